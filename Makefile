@@ -1,0 +1,60 @@
+# dxboard: the two commands are `make run` and `make test` (see README.md).
+# Both create or reuse .venv and install the project with what it needs first.
+
+PYTHON ?= python3
+VENV   ?= .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed
+
+.PHONY: run test lint pytest mpytest bench browser clean
+
+$(STAMP): pyproject.toml
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e '.[test]'
+	touch $(STAMP)
+
+# The main job on the emulated board. Until the daemon (`dxboard run`) lands, this is the
+# TEDUSAR robot's board: the real firmware on simulated electronics, with a development key.
+DEV_KEY := .dxboard-dev.key
+run: $(STAMP)
+	test -s $(DEV_KEY) || (umask 077; $(BIN)/python -c "import secrets; print(secrets.token_hex(32))" > $(DEV_KEY))
+	@echo "dxboard: the TEDUSAR board, emulated; in another shell try:"
+	@echo "  DXBOARD_KEY=$$(cat $(DEV_KEY)) .venv/bin/dxboard board tcp://127.0.0.1:7000 status"
+	@echo "  .venv/bin/dxboard inject 127.0.0.1:7001 hokuyo short     (Ctrl-C stops the board)"
+	$(BIN)/dxboard emulate models/tedusar --listen 127.0.0.1:7000 --control 127.0.0.1:7001 \
+		--modbus 127.0.0.1:7502 --key-file $(DEV_KEY)
+
+test: $(STAMP) lint pytest mpytest
+
+lint: $(STAMP)
+	$(BIN)/ruff check protocol firmware emulator host tests benchmarks
+	$(BIN)/mypy
+
+pytest: $(STAMP) browser
+	$(BIN)/pytest
+
+# Debian's headless Chromium, for the web page's tests (installed when root and missing).
+browser:
+	scripts/ensure-chromium
+
+# The protocol and firmware tests again, under the real MicroPython interpreter.
+mpytest: $(STAMP)
+	$(BIN)/micropython tests/mpy_run.py
+
+BENCH_STAMP := $(VENV)/.bench-installed
+$(BENCH_STAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[test,bench]'
+	touch $(BENCH_STAMP)
+
+# Every benchmark, in turn (several minutes); figures go to benchmarks/RESULTS.md by hand.
+bench: $(BENCH_STAMP)
+	$(BIN)/python benchmarks/protocol.py
+	$(BIN)/python benchmarks/firmware.py
+	$(BIN)/python benchmarks/transport.py
+	$(BIN)/python benchmarks/diagnosis.py --quick
+	$(BIN)/python benchmarks/planning.py --quick
+	$(BIN)/python benchmarks/journal.py
+
+clean:
+	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache

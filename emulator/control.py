@@ -1,0 +1,188 @@
+"""The emulator's control endpoint: inject and clear faults at run time, read the truth.
+
+Protocol: TCP, one JSON object per line (UTF-8, ``\\n``-terminated, at most 64 KiB) each way;
+every request gets exactly one reply line, in order; the connection stays open for more.
+
+    {"op": "hello"}
+        -> {"ok": true, "board": "dxboard-emulator", "version": 1, "channels": [names],
+            "faults": [fault names]}
+    {"op": "inject", "channel": "hokuyo" | 3 | "board", "fault": "hang",
+     "params": {"permanent": "true"}}
+        -> {"ok": true, "channel": 3, "fault": "hang", "params": {"permanent": true}}
+    {"op": "clear"}                                   (every fault)
+    {"op": "clear", "channel": C}                     (one channel's, or "board")
+    {"op": "clear", "channel": C, "fault": NAME}      (one fault)
+        -> {"ok": true, "cleared": N}
+    {"op": "faults"}  -> {"ok": true, "faults": [{"channel", "fault", "params"}, ...]}
+    {"op": "status"}  -> {"ok": true, "status": {...}}  (``Emulator.status``)
+
+Parameter values may be strings (as typed on the command line) or JSON values; the emulator
+converts and checks them (``emulator.faults``). Any error is ``{"ok": false, "error": "..."}``
+with a message meant for a person; a bad line never closes the connection or touches the board.
+The URL printed for this endpoint is ``control://HOST:PORT``.
+
+``run_wallclock`` advances the emulator with the wall clock; ``Background`` runs it and the
+control server on an event loop in a thread (for ``dxboard emulate`` and tests), and ``call``
+runs a function on that loop so that nothing touches the emulator from two threads.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import threading
+import time
+from collections.abc import Callable, Coroutine
+from concurrent.futures import Future
+from typing import Any, TypeVar
+
+from emulator import faults as F
+from emulator.sim import Emulator
+
+MAX_LINE = 65536
+SCHEME = "control://"
+T = TypeVar("T")
+
+
+def handle(emu: Emulator, line: bytes) -> dict[str, Any]:
+    """The reply to one request line."""
+    try:
+        req = json.loads(line)
+    except (ValueError, UnicodeDecodeError):
+        return {"ok": False, "error": "not a JSON object on one line"}
+    if not isinstance(req, dict):
+        return {"ok": False, "error": "not a JSON object on one line"}
+    op = req.get("op")
+    try:
+        if op == "hello":
+            return {"ok": True, "board": "dxboard-emulator", "version": 1,
+                    "channels": [c.name for c in emu.model.channels], "faults": list(F.FAULTS)}
+        if op == "inject":
+            fault, params = req.get("fault"), req.get("params", {})
+            channel = req.get("channel")
+            if not isinstance(fault, str) or not isinstance(params, dict) \
+                    or not isinstance(channel, str | int) or isinstance(channel, bool):
+                return {"ok": False, "error": "inject needs channel, fault and params {}"}
+            return {"ok": True, **emu.inject(channel, fault, params)}
+        if op == "clear":
+            before = len(emu.active)
+            channel, fault = req.get("channel"), req.get("fault")
+            if channel is not None and (not isinstance(channel, str | int)
+                                        or isinstance(channel, bool)):
+                return {"ok": False, "error": "channel must be a number or a name"}
+            if fault is not None and not isinstance(fault, str):
+                return {"ok": False, "error": "fault must be a name"}
+            emu.clear(channel, fault)
+            return {"ok": True, "cleared": before - len(emu.active)}
+        if op == "faults":
+            return {"ok": True, "faults": emu.faults()}
+        if op == "status":
+            return {"ok": True, "status": emu.status()}
+    except F.FaultError as exc:
+        return {"ok": False, "error": str(exc)}
+    return {"ok": False, "error": f"unknown op {op!r} (hello, inject, clear, faults, status)"}
+
+
+async def _client(emu: Emulator, reader: asyncio.StreamReader,
+                  writer: asyncio.StreamWriter) -> None:
+    try:
+        while True:
+            try:
+                line = await reader.readuntil(b"\n")
+            except asyncio.LimitOverrunError:
+                writer.write(b'{"ok": false, "error": "line too long"}\n')
+                break
+            except asyncio.IncompleteReadError:
+                break
+            writer.write(json.dumps(handle(emu, line)).encode() + b"\n")
+            await writer.drain()
+    except ConnectionError:
+        pass
+    finally:
+        writer.close()
+
+
+async def start_server(emu: Emulator, host: str = "127.0.0.1", port: int = 0) -> asyncio.Server:
+    return await asyncio.start_server(lambda r, w: _client(emu, r, w), host, port,
+                                      limit=MAX_LINE)
+
+
+async def run_wallclock(emu: Emulator, stop: asyncio.Event, tick_ms: int = 10) -> None:
+    """Advance the emulator's clock with the wall clock until ``stop`` is set."""
+    t0 = time.monotonic()
+    start = emu.now
+    while not stop.is_set():
+        emu.advance_to(start + int((time.monotonic() - t0) * 1000))
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(stop.wait(), tick_ms / 1000)
+
+
+class Background:
+    """The emulator on the wall clock plus its control server, on a loop in a thread."""
+
+    def __init__(self, emu: Emulator, host: str = "127.0.0.1", port: int = 0) -> None:
+        self.emu = emu
+        self.loop = asyncio.new_event_loop()
+        self._stop: asyncio.Event | None = None
+        self._ready = threading.Event()
+        self.error: OSError | None = None
+        self.address: tuple[str, int] = (host, port)
+        self._thread = threading.Thread(target=self._run, daemon=True)
+
+    @property
+    def url(self) -> str:
+        return f"{SCHEME}{self.address[0]}:{self.address[1]}"
+
+    def _run(self) -> None:
+        asyncio.set_event_loop(self.loop)
+        self.loop.run_until_complete(self._main())
+
+    async def _main(self) -> None:
+        self._stop = asyncio.Event()
+        try:
+            server = await start_server(self.emu, *self.address)
+        except OSError as exc:  # handed to start()
+            self.error = exc
+            self._ready.set()
+            return
+        self.address = server.sockets[0].getsockname()[:2]
+        self._ready.set()
+        async with server:
+            await run_wallclock(self.emu, self._stop)
+
+    def start(self) -> Background:
+        self._thread.start()
+        self._ready.wait(10)
+        if self.error is not None:
+            self._thread.join(10)
+            raise self.error
+        return self
+
+    def call(self, fn: Callable[[], T]) -> T:
+        """Run ``fn`` on the emulator's loop and return its result."""
+        fut: Future[T] = Future()
+
+        def run() -> None:
+            try:
+                fut.set_result(fn())
+            except Exception as exc:  # handed to the caller's thread
+                fut.set_exception(exc)
+
+        self.loop.call_soon_threadsafe(run)
+        return fut.result(10)
+
+    def run(self, coro: Coroutine[Any, Any, T], timeout: float = 30) -> T:
+        """Run a coroutine on the emulator's loop (front ends start this way)."""
+        return asyncio.run_coroutine_threadsafe(coro, self.loop).result(timeout)
+
+    def stop(self) -> None:
+        if self._stop is not None:
+            self.loop.call_soon_threadsafe(self._stop.set)
+        self._thread.join(10)
+
+    def __enter__(self) -> Background:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()

@@ -1,0 +1,180 @@
+"""The firmware's own front ends on the emulated board (CPython runtime), and their seams.
+
+``FrontEnds(emu)`` runs ``firmware.net.Net`` (native protocol over TCP and over a serial
+stream) and ``firmware.modbus`` on the emulator's event loop, exactly as ``firmware/main.py``
+does on the board, except that the emulator's clock drives the protection steps: after each
+step (``emu.step_listeners``) the front ends ``pump`` their pushes, and after a reboot they
+``attach`` to the new boot's firmware (which closes every client, as a reset does). Clients
+never reach the firmware's servers directly: a ``LinkProxy`` (``emulator/link.py``) in front of
+each applies the injected link faults, and its address is the one printed. The serial front end
+sits on the master side of a pseudo-terminal pair; clients open the slave (``serial_path``).
+The CAN front end (``emulator/canbus.py``) puts ``firmware/can.py`` on a python-can bus.
+
+``start(listen, modbus=None, serial=False, can=None)`` must run on the emulator's loop (see
+``control.Background.run``); the ``urls`` it returns are the ones ``dxboard emulate`` prints.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import os
+import tty
+from typing import Any
+
+from emulator.link import LinkProxy
+from emulator.sim import Emulator
+from firmware import modbus
+from firmware.net import MAX_CLIENTS, READ_TIMEOUT_MS, Net
+from firmware.session import FIRMWARE_VERSION
+from protocol.constants import (
+    CAP_AUTH,
+    CAP_CAN,
+    CAP_CONFIG,
+    CAP_EVENTS,
+    CAP_MODBUS,
+    CAP_SUBSCRIBE,
+    CAP_VOLTAGE,
+)
+
+BASE_CAPS = CAP_AUTH | CAP_SUBSCRIBE | CAP_EVENTS | CAP_CONFIG | CAP_VOLTAGE
+
+
+def capabilities(modbus: bool, can: bool) -> int:
+    return BASE_CAPS | (CAP_MODBUS if modbus else 0) | (CAP_CAN if can else 0)
+
+
+def url_host(host: str) -> str:
+    return f"[{host}]" if ":" in host else host
+
+
+class FrontEnds:
+    def __init__(self, emu: Emulator, seed: int = 0, read_timeout_ms: int = READ_TIMEOUT_MS,
+                 max_clients: int = MAX_CLIENTS) -> None:
+        self.emu = emu
+        self.seed = seed
+        self.read_timeout_ms = read_timeout_ms
+        self.max_clients = max_clients
+        self.net: Net | None = None
+        self.proxies: list[LinkProxy] = []
+        self.servers: list[Any] = []
+        self.tasks: list[asyncio.Task[Any]] = []
+        self.urls: dict[str, str] = {}
+        self.serial_path = ""
+        self._pty: tuple[int, int] | None = None
+        self.can: Any = None
+
+    async def start(self, listen: tuple[str, int] = ("127.0.0.1", 0),
+                    modbus_at: tuple[str, int] | None = None, serial: bool = False,
+                    can: str | None = None) -> dict[str, str]:
+        emu = self.emu
+        net = Net(emu.firmware, FIRMWARE_VERSION,
+                  capabilities(modbus_at is not None, can is not None),
+                  self.read_timeout_ms, self.max_clients)
+        self.net = net
+        emu.step_listeners.append(self._after_step)
+        self.tasks.append(asyncio.create_task(net.housekeeping()))
+        server: Any = await net.serve_tcp("127.0.0.1", 0)
+        self.servers.append(server)
+        host, port = await self._proxy(server, listen)
+        self.urls["board"] = f"tcp://{host}:{port}"
+        if modbus_at is not None:
+            mserver: Any = await modbus.serve(net, "127.0.0.1", 0)
+            self.servers.append(mserver)
+            host, port = await self._proxy(mserver, modbus_at)
+            self.urls["modbus"] = f"modbus+tcp://{host}:{port}"
+        if serial:
+            self.urls["serial"] = "serial://" + await self._start_serial()
+        if can is not None:
+            from emulator.canbus import CanFrontEnd
+
+            self.can = CanFrontEnd(emu, can)
+            self.urls["can"] = self.can.url
+        return self.urls
+
+    async def _proxy(self, server: Any, listen: tuple[str, int]) -> tuple[str, int]:
+        return await self.proxy_to(server.sockets[0].getsockname()[:2], listen)
+
+    async def proxy_to(self, target: tuple[str, int], listen: tuple[str, int]) -> tuple[str, int]:
+        """A link-fault proxy listening on ``listen`` in front of ``target``: (host, port)."""
+        proxy = LinkProxy(self.emu, target, self.seed + len(self.proxies))
+        self.proxies.append(proxy)
+        host, port = await proxy.start(*listen)
+        return url_host(host), port
+
+    def _after_step(self) -> None:
+        net = self.net
+        if net is None:
+            return
+        if net.app is not self.emu.firmware:
+            net.attach(self.emu.firmware)
+        now = self.emu.hal.ticks_ms()
+        net.pump(now)
+        if self.can is not None:
+            self.can.pump(now)
+
+    # --- serial -------------------------------------------------------------------------
+
+    async def _start_serial(self) -> str:
+        master, slave = os.openpty()
+        tty.setraw(slave)
+        self._pty = (master, slave)
+        self.serial_path = os.ttyname(slave)
+        self.tasks.append(asyncio.create_task(self._serve_serial(master)))
+        return self.serial_path
+
+    async def _serve_serial(self, master: int) -> None:
+        loop = asyncio.get_running_loop()
+        reader = asyncio.StreamReader()
+        rproto = asyncio.StreamReaderProtocol(reader)
+        await loop.connect_read_pipe(lambda: rproto, os.fdopen(os.dup(master), "rb", 0))
+        wtrans, _ = await loop.connect_write_pipe(
+            asyncio.Protocol, os.fdopen(os.dup(master), "wb", 0))
+        writer = _PipeWriter(wtrans)
+        assert self.net is not None
+        while True:  # the stream never ends while the slave stays open; restart if it does
+            await self.net.serve_stream(reader, writer, close=False)
+            if reader.at_eof():
+                return
+            await asyncio.sleep(0.1)
+
+    async def stop(self) -> None:
+        with contextlib.suppress(ValueError):
+            self.emu.step_listeners.remove(self._after_step)
+        for p in self.proxies:
+            p.close()
+        for s in self.servers:
+            s.close()
+        for t in self.tasks:
+            t.cancel()
+        for t in self.tasks:
+            with contextlib.suppress(asyncio.CancelledError, OSError):
+                await t
+        if self.net is not None:
+            for c in self.net.clients:
+                c.close()
+        if self.can is not None:
+            self.can.close()
+        if self._pty is not None:
+            for fd in self._pty:
+                with contextlib.suppress(OSError):
+                    os.close(fd)
+
+
+class _PipeWriter:
+    """The little of ``StreamWriter`` that ``Net`` uses, over a write-pipe transport.
+
+    A pty's master may not be read for a long time (no program on the slave); ``drain`` then
+    waits until the transport's buffer is below 16 KiB, so the client's queue backs up and
+    the session skips measurements, as it would for a slow TCP reader."""
+
+    def __init__(self, transport: asyncio.WriteTransport) -> None:
+        self.transport = transport
+
+    def write(self, data: bytes) -> None:
+        self.transport.write(data)
+
+    async def drain(self) -> None:
+        while self.transport.get_write_buffer_size() > 16384 and not self.transport.is_closing():
+            await asyncio.sleep(0.01)
+

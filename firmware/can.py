@@ -1,0 +1,207 @@
+"""The board on CAN, sans I/O: frames per ``protocol/dxboard.dbc`` out, commands in.
+
+``CanNode(board, key, random_bytes, node=0, rate_hz=10)``; ``poll(now_ms)`` returns the
+frames due, as ``(can_id, data)`` pairs (11-bit ids, 8 data bytes, little-endian as the DBC
+says): DXB_Status (0x100+N) and DXB_Nonce (0x1F0+N) every second, DXB_Currents_g
+(0x110+4N+g, channels 4g..4g+3, i16 in 10 mA) at ``rate_hz``, DXB_Channel_k (0x140+16N+k)
+every second and at once when the channel's state, command or read-back changes.
+``receive(can_id, data, now_ms)`` takes a frame from the bus and returns the replies.
+
+CAN has no session, so commands carry their own authentication: DXB_Cmd (0x180+N: op 1 on,
+2 off, 3 cycle, 4 clear; channel; force; off time in 100 ms; a counter, strictly increasing
+per boot) is followed within ``TAG_WINDOW_MS`` by DXB_CmdTagA and DXB_CmdTagB (0x181+N,
+0x182+N), the first and second 8 bytes of HMAC-SHA256(key, CAN nonce || the command's 8
+bytes). The nonce is 8 random bytes chosen at boot and broadcast in DXB_Nonce. Each command
+is answered with DXB_CmdResult (0x188+N): op, channel, error (0 or E_*), state, read-back. A
+command whose tags do not arrive in time (E_AUTH_REQUIRED), with a bad tag (E_BAD_TAG), with
+a counter not above the last accepted (E_REPLAYED) or on a board without key changes nothing.
+"""
+
+import struct
+
+from protocol.auth import equal, hmac_sha256
+from protocol.compat import const
+from protocol.constants import (
+    E_AUTH_REQUIRED,
+    E_BAD_CHANNEL,
+    E_BAD_TAG,
+    E_BAD_VALUE,
+    E_REPLAYED,
+)
+
+ID_STATUS = const(0x100)
+ID_CURRENTS = const(0x110)
+ID_CHANNEL = const(0x140)
+ID_CMD = const(0x180)
+ID_TAG_A = const(0x181)
+ID_TAG_B = const(0x182)
+ID_RESULT = const(0x188)
+ID_NONCE = const(0x1F0)
+SLOW_MS = const(1000)
+TAG_WINDOW_MS = const(100)
+OP_ON = const(1)
+OP_OFF = const(2)
+OP_CYCLE = const(3)
+OP_CLEAR = const(4)
+CURRENT_GROUPS = const(3)
+MAX_CHANNELS = const(16)
+
+
+def _clamp(v: int, lo: int, hi: int) -> int:
+    return lo if v < lo else (hi if v > hi else v)
+
+
+def channel_frame(ch: tuple) -> bytes:  # type: ignore[type-arg]
+    """DXB_Channel data from a ``Board.channel_status`` tuple."""
+    commanded, physical, state, ma, live, _sticky, trips, retries = ch
+    ma = _clamp(ma, -0x80000, 0x7FFFF) & 0xFFFFF
+    b0 = (state & 0xF) | (0x10 if commanded else 0) | (0x20 if physical else 0)
+    return struct.pack("<BBBBHBB", b0, ma & 0xFF, (ma >> 8) & 0xFF, ma >> 16, live & 0xFFFF,
+                       _clamp(trips, 0, 255), _clamp(retries, 0, 255))
+
+
+def status_frame(board_status: tuple) -> bytes:  # type: ignore[type-arg]
+    mv, _total, uptime, cause, cfg_status, flags = board_status
+    return struct.pack("<IHBB", (uptime // 1000) & 0xFFFFFFFF, _clamp(mv, 0, 0xFFFF),
+                       flags & 0xFF, (cause & 0xF) | ((cfg_status & 0xF) << 4))
+
+
+def currents_frame(currents_ma: list, g: int) -> bytes:  # type: ignore[type-arg]
+    vals = []
+    for i in range(4 * g, 4 * g + 4):
+        ma = currents_ma[i] if i < len(currents_ma) else 0
+        vals.append(_clamp((ma + 5) // 10 if ma >= 0 else -((-ma + 5) // 10), -32768, 32767))
+    return struct.pack("<4h", *vals)
+
+
+def command_frame(op: int, ch: int, force: bool = False, off_100ms: int = 0,
+                  counter: int = 0) -> bytes:
+    return struct.pack("<BBBBI", op, ch, 1 if force else 0, off_100ms, counter)
+
+
+def command_tag(key: bytes, nonce: bytes, cmd: bytes) -> bytes:
+    """The 16 bytes that DXB_CmdTagA (first 8) and DXB_CmdTagB (last 8) carry."""
+    return hmac_sha256(key, nonce + cmd)[:16]
+
+
+def result_frame(op: int, ch: int, err: int, state: int, physical: bool) -> bytes:
+    return struct.pack("<BBHBBBB", op, ch, err, (state & 0xF) | (0x10 if physical else 0),
+                       0, 0, 0)
+
+
+class CanNode:
+    def __init__(self, board: object, key: "bytes | None", random_bytes: object, node: int = 0,
+                 rate_hz: int = 10) -> None:
+        self.board = board
+        self.key = key
+        self.node = node
+        self.nonce = random_bytes(8)  # type: ignore[operator]
+        self.period = 1000 // rate_hz if rate_hz else 0
+        self.counter = 0
+        self.pending: "bytes | None" = None
+        self.pending_at = 0
+        self.tag_a: "bytes | None" = None
+        self.slow_at = 0
+        self.fast_at = 0
+        self.last: list = []  # type: ignore[type-arg]
+        self.readback: "tuple | None" = None  # type: ignore[type-arg]
+
+    # --- broadcasts ---------------------------------------------------------------------
+
+    def poll(self, now: int) -> list:  # type: ignore[type-arg]
+        out = []
+        n = self.node
+        if self.pending is not None and now - self.pending_at > TAG_WINDOW_MS:
+            out.append(self._result(self.pending, E_AUTH_REQUIRED))
+            self.pending = None
+        bstat, chans = self.board.status()  # type: ignore[attr-defined]
+        chans = chans[:MAX_CHANNELS]
+        slow = now >= self.slow_at
+        if slow:
+            self.slow_at = now + SLOW_MS
+            out.append((ID_STATUS + n, status_frame(bstat)))
+            out.append((ID_NONCE + n, bytes(self.nonce)))
+        if self.period and now >= self.fast_at:
+            self.fast_at = now + self.period
+            currents = [c[3] for c in chans]
+            for g in range(CURRENT_GROUPS):
+                out.append((ID_CURRENTS + 4 * n + g, currents_frame(currents, g)))
+        last = self.last
+        for k in range(len(chans)):
+            c = chans[k]
+            key = (c[0], c[1], c[2])
+            if slow or k >= len(last) or last[k] != key:
+                out.append((ID_CHANNEL + 16 * n + k, channel_frame(c)))
+        self.last = [(c[0], c[1], c[2]) for c in chans]
+        return out
+
+    # --- commands -----------------------------------------------------------------------
+
+    def receive(self, can_id: int, data: bytes, now: int) -> list:  # type: ignore[type-arg]
+        n = self.node
+        if len(data) != 8:
+            return []
+        out = []
+        if can_id == ID_CMD + n:
+            if self.pending is not None:
+                out.append(self._result(self.pending, E_AUTH_REQUIRED))
+            self.pending = bytes(data)
+            self.pending_at = now
+            self.tag_a = None
+        elif can_id == ID_TAG_A + n and self.pending is not None:
+            self.tag_a = bytes(data)
+        elif can_id == ID_TAG_B + n and self.pending is not None:
+            cmd = self.pending
+            tag_a = self.tag_a
+            self.pending = None
+            self.tag_a = None
+            if now - self.pending_at > TAG_WINDOW_MS or tag_a is None:
+                out.append(self._result(cmd, E_AUTH_REQUIRED))
+            else:
+                out.append(self._result(cmd, self._check(cmd, tag_a + bytes(data))))
+        return out
+
+    def _check(self, cmd: bytes, tag: bytes) -> int:
+        """0 if the command may run (and then runs it), else the error code."""
+        if self.key is None:
+            return E_AUTH_REQUIRED
+        if not equal(command_tag(self.key, self.nonce, cmd), tag):
+            return E_BAD_TAG
+        op, ch, force, off, counter = struct.unpack("<BBBBI", cmd)
+        if counter <= self.counter:
+            return E_REPLAYED
+        self.counter = counter
+        self.board.host_seen(self.board.now)  # type: ignore[attr-defined]
+        b = self.board
+        if op == OP_ON:
+            res = b.switch(ch, True)  # type: ignore[attr-defined]
+        elif op == OP_OFF:
+            res = b.switch(ch, False, bool(force & 1))  # type: ignore[attr-defined]
+        elif op == OP_CYCLE:
+            res = b.power_cycle(ch, off * 100, bool(force & 1))  # type: ignore[attr-defined]
+        elif op == OP_CLEAR:
+            res = b.clear(ch)  # type: ignore[attr-defined]
+        else:
+            return E_BAD_VALUE
+        self.readback = res  # (error, state, physical read back from the switch)
+        err: int = res[0]
+        return err
+
+    def _result(self, cmd: bytes, err: int) -> tuple:  # type: ignore[type-arg]
+        op = cmd[0]
+        ch = cmd[1]
+        b = self.board
+        state = 0
+        physical = False
+        rb = self.readback
+        self.readback = None
+        if 0 <= ch < b.n:  # type: ignore[attr-defined]
+            if rb is not None:
+                state = rb[1]
+                physical = rb[2]
+            else:
+                state = b.channels[ch].state  # type: ignore[attr-defined]
+                physical = b.hal.read_switch(ch)  # type: ignore[attr-defined]
+        elif not err and op != OP_CLEAR:
+            err = E_BAD_CHANNEL
+        return (ID_RESULT + self.node, result_frame(op, ch, err, state, physical))

@@ -1,0 +1,321 @@
+"""One switched channel: its state machine, written as a table, and its protection rules.
+
+Theory of operation. A channel is in one of six states (``ST_*`` of ``protocol.constants``):
+
+    OFF ──on──► INRUSH ──window over──► ON
+     ▲            │ trip                 │ trip (short / I²t)
+     │            ▼                      ▼
+     └──off── TRIPPED ◄─────────────────┘   (switch off, wait retry_ms[i], then INRUSH)
+                  │ trip with no retry left
+                  ▼
+               LATCHED ──clear──► OFF        FAULTED (switch stuck) ──clear──► OFF
+
+Inputs to the machine are commands (``X_ON``, ``X_OFF``, ``X_CLEAR``, ``X_SHED``) and
+detections made by ``step`` every sampling tick (``X_INRUSH_END``, ``X_TRIP``,
+``X_TRIP_LATCH``, ``X_RETRY``, ``X_STUCK_ON``, ``X_STUCK_OFF``). ``TRANSITIONS`` maps every
+(state, input) pair that can occur to ``(new_state, error)``: an error other than 0 refuses the
+command and leaves the channel as it was (switching a latched channel on gives ``E_LATCHED``).
+A pair missing from the table is a bug in this module and raises ``KeyError``; ``step`` only
+fires detections in the states where the table has them. Entering a state runs its entry
+action (``_enter``): INRUSH drives the switch on and opens the inrush window, every other state
+except ON drives it off. Self-transitions run no entry action.
+
+Protection, per tick, from the integer current ``ma`` (no floating point on the hot path):
+- INRUSH (``inrush_ms``): tolerates up to ``inrush_factor_x10``/10 x rated; above that for
+  ``trip_samples`` samples it trips (``F_INRUSH``, handled like a short).
+- ON: at or above ``trip_factor_x10``/10 x rated for ``trip_samples`` consecutive samples it
+  trips at once (``F_SHORT``). Thermal model (I²t) with r = 100·I/Ir:
+  ``heat += (r² - start²)·dt_ms``, clamped at 0, trip (``F_OVERLOAD``) at
+  ``i2t_ms``·10⁴; with start = 110 and i2t_ms = 3100 that is ≈3 s at 1.5x, ≈1.1 s at 2x,
+  ≈0.4 s at 3x (under the instant trip, 2.9x takes ≈0.43 s); heat cools in every other state.
+- Retries: after an overload, retry after ``retry_ms[0]``, ``[1]``, ... then latch; after a
+  short or inrush trip retry ``short_retries`` times (after ``retry_ms[0]``), then latch. Both
+  counters reset after ``retry_reset_ms`` without a fault, or by ``clear``.
+- Open load (warning only, ``F_OPEN_LOAD`` live while it lasts): ON with the current below
+  ``open_load_ma`` (0: max(20 mA, 1 % of rated)) for ``open_load_ms``.
+- Stuck on: not switched on (OFF, TRIPPED, LATCHED) and above ``stuck_on_ma`` for
+  ``stuck_on_ms`` → FAULTED. Stuck off: INRUSH or ON and the switch reads back off for
+  ``STUCK_OFF_SAMPLES`` samples → FAULTED. FAULTED keeps the switch off until ``clear``.
+
+``live`` faults are conditions present now; ``sticky`` faults accumulate until ``clear``.
+"""
+
+from protocol.compat import const
+from protocol.constants import (
+    E_LATCHED,
+    E_SWITCH_FAULT,
+    EV_FAULT,
+    EV_STATE,
+    EV_TRIP,
+    EV_WARNING,
+    F_DEADMAN,
+    F_INRUSH,
+    F_OPEN_LOAD,
+    F_OVERLOAD,
+    F_SHED_TOTAL,
+    F_SHED_UV,
+    F_SHORT,
+    F_STUCK_OFF,
+    F_STUCK_ON,
+    ST_FAULTED,
+    ST_INRUSH,
+    ST_LATCHED,
+    ST_OFF,
+    ST_ON,
+    ST_TRIPPED,
+)
+
+# inputs of the state machine
+X_ON = const(0)
+X_OFF = const(1)
+X_CLEAR = const(2)
+X_SHED = const(3)
+X_INRUSH_END = const(4)
+X_TRIP = const(5)
+X_TRIP_LATCH = const(6)
+X_RETRY = const(7)
+X_STUCK_ON = const(8)
+X_STUCK_OFF = const(9)
+
+STUCK_OFF_SAMPLES = const(2)
+RATIO_CAP = const(1000)  # r = 100·I/Ir is capped at 10x to keep r² a small int
+TRIP_LIVE = F_SHORT | F_OVERLOAD | F_INRUSH | F_SHED_TOTAL | F_SHED_UV | F_DEADMAN
+
+# (state, input) -> (new state, error code); 0 = accepted
+TRANSITIONS = {
+    (ST_OFF, X_ON): (ST_INRUSH, 0),
+    (ST_OFF, X_OFF): (ST_OFF, 0),
+    (ST_OFF, X_CLEAR): (ST_OFF, 0),
+    (ST_OFF, X_SHED): (ST_OFF, 0),
+    (ST_OFF, X_STUCK_ON): (ST_FAULTED, 0),
+    (ST_INRUSH, X_ON): (ST_INRUSH, 0),
+    (ST_INRUSH, X_OFF): (ST_OFF, 0),
+    (ST_INRUSH, X_CLEAR): (ST_INRUSH, 0),
+    (ST_INRUSH, X_SHED): (ST_OFF, 0),
+    (ST_INRUSH, X_INRUSH_END): (ST_ON, 0),
+    (ST_INRUSH, X_TRIP): (ST_TRIPPED, 0),
+    (ST_INRUSH, X_TRIP_LATCH): (ST_LATCHED, 0),
+    (ST_INRUSH, X_STUCK_OFF): (ST_FAULTED, 0),
+    (ST_ON, X_ON): (ST_ON, 0),
+    (ST_ON, X_OFF): (ST_OFF, 0),
+    (ST_ON, X_CLEAR): (ST_ON, 0),
+    (ST_ON, X_SHED): (ST_OFF, 0),
+    (ST_ON, X_TRIP): (ST_TRIPPED, 0),
+    (ST_ON, X_TRIP_LATCH): (ST_LATCHED, 0),
+    (ST_ON, X_STUCK_OFF): (ST_FAULTED, 0),
+    (ST_TRIPPED, X_ON): (ST_TRIPPED, 0),  # already wanted on: the retry will switch it
+    (ST_TRIPPED, X_OFF): (ST_OFF, 0),  # cancels the retry
+    (ST_TRIPPED, X_CLEAR): (ST_TRIPPED, 0),  # counters reset, the retry still comes
+    (ST_TRIPPED, X_SHED): (ST_OFF, 0),
+    (ST_TRIPPED, X_RETRY): (ST_INRUSH, 0),
+    (ST_TRIPPED, X_STUCK_ON): (ST_FAULTED, 0),
+    (ST_LATCHED, X_ON): (ST_LATCHED, E_LATCHED),
+    (ST_LATCHED, X_OFF): (ST_LATCHED, 0),  # stays latched until cleared
+    (ST_LATCHED, X_CLEAR): (ST_OFF, 0),
+    (ST_LATCHED, X_SHED): (ST_LATCHED, 0),
+    (ST_LATCHED, X_STUCK_ON): (ST_FAULTED, 0),
+    (ST_FAULTED, X_ON): (ST_FAULTED, E_SWITCH_FAULT),
+    (ST_FAULTED, X_OFF): (ST_FAULTED, 0),
+    (ST_FAULTED, X_CLEAR): (ST_OFF, 0),
+    (ST_FAULTED, X_SHED): (ST_FAULTED, 0),
+}
+
+
+class Channel:
+    """One channel's configuration, state machine and protection. ``log`` is an EventLog."""
+
+    def __init__(self, index: int, hal: object, log: object, cfg: dict) -> None:  # type: ignore[type-arg]
+        self.index = index
+        self.hal = hal
+        self.log = log
+        self.boot_ms = 0
+        self.state = ST_OFF
+        self.commanded = False
+        self.physical = False
+        self.current_ma = 0
+        self.live = 0
+        self.sticky = 0
+        self.trips = 0
+        self.retries = 0  # overload retries used
+        self.short_used = 0  # short retries used
+        self.heat = 0
+        self.over_n = 0
+        self.mismatch_n = 0
+        self.deadline = 0  # end of the inrush window, or time of the retry
+        self.low_since = -1
+        self.stuck_since = -1
+        self.last_fault_ms = 0
+        self.cycle_at = -1  # power-cycle: switch back on at this time
+        self.cfg = cfg
+        self.apply(cfg)
+
+    def apply(self, cfg: dict) -> None:  # type: ignore[type-arg]
+        """Take a (validated) configuration; precompute the integer limits of the hot path."""
+        self.cfg = cfg
+        rated = cfg["rated_ma"]
+        self.rated = rated
+        self.inrush_ms = cfg["inrush_ms"]
+        self.inrush_lim = rated * cfg["inrush_factor_x10"] // 10
+        self.trip_lim = rated * cfg["trip_factor_x10"] // 10
+        self.trip_samples = cfg["trip_samples"]
+        s = cfg["overload_start_x100"]
+        self.start2 = s * s
+        self.heat_max = cfg["i2t_ms"] * 10000
+        self.retry_ms = cfg["retry_ms"]
+        self.short_retries = cfg["short_retries"]
+        self.retry_reset_ms = cfg["retry_reset_ms"]
+        ol = cfg["open_load_ma"]
+        self.open_ma = ol if ol else max(20, rated // 100)
+        self.open_ms = cfg["open_load_ms"]
+        self.stuck_on_ma = cfg["stuck_on_ma"]
+        self.stuck_on_ms = cfg["stuck_on_ms"]
+        self.priority = cfg["priority"]
+        self.protected = cfg["protected"]
+
+    # --- the state machine ------------------------------------------------------------
+
+    def fire(self, x: int, now: int) -> int:
+        """Apply input ``x``; returns 0 or the error code that refused it."""
+        old = self.state
+        new, err = TRANSITIONS[(old, x)]
+        if err:
+            return err
+        if new != old:
+            self.state = new
+            self._enter(new, now)
+            self.log.put(EV_STATE, self.index, old, new, self.live,  # type: ignore[attr-defined]
+                         self.current_ma, now - self.boot_ms)
+        return 0
+
+    def _enter(self, st: int, now: int) -> None:
+        if st == ST_INRUSH:
+            self.live &= ~TRIP_LIVE
+            self.deadline = now + self.inrush_ms
+            self.over_n = 0
+            self.mismatch_n = 0
+            self.cycle_at = -1
+            self.hal.set_switch(self.index, True)  # type: ignore[attr-defined]
+        elif st != ST_ON:
+            self.hal.set_switch(self.index, False)  # type: ignore[attr-defined]
+            self.low_since = -1
+            self.stuck_since = -1
+            if self.live & F_OPEN_LOAD:
+                self.live &= ~F_OPEN_LOAD
+        else:
+            self.low_since = -1
+
+    # --- faults -------------------------------------------------------------------------
+
+    def _trip(self, now: int, flag: int, ma: int) -> None:
+        self.trips += 1
+        self.live |= flag
+        self.sticky |= flag
+        self.last_fault_ms = now
+        x = X_TRIP_LATCH
+        delay = 0
+        if flag == F_OVERLOAD:
+            if self.retries < len(self.retry_ms):
+                delay = self.retry_ms[self.retries]
+                self.retries += 1
+                x = X_TRIP
+        elif self.short_used < self.short_retries:
+            delay = self.retry_ms[0] if self.retry_ms else 1000
+            self.short_used += 1
+            x = X_TRIP
+        self.log.put(EV_TRIP, self.index, self.state,  # type: ignore[attr-defined]
+                     ST_TRIPPED if x == X_TRIP else ST_LATCHED, flag, ma, now - self.boot_ms)
+        self.fire(x, now)
+        self.deadline = now + delay
+
+    def _fault(self, now: int, x: int, flag: int) -> None:
+        self.live |= flag
+        self.sticky |= flag
+        self.last_fault_ms = now
+        self.log.put(EV_FAULT, self.index, self.state, ST_FAULTED,  # type: ignore[attr-defined]
+                     flag, self.current_ma, now - self.boot_ms)
+        self.fire(x, now)
+
+    def clear(self, now: int) -> int:
+        err = self.fire(X_CLEAR, now)
+        if not err:
+            self.sticky = 0
+            self.live &= ~(F_STUCK_ON | F_STUCK_OFF | TRIP_LIVE)
+            self.retries = 0
+            self.short_used = 0
+            self.heat = 0
+        return err
+
+    # --- the protection step, every tick -------------------------------------------------
+
+    def step(self, now: int, ma: int, sw: bool, dt: int) -> None:
+        self.current_ma = ma
+        self.physical = sw
+        st = self.state
+        if st == ST_ON or st == ST_INRUSH:  # noqa: SIM109 (no tuple built on the hot path)
+            if not sw:
+                self.mismatch_n += 1
+                if self.mismatch_n >= STUCK_OFF_SAMPLES:
+                    self._fault(now, X_STUCK_OFF, F_STUCK_OFF)
+                    return
+            else:
+                self.mismatch_n = 0
+            if ma >= (self.inrush_lim if st == ST_INRUSH else self.trip_lim):
+                self.over_n += 1
+                if self.over_n >= self.trip_samples:
+                    self._trip(now, F_INRUSH if st == ST_INRUSH else F_SHORT, ma)
+                    return
+            else:
+                self.over_n = 0
+            if st == ST_INRUSH:
+                if now >= self.deadline:
+                    self.fire(X_INRUSH_END, now)
+                return
+            r = ma * 100 // self.rated
+            if r > RATIO_CAP:
+                r = RATIO_CAP
+            h = self.heat + (r * r - self.start2) * dt
+            self.heat = h if h > 0 else 0
+            if h >= self.heat_max:
+                self._trip(now, F_OVERLOAD, ma)
+                return
+            if ma < self.open_ma:
+                if self.low_since < 0:
+                    self.low_since = now
+                elif now - self.low_since >= self.open_ms and not self.live & F_OPEN_LOAD:
+                    self.live |= F_OPEN_LOAD
+                    self.sticky |= F_OPEN_LOAD
+                    self.log.put(EV_WARNING, self.index, st, st,  # type: ignore[attr-defined]
+                                 F_OPEN_LOAD, ma, now - self.boot_ms)
+            elif self.low_since >= 0:
+                self.low_since = -1
+                if self.live & F_OPEN_LOAD:
+                    self.live &= ~F_OPEN_LOAD
+                    self.log.put(EV_FAULT, self.index, st, st, 0,  # type: ignore[attr-defined]
+                                 ma, now - self.boot_ms)
+        else:
+            if self.heat:
+                h = self.heat - self.start2 * dt
+                self.heat = h if h > 0 else 0
+            if st != ST_FAULTED:
+                if ma > self.stuck_on_ma:
+                    if self.stuck_since < 0:
+                        self.stuck_since = now
+                    if now - self.stuck_since >= self.stuck_on_ms:
+                        self._fault(now, X_STUCK_ON, F_STUCK_ON)
+                        return
+                else:
+                    self.stuck_since = -1
+                if st == ST_TRIPPED:
+                    if now >= self.deadline:
+                        self.fire(X_RETRY, now)
+                    return
+                if self.cycle_at >= 0 and now >= self.cycle_at:
+                    self.cycle_at = -1
+                    if st == ST_OFF:
+                        self.commanded = True
+                        self.fire(X_ON, now)
+                    return
+        if (self.retries or self.short_used) and now - self.last_fault_ms >= self.retry_reset_ms \
+                and st != ST_LATCHED and st != ST_FAULTED:
+            self.retries = 0
+            self.short_used = 0

@@ -1,0 +1,198 @@
+"""A HAL whose electronics live elsewhere: the firmware in ``micropython``, fed by the emulator.
+
+``micropython -m firmware.hal.remote HOST PORT`` connects twice to the emulator
+(``emulator/mpy.py``), which keeps the simulated electronics and the clock; this process runs
+the real firmware (``App``) and its front ends (``firmware.net``, ``firmware.modbus``) on
+MicroPython's asyncio. Two links, JSON lines (``\\n``-terminated), lock-step:
+
+- link A, emulator -> firmware, one reply per request, read by an asyncio task here:
+  ``{"op": "boot", "cause": C, "n": N, "seed": S, "tcp": P, "modbus": P|null}`` builds a new
+  ``App`` on a new ``RemoteHal`` (the first boot also starts the servers on 127.0.0.1);
+  ``{"op": "step", "t": ms, "ma": [..], "sw": [..], "mv": mv}`` sets this step's clock and
+  readings, runs ``App.step`` and ``Net.pump``, answers ``{"due", "feeds", "reboot"}``;
+  ``{"op": "call", "m": NAME, "a": [..]}`` calls a ``Board`` method (the emulator's status,
+  scenario commands) and answers ``{"r": result}``; ``{"op": "mem"}`` collects garbage and
+  answers ``{"alloc": B, "free": B}``: the heap the running firmware holds beyond what was
+  allocated once its modules were imported (benchmarks).
+- link B, firmware -> emulator, a blocking request whenever the firmware must act at once:
+  ``["set_switch", ch, on]`` -> the switch read-backs after it; storage ``["read", name]``
+  (hex or null), ``["write", name, hex]``, ``["rename", a, b]``, ``["remove", name]``.
+
+Between steps the readings stay those of the last step, as a sampled ADC's would.
+"""
+
+import asyncio
+import binascii
+import gc
+import json
+import random
+import socket
+import sys
+
+from firmware import modbus
+from firmware.app import App
+from firmware.net import Net
+from firmware.session import FIRMWARE_VERSION
+
+
+class Link:
+    """Link B: blocking JSON-line requests to the emulator."""
+
+    def __init__(self, sock: object) -> None:
+        self.sock = sock
+        self.buf = b""
+
+    def call(self, req: list) -> object:  # type: ignore[type-arg]
+        self.sock.sendall(json.dumps(req).encode() + b"\n")  # type: ignore[attr-defined]
+        while b"\n" not in self.buf:
+            chunk = self.sock.recv(4096)  # type: ignore[attr-defined]
+            if not chunk:
+                raise OSError("emulator link closed")
+            self.buf += chunk
+        i = self.buf.index(b"\n")
+        line = self.buf[:i]
+        self.buf = self.buf[i + 1:]
+        return json.loads(line)
+
+
+class RemoteStorage:
+    def __init__(self, link: Link) -> None:
+        self.link = link
+
+    def read(self, name: str) -> "bytes | None":
+        got = self.link.call(["read", name])
+        return None if got is None else binascii.unhexlify(got)  # type: ignore[arg-type]
+
+    def write(self, name: str, data: bytes) -> None:
+        self.link.call(["write", name, binascii.hexlify(data).decode()])
+
+    def rename(self, old: str, new: str) -> None:
+        self.link.call(["rename", old, new])
+
+    def remove(self, name: str) -> None:
+        self.link.call(["remove", name])
+
+
+class RemoteHal:
+    def __init__(self, link: Link, n: int, cause: int, seed: int) -> None:
+        self.link = link
+        self.n_channels = n
+        self.storage = RemoteStorage(link)
+        self.cause = cause
+        self.now = 0
+        self.ma = [0] * n
+        self.sw = [False] * n
+        self.mv = 0
+        self.feeds = 0
+        self.rebooted = False
+        random.seed(seed)
+
+    def ticks_ms(self) -> int:
+        return self.now
+
+    def read_currents_ma(self, out: list) -> None:  # type: ignore[type-arg]
+        ma = self.ma
+        for ch in range(self.n_channels):
+            out[ch] = ma[ch]
+
+    def read_current_ma(self, ch: int) -> int:
+        return self.ma[ch]  # type: ignore[no-any-return]
+
+    def set_switch(self, ch: int, on: bool) -> None:
+        self.sw = self.link.call(["set_switch", ch, on])  # type: ignore[assignment]
+
+    def read_switch(self, ch: int) -> bool:
+        return self.sw[ch]
+
+    def read_input_mv(self) -> int:
+        return self.mv
+
+    def wdt_feed(self) -> None:
+        self.feeds += 1
+
+    def reset_cause(self) -> int:
+        return self.cause
+
+    def random_bytes(self, n: int) -> bytes:
+        return bytes([random.getrandbits(8) for _ in range(n)])
+
+    def reboot(self) -> None:
+        self.rebooted = True
+
+
+class Runner:
+    def __init__(self, link: Link) -> None:
+        gc.collect()
+        self.base = gc.mem_alloc()  # type: ignore[attr-defined]
+        self.link = link
+        self.app: "App | None" = None
+        self.hal: "RemoteHal | None" = None
+        self.net: "Net | None" = None
+        self.tasks: list = []  # type: ignore[type-arg]
+
+    async def boot(self, req: dict) -> dict:  # type: ignore[type-arg]
+        hal = RemoteHal(self.link, req["n"], req["cause"], req["seed"])
+        app = App(hal)
+        self.hal = hal
+        self.app = app
+        app.start()
+        if self.net is None:
+            self.net = Net(app, FIRMWARE_VERSION, req.get("caps", 0))
+            await self.net.serve_tcp("127.0.0.1", req["tcp"])
+            if req.get("modbus"):
+                await modbus.serve(self.net, "127.0.0.1", req["modbus"])
+            self.tasks.append(asyncio.create_task(self.net.housekeeping()))
+        else:
+            self.net.attach(app)
+        return {"ok": 1}
+
+    def step(self, req: dict) -> dict:  # type: ignore[type-arg]
+        hal = self.hal
+        app = self.app
+        hal.now = req["t"]  # type: ignore[union-attr]
+        hal.ma = req["ma"]  # type: ignore[union-attr]
+        hal.sw = req["sw"]  # type: ignore[union-attr]
+        hal.mv = req["mv"]  # type: ignore[union-attr]
+        hal.feeds = 0  # type: ignore[union-attr]
+        due = app.step()  # type: ignore[union-attr]
+        self.net.pump(hal.now)  # type: ignore[union-attr]
+        return {"due": due, "feeds": hal.feeds, "reboot": hal.rebooted}  # type: ignore[union-attr]
+
+    def call(self, req: dict) -> dict:  # type: ignore[type-arg]
+        board = self.app.board  # type: ignore[union-attr]
+        return {"r": getattr(board, req["m"])(*req["a"])}
+
+    async def serve(self, host: str, port: int) -> None:
+        reader, writer = await asyncio.open_connection(host, port)
+        writer.write(b"A\n")
+        await writer.drain()
+        while True:
+            line = await reader.readline()
+            if not line:
+                return
+            req = json.loads(line)
+            op = req["op"]
+            if op == "step":
+                rep = self.step(req)
+            elif op == "boot":
+                rep = await self.boot(req)
+            elif op == "mem":
+                gc.collect()
+                rep = {"alloc": gc.mem_alloc() - self.base,  # type: ignore[attr-defined]
+                       "free": gc.mem_free()}  # type: ignore[attr-defined]
+            else:
+                rep = self.call(req)
+            writer.write(json.dumps(rep).encode() + b"\n")
+            await writer.drain()
+
+
+def main(host: str, port: int) -> None:
+    """Connect link B (blocking), then serve link A on asyncio; each names itself first."""
+    sock = socket.socket()
+    sock.connect(socket.getaddrinfo(host, port)[0][-1])
+    sock.sendall(b"B\n")
+    asyncio.run(Runner(Link(sock)).serve(host, port))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], int(sys.argv[2]))

@@ -1,0 +1,106 @@
+"""The real board's HAL: ``machine.Pin`` switches, ADC or INA226 current sensing, ``machine.WDT``.
+
+Only ``firmware/main.py`` builds this class, passing the pin numbers of the board revision.
+Current is read either from one ``machine.ADC`` per channel across a shunt amplifier
+(``adc_pins``, ``ma_per_count_x1000`` = mA per ADC count, times 1000) or from one INA226 per
+channel on an I2C bus (``ina226_addrs``, shunt register 2.5 µV/LSB, ``shunt_uohm`` the shunt in
+micro-ohms). Each switch has an enable pin and, where the board has one, a status (read-back)
+pin; without one the enable pin's output latch is read back. ``ticks_ms`` turns the port's
+wrapping ``time.ticks_ms`` into a monotonic count with ``ticks_diff``.
+"""
+
+import os
+import time
+
+import machine  # type: ignore[import-not-found]
+
+from protocol.constants import (
+    RESET_BROWNOUT,
+    RESET_POWER_ON,
+    RESET_SOFT,
+    RESET_UNKNOWN,
+    RESET_WATCHDOG,
+)
+
+INA226_SHUNT = 0x01
+INA226_BUS = 0x02
+
+
+class TargetHal:
+    def __init__(self, en_pins, status_pins=None, adc_pins=None, ma_per_count_x1000=1000,
+                 i2c=None, ina226_addrs=None, shunt_uohm=10000, vin_adc_pin=None,
+                 mv_per_count_x1000=1000, wdt_timeout_ms=2000, storage=None):
+        self.n_channels = len(en_pins)
+        self.en = [machine.Pin(p, machine.Pin.OUT, value=0) for p in en_pins]
+        self.status = [machine.Pin(p, machine.Pin.IN) for p in status_pins] if status_pins else None
+        self.adc = [machine.ADC(machine.Pin(p)) for p in adc_pins] if adc_pins else None
+        self.ma_k = ma_per_count_x1000
+        self.i2c = i2c
+        self.ina = ina226_addrs
+        self.shunt_uohm = shunt_uohm
+        self.vin = machine.ADC(machine.Pin(vin_adc_pin)) if vin_adc_pin is not None else None
+        self.mv_k = mv_per_count_x1000
+        self._buf = bytearray(2)
+        self._t0 = time.ticks_ms()
+        self._ms = 0
+        self.storage = storage
+        self._cause = self._read_cause()
+        self.wdt = machine.WDT(timeout=wdt_timeout_ms)
+
+    def _read_cause(self):
+        c = machine.reset_cause()
+        if c == getattr(machine, "WDT_RESET", -1):
+            return RESET_WATCHDOG
+        if c == getattr(machine, "SOFT_RESET", -1):
+            return RESET_SOFT
+        if c == getattr(machine, "PWRON_RESET", -1):
+            return RESET_POWER_ON
+        if c == getattr(machine, "BROWNOUT_RESET", -2):
+            return RESET_BROWNOUT
+        return RESET_UNKNOWN
+
+    def ticks_ms(self):
+        t = time.ticks_ms()
+        self._ms += time.ticks_diff(t, self._t0)
+        self._t0 = t
+        return self._ms
+
+    def read_current_ma(self, ch):
+        if self.ina is not None:
+            self.i2c.readfrom_mem_into(self.ina[ch], INA226_SHUNT, self._buf)
+            raw = (self._buf[0] << 8) | self._buf[1]
+            if raw & 0x8000:
+                raw -= 0x10000
+            if raw < 0:
+                raw = 0
+            return raw * 2500 // self.shunt_uohm  # 2.5 uV/LSB over the shunt, in mA
+        if self.adc is not None:
+            return self.adc[ch].read_u16() * self.ma_k // 1000
+        return 0
+
+    def read_currents_ma(self, out):
+        for ch in range(self.n_channels):
+            out[ch] = self.read_current_ma(ch)
+
+    def set_switch(self, ch, on):
+        self.en[ch].value(1 if on else 0)
+
+    def read_switch(self, ch):
+        if self.status is not None:
+            return bool(self.status[ch].value())
+        return bool(self.en[ch].value())
+
+    def read_input_mv(self):
+        return self.vin.read_u16() * self.mv_k // 1000 if self.vin is not None else 0
+
+    def wdt_feed(self):
+        self.wdt.feed()
+
+    def reset_cause(self):
+        return self._cause
+
+    def random_bytes(self, n):
+        return os.urandom(n)
+
+    def reboot(self):
+        machine.reset()

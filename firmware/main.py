@@ -1,0 +1,67 @@
+"""The board's entry point: build the real HAL for this board revision and run the firmware.
+
+This is the only module that touches ``machine`` (through ``firmware.hal.target``). The pin map
+below is the dxboard rev A: ten high-side switches with status outputs, ten INA226 monitors on
+I2C(0), the input voltage on an ADC pin through a 1:11 divider. Everything runs on asyncio
+(``firmware.net``): the protection loop (one step per tick, then the pushes), the native
+protocol on TCP port 7000 and on UART(1), Modbus TCP on port 502, each registered with the
+supervisor. The network interface is brought up by ``boot.py`` before this runs.
+"""
+
+import asyncio
+
+import machine  # type: ignore[import-not-found]
+
+from firmware import modbus
+from firmware.app import App
+from firmware.hal.storage import FileStorage
+from firmware.hal.target import TargetHal
+from firmware.net import Net
+from firmware.session import FIRMWARE_VERSION
+from protocol.constants import (
+    CAP_AUTH,
+    CAP_CONFIG,
+    CAP_EVENTS,
+    CAP_MODBUS,
+    CAP_SUBSCRIBE,
+    CAP_VOLTAGE,
+)
+
+EN_PINS = (2, 3, 4, 5, 6, 7, 8, 9, 10, 11)
+STATUS_PINS = (12, 13, 14, 15, 16, 17, 18, 19, 20, 21)
+INA226_ADDRS = (0x40, 0x41, 0x42, 0x43, 0x44, 0x45, 0x46, 0x47, 0x48, 0x49)
+VIN_PIN = 26
+TCP_PORT = 7000
+MODBUS_PORT = 502
+UART_ID = 1
+UART_BAUD = 115200
+CAPS = CAP_AUTH | CAP_SUBSCRIBE | CAP_EVENTS | CAP_CONFIG | CAP_MODBUS | CAP_VOLTAGE
+
+
+async def run(app: App, uart: object) -> None:
+    net = Net(app, FIRMWARE_VERSION, CAPS)
+    await net.serve_tcp("0.0.0.0", TCP_PORT)
+    await modbus.serve(net, "0.0.0.0", MODBUS_PORT)
+    tasks = [asyncio.create_task(net.housekeeping())]
+    stream = asyncio.StreamReader(uart)  # type: ignore[arg-type] # MicroPython: one Stream
+    tasks.append(asyncio.create_task(_serial(net, stream)))
+    await net.protect()
+
+
+async def _serial(net: Net, stream: object) -> None:
+    while True:  # one session per stream; a new one if it ever ends
+        await net.serve_stream(stream, stream, close=False)
+
+
+def main() -> None:
+    i2c = machine.I2C(0, freq=400000)
+    hal = TargetHal(EN_PINS, STATUS_PINS, i2c=i2c, ina226_addrs=INA226_ADDRS,
+                    shunt_uohm=10000, vin_adc_pin=VIN_PIN, mv_per_count_x1000=55000,
+                    storage=FileStorage(""))
+    app = App(hal)
+    app.start()
+    uart = machine.UART(UART_ID, UART_BAUD)
+    asyncio.run(run(app, uart))
+
+
+main()

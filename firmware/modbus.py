@@ -1,0 +1,410 @@
+"""Modbus TCP server of the board (PROTOCOL.md §8): MBAP framing, the register map, asyncio.
+
+Sans I/O first: ``Framer`` splits a byte stream into MBAP requests; ``handle(board, request,
+client_ip) -> bytes`` answers one whole ADU; ``serve(net, host, port)`` is the asyncio wrapper
+(the board comes from ``net.app``, so it follows reboots). Frames::
+
+    +--------+--------+--------+------+------+----------+
+    | trans  | proto  | length | unit |  fc  |   data   |     (big-endian u16s)
+    +--------+--------+--------+------+------+----------+
+        2        2        2       1      1     length-2
+
+Any unit id is answered. A protocol id other than 0 or a length above 254 (or below 2)
+closes the connection. Map, channel k (addresses of missing channels read 0):
+
+- coils (FC1, FC5, FC15) 0..15: commanded switch; a write switches without force.
+- discrete inputs (FC2) 0..15: physical read-back; 16..31: any live fault.
+- input registers (FC4) 0..15 current mA (u16, negative -> 0, saturating), 16..31 state,
+  32..47 live faults, 48..63 sticky faults, 64..79 trips, 100 input mV, 101-102 total mA
+  (u32, high word first), 103-104 uptime ms (u32), 105 board flags, 106 reset cause,
+  107 config status, 108 channel count, 109 protocol version.
+- holding registers (FC3, FC6, FC16): channel k's configuration at 1000+32k (offsets in
+  ``CH_REGS``; u32 fields take two registers, high word first; ``retry_ms`` four, 0 = unused;
+  values above 65535 read 65535), the board's at 900-909 (``BOARD_REGS``), 990 the command
+  register (write 1 = save the configuration; reads 0). ``protected`` is never writable here:
+  writing a value other than the current one is exception 02.
+
+Requests reaching outside a table's span (coils 0-15, discrete inputs 0-31, input registers
+0-109, holding registers 900-1511) get exception 02; unassigned addresses inside it read 0 and
+are not writable (02). Counts out of range or bad values: 03. Writes need ``modbus_write``
+and the client's IPv4 address in ``modbus_allow``, else 01; an unknown function is 01; the
+board refusing (latched, protected, switch fault, inhibited, storage) is 04. A write is checked
+completely before anything changes, except that FC15 switches channel by channel and stops at
+the first refusal.
+"""
+
+import asyncio
+import struct
+
+from firmware import config
+from protocol.compat import const
+from protocol.constants import E_BAD_CHANNEL, PROTOCOL_VERSION
+
+MAX_LEN = const(254)
+MAX_CHANNELS = const(16)
+COIL_SPAN = const(16)
+DISCRETE_SPAN = const(32)
+INPUT_SPAN = const(110)
+HOLD_LO = const(900)
+HOLD_HI = const(1512)  # exclusive
+CH_BASE = const(1000)
+CH_STRIDE = const(32)
+CMD_REG = const(990)
+
+X_FUNCTION = const(1)
+X_ADDRESS = const(2)
+X_VALUE = const(3)
+X_DEVICE = const(4)
+
+# field -> (offset, words); words 2 = u32 high word first
+CH_REGS = (
+    ("rated_ma", 0, 2), ("inrush_ms", 2, 1), ("inrush_factor_x10", 3, 1),
+    ("trip_factor_x10", 4, 1), ("trip_samples", 5, 1), ("overload_start_x100", 6, 1),
+    ("i2t_ms", 7, 1), ("short_retries", 8, 1), ("open_load_ma", 9, 1), ("open_load_ms", 10, 1),
+    ("stuck_on_ma", 11, 1), ("stuck_on_ms", 12, 1), ("powerup", 13, 1), ("priority", 14, 1),
+    ("protected", 15, 1), ("retry_reset_ms", 20, 2),
+)
+RETRY_OFF = const(16)
+RETRY_N = const(4)
+BOARD_REGS = (
+    ("total_limit_ma", 900, 2), ("uv_warn_mv", 902, 1), ("uv_shed_mv", 903, 1),
+    ("uv_off_mv", 904, 1), ("uv_hyst_mv", 905, 1), ("tick_ms", 906, 1),
+    ("powerup_spacing_ms", 907, 1), ("deadman_ms", 908, 2),
+)
+
+
+def _u16(v: int) -> int:
+    v = int(v)
+    return 0 if v < 0 else (0xFFFF if v > 0xFFFF else v)
+
+
+def _u32(v: int) -> int:
+    v = int(v)
+    return 0 if v < 0 else (0xFFFFFFFF if v > 0xFFFFFFFF else v)
+
+
+class Framer:
+    """Bytes in, whole MBAP ADUs out; ``bad`` once the stream must be closed."""
+
+    def __init__(self) -> None:
+        self.buf = b""
+        self.bad = False
+
+    def feed(self, data: bytes) -> None:
+        self.buf += data
+
+    def next(self) -> "bytes | None":
+        buf = self.buf
+        if self.bad or len(buf) < 7:
+            return None
+        proto, length = struct.unpack_from(">HH", buf, 2)
+        if proto != 0 or length > MAX_LEN or length < 2:
+            self.bad = True
+            self.buf = b""
+            return None
+        end = 6 + length
+        if len(buf) < end:
+            return None
+        self.buf = buf[end:]
+        return buf[:end]
+
+
+# --- register images ---------------------------------------------------------------------
+
+
+def _input_regs(board: object) -> list:  # type: ignore[type-arg]
+    regs = [0] * INPUT_SPAN
+    (mv, total, uptime, cause, cfg_status, flags), chans = board.status()  # type: ignore[attr-defined]
+    for k in range(min(len(chans), MAX_CHANNELS)):
+        c = chans[k]
+        regs[k] = _u16(c[3])
+        regs[16 + k] = c[2]
+        regs[32 + k] = c[4] & 0xFFFF
+        regs[48 + k] = c[5] & 0xFFFF
+        regs[64 + k] = _u16(c[6])
+    regs[100] = _u16(mv)
+    t = _u32(total)
+    regs[101] = t >> 16
+    regs[102] = t & 0xFFFF
+    u = _u32(uptime)
+    regs[103] = u >> 16
+    regs[104] = u & 0xFFFF
+    regs[105] = flags & 0xFFFF
+    regs[106] = cause
+    regs[107] = cfg_status
+    regs[108] = board.n  # type: ignore[attr-defined]
+    regs[109] = PROTOCOL_VERSION
+    return regs
+
+
+def _put(regs: dict, addr: int, words: int, value: int) -> None:  # type: ignore[type-arg]
+    if words == 2:
+        v = _u32(value)
+        regs[addr] = v >> 16
+        regs[addr + 1] = v & 0xFFFF
+    else:
+        regs[addr] = _u16(value)
+
+
+def _get(regs: dict, addr: int, words: int) -> int:  # type: ignore[type-arg]
+    if words == 2:
+        return (regs[addr] << 16) | regs[addr + 1]  # type: ignore[no-any-return]
+    return regs[addr]  # type: ignore[no-any-return]
+
+
+def _channel_regs(cfg: dict, base: int, regs: dict) -> None:  # type: ignore[type-arg]
+    for name, off, words in CH_REGS:
+        _put(regs, base + off, words, cfg[name])
+    retry = cfg["retry_ms"]
+    for i in range(RETRY_N):
+        regs[base + RETRY_OFF + i] = _u16(retry[i]) if i < len(retry) else 0
+
+
+def _board_regs(cfg: dict, regs: dict) -> None:  # type: ignore[type-arg]
+    for name, addr, words in BOARD_REGS:
+        _put(regs, addr, words, cfg[name])
+    regs[CMD_REG] = 0
+
+
+def _holding(board: object, lo: int, hi: int) -> dict:  # type: ignore[type-arg]
+    """Register image of the holding table for ``lo <= addr < hi`` (at least)."""
+    regs: dict = {}  # type: ignore[type-arg]
+    if lo < CH_BASE:
+        _board_regs(board.cfg["board"], regs)  # type: ignore[attr-defined]
+    n = board.n  # type: ignore[attr-defined]
+    for k in range(MAX_CHANNELS):
+        base = CH_BASE + CH_STRIDE * k
+        if base + CH_STRIDE <= lo or base >= hi or k >= n:
+            continue
+        _channel_regs(board.cfg["channels"][k], base, regs)  # type: ignore[attr-defined]
+    return regs
+
+
+def _is_assigned(addr: int) -> bool:
+    if addr >= CH_BASE:
+        off = (addr - CH_BASE) % CH_STRIDE
+        return off < 22
+    return 900 <= addr < 910 or addr == CMD_REG
+
+
+# --- requests ----------------------------------------------------------------------------
+
+
+def _allowed(board: object, client_ip: str) -> bool:
+    b = board.cfg["board"]  # type: ignore[attr-defined]
+    return bool(b.get("modbus_write")) and client_ip in b.get("modbus_allow", [])
+
+
+def _bits(values: list) -> bytes:  # type: ignore[type-arg]
+    out = bytearray((len(values) + 7) // 8)
+    for i in range(len(values)):
+        if values[i]:
+            out[i >> 3] |= 1 << (i & 7)
+    return bytes([len(out)]) + bytes(out)
+
+
+def _words(values: list) -> bytes:  # type: ignore[type-arg]
+    return bytes([2 * len(values)]) + struct.pack(">%dH" % len(values), *values)
+
+
+def _read(board: object, fc: int, addr: int, count: int) -> "bytes | int":
+    if fc == 1 or fc == 2:
+        if not 1 <= count <= 2000:
+            return X_VALUE
+        span = COIL_SPAN if fc == 1 else DISCRETE_SPAN
+        if addr + count > span:
+            return X_ADDRESS
+        chans = board.channels  # type: ignore[attr-defined]
+        n = len(chans)
+        vals = []
+        for a in range(addr, addr + count):
+            k = a % 16
+            if k >= n:
+                vals.append(0)
+            elif fc == 1:
+                vals.append(chans[k].commanded)
+            elif a < 16:
+                vals.append(chans[k].physical)
+            else:
+                vals.append(chans[k].live != 0)
+        return _bits(vals)
+    if not 1 <= count <= 125:
+        return X_VALUE
+    if fc == 4:
+        if addr + count > INPUT_SPAN:
+            return X_ADDRESS
+        return _words(_input_regs(board)[addr:addr + count])
+    if addr < HOLD_LO or addr + count > HOLD_HI:
+        return X_ADDRESS
+    regs = _holding(board, addr, addr + count)
+    return _words([regs.get(a, 0) for a in range(addr, addr + count)])
+
+
+def _write_coils(board: object, addr: int, values: list) -> int:  # type: ignore[type-arg]
+    n = board.n  # type: ignore[attr-defined]
+    if addr + len(values) > COIL_SPAN or addr + len(values) > n:
+        return X_ADDRESS
+    for i in range(len(values)):
+        err = board.switch(addr + i, bool(values[i]), False)[0]  # type: ignore[attr-defined]
+        if err == E_BAD_CHANNEL:
+            return X_ADDRESS
+        if err:
+            return X_DEVICE
+    return 0
+
+
+def _write_regs(board: object, addr: int, values: list) -> int:  # type: ignore[type-arg]
+    end = addr + len(values)
+    if addr < HOLD_LO or end > HOLD_HI:
+        return X_ADDRESS
+    n = board.n  # type: ignore[attr-defined]
+    regs = _holding(board, addr, end)
+    for i in range(len(values)):
+        a = addr + i
+        if not _is_assigned(a) or (a >= CH_BASE and (a - CH_BASE) // CH_STRIDE >= n):
+            return X_ADDRESS
+        if a >= CH_BASE and (a - CH_BASE) % CH_STRIDE == 15 and values[i] != regs[a]:
+            return X_ADDRESS  # protected: never writable over Modbus
+        regs[a] = values[i]
+    save = CMD_REG in regs and addr <= CMD_REG < end
+    if save and regs[CMD_REG] != 1:
+        return X_VALUE
+    # decode and check everything before applying anything
+    board_fields = None
+    if addr < 910:
+        board_fields = {}
+        for name, a, words in BOARD_REGS:
+            board_fields[name] = _get(regs, a, words)
+        if config.check_board(board_fields) is not None:
+            return X_VALUE
+    updates = []
+    for k in range(min(n, MAX_CHANNELS)):
+        base = CH_BASE + CH_STRIDE * k
+        if base + CH_STRIDE <= addr or base >= end:
+            continue
+        fields: dict = {}  # type: ignore[type-arg]
+        for name, off, words in CH_REGS:
+            v = _get(regs, base + off, words)
+            if name == "powerup" or name == "protected":
+                if v > 1:
+                    return X_VALUE
+                v = bool(v)
+            fields[name] = v
+        retry = []
+        for i in range(RETRY_N):
+            v = regs[base + RETRY_OFF + i]
+            if v:
+                retry.append(v)
+        fields["retry_ms"] = retry
+        if config.check_channel(fields) is not None:
+            return X_VALUE
+        updates.append((k, fields))
+    if board_fields is not None and board.set_board_config(board_fields):  # type: ignore[attr-defined]
+        return X_VALUE
+    for k, fields in updates:
+        if board.set_channel_config(k, fields):  # type: ignore[attr-defined]
+            return X_VALUE
+    if save and board.save_config():  # type: ignore[attr-defined]
+        return X_DEVICE
+    return 0
+
+
+def handle_pdu(board: object, pdu: bytes, client_ip: str) -> bytes:
+    """The response PDU to one request PDU (function code first)."""
+    fc = pdu[0]
+    body = pdu[1:]
+    if fc in (1, 2, 3, 4):
+        if len(body) != 4:
+            return bytes([fc | 0x80, X_VALUE])
+        addr, count = struct.unpack(">HH", body)
+        got = _read(board, fc, addr, count)
+        if isinstance(got, int):
+            return bytes([fc | 0x80, got])
+        return bytes([fc]) + got
+    if fc not in (5, 6, 15, 16):
+        return bytes([fc | 0x80, X_FUNCTION])
+    if not _allowed(board, client_ip):
+        return bytes([fc | 0x80, X_FUNCTION])
+    if fc == 5 or fc == 6:
+        if len(body) != 4:
+            return bytes([fc | 0x80, X_VALUE])
+        addr, value = struct.unpack(">HH", body)
+        if fc == 5:
+            if value not in (0, 0xFF00):
+                return bytes([fc | 0x80, X_VALUE])
+            err = _write_coils(board, addr, [value == 0xFF00])
+        else:
+            err = _write_regs(board, addr, [value])
+        if err:
+            return bytes([fc | 0x80, err])
+        return pdu
+    if len(body) < 5:
+        return bytes([fc | 0x80, X_VALUE])
+    addr, count, nbytes = struct.unpack_from(">HHB", body)
+    data = body[5:]
+    if fc == 15:
+        if not 1 <= count <= 1968 or nbytes != (count + 7) // 8 or len(data) != nbytes:
+            return bytes([fc | 0x80, X_VALUE])
+        err = _write_coils(board, addr, [(data[i >> 3] >> (i & 7)) & 1 for i in range(count)])
+    else:
+        if not 1 <= count <= 123 or nbytes != 2 * count or len(data) != nbytes:
+            return bytes([fc | 0x80, X_VALUE])
+        err = _write_regs(board, addr, list(struct.unpack(">%dH" % count, data)))
+    if err:
+        return bytes([fc | 0x80, err])
+    return bytes([fc]) + struct.pack(">HH", addr, count)
+
+
+def handle(board: object, adu: bytes, client_ip: str) -> bytes:
+    """The response ADU to one request ADU (as cut by ``Framer``)."""
+    tid, _, _, unit = struct.unpack_from(">HHHB", adu)
+    try:
+        pdu = handle_pdu(board, adu[7:], client_ip)
+    except (ValueError, TypeError, KeyError, IndexError):
+        pdu = bytes([adu[7] | 0x80, X_DEVICE])
+    if pdu and pdu[0] & 0x80 == 0 and pdu[0] in (5, 6, 15, 16):
+        board.host_seen(board.now)  # type: ignore[attr-defined]
+    return struct.pack(">HHHB", tid, 0, len(pdu) + 1, unit) + pdu
+
+
+# --- asyncio wrapper ---------------------------------------------------------------------
+
+
+async def serve(net: object, host: str = "0.0.0.0", port: int = 502) -> object:
+    """Serve Modbus TCP for ``net.app.board`` (a ``firmware.net.Net``)."""
+
+    async def client(reader: object, writer: object) -> None:
+        peer = writer.get_extra_info("peername")  # type: ignore[attr-defined]
+        ip = peer[0] if peer else ""
+        framer = Framer()
+        timeout = net.read_timeout_ms / 1000  # type: ignore[attr-defined]
+        try:
+            while True:
+                try:
+                    data = await asyncio.wait_for(reader.read(512), timeout)  # type: ignore[attr-defined]
+                except asyncio.TimeoutError:  # noqa: UP041 (MicroPython has no builtin TimeoutError)
+                    break
+                if not data:
+                    break
+                framer.feed(data)
+                while True:
+                    adu = framer.next()
+                    if adu is None:
+                        break
+                    writer.write(handle(net.app.board, adu, ip))  # type: ignore[attr-defined]
+                    await writer.drain()  # type: ignore[attr-defined]
+                if framer.bad:
+                    break
+                await asyncio.sleep(0)
+        except OSError:
+            pass
+        try:
+            writer.close()  # type: ignore[attr-defined]
+            await writer.wait_closed()  # type: ignore[attr-defined]
+        except OSError:
+            pass
+
+    return await asyncio.start_server(client, host, port)
+
+
+__all__ = ["Framer", "handle", "handle_pdu", "serve"]

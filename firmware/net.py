@@ -1,0 +1,222 @@
+"""The board's asyncio front ends: native protocol over TCP and over a serial byte stream.
+
+Each connection (or the serial stream) gets a ``Session`` (``firmware/session.py``, sans I/O)
+and two tasks: the reader feeds received bytes to the session and queues its replies; the
+writer sends the client's queue. ``pump(now)``, called after every protection step, polls each
+session and queues its pushes (events at once, measurements when due). Nothing here can hold
+up protection: the protection step never waits for a client, each client's queue is bounded,
+and a client whose queue holds more than ``SOFT_CAP`` bytes (a slow reader) has its due
+measurements skipped (the session keeps counting, so the client sees the gap in ``seq``);
+events are never skipped: a client that lets ``HARD_CAP`` bytes pile up is disconnected
+instead. A flood of bytes is read ``READ_SIZE`` at a time with a yield after each chunk.
+TCP connections silent for ``read_timeout_ms`` (30 s; hosts PING) are closed, which also
+ends half-open connections; at most ``max_clients`` (8) are served, more are closed at once.
+
+``Net(app, firmware_version, capabilities)``; ``attach(app)`` after a reboot (closes every
+client, as a reset would); ``await serve_tcp(host, port)`` returns the server;
+``await serve_stream(reader, writer)`` serves a serial stream until it ends; ``pump(now)``;
+``await protect()`` runs the protection loop (``App.step`` on the HAL clock, then ``pump``)
+for the real board, where the emulator calls ``step`` and ``pump`` itself. ``housekeeping``
+beats the supervisor's ``net`` task once a second. Runs on MicroPython's asyncio and CPython's.
+"""
+
+import asyncio
+
+from firmware.session import Session, board_key
+from protocol.compat import const
+
+READ_SIZE = const(512)
+SOFT_CAP = const(2048)
+HARD_CAP = const(32768)
+MAX_CLIENTS = const(8)
+READ_TIMEOUT_MS = const(30000)
+NET_SILENCE_MS = const(5000)
+
+_sleep_ms = getattr(asyncio, "sleep_ms", None)
+
+
+async def sleep_ms(ms: int) -> None:
+    if _sleep_ms is not None:
+        await _sleep_ms(ms)
+    else:
+        await asyncio.sleep(ms / 1000)
+
+
+class Client:
+    """One stream's session and its bounded output queue."""
+
+    def __init__(self, session: Session, writer: object, name: str) -> None:
+        self.session = session
+        self.writer = writer
+        self.name = name
+        self.out: list = []  # type: ignore[type-arg]
+        self.n = 0
+        self.wake = asyncio.Event()
+        self.closed = False
+        self.skipped = 0  # measurements skipped for this client
+        self.task: object = None  # the task reading this stream
+        self.reading = False
+        self.kicked = False
+
+    def queue(self, data: bytes) -> None:
+        if not data or self.closed:
+            return
+        self.out.append(data)
+        self.n += len(data)
+        if self.n > HARD_CAP:
+            self.close()
+        self.wake.set()
+
+    def close(self) -> None:
+        """End this client (a reset, an overflow): its reader stops waiting at once."""
+        self.closed = True
+        self.out = []
+        self.n = 0
+        self.wake.set()
+        if self.reading and self.task is not None and not self.kicked:
+            self.kicked = True
+            self.task.cancel()  # type: ignore[attr-defined]
+
+    async def write_loop(self) -> None:
+        w = self.writer
+        try:
+            while not self.closed:
+                await self.wake.wait()
+                self.wake.clear()
+                while self.out and not self.closed:
+                    data = b"".join(self.out)
+                    self.out = []
+                    w.write(data)  # type: ignore[attr-defined]
+                    await w.drain()  # type: ignore[attr-defined]
+                    self.n -= len(data)
+                    if self.n < 0:
+                        self.n = 0
+        except (OSError, asyncio.CancelledError):
+            pass
+        self.closed = True
+
+
+class Net:
+    def __init__(self, app: object, firmware_version: str, capabilities: int,
+                 read_timeout_ms: int = READ_TIMEOUT_MS, max_clients: int = MAX_CLIENTS) -> None:
+        self.firmware_version = firmware_version
+        self.capabilities = capabilities
+        self.read_timeout_ms = read_timeout_ms
+        self.max_clients = max_clients
+        self.clients: list = []  # type: ignore[type-arg]
+        self.app = app
+        self.hal = app.hal  # type: ignore[attr-defined]
+        self.task = -1
+        self.attach(app)
+
+    def attach(self, app: object) -> None:
+        """Serve ``app`` (a new boot): every client of the old one is closed."""
+        self.app = app
+        self.hal = app.hal  # type: ignore[attr-defined]
+        for c in self.clients:
+            c.close()
+        sup = app.supervisor  # type: ignore[attr-defined]
+        self.task = sup.register("net", NET_SILENCE_MS, self.hal.ticks_ms())
+
+    def now(self) -> int:
+        return self.hal.ticks_ms()  # type: ignore[no-any-return]
+
+    def _session(self) -> Session:
+        board = self.app.board  # type: ignore[attr-defined]
+        return Session(board, board_key(board), self.hal.random_bytes, self.firmware_version,
+                       self.capabilities, self.now())
+
+    # --- pushes, after every protection step ------------------------------------------
+
+    def pump(self, now: int) -> None:
+        for c in self.clients:
+            if c.closed:
+                continue
+            room = c.n < SOFT_CAP
+            data = c.session.poll(now, room)
+            if not room and c.session.rate_hz:
+                c.skipped += 1
+            c.queue(data)
+
+    async def protect(self) -> None:
+        """The protection loop of the real board: one step per tick, then the pushes."""
+        app = self.app
+        while True:
+            due = app.step()  # type: ignore[attr-defined]
+            now = self.now()
+            self.pump(now)
+            wait = due - now
+            await sleep_ms(wait if wait > 0 else 0)
+
+    async def housekeeping(self) -> None:
+        while True:
+            self.app.supervisor.beat(self.task, self.now())  # type: ignore[attr-defined]
+            await sleep_ms(1000)
+
+    # --- streams ----------------------------------------------------------------------
+
+    async def serve_tcp(self, host: str = "0.0.0.0", port: int = 7000) -> object:
+        return await asyncio.start_server(self._tcp_client, host, port)
+
+    async def _tcp_client(self, reader: object, writer: object) -> None:
+        live = 0
+        for c in self.clients:
+            if not c.closed:
+                live += 1
+        if live >= self.max_clients:
+            await _close(writer)
+            return
+        await self.serve_stream(reader, writer, self.read_timeout_ms)
+
+    async def serve_stream(self, reader: object, writer: object, timeout_ms: int = 0,
+                           name: str = "", close: bool = True) -> None:
+        """Serve one byte stream until it ends (``timeout_ms`` 0: never time out); a serial
+        port passes ``close=False`` so that the next session can use it."""
+        s = self._session()
+        c = Client(s, writer, name)
+        self.clients.append(c)
+        c.queue(s.start(self.now()))
+        wt = asyncio.create_task(c.write_loop())
+        c.task = asyncio.current_task()
+        try:
+            while not c.closed:
+                c.reading = True
+                try:
+                    if timeout_ms:
+                        data = await asyncio.wait_for(reader.read(READ_SIZE),  # type: ignore[attr-defined]
+                                                      timeout_ms / 1000)
+                    else:
+                        data = await reader.read(READ_SIZE)  # type: ignore[attr-defined]
+                except asyncio.TimeoutError:  # noqa: UP041 (MicroPython has no builtin TimeoutError)
+                    break
+                except asyncio.CancelledError:
+                    if c.kicked:  # closed by the board itself: not a cancellation of ours
+                        break
+                    raise
+                finally:
+                    c.reading = False
+                if c.closed:
+                    break
+                if not data:
+                    s.receive(b"", self.now())
+                    break
+                c.queue(s.receive(data, self.now()))
+                c.queue(s.poll(self.now(), c.n < SOFT_CAP))  # a Reboot's ACK, new events
+                await asyncio.sleep(0)  # a flood must not starve the others
+        except OSError:
+            pass
+        finally:
+            c.close()
+            if c in self.clients:
+                self.clients.remove(c)
+            wt.cancel()
+            if close:
+                await _close(writer)
+
+
+async def _close(writer: object) -> None:
+    try:
+        writer.close()  # type: ignore[attr-defined]
+        await writer.wait_closed()  # type: ignore[attr-defined]
+    except (OSError, asyncio.CancelledError):
+        pass

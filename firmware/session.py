@@ -1,0 +1,334 @@
+"""One client of the native protocol, sans I/O: bytes in, reply bytes out, pushes on poll.
+
+A ``Session`` serves one TCP connection or one serial stream. It owns a
+``protocol.connection.Connection(BOARD, key)`` and a ``Board``; it never touches a socket or a
+clock (time comes in as ``now_ms``, on the HAL clock the board ticks on). The front end
+(``firmware/net.py``) moves the bytes. API:
+
+``Session(board, key, random_bytes, firmware_version, capabilities, now_ms)``
+    ``key`` the actuation key (bytes, or None: every authenticated command is refused with
+    E_AUTH_REQUIRED; ``board_key(board)`` reads it from the board config); ``random_bytes(n)``
+    the HAL's random source (session nonces); ``firmware_version`` a string for HELLO;
+    ``capabilities`` the ``CAP_*`` mask for HELLO.
+``start(now_ms) -> bytes``
+    the HELLO that opens the session: a fresh 16-byte nonce, the board's boot id, reset cause
+    and configuration status. Events logged before ``start`` are not pushed to this session.
+``receive(data, now_ms) -> bytes``
+    feed bytes (``b""`` = the stream ended); returns every reply frame: STATE, ACK, PONG,
+    HELLO, SWITCHED (with the physical read-back), CHANNEL_CONFIG, BOARD_CONFIG, or ERROR
+    (``Connection.error_reply`` for a bad frame, the board's E_* for a refused command). A
+    refused or malformed command changes nothing. Every authenticated message and every PING
+    restarts the board's host dead-man (``board.host_seen``).
+``poll(now_ms, send_measurement=True) -> bytes``
+    the pushes due now: every new board event as EVENT (its log ``seq``; ``dropped`` = events
+    this session lost to the ring since the last EVENT), then a MEASUREMENT when the
+    subscription (SUBSCRIBE 1-100 Hz, 0 stops) is due, numbered from 1 per session. A front end
+    whose client cannot keep up passes ``send_measurement=False``: the due measurement is
+    skipped but its number is used, so the client sees the gap. Events are never skipped.
+``next_due(now_ms) -> int``
+    when ``poll`` next has something to send (``now_ms`` if events are waiting).
+``idle_ms(now_ms) -> int``
+    ms since bytes last arrived; the front end closes a session silent for longer than its read
+    timeout (hosts PING to stay connected).
+``closed``
+    True once the stream ended (``receive(b"")``).
+"""
+
+from firmware.board import (
+    C_COMMANDED,
+    C_CURRENT_MA,
+    C_LIVE,
+    C_PHYSICAL,
+    C_RETRIES,
+    C_STATE,
+    C_STICKY,
+    C_TRIPS,
+)
+from protocol.auth import NONCE_LEN
+from protocol.connection import BOARD, Connection
+from protocol.constants import BOARD_CHANNEL, E_BAD_VALUE, ERROR_TEXT, PROTOCOL_VERSION
+from protocol.framing import BadFrame
+from protocol.messages import (
+    Ack,
+    BoardConfig,
+    ChannelConfig,
+    ChannelStatus,
+    Clear,
+    Error,
+    Event,
+    GetConfig,
+    GetState,
+    Hello,
+    HelloRequest,
+    Measurement,
+    Ping,
+    Pong,
+    PowerCycle,
+    Reboot,
+    SaveConfig,
+    SetBoardConfig,
+    SetChannelConfig,
+    State,
+    Subscribe,
+    Switch,
+    Switched,
+)
+
+FIRMWARE_VERSION = "0.1.0"
+MAX_RATE_HZ = 100
+EVENTS_PER_POLL = 16
+IDLE_DUE_MS = 1000  # next_due when nothing is scheduled
+
+
+def board_key(board: object) -> "bytes | None":
+    """The actuation key from the board configuration (hex), or None when none is set."""
+    text = board.cfg["board"].get("key", "")  # type: ignore[attr-defined]
+    if not text:
+        return None
+    try:
+        return bytes.fromhex(text)
+    except ValueError:
+        return None
+
+
+def ip_to_int(text: str) -> int:
+    """``"10.0.0.1"`` -> 0x0A000001; ValueError if it is not a dotted IPv4 address."""
+    parts = text.split(".")
+    if len(parts) != 4:
+        raise ValueError("not an IPv4 address: %r" % text)
+    n = 0
+    for p in parts:
+        v = int(p)
+        if not 0 <= v <= 255:
+            raise ValueError("not an IPv4 address: %r" % text)
+        n = n * 256 + v
+    return n
+
+
+def _ip_or_none(text: str) -> "int | None":
+    try:
+        return ip_to_int(text)
+    except ValueError:
+        return None
+
+
+def int_to_ip(n: int) -> str:
+    return "%d.%d.%d.%d" % ((n >> 24) & 255, (n >> 16) & 255, (n >> 8) & 255, n & 255)
+
+
+def _u16(v: int) -> int:
+    return 0 if v < 0 else (0xFFFF if v > 0xFFFF else v)
+
+
+class Session:
+    def __init__(self, board: object, key: "bytes | None", random_bytes: object,
+                 firmware_version: str, capabilities: int, now_ms: int) -> None:
+        self.board = board
+        self.conn = Connection(BOARD, key)
+        self.random_bytes = random_bytes
+        self.firmware_version = firmware_version
+        self.capabilities = capabilities
+        self.last_rx = now_ms
+        self.cursor = board.events.seq  # type: ignore[attr-defined]
+        self.lost = 0
+        self.rate_hz = 0
+        self.period = 0
+        self.meas_at = 0
+        self.meas_seq = 0
+        self.closed = False
+
+    # --- session ----------------------------------------------------------------------
+
+    def _hello(self, req_id: int) -> bytes:
+        b = self.board
+        nonce = self.random_bytes(NONCE_LEN)  # type: ignore[operator]
+        return self.conn.send(Hello(
+            PROTOCOL_VERSION, b.cfg["board"]["board_id"], self.firmware_version,  # type: ignore[attr-defined]
+            b.n, self.capabilities, getattr(b, "boot_id", 0), nonce,  # type: ignore[attr-defined]
+            b.reset_cause, b.cfg_status, req_id))  # type: ignore[attr-defined]
+
+    def start(self, now_ms: int) -> bytes:
+        self.last_rx = now_ms
+        self.cursor = self.board.events.seq  # type: ignore[attr-defined]
+        return self._hello(0)
+
+    def idle_ms(self, now_ms: int) -> int:
+        return now_ms - self.last_rx
+
+    # --- receiving --------------------------------------------------------------------
+
+    def receive(self, data: bytes, now_ms: int) -> bytes:
+        conn = self.conn
+        if data:
+            self.last_rx = now_ms
+        else:
+            self.closed = True
+        conn.receive_data(data)
+        out = []
+        while True:
+            ev = conn.next_event()
+            if ev is None:
+                break
+            if isinstance(ev, BadFrame):
+                reply = conn.error_reply(ev)
+            else:
+                if ev.AUTH or isinstance(ev, Ping):
+                    self.board.host_seen(now_ms)  # type: ignore[attr-defined]
+                reply = self._answer(ev, now_ms)
+            if reply:
+                out.append(reply)
+        return b"".join(out)
+
+    def _error(self, code: int, msg: object) -> bytes:
+        return self.conn.send(Error(code, msg.TYPE, ERROR_TEXT.get(code, ""),  # type: ignore[attr-defined]
+                                    req_id=msg.req_id))  # type: ignore[attr-defined]
+
+    def _switched(self, msg: object, result: tuple) -> bytes:  # type: ignore[type-arg]
+        err, state, physical = result
+        if err:
+            return self._error(err, msg)
+        ch = msg.channel  # type: ignore[attr-defined]
+        commanded = self.board.channels[ch].commanded  # type: ignore[attr-defined]
+        return self.conn.send(Switched(ch, commanded, physical, state, msg.req_id))  # type: ignore[attr-defined]
+
+    def _answer(self, msg: object, now_ms: int) -> "bytes | None":
+        b = self.board
+        send = self.conn.send
+        rid = msg.req_id  # type: ignore[attr-defined]
+        if isinstance(msg, GetState):
+            return send(self.state_message(rid))
+        if isinstance(msg, Ping):
+            return send(Pong(msg.token, _uptime(b), rid))
+        if isinstance(msg, Subscribe):
+            rate = msg.rate_hz
+            if rate > MAX_RATE_HZ:
+                return self._error(E_BAD_VALUE, msg)
+            self.rate_hz = rate
+            if rate:
+                self.period = 1000 // rate
+                self.meas_at = now_ms
+            return send(Ack(Subscribe.TYPE, rid))
+        if isinstance(msg, HelloRequest):
+            return self._hello(rid)
+        if isinstance(msg, Switch):
+            return self._switched(msg, b.switch(msg.channel, msg.on, msg.force))  # type: ignore[attr-defined]
+        if isinstance(msg, PowerCycle):
+            return self._switched(msg, b.power_cycle(msg.channel, msg.off_ms, msg.force))  # type: ignore[attr-defined]
+        if isinstance(msg, Clear):
+            result = b.clear(msg.channel)  # type: ignore[attr-defined]
+            if msg.channel == BOARD_CHANNEL and not result[0]:
+                return send(Ack(Clear.TYPE, rid))
+            return self._switched(msg, result)
+        if isinstance(msg, GetConfig):
+            if msg.channel == BOARD_CHANNEL:
+                return send(self.board_config_message(rid))
+            return self._channel_config(msg, msg.channel, rid)
+        if isinstance(msg, SetChannelConfig):
+            fields = {}
+            for name, _ in SetChannelConfig.FIELDS:
+                if name != "channel":
+                    fields[name] = getattr(msg, name)
+            err = b.set_channel_config(msg.channel, fields)  # type: ignore[attr-defined]
+            if err:
+                return self._error(err, msg)
+            return self._channel_config(msg, msg.channel, rid)
+        if isinstance(msg, SetBoardConfig):
+            fields = {}
+            for name, _ in SetBoardConfig.FIELDS:
+                fields[name] = getattr(msg, name)
+            try:
+                fields["modbus_allow"] = [int_to_ip(n) for n in msg.modbus_allow]
+            except (TypeError, ValueError):
+                return self._error(E_BAD_VALUE, msg)
+            err = b.set_board_config(fields)  # type: ignore[attr-defined]
+            if err:
+                return self._error(err, msg)
+            return send(self.board_config_message(rid))
+        if isinstance(msg, SaveConfig):
+            err = b.save_config()  # type: ignore[attr-defined]
+            return self._error(err, msg) if err else send(Ack(SaveConfig.TYPE, rid))
+        if isinstance(msg, Reboot):
+            b.request_reboot()  # type: ignore[attr-defined]
+            return send(Ack(Reboot.TYPE, rid))
+        return None  # HELLO from the host cannot happen: the codec refuses board messages
+
+    def _channel_config(self, msg: object, ch: int, rid: int) -> bytes:
+        err, cfg = self.board.get_channel_config(ch)  # type: ignore[attr-defined]
+        if err:
+            return self._error(err, msg)
+        cfg["channel"] = ch
+        return self.conn.send(ChannelConfig(req_id=rid, **cfg))
+
+    # --- messages built from the board ----------------------------------------------------
+
+    def state_message(self, req_id: int = 0) -> State:
+        (mv, total, uptime, cause, cfg_status, flags), chans = self.board.status()  # type: ignore[attr-defined]
+        out = []
+        for i in range(len(chans)):
+            c = chans[i]
+            out.append(ChannelStatus(
+                channel=i, commanded=c[C_COMMANDED], physical=c[C_PHYSICAL], state=c[C_STATE],
+                current_ma=c[C_CURRENT_MA], live_faults=c[C_LIVE], sticky_faults=c[C_STICKY],
+                trips=_u16(c[C_TRIPS]), retries=min(c[C_RETRIES], 255)))
+        return State(uptime, _u16(mv), total, cause, cfg_status, flags, out, req_id)
+
+    def board_config_message(self, req_id: int = 0) -> BoardConfig:
+        cfg = self.board.get_board_config()  # type: ignore[attr-defined]
+        allow = []
+        for text in cfg.get("modbus_allow", []):
+            n = _ip_or_none(text)
+            if n is not None:  # a hostname or a malformed entry is not representable
+                allow.append(n)
+        cfg["modbus_allow"] = allow
+        return BoardConfig(req_id=req_id, **cfg)
+
+    # --- pushes -----------------------------------------------------------------------
+
+    def poll(self, now_ms: int, send_measurement: bool = True) -> bytes:
+        b = self.board
+        out = []
+        log = b.events  # type: ignore[attr-defined]
+        if log.seq > self.cursor:
+            evs, self.cursor, lost = log.read(self.cursor, EVENTS_PER_POLL)
+            self.lost += lost
+            for e in evs:
+                seq, kind, ch, old, new, faults, value, uptime = e
+                out.append(self.conn.send(Event(seq, uptime, kind, ch, old, new, faults & 0xFFFF,
+                                                value, min(self.lost, 0xFFFF))))
+                self.lost = 0
+        if self.rate_hz and now_ms >= self.meas_at:
+            self.meas_seq += 1
+            self.meas_at += self.period
+            if self.meas_at <= now_ms:  # late: no burst to catch up
+                self.meas_at = now_ms + self.period
+            if send_measurement:
+                out.append(self.conn.send(self.measurement()))
+        return b"".join(out)
+
+    def measurement(self) -> Measurement:
+        b = self.board
+        on = 0
+        faults = 0
+        currents = []
+        chans = b.channels  # type: ignore[attr-defined]
+        for i in range(len(chans)):
+            c = chans[i]
+            if c.physical:
+                on |= 1 << i
+            if c.live:
+                faults |= 1 << i
+            currents.append(c.current_ma)
+        return Measurement(self.meas_seq, _uptime(b), _u16(b.input_mv), on, faults,  # type: ignore[attr-defined]
+                           currents)
+
+    def next_due(self, now_ms: int) -> int:
+        if self.board.events.seq > self.cursor:  # type: ignore[attr-defined]
+            return now_ms
+        if self.rate_hz:
+            return self.meas_at if self.meas_at > now_ms else now_ms
+        return now_ms + IDLE_DUE_MS
+
+
+def _uptime(board: object) -> int:
+    up: int = board.now - board.boot_ms  # type: ignore[attr-defined]
+    return up & 0xFFFFFFFF

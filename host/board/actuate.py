@@ -1,0 +1,81 @@
+"""Actuation through the board client: switch, power-cycle, clear, each read back and checked.
+
+``ActuateMixin`` is the actuation half of ``BoardClient``. Every command names a channel by
+number or name, goes out signed with the key (on transports that authenticate) and comes back
+as the board's read-back: the switch's physical state and the channel's state. A board that
+acknowledges a command but reads back something else raises ``ReadbackMismatch`` (the switch
+may be faulty), so a caller never believes a switch moved when it did not.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+from host.board.types import SwitchResult
+from host.transports.errors import BadChannel, ReadbackMismatch
+from protocol.constants import BOARD_CHANNEL, ST_INRUSH, ST_ON
+from protocol.messages import Ack, Clear, Message, PowerCycle, Switch, Switched
+
+log = logging.getLogger(__name__)
+
+
+class ActuateMixin:
+    """Needs ``url``, ``channel``, ``channel_names`` and ``_expect``."""
+
+    url: str
+
+    async def channel(self, ch: int | str) -> int:
+        raise NotImplementedError
+
+    async def channel_names(self) -> list[str]:
+        raise NotImplementedError
+
+    async def _expect(self, msg: Message, kind: type[Any]) -> Any:
+        raise NotImplementedError
+
+    async def _switched(self, msg: Message, ch: int) -> Switched:
+        reply: Switched = await self._expect(msg, Switched)
+        if reply.channel != ch:
+            raise ReadbackMismatch(f"{self.url}: asked about channel {ch}, "
+                                   f"the board answered for {reply.channel}",
+                                   "the firmware may not match this host")
+        return reply
+
+    async def _result(self, reply: Switched) -> SwitchResult:
+        names = await self.channel_names()
+        name = names[reply.channel] if reply.channel < len(names) else ""
+        return SwitchResult(reply.channel, name, reply.commanded, reply.physical, reply.state)
+
+    async def switch(self, ch: int | str, on: bool, force: bool = False) -> SwitchResult:
+        """Switch a channel; the read-back must show the switch where it was asked to be."""
+        n = await self.channel(ch)
+        reply = await self._switched(Switch(n, on, force), n)
+        ok = reply.physical and reply.state in (ST_INRUSH, ST_ON) if on else not reply.physical
+        if not ok or reply.commanded != on:
+            raise ReadbackMismatch(
+                f"{self.url}: channel {n} was switched {'on' if on else 'off'} but reads back "
+                f"{'on' if reply.physical else 'off'} (state {reply.state})",
+                "the switch may be faulty: see `dxboard board URL status`")
+        return await self._result(reply)
+
+    async def power_cycle(self, ch: int | str, off_s: float = 1.0,
+                          force: bool = False) -> SwitchResult:
+        """Switch off, wait ``off_s``, switch on (the board times it where it can)."""
+        n = await self.channel(ch)
+        off_ms = round(off_s * 1000)
+        if not 0 <= off_ms <= 60000:
+            raise BadChannel(f"off time {off_s} s is out of range", "use 0..60 s")
+        reply = await self._switched(PowerCycle(n, off_ms, force), n)
+        if reply.physical and off_ms:
+            raise ReadbackMismatch(f"{self.url}: channel {n} should be off for {off_s:g} s "
+                                   "but reads back on", "the switch may be stuck on")
+        return await self._result(reply)
+
+    async def clear(self, ch: int | str) -> SwitchResult | None:
+        """Clear a channel's latch and sticky faults (``"all"``: every channel)."""
+        if str(ch) == "all":
+            await self._expect(Clear(BOARD_CHANNEL), Ack)
+            return None
+        n = await self.channel(ch)
+        return await self._result(await self._switched(Clear(n), n))

@@ -1,0 +1,466 @@
+"""The async board client: one board, any transport, reconnecting, every reply checked.
+
+Theory of operation. ``BoardClient(url, key)`` opens the transport for the URL, checks the
+HELLO (protocol version, board id, boot id) and starts one reader task that owns every byte
+from the board: a reply is matched to its request by ``req_id`` and completes that request's
+future; a MEASUREMENT becomes a ``Reading`` and an EVENT a ``BoardEvent`` for every
+subscriber; an unexpected HELLO starts a new session. Requests have a timeout
+(``RequestTimeout``); an ERROR reply raises ``BoardRefused`` (``AuthRefused`` for a bad or
+missing key) and changes nothing on the board. Actuation checks the read-back: a board that
+acknowledges "on" but reads the switch back off raises ``ReadbackMismatch``.
+
+When the link is lost the reader fails pending requests with ``LinkLost``, tells subscribers
+(``LinkDown``) and, with ``reconnect=True``, reopens the transport with exponential backoff and
+jitter (``backoff_s`` doubling up to ``max_backoff_s``, each wait drawn from [½, 1] of it).
+Back up, it compares the boot: a new boot id, or (for boards that report none) an uptime lower
+than the one last seen plus the time away, is a reboot (``Rebooted``); then it subscribes again
+at the same rate and announces ``LinkUp``. Within a session the board numbers measurements
+from 1, so a gap becomes ``Reading.missed``; nothing is lost without a trace.
+
+Capabilities the transport lacks (``Transport.CAPS``) raise ``NotSupported`` before anything
+is sent. Channels are named by number or by name (names come from the board's configuration,
+read once per connection where the transport can read it). Actuation with its read-back
+checks is in ``host.board.actuate``, configuration in ``host.board.configure``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import dataclasses
+import logging
+import random
+import time
+from collections.abc import AsyncIterator, Callable, Coroutine
+from typing import Any
+
+from host.board.actuate import ActuateMixin
+from host.board.configure import ConfigMixin
+from host.board.types import (
+    BoardEvent,
+    BoardInfo,
+    BoardState,
+    ChannelState,
+    LinkDown,
+    LinkUp,
+    Reading,
+    Rebooted,
+    StreamItem,
+)
+from host.transports import open_transport
+from host.transports.base import NAMES, Transport
+from host.transports.errors import (
+    AuthRefused,
+    BadChannel,
+    BoardRefused,
+    BoardUnreachable,
+    LinkLost,
+    NotSupported,
+    RequestTimeout,
+    VersionMismatch,
+)
+from protocol.constants import (
+    E_AUTH_REQUIRED,
+    E_BAD_TAG,
+    E_NO_SESSION,
+    E_REPLAYED,
+    ERROR_TEXT,
+    PROTOCOL_VERSION,
+)
+from protocol.framing import BadFrame
+from protocol.messages import (
+    Ack,
+    ChannelConfig,
+    Error,
+    Event,
+    GetConfig,
+    GetState,
+    Hello,
+    Measurement,
+    Message,
+    Ping,
+    Pong,
+    State,
+    Subscribe,
+)
+
+log = logging.getLogger(__name__)
+
+AUTH_CODES = (E_AUTH_REQUIRED, E_BAD_TAG, E_REPLAYED, E_NO_SESSION)
+QUEUE_LIMIT = 4096  # items a subscriber may fall behind before the oldest are dropped
+UPTIME_SLACK_MS = 500  # uptime may lag the host's clock by this much (+5 %) without a reboot
+
+
+class _Subscriber:
+    def __init__(self) -> None:
+        self.queue: asyncio.Queue[StreamItem] = asyncio.Queue()
+        self.dropped = 0
+
+    def put(self, item: StreamItem) -> None:
+        if self.queue.qsize() >= QUEUE_LIMIT:
+            self.queue.get_nowait()
+            self.dropped += 1
+        self.queue.put_nowait(item)
+
+
+class BoardClient(ActuateMixin, ConfigMixin):
+    """See the module docstring. Use as ``async with BoardClient(url, key) as board:``."""
+
+    def __init__(self, url: str, key: bytes | None = None, *, timeout_s: float = 2.0,
+                 connect_timeout_s: float = 5.0, reconnect: bool = True,
+                 backoff_s: float = 0.1, max_backoff_s: float = 5.0,
+                 transport_factory: Callable[[str, bytes | None], Transport] = open_transport,
+                 rng: random.Random | None = None) -> None:
+        self.url = url
+        self.key = key
+        self.timeout_s = timeout_s
+        self.connect_timeout_s = connect_timeout_s
+        self.reconnect = reconnect
+        self.backoff_s = backoff_s
+        self.max_backoff_s = max_backoff_s
+        self._factory = transport_factory
+        self._rng = rng or random.Random()
+        self.transport: Transport = transport_factory(url, key)  # BadUrl at once
+        self.info: BoardInfo | None = None
+        self.latest: Reading | None = None
+        self.reboots = 0
+        self._pending: dict[int, asyncio.Future[Message]] = {}
+        self._req = 0
+        self._subs: list[_Subscriber] = []
+        self._rate = 0
+        self._names: list[str] | None = None
+        self._reader: asyncio.Task[None] | None = None
+        self._up = asyncio.Event()
+        self._closing = False
+        self._last_seq = 0
+        self._seen_uptime = (0, 0.0)  # (uptime ms, host monotonic s) last seen
+        self._down_since = 0.0
+        self._tasks: set[asyncio.Task[None]] = set()
+
+    # --- connection -------------------------------------------------------------------
+
+    async def __aenter__(self) -> BoardClient:
+        await self.connect()
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        await self.close()
+
+    async def connect(self) -> BoardInfo:
+        """Open the link and check the HELLO; ``BoardUnreachable`` or ``VersionMismatch``."""
+        self._closing = False
+        hello = await self.transport.open(self.connect_timeout_s)
+        info = self._accept_hello(hello)
+        self._reader = asyncio.create_task(self._read_loop(), name=f"board-reader {self.url}")
+        self._up.set()
+        return info
+
+    def _accept_hello(self, hello: Hello) -> BoardInfo:
+        if hello.version != PROTOCOL_VERSION:
+            raise VersionMismatch(
+                f"{self.url}: board speaks protocol version {hello.version}, "
+                f"this host version {PROTOCOL_VERSION}",
+                "flash matching firmware (dxboard flash) or use a matching dxboard")
+        old = self.info
+        self.info = BoardInfo(
+            url=self.url, scheme=self.transport.SCHEME, version=hello.version,
+            board_id=hello.board_id, firmware=hello.firmware, channels=hello.channels,
+            capabilities=hello.capabilities, boot_id=hello.boot_id,
+            reset_cause=hello.reset_cause, config_status=hello.config_status,
+            transport_caps=self.transport.CAPS)
+        self._last_seq = 0
+        if old is not None and old.board_id != hello.board_id:
+            log.warning("%s: now board %r (was %r)", self.url, hello.board_id, old.board_id)
+            self._names = None
+        return self.info
+
+    async def close(self) -> None:
+        """Stop the reader, unsubscribe nobody (the link closes), close the transport."""
+        self._closing = True
+        self._up.clear()
+        reader, self._reader = self._reader, None
+        if reader is not None:
+            reader.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await reader
+        for task in list(self._tasks):
+            task.cancel()
+        await self.transport.close()
+        self._fail_pending(LinkLost(f"{self.url}: client closed", ""))
+
+    @property
+    def connected(self) -> bool:
+        return self._up.is_set()
+
+    def _fail_pending(self, exc: Exception) -> None:
+        pending, self._pending = self._pending, {}
+        for fut in pending.values():
+            if not fut.done():
+                fut.set_exception(exc)
+
+    def _publish(self, item: StreamItem) -> None:
+        for sub in self._subs:
+            sub.put(item)
+
+    async def _read_loop(self) -> None:
+        while True:
+            try:
+                msg = await self.transport.receive()
+            except BoardUnreachable as exc:
+                if self._closing:
+                    return
+                if not await self._link_lost(str(exc)):
+                    return
+                continue
+            self._dispatch(msg)
+
+    def _dispatch(self, msg: Message | BadFrame) -> None:
+        if isinstance(msg, BadFrame):
+            log.warning("%s: bad frame from the board: %s", self.url, msg.text)
+            return
+        fut = self._pending.pop(msg.req_id, None) if msg.req_id else None
+        if fut is not None:
+            if not fut.done():
+                fut.set_result(msg)
+            return
+        now = time.time()
+        boot = self.info.boot_id if self.info else 0
+        if isinstance(msg, Measurement):
+            self._note_uptime(msg.uptime_ms)
+            missed = msg.seq - self._last_seq - 1 if self._last_seq else 0
+            self._last_seq = msg.seq
+            reading = Reading(now, time.monotonic(), boot, msg.seq, msg.uptime_ms, msg.input_mv,
+                              msg.on_mask, msg.fault_mask, tuple(msg.currents_ma),
+                              max(missed, 0))
+            self.latest = reading
+            for sub in self._subs:
+                if sub.dropped:
+                    more = reading.missed + sub.dropped
+                    sub.dropped = 0
+                    sub.put(dataclasses.replace(reading, missed=more))
+                else:
+                    sub.put(reading)
+        elif isinstance(msg, Event):
+            self._publish(BoardEvent(now, boot, msg.seq, msg.uptime_ms, msg.kind, msg.channel,
+                                     msg.old_state, msg.new_state, msg.faults, msg.value_ma,
+                                     msg.dropped))
+        elif isinstance(msg, Hello):
+            try:
+                old = self._accept_new_hello(msg)
+            except VersionMismatch as exc:
+                log.error("%s", exc)
+                return
+            self._spawn(self._finish_session(old, msg, 0.0))
+        else:
+            log.debug("%s: unsolicited %r dropped", self.url, msg)
+
+    def _note_uptime(self, uptime_ms: int) -> None:
+        self._seen_uptime = (uptime_ms, time.monotonic())
+
+    async def _link_lost(self, reason: str) -> bool:
+        """Handle a lost link; True when it is back (the reader goes on)."""
+        self._up.clear()
+        self._down_since = time.monotonic()
+        log.warning("%s: link lost: %s", self.url, reason)
+        self._fail_pending(LinkLost(f"{self.url}: link lost: {reason}",
+                                    "the board may have rebooted or been unplugged"))
+        self._publish(LinkDown(time.time(), reason))
+        await self.transport.close()
+        if not self.reconnect:
+            return False
+        delay = self.backoff_s
+        while not self._closing:
+            await asyncio.sleep(delay * (0.5 + 0.5 * self._rng.random()))
+            delay = min(delay * 2, self.max_backoff_s)
+            self.transport = self._factory(self.url, self.key)
+            try:
+                hello = await self.transport.open(self.connect_timeout_s)
+            except BoardUnreachable as exc:
+                log.info("%s: reconnect failed: %s", self.url, exc)
+                continue
+            try:
+                old = self._accept_new_hello(hello)
+            except VersionMismatch as exc:
+                log.error("%s", exc)
+                self._publish(LinkDown(time.time(), str(exc)))
+                await self.transport.close()
+                return False
+            self._spawn(self._finish_session(old, hello, time.monotonic() - self._down_since))
+            return True
+        return False
+
+    def _spawn(self, coro: Coroutine[Any, Any, None]) -> None:
+        task = asyncio.get_running_loop().create_task(coro)
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    def _accept_new_hello(self, hello: Hello) -> BoardInfo | None:
+        """The synchronous half of a new session: check the HELLO, keep the old info."""
+        old = self.info
+        self._accept_hello(hello)
+        self._up.set()
+        return old
+
+    async def _finish_session(self, old: BoardInfo | None, hello: Hello, down_s: float) -> None:
+        """The rest of a new session (runs beside the reader): rebooted? resubscribe."""
+        rebooted = None
+        if old is not None and old.boot_id != hello.boot_id:
+            rebooted = Rebooted(time.time(), old.boot_id, hello.boot_id, hello.reset_cause,
+                                "boot id")
+        elif old is not None:
+            rebooted = await self._check_uptime(old, hello)
+        if rebooted is not None:
+            self.reboots += 1
+            log.warning("%s: board rebooted (%s changed, reset cause %s)", self.url,
+                        rebooted.how, rebooted.reset_cause_name)
+            self._publish(rebooted)
+        if self.info is not None:
+            self._publish(LinkUp(time.time(), down_s, self.info))
+        if self._rate:
+            await self._resubscribe()
+
+    async def _check_uptime(self, old: BoardInfo, hello: Hello) -> Rebooted | None:
+        seen_ms, seen_at = self._seen_uptime
+        if not seen_at:
+            return None
+        try:
+            state = await self._request_now(GetState())
+        except (BoardUnreachable, BoardRefused):
+            return None
+        if not isinstance(state, State):
+            return None
+        away_ms = (time.monotonic() - seen_at) * 1000
+        self._note_uptime(state.uptime_ms)
+        if state.uptime_ms + UPTIME_SLACK_MS + away_ms * 0.05 < seen_ms + away_ms:
+            return Rebooted(time.time(), old.boot_id, hello.boot_id, hello.reset_cause, "uptime")
+        return None
+
+    async def _resubscribe(self) -> None:
+        try:
+            await self._request_now(Subscribe(self._rate))
+        except (BoardUnreachable, BoardRefused) as exc:
+            log.warning("%s: resubscribing failed: %s", self.url, exc)
+
+    # --- requests ---------------------------------------------------------------------
+
+    def _next_req(self) -> int:
+        self._req = self._req % 0xFFFF + 1
+        return self._req
+
+    async def _request_now(self, msg: Message) -> Message:
+        """Send ``msg`` on the current link and wait for its reply (no waiting for a link)."""
+        msg.req_id = self._next_req()
+        fut: asyncio.Future[Message] = asyncio.get_running_loop().create_future()
+        self._pending[msg.req_id] = fut
+        name = type(msg).__name__
+        try:
+            await self.transport.send(msg)
+            reply = await asyncio.wait_for(fut, self.timeout_s)
+        except TimeoutError:
+            raise RequestTimeout(
+                f"{self.url}: the board did not answer {name} within {self.timeout_s:g} s",
+                "the board stopped answering; check its power and the link") from None
+        finally:
+            self._pending.pop(msg.req_id, None)
+        if isinstance(reply, Error):
+            text = reply.text or ERROR_TEXT.get(reply.code, "error")
+            if reply.code in AUTH_CODES:
+                raise AuthRefused(f"{self.url}: the board refused {name}: {text}",
+                                  "check the key (DXBOARD_KEY or --key-file); nothing changed",
+                                  reply.code)
+            raise BoardRefused(f"{self.url}: the board refused {name}: {text}",
+                               "nothing was changed", reply.code)
+        return reply
+
+    async def request(self, msg: Message) -> Message:
+        """Send a host message and return the board's reply (waiting for a link first)."""
+        if not self._up.is_set():
+            if self._closing or self._reader is None:
+                raise LinkLost(f"{self.url}: not connected", "connect first")
+            try:
+                await asyncio.wait_for(self._up.wait(), self.timeout_s)
+            except TimeoutError:
+                raise BoardUnreachable(f"{self.url}: the link is down and did not come back "
+                                       f"within {self.timeout_s:g} s",
+                                       "check the board's power and the link") from None
+        return await self._request_now(msg)
+
+    async def _expect(self, msg: Message, kind: type[Any]) -> Any:
+        reply = await self.request(msg)
+        if not isinstance(reply, kind):
+            raise BoardRefused(f"{self.url}: expected {kind.__name__}, got {type(reply).__name__}",
+                               "the board's firmware may not match this host")
+        return reply
+
+    def _need(self, cap: str, what: str) -> None:
+        if cap not in self.transport.CAPS:
+            raise NotSupported(f"{self.url}: {what} is not possible over {self.transport.SCHEME}",
+                               "use the board's native transport (tcp:// or serial://)")
+
+    # --- reading ----------------------------------------------------------------------
+
+    async def ping(self, token: int = 0) -> int:
+        """The board's uptime in ms (a round trip; also feeds the board's dead-man)."""
+        pong: Pong = await self._expect(Ping(token), Pong)
+        self._note_uptime(pong.uptime_ms)
+        return pong.uptime_ms
+
+    async def state(self) -> BoardState:
+        st: State = await self._expect(GetState(), State)
+        self._note_uptime(st.uptime_ms)
+        names = await self.channel_names()
+        chans = tuple(
+            ChannelState(c.channel, names[c.channel] if c.channel < len(names) else "",
+                         c.commanded, c.physical, c.state, c.current_ma, c.live_faults,
+                         c.sticky_faults, c.trips, c.retries)
+            for c in st.channels)
+        boot = self.info.boot_id if self.info else 0
+        return BoardState(time.time(), boot, st.uptime_ms, st.input_mv, st.total_ma,
+                          st.reset_cause, st.config_status, st.board_flags, chans)
+
+    async def channel_names(self) -> list[str]:
+        """Channel names from the board's configuration ("ch<N>" where it cannot say)."""
+        if self._names is None:
+            n = self.info.channels if self.info else 0
+            names = [f"ch{i}" for i in range(n)]
+            if NAMES in self.transport.CAPS:
+                for i in range(n):
+                    cfg: ChannelConfig = await self._expect(GetConfig(i), ChannelConfig)
+                    names[i] = cfg.name or names[i]
+            self._names = names
+        return list(self._names)
+
+    async def channel(self, ch: int | str) -> int:
+        """The channel number for a number or a name; ``BadChannel`` if there is none."""
+        names = await self.channel_names()
+        text = str(ch).strip()
+        if text.isdigit() and int(text) < len(names):
+            return int(text)
+        if text in names:
+            return names.index(text)
+        raise BadChannel(f"{self.url}: no channel {text!r}",
+                         f"use 0..{len(names) - 1} or one of: {', '.join(names)}")
+
+    def is_stale(self, max_age_s: float) -> bool:
+        """True when there is no reading newer than ``max_age_s`` seconds (or the link is down)."""
+        return self.latest is None or not self.connected or self.latest.stale(max_age_s)
+
+    async def subscribe(self, rate_hz: int = 10) -> AsyncIterator[StreamItem]:
+        """Readings at ``rate_hz`` (1-100) and every event and link notice, until closed.
+        Over transports without push the transport polls at that rate."""
+        if not 1 <= rate_hz <= 100:
+            raise BadChannel(f"rate {rate_hz} Hz is out of range", "use 1..100 Hz")
+        sub = _Subscriber()
+        self._subs.append(sub)
+        try:
+            if rate_hz > self._rate:
+                await self._expect(Subscribe(rate_hz), Ack)
+                self._rate = rate_hz
+            while True:
+                yield await sub.queue.get()
+        finally:
+            self._subs.remove(sub)
+            if not self._subs and self._rate and self.connected:
+                self._rate = 0
+                with contextlib.suppress(BoardUnreachable, BoardRefused):
+                    await self._expect(Subscribe(0), Ack)

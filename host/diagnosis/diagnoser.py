@@ -1,0 +1,145 @@
+"""The ``Diagnoser``: a theory, the current observations and an incremental solver, as one value.
+
+Build one per context (the robot's hardware/software model now; later one per layer of a
+hierarchy, over any propositions)::
+
+    d = Diagnoser(theory)               # algorithm: "cardinality" | "maxsat" | "hitting-set"
+    d.observe("~on(jaguar)", now=12.5, source="hobs", validity=3.0)   # S ⊕ o
+    d.expire(now=20.0)                           # silent observers' literals become unknown
+    result = d.diagnose(max_card=5, max_count=100, time_budget_s=0.5)
+    result.diagnoses[0].bad, result.complete, result.cut_by
+
+``observe``/``retract``/``expire``/``drop_source`` change only the assumption set; the solver,
+its learnt clauses and the cardinality encoding are kept, so re-diagnosis after one changed
+observation costs a few solver calls. An observation about an atom the theory does not know
+raises ``UnknownLiteral``. ``diagnose`` with unchanged observations and bounds returns the
+previous result. ``close()`` (or ``with Diagnoser(...) as d``) frees the solver and stops the
+budget watchdog thread.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+
+from host.diagnosis.logic import Literal, Theory, parse_literal
+from host.diagnosis.observations import Observation, ObservationSet
+from host.diagnosis.result import DiagnosisResult, prior_weights, rank
+from host.diagnosis.satctx import SatContext
+from host.diagnosis.search import ALGORITHMS, DEFAULT_ALGORITHM
+
+log = logging.getLogger(__name__)
+
+
+class UnknownLiteral(ValueError):
+    """An observation names an atom the model does not mention."""
+
+
+class Diagnoser:
+    def __init__(
+        self, theory: Theory, algorithm: str = DEFAULT_ALGORITHM, solver: str = "g4"
+    ) -> None:
+        if algorithm not in ALGORITHMS:
+            raise ValueError(f"unknown algorithm {algorithm!r}; use one of {sorted(ALGORITHMS)}")
+        self.theory = theory
+        self.algorithm = algorithm
+        self._search = ALGORITHMS[algorithm]
+        self._ctx = SatContext(theory, solver)
+        self._observable = theory.observable_atoms()
+        self._priors = {c: theory.prior(c) for c in theory.components}
+        self._universe = frozenset(theory.components)
+        self._weights = prior_weights(self._priors)
+        self._assumed: dict[str, int] = {}  # atom -> solver literal of the current observation
+        self.observations = ObservationSet()
+        self._version = 0
+        self._cache: tuple[tuple[object, ...], DiagnosisResult] | None = None
+
+    # -- observations ----------------------------------------------------------------------
+    def observe(
+        self,
+        obs: Observation | Literal | str,
+        now: float = 0.0,
+        source: str = "",
+        validity: float | None = None,
+    ) -> bool:
+        """``S := S ⊕ o``; True when the literal set changed."""
+        if isinstance(obs, str):
+            obs = parse_literal(obs)
+        if isinstance(obs, Literal):
+            obs = Observation(obs, now, source, validity)
+        if obs.literal.atom not in self._observable:
+            raise UnknownLiteral(
+                f"observation {obs.literal} names {obs.literal.atom}, which no clause mentions"
+            )
+        changed = self.observations.add(obs)
+        if changed:
+            self._version += 1
+            self._assumed[obs.literal.atom] = self._ctx.lit(obs.literal)
+        return changed
+
+    def retract(self, atom: str) -> bool:
+        changed = self.observations.retract(atom)
+        if changed:
+            self._version += 1
+            del self._assumed[atom]
+        return changed
+
+    def expire(self, now: float) -> list[Observation]:
+        return self._forget(self.observations.expire(now))
+
+    def drop_source(self, source: str) -> list[Observation]:
+        return self._forget(self.observations.drop_source(source))
+
+    def _forget(self, gone: list[Observation]) -> list[Observation]:
+        for o in gone:
+            del self._assumed[o.literal.atom]
+        self._version += bool(gone)
+        return gone
+
+    # -- diagnosis -------------------------------------------------------------------------
+    def diagnose(
+        self,
+        max_card: int | None = None,
+        max_count: int | None = None,
+        time_budget_s: float | None = None,
+        min_card_only: bool = False,
+    ) -> DiagnosisResult:
+        """The subset-minimal diagnoses by cardinality, then probability, within the bounds.
+
+        ``min_card_only`` stops after the smallest cardinality that has diagnoses (the
+        minimal-cardinality diagnoses); ``complete`` then refers to that level.
+        """
+        key = (self._version, max_card, max_count, time_budget_s, min_card_only)
+        if self._cache is not None and self._cache[0] == key:
+            return self._cache[1]
+        start = time.perf_counter()
+        calls = self._ctx.calls
+        assumptions = list(self._assumed.values())
+        self._ctx.start_budget(time_budget_s)
+        try:
+            outcome = self._search(self._ctx, assumptions, max_card, max_count, min_card_only)
+        finally:
+            self._ctx.stop_budget()
+        comps = self.theory.components
+        bad = [frozenset(comps[i] for i in s) for s in outcome.bad_sets]
+        result = DiagnosisResult(
+            diagnoses=rank(bad, self._priors, self._universe, self._weights),
+            complete=outcome.cut_by is None,
+            cut_by=outcome.cut_by,
+            explainable=outcome.explainable,
+            elapsed_s=time.perf_counter() - start,
+            stats={"sat_calls": self._ctx.calls - calls},
+        )
+        log.debug("diagnosis: %d diagnoses, complete=%s, %.3f ms", len(bad), result.complete,
+                  result.elapsed_s * 1000)
+        self._cache = (key, result)
+        return result
+
+    def close(self) -> None:
+        self._ctx.close()
+
+    def __enter__(self) -> Diagnoser:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

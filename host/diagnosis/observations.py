@@ -1,0 +1,82 @@
+"""Observations: literals with a time, a source and a validity, kept as the set S ⊕ o.
+
+Paper 000 §IV-C integrates each observation ``o`` into the set ``S`` as ``S ⊕ o``: a new
+literal ``L`` replaces ``¬L`` (and an older ``L``). On top of that each ``Observation`` has a
+``validity`` in seconds: an observer repeats its observation while it holds, and one that falls
+silent for longer than the validity lets its literal *expire* — the atom becomes unknown (it is
+dropped, not negated: unknown is not false). ``validity=None`` means valid until replaced.
+Time is passed in (``now``, seconds on any monotonic clock the caller chooses); this module
+never reads a clock.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from host.diagnosis.logic import Literal, parse_literal
+
+
+@dataclass(frozen=True)
+class Observation:
+    literal: Literal
+    time: float = 0.0
+    source: str = ""
+    validity: float | None = None
+
+    @property
+    def expires_at(self) -> float | None:
+        return None if self.validity is None else self.time + self.validity
+
+    @staticmethod
+    def parse(text: str, time: float = 0.0, source: str = "",
+              validity: float | None = None) -> Observation:
+        return Observation(parse_literal(text), time, source, validity)
+
+
+class ObservationSet:
+    """The current observations, one per atom (``S ⊕ o``), with expiry."""
+
+    def __init__(self) -> None:
+        self._by_atom: dict[str, Observation] = {}
+
+    def add(self, obs: Observation) -> bool:
+        """``S := S ⊕ o``. True when the set of literals changed (a refresh is no change)."""
+        old = self._by_atom.get(obs.literal.atom)
+        if old is not None and old.time > obs.time:
+            return False  # a late, older report never overrides a newer one
+        self._by_atom[obs.literal.atom] = obs
+        return old is None or old.literal != obs.literal
+
+    def retract(self, atom: str) -> bool:
+        """Forget what is known about ``atom`` (it becomes unknown). True if it was known."""
+        return self._by_atom.pop(atom, None) is not None
+
+    def expire(self, now: float) -> list[Observation]:
+        """Drop and return the observations whose validity ran out at ``now``."""
+        gone = [o for o in self._by_atom.values()
+                if o.expires_at is not None and o.expires_at <= now]
+        for o in gone:
+            del self._by_atom[o.literal.atom]
+        return gone
+
+    def drop_source(self, source: str) -> list[Observation]:
+        """Forget everything ``source`` said (an observer that stopped)."""
+        gone = [o for o in self._by_atom.values() if o.source == source]
+        for o in gone:
+            del self._by_atom[o.literal.atom]
+        return gone
+
+    def get(self, atom: str) -> Observation | None:
+        return self._by_atom.get(atom)
+
+    def literals(self) -> list[Literal]:
+        return [o.literal for o in self._by_atom.values()]
+
+    def __len__(self) -> int:
+        return len(self._by_atom)
+
+    def __contains__(self, literal: object) -> bool:
+        if not isinstance(literal, Literal):
+            return False
+        o = self._by_atom.get(literal.atom)
+        return o is not None and o.literal == literal

@@ -1,0 +1,174 @@
+"""One incremental SAT solver holding a theory: the shared state every search algorithm uses.
+
+``SatContext`` encodes a ``Theory`` once (one variable per atom, from a PySAT-style pool) into
+an incremental PySAT solver. Observations are never added as clauses: they are passed as
+*assumptions* on each call, so a changed observation needs no rebuilding. A search may add
+clauses that hold for one run only by guarding them with a fresh activation variable
+(``new_run()``/``end_run()``): the run assumes it, and ``end_run`` disables the clauses for
+good with a unit clause. Cardinality bounds over the health variables come from an
+incremental totalizer (``pysat.card.ITotalizer``) grown on demand. A wall-clock budget
+interrupts a running solver call (``solve`` then returns None); the budget is the only clock
+this package reads, and only to bound computation time.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+
+from pysat.card import ITotalizer  # type: ignore[import-untyped]
+from pysat.solvers import Solver  # type: ignore[import-untyped]
+
+from host.diagnosis.logic import Literal, Theory, ab
+
+
+class _Watchdog:
+    """One thread per context that interrupts the solver when the armed deadline passes
+    (starting a thread per call would cost more than a small diagnosis)."""
+
+    def __init__(self, solver: Solver) -> None:
+        self._solver = solver
+        self._cv = threading.Condition()
+        self._deadline: float | None = None
+        self._closed = False
+        self._thread: threading.Thread | None = None
+
+    def arm(self, deadline: float) -> None:
+        with self._cv:
+            self._deadline = deadline
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._run, daemon=True,
+                                                name="diagnosis-watchdog")
+                self._thread.start()
+            self._cv.notify()
+
+    def disarm(self) -> None:
+        with self._cv:  # after this no interrupt can come for the finished run
+            self._deadline = None
+            self._cv.notify()
+
+    def close(self) -> None:
+        with self._cv:
+            self._closed = True
+            self._cv.notify()
+        if self._thread is not None:
+            self._thread.join()
+
+    def _run(self) -> None:
+        with self._cv:
+            while not self._closed:
+                if self._deadline is None:
+                    self._cv.wait()
+                    continue
+                remaining = self._deadline - time.perf_counter()
+                if remaining <= 0:
+                    self._solver.interrupt()
+                    self._deadline = None
+                else:
+                    self._cv.wait(remaining)
+
+
+class SatContext:
+    def __init__(self, theory: Theory, solver: str = "g4") -> None:
+        self.theory = theory
+        self.vars: dict[str, int] = {}
+        self.top = 0
+        self.solver = Solver(name=solver)
+        # CaDiCaL in PySAT cannot be interrupted: budgets are then checked between calls only
+        self._interruptible = not solver.startswith(("cd", "cadical"))
+        self.ab_vars: list[int] = [self.var(ab(c)) for c in theory.components]
+        self.index_of_ab = {v: i for i, v in enumerate(self.ab_vars)}
+        for clause in theory.clauses:
+            self.solver.add_clause([self.lit(lit) for lit in clause.lits])
+        self._tot: ITotalizer | None = None
+        self._deadline: float | None = None
+        self._watchdog = _Watchdog(self.solver)
+        self.calls = 0
+
+    # -- variables -------------------------------------------------------------------------
+    def var(self, atom: str) -> int:
+        v = self.vars.get(atom)
+        if v is None:
+            self.top += 1
+            v = self.vars[atom] = self.top
+        return v
+
+    def new_var(self) -> int:
+        self.top += 1
+        return self.top
+
+    def lit(self, literal: Literal) -> int:
+        v = self.var(literal.atom)
+        return v if literal.positive else -v
+
+    # -- runs, bounds and budget -----------------------------------------------------------
+    def new_run(self) -> int:
+        """A fresh activation literal for clauses that hold during one run only."""
+        return self.new_var()
+
+    def end_run(self, act: int) -> None:
+        self.solver.add_clause([-act])
+
+    def at_most(self, k: int) -> list[int]:
+        """Assumptions that allow at most ``k`` abnormal components."""
+        n = len(self.ab_vars)
+        if k >= n:
+            return []
+        if self._tot is None:
+            self._tot = ITotalizer(lits=self.ab_vars, ubound=min(n, k + 2), top_id=self.top)
+            self.solver.append_formula(self._tot.cnf.clauses)
+            self.top = max(self.top, self._tot.top_id)
+        elif len(self._tot.rhs) <= k:
+            self._tot.increase(ubound=min(n, 2 * k + 1), top_id=self.top)
+            if self._tot.nof_new:
+                self.solver.append_formula(self._tot.cnf.clauses[-self._tot.nof_new :])
+            self.top = max(self.top, self._tot.top_id)
+        return [-self._tot.rhs[k]]
+
+    def start_budget(self, seconds: float | None) -> None:
+        self.stop_budget()
+        if seconds is None:
+            return
+        self._deadline = time.perf_counter() + seconds
+        if self._interruptible:
+            self._watchdog.arm(self._deadline)
+
+    def stop_budget(self) -> None:
+        if self._deadline is not None and self._interruptible:
+            self._watchdog.disarm()
+            self.solver.clear_interrupt()
+        self._deadline = None
+
+    def out_of_time(self) -> bool:
+        return self._deadline is not None and time.perf_counter() >= self._deadline
+
+    # -- calls -----------------------------------------------------------------------------
+    def solve(self, assumptions: list[int]) -> bool | None:
+        """SAT under ``assumptions``; None when the time budget ran out."""
+        self.calls += 1
+        if self._deadline is None or not self._interruptible:
+            if self.out_of_time():
+                return None
+            return bool(self.solver.solve(assumptions=assumptions))
+        if self.out_of_time():
+            return None
+        result = self.solver.solve_limited(assumptions=assumptions, expect_interrupt=True)
+        return None if result is None else bool(result)
+
+    def model_bad(self) -> frozenset[int]:
+        """Indexes (into ``theory.components``) of the components abnormal in the model."""
+        model = self.solver.get_model()
+        assert model is not None
+        # the health variables are 1..n, allocated first (see __init__)
+        return frozenset(i for i, x in enumerate(model[: len(self.ab_vars)]) if x > 0)
+
+    def core(self) -> list[int]:
+        core = self.solver.get_core()
+        return [] if core is None else list(core)
+
+    def close(self) -> None:
+        self.stop_budget()
+        self._watchdog.close()
+        self.solver.delete()
+        if self._tot is not None:
+            self._tot.delete()

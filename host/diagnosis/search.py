@@ -1,0 +1,214 @@
+"""Search algorithms for subset-minimal diagnoses, behind a name -> callable registry.
+
+A diagnosis (Reiter) is a set ``D`` of components such that ``SD + OBS + {AB(c) | c ∈ D} +
+{¬AB(c) | c ∉ D}`` is consistent; we want the subset-minimal ones, by cardinality. Every
+algorithm takes a ``SatContext``, the observation assumptions and the bounds, and returns
+``SearchOutcome`` (the bad sets as component indexes, the bound that cut the list, and whether
+any diagnosis exists at all).
+
+- ``cardinality`` (default): for k = 0, 1, ... ask the solver for a model with at most k
+  abnormal components (totalizer bound as an assumption) that is no superset of a diagnosis
+  found before (blocking clauses under the run's activation literal). Every model found at
+  level k is a subset-minimal diagnosis of size k, for general clauses too (no monotonicity
+  needed, since a model fixes every health variable).
+- ``maxsat``: core-guided MaxSAT (PySAT's RC2: hard = clauses + observations, soft = each
+  component healthy, weight 1); each optimum is a minimum-cardinality diagnosis, blocked as in
+  ``cardinality`` before the next. Rebuilt per run (observations are hard clauses), so it
+  suits one-shot diagnosis of hard instances, where cores find the lower bound fast.
+- ``hitting-set``: conflict-directed, as in Reiter's theory but with an implicit hitting-set
+  solver (PySAT's ``Hitman``, MaxSAT-based, minimal sets in order of size): check a candidate
+  with all other components assumed healthy; an unsatisfiable core over those assumptions is a
+  new conflict. Suits models with few, small conflicts.
+
+Both are cross-checked against brute force in ``tests/diagnosis``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from pysat.examples.hitman import Hitman  # type: ignore[import-untyped]
+from pysat.examples.rc2 import RC2  # type: ignore[import-untyped]
+from pysat.formula import WCNF  # type: ignore[import-untyped]
+
+from host.diagnosis.result import Bound
+from host.diagnosis.satctx import SatContext
+
+
+@dataclass
+class SearchOutcome:
+    bad_sets: list[frozenset[int]]
+    cut_by: Bound | None = None
+    explainable: bool = True
+
+
+Search = Callable[[SatContext, list[int], int | None, int | None, bool], SearchOutcome]
+
+
+def cardinality_search(
+    ctx: SatContext,
+    obs: list[int],
+    max_card: int | None,
+    max_count: int | None,
+    min_card_only: bool = False,
+) -> SearchOutcome:
+    n = len(ctx.ab_vars)
+    act = ctx.new_run()
+    base = [*obs, act]
+    out = SearchOutcome([])
+    try:
+        first = ctx.solve(base)  # is there any diagnosis at all?
+        if first is None:
+            out.cut_by = Bound.TIME_BUDGET
+            return out
+        if not first:
+            out.explainable = False
+            return out
+        limit = n if max_card is None else min(max_card, n)
+        k = _disjoint_cores(ctx, base)
+        if k is None:
+            out.cut_by = Bound.TIME_BUDGET
+            return out
+        while k <= limit:
+            bound = ctx.at_most(k)
+            while True:
+                if max_count is not None and len(out.bad_sets) >= max_count:
+                    out.cut_by = Bound.MAX_COUNT
+                    return out
+                r = ctx.solve(base + bound)
+                if r is None:
+                    out.cut_by = Bound.TIME_BUDGET
+                    return out
+                if not r:
+                    break
+                bad = ctx.model_bad()
+                out.bad_sets.append(bad)
+                ctx.solver.add_clause([-ctx.ab_vars[i] for i in bad] + [-act])
+            k += 1
+            if min_card_only and out.bad_sets:
+                return out
+            if k <= limit:  # anything left at all? (saves the levels above the last one)
+                r = ctx.solve(base)
+                if r is None:
+                    out.cut_by = Bound.TIME_BUDGET
+                    return out
+                if not r:
+                    return out
+        if limit < n:
+            r = ctx.solve(base)
+            if r is None or r:
+                out.cut_by = Bound.TIME_BUDGET if r is None else Bound.MAX_CARD
+        return out
+    finally:
+        ctx.end_run(act)
+
+
+def _disjoint_cores(ctx: SatContext, base: list[int]) -> int | None:
+    """A lower bound on the size of any diagnosis: the number of pairwise disjoint conflicts
+    (each diagnosis holds a component of each), found from unsatisfiable cores with the
+    conflicts' components left free. None when the time budget ran out."""
+    free: set[int] = set()
+    bound = 0
+    while True:
+        r = ctx.solve(base + [-v for i, v in enumerate(ctx.ab_vars) if i not in free])
+        if r is None:
+            return None
+        if r:
+            return bound
+        conflict = {ctx.index_of_ab[-lit] for lit in ctx.core() if -lit in ctx.index_of_ab}
+        if not conflict:  # cannot happen once base is known satisfiable; be safe
+            return bound
+        free |= conflict
+        bound += 1
+
+
+def maxsat_search(
+    ctx: SatContext,
+    obs: list[int],
+    max_card: int | None,
+    max_count: int | None,
+    min_card_only: bool = False,
+) -> SearchOutcome:
+    out = SearchOutcome([])
+    wcnf = WCNF()
+    for clause in ctx.theory.clauses:
+        wcnf.append([ctx.lit(lit) for lit in clause.lits])
+    for lit in obs:
+        wcnf.append([lit])
+    for v in ctx.ab_vars:
+        wcnf.append([-v], weight=1)
+    n = len(ctx.ab_vars)
+    with RC2(wcnf, solver="g3", adapt=True, exhaust=True, minz=True, trim=5) as rc2:
+        while True:
+            if max_count is not None and len(out.bad_sets) >= max_count:
+                out.cut_by = Bound.MAX_COUNT
+                return out
+            if ctx.out_of_time():
+                out.cut_by = Bound.TIME_BUDGET
+                return out
+            ctx.calls += 1
+            model = rc2.compute()
+            if model is None:
+                out.explainable = bool(out.bad_sets)
+                return out
+            if min_card_only and out.bad_sets and rc2.cost > len(out.bad_sets[0]):
+                return out
+            if max_card is not None and rc2.cost > max_card:
+                out.cut_by = Bound.MAX_CARD
+                return out
+            bad = frozenset(i for i, x in enumerate(model[:n]) if x > 0)
+            out.bad_sets.append(bad)
+            rc2.add_clause([-ctx.ab_vars[i] for i in bad])
+
+
+def hitting_set_search(
+    ctx: SatContext,
+    obs: list[int],
+    max_card: int | None,
+    max_count: int | None,
+    min_card_only: bool = False,
+) -> SearchOutcome:
+    out = SearchOutcome([])
+    healthy = [-v for v in ctx.ab_vars]
+    hitman = Hitman(solver="g3", htype="sorted")
+    try:
+        while True:
+            if max_count is not None and len(out.bad_sets) >= max_count:
+                out.cut_by = Bound.MAX_COUNT
+                return out
+            if ctx.out_of_time():
+                out.cut_by = Bound.TIME_BUDGET
+                return out
+            hs = hitman.get()
+            if hs is None:
+                return out
+            cand = frozenset(int(i) for i in hs)
+            if min_card_only and out.bad_sets and len(cand) > len(out.bad_sets[0]):
+                return out
+            r = ctx.solve(obs + [h for i, h in enumerate(healthy) if i not in cand])
+            if r is None:
+                out.cut_by = Bound.TIME_BUDGET
+                return out
+            if r:
+                if max_card is not None and len(cand) > max_card:
+                    out.cut_by = Bound.MAX_CARD
+                    return out
+                out.bad_sets.append(cand)
+                hitman.block(list(cand))
+                continue
+            conflict = [ctx.index_of_ab[-lit] for lit in ctx.core() if -lit in ctx.index_of_ab]
+            if not conflict:
+                out.explainable = False
+                return out
+            hitman.hit(conflict)
+    finally:
+        hitman.delete()
+
+
+ALGORITHMS: dict[str, Search] = {
+    "cardinality": cardinality_search,
+    "hitting-set": hitting_set_search,
+    "maxsat": maxsat_search,
+}
+DEFAULT_ALGORITHM = "cardinality"

@@ -1,0 +1,170 @@
+"""The original TEDUSAR (TU Graz) diagnosis model file: read it into a ``Theory``, write one back.
+
+The format (paper 000 §IV-D) is YAML with five keys::
+
+    ab: AB                 # the predicate of abnormality
+    nab: NAB               # the predicate of health (NAB(x) is ~AB(x))
+    neg_prefix: '!'        # a prefix that negates a literal ('~' and 'not ' work too)
+    props: [AB(hokuyo_node), running(hokuyo_node), ok(/scan)]   # every proposition
+    rules:
+      - NAB(hokuyo_node) -> running(hokuyo_node)
+      - NAB(hokuyo_node), NAB(hokuyo) -> ok(/scan)
+
+A rule is ``body -> head``: the body a comma-separated conjunction of literals, the head one
+literal. As an extension the head may be a disjunction (``a, b -> c | d``) or ``false``, and a
+rule without ``->`` is a fact (a disjunction), so any clause set can be written, circuits
+included. Components are the arguments of ``ab``/``nab`` atoms in props and rules. An optional
+``priors: {component: p}`` key carries prior fault probabilities. Every atom a rule uses must be
+listed in ``props``; errors name the file, the line, the offending value and the fix.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from host.diagnosis import yamlpos
+from host.diagnosis.logic import Clause, Literal, Theory, ab, ab_component, parse_literal
+from host.errors import UserError
+
+TUG_KEYS = {"ab", "nab", "neg_prefix", "props", "rules", "priors"}
+
+
+def is_tug_file(path: Path) -> bool:
+    """True for a file whose top-level keys are those of the tug format."""
+    if not path.is_file():
+        return False
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError):
+        return False
+    return isinstance(data, dict) and "rules" in data and "props" in data
+
+
+def read_tug(path: str | Path) -> Theory:
+    """Load a tug model file. Raises ``UserError`` naming file and line."""
+    file = Path(path)
+    try:
+        text = file.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise UserError(f"{file}: cannot read: {exc.strerror}", "give a tug model file") from exc
+    try:
+        data, lines = yamlpos.load(text)
+    except yamlpos.YamlSyntaxError as exc:
+        raise UserError(f"{file}:{exc.line}: {exc}", "fix the YAML syntax") from exc
+    return parse_tug(data, lines, file)
+
+
+def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
+    def fail(path: tuple[object, ...], message: str, fix: str) -> UserError:
+        return UserError(f"{file}:{lines(*path)}: {message}", fix)
+
+    if not isinstance(data, dict):
+        raise fail((), "not a tug model (a mapping with ab, nab, neg_prefix, props, rules)",
+                    "see host/diagnosis/tug.py for the format")
+    for key in data:
+        if key not in TUG_KEYS:
+            raise fail((key,), f"unknown key {key!r}", f"use one of {sorted(TUG_KEYS)}")
+    ab_name = str(data.get("ab", "AB"))
+    nab_name = str(data.get("nab", "NAB"))
+    neg = data.get("neg_prefix") or "~"
+    neg_prefixes = [str(neg)]
+    components: dict[str, None] = {}
+
+    def literal(text: str, path: tuple[object, ...]) -> Literal:
+        s = text.strip()
+        try:
+            lit = parse_literal(s, neg_prefixes)
+        except ValueError as exc:
+            raise fail(path, str(exc), "write a literal such as ok(/scan) or !on(jaguar)") from exc
+        for pred, sign in ((nab_name, False), (ab_name, True)):
+            if lit.atom.startswith(pred + "(") and lit.atom.endswith(")"):
+                comp = lit.atom[len(pred) + 1 : -1]
+                if not comp:
+                    raise fail(path, f"{text!r} names no component", f"write {pred}(name)")
+                components.setdefault(comp)
+                return Literal(ab(comp), lit.positive == sign)
+        return lit
+
+    props = data.get("props")
+    if not isinstance(props, list):
+        raise fail(("props",), "props is not a list of propositions", "write props: [ok(/scan)]")
+    known: set[str] = set()
+    for i, p in enumerate(props):
+        known.add(literal(str(p), ("props", i)).atom)
+    rules = data.get("rules")
+    if not isinstance(rules, list):
+        raise fail(("rules",), "rules is not a list", "write rules: ['NAB(a) -> ok(x)']")
+    clauses: list[Clause] = []
+    for i, rule in enumerate(rules):
+        path = ("rules", i)
+        text = str(rule)
+        body_text, arrow, head_text = text.partition("->")
+        if not arrow:
+            body_text, head_text = "", text
+        body = [literal(t, path) for t in body_text.split(",") if t.strip()]
+        head_text = head_text.strip()
+        if head_text.lower() in ("false", ""):
+            if not arrow:
+                raise fail(path, f"empty rule {text!r}", "write body -> head")
+            head: list[Literal] = []
+        else:
+            head = [literal(t, path) for t in head_text.split("|")]
+        clause = Clause(tuple([-b for b in body] + head))
+        for lit in clause.lits:
+            if lit.atom not in known and ab_component(lit.atom) is None:
+                raise fail(path, f"rule {text!r} uses {lit.atom}, which props does not list",
+                           f"add {lit.atom} to props or fix the name")
+        clauses.append(clause)
+    priors = data.get("priors") or {}
+    if not isinstance(priors, dict):
+        raise fail(("priors",), "priors is not a mapping", "write priors: {name: 0.01}")
+    out_priors: dict[str, float] = {}
+    for comp, p in priors.items():
+        if str(comp) not in components:
+            raise fail(("priors", comp), f"prior for unknown component {comp!r}",
+                       f"use a component named in {ab_name}(...)")
+        if not isinstance(p, int | float) or not 0 < p < 1:
+            raise fail(("priors", comp), f"prior {p!r} is not in (0, 1)", "write e.g. 0.01")
+        out_priors[str(comp)] = float(p)
+    observables = frozenset(a for a in known if ab_component(a) is None)
+    return Theory(tuple(components), tuple(clauses), out_priors, observables)
+
+
+def _rule(clause: Clause, ab_name: str, nab_name: str, neg: str) -> str:
+    def name(atom: str, positive: bool) -> str:
+        comp = ab_component(atom)
+        if comp is not None:
+            return f"{ab_name if positive else nab_name}({comp})"
+        return atom if positive else neg + atom
+
+    body = [name(lit.atom, not lit.positive) for lit in clause.lits
+            if not lit.positive or ab_component(lit.atom) is not None]
+    head = [lit.atom for lit in clause.lits
+            if lit.positive and ab_component(lit.atom) is None]
+    rhs = " | ".join(head) if head else "false"
+    return f"{', '.join(body)} -> {rhs}" if body else rhs
+
+
+def dump_tug(theory: Theory, ab_name: str = "AB", nab_name: str = "NAB", neg: str = "!") -> str:
+    """The tug-format text of ``theory`` (priors only when they are set)."""
+    props = [f"{ab_name}({c})" for c in theory.components]
+    props += sorted(theory.observable_atoms() | {
+        lit.atom for cl in theory.clauses for lit in cl.lits if ab_component(lit.atom) is None
+    })
+    data: dict[str, Any] = {
+        "ab": ab_name,
+        "nab": nab_name,
+        "neg_prefix": neg,
+        "props": props,
+        "rules": [_rule(c, ab_name, nab_name, neg) for c in theory.clauses],
+    }
+    if theory.priors:
+        data["priors"] = {c: float(p) for c, p in theory.priors.items()}
+    return yaml.safe_dump(data, sort_keys=False, width=100, allow_unicode=True)
+
+
+def write_tug(theory: Theory, path: str | Path) -> None:
+    Path(path).write_text(dump_tug(theory), encoding="utf-8")

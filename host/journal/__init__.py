@@ -1,0 +1,49 @@
+"""The journal: an append-only SQLite (WAL) record of what the daemon saw, thought and did.
+
+Every observation change, diagnosis, plan, repair action and result, board event, downsampled
+telemetry and note is an ``Entry`` with a monotonic id and the daemon's wall and monotonic
+times (``entries``). ``Journal`` writes from a background thread so the asyncio loop never
+waits for the disk (``writer``); ``JournalReader`` answers tail / since-id / by-kind /
+time-range queries for the web page, ``dxboard journal`` and the timeline report (``store``);
+``TelemetryDownsampler`` turns 100 Hz channel readings into the 1 Hz summaries that are
+journaled (``telemetry``).
+"""
+
+from host.journal.entries import (
+    ActionRecord,
+    ActionState,
+    BoardEvent,
+    ChannelSummary,
+    DiagnosisRecord,
+    Entry,
+    Kind,
+    Note,
+    Observation,
+    Payload,
+    PlanRecord,
+    PlanStep,
+    Telemetry,
+)
+from host.journal.store import JournalReader
+from host.journal.telemetry import TelemetryDownsampler
+from host.journal.writer import Journal, Retention
+
+__all__ = [
+    "ActionRecord",
+    "ActionState",
+    "BoardEvent",
+    "ChannelSummary",
+    "DiagnosisRecord",
+    "Entry",
+    "Journal",
+    "JournalReader",
+    "Kind",
+    "Note",
+    "Observation",
+    "Payload",
+    "PlanRecord",
+    "PlanStep",
+    "Retention",
+    "Telemetry",
+    "TelemetryDownsampler",
+]

@@ -1,0 +1,529 @@
+"""The ``observers:`` section of ``system.yaml``: schema, validation, and the observers built.
+
+::
+
+    observers:
+      refresh: 1.0            # s between repeats of an unchanged literal (default 1.0)
+      validity: 3.0           # s a literal stays true without fresh evidence (> refresh)
+      poll: 0.5               # s between process scans and CPU/memory samples
+      source: {kind: zenoh, listen: [tcp/127.0.0.1:7447], connect: [], prefix: ""}
+      hardware: {link_timeout: 0.25, settle: 3, link: link(board)}   # devices: SH components
+      nodes:                  # node observer: running(n); exactly one of pid, match, supervised
+        hector_mapping: {match: 'hector_mapping'}     # regex on the command line (pgrep -f)
+        jaguar_node: {supervised: true}               # the daemon starts it and tracks its pid
+      topics:                 # general observer: ok(/t) iff |f - rate| < tolerance over window
+        /odom: {rate: 10, tolerance: 3, window: 1.0, silence: 5}   # silence in periods
+      trends:                 # qualitative observer: inc/dec/const(v), slope b per second
+        odom_yaw_rate: {topic: /odom, key: twist.angular.z, window: 1.0, slope: 0.05}
+      matched: [[odom_yaw_rate, imu_yaw_rate]]          # binary qualitative: matched(v1,v2)
+      diagnostics:            # diagnostic observer: thresholds on key/value pairs of a topic
+        /diagnostics: [{key: cpu.temp, max: 80, literal: ok(temp_cpu1)}]
+      properties:             # property observer: ok(n/cpu), ok(n/memory)
+        hector_mapping: {cpu_percent: 90, memory_mb: 800}
+      responses:              # multiple observer: output within a time limit of its input
+        - {input: /cmd_vel, output: /odom, within: 0.5}               # -> ok(/odom)
+
+Any entry may override ``refresh`` and ``validity``. With a ``SystemModel`` the loader checks
+names against it (nodes are node components, topics are published, the hardware observer
+watches every switchable device with its channel and current band); without one,
+``hardware:`` lists ``devices: {name: {channel: 3, current: [0.2, 1.2]}}``. Every problem is
+reported with the file, the line and the fix (``ObserverConfigError``, a ``UserError``).
+``check_atoms`` lists the emitted atoms a diagnosis theory does not know.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TypedDict
+
+from host.diagnosis import yamlpos
+from host.diagnosis.logic import Theory, parse_literal
+from host.diagnosis.model import Kind, Problem, SystemModel, system_file
+from host.errors import UserError
+from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
+from host.observers.hardware import (
+    DEFAULT_LINK_ATOM,
+    DEFAULT_LINK_TIMEOUT,
+    DEFAULT_SETTLE,
+    Device,
+    HardwareObserver,
+)
+from host.observers.processes import NodeObserver, PropertyObserver
+from host.observers.sources.base import TopicSource
+from host.observers.topics import DEFAULT_SILENCE, FrequencyObserver, ResponseObserver
+from host.observers.values import (
+    DiagnosticObserver,
+    MatchObserver,
+    Threshold,
+    TrendObserver,
+    ValueRef,
+)
+from host.observers.watcher import DEFAULT_POLL, ProcessSpec
+
+SECTION = "observers"
+_TOP = {"refresh", "validity", "poll", "source", "hardware", "nodes", "topics", "trends",
+        "matched", "diagnostics", "properties", "responses"}
+_TIMING = {"refresh", "validity"}
+
+
+class Timing(TypedDict):
+    refresh: float
+    validity: float
+
+
+class ObserverConfigError(UserError):
+    """The ``observers:`` section has problems; ``problems`` lists all of them."""
+
+    def __init__(self, problems: list[Problem]) -> None:
+        more = f" (+{len(problems) - 1} more problems)" if len(problems) > 1 else ""
+        super().__init__(str(problems[0]) + more)
+        self.problems = problems
+
+
+@dataclass(frozen=True)
+class SourceSpec:
+    kind: str = "zenoh"
+    listen: tuple[str, ...] = ("tcp/127.0.0.1:7447",)
+    connect: tuple[str, ...] = ()
+    prefix: str = ""
+
+    def open(self) -> TopicSource:
+        """The topic source (a zenoh session opens here; call inside the event loop)."""
+        if self.kind == "memory":
+            from host.observers.sources.memory import MemorySource
+            return MemorySource()
+        from host.observers.sources.zenoh_peer import ZenohSource
+        return ZenohSource(self.listen, self.connect, self.prefix)
+
+
+@dataclass
+class ObserversConfig:
+    file: Path
+    observers: list[Observer[Any]] = field(default_factory=list)
+    processes: dict[str, ProcessSpec] = field(default_factory=dict)
+    source: SourceSpec = field(default_factory=SourceSpec)
+    poll: float = DEFAULT_POLL
+
+
+def load_observers(path: str | Path, model: SystemModel | None = None) -> ObserversConfig:
+    """Read and validate the ``observers:`` section of ``path`` (a robot directory or its
+    ``system.yaml``) and build its observers. Raises ``ObserverConfigError``."""
+    file = system_file(path)
+    try:
+        text = file.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ObserverConfigError([Problem(file, 0, f"cannot read: {exc.strerror}",
+                                           "give a robot directory holding system.yaml")]) from exc
+    try:
+        data, lines = yamlpos.load(text)
+    except yamlpos.YamlSyntaxError as exc:
+        raise ObserverConfigError([Problem(file, exc.line, str(exc), "fix the YAML syntax")]
+                                  ) from exc
+    section = data.get(SECTION) if isinstance(data, dict) else None
+    b = _Builder(file, lines, model)
+    config = b.build(section)
+    if b.problems:
+        raise ObserverConfigError(b.problems)
+    return config
+
+
+def check_atoms(config: ObserversConfig, theory: Theory) -> list[str]:
+    """The atoms the observers may emit that no clause of ``theory`` mentions."""
+    known = theory.observable_atoms()
+    return [a for o in config.observers for a in o.atoms() if a not in known]
+
+
+class _Builder:
+    def __init__(self, file: Path, lines: yamlpos.Lines, model: SystemModel | None) -> None:
+        self.file = file
+        self.lines = lines
+        self.model = model
+        self.problems: list[Problem] = []
+        self.refresh = DEFAULT_REFRESH
+        self.validity = DEFAULT_VALIDITY
+
+    def err(self, path: tuple[object, ...], message: str, fix: str) -> None:
+        self.problems.append(Problem(self.file, self.lines(SECTION, *path), message, fix))
+
+    # -- helpers ---------------------------------------------------------------------------
+    def mapping(self, path: tuple[object, ...], value: Any, allowed: set[str],
+                example: str) -> dict[str, Any] | None:
+        if value is None:
+            return {}
+        if not isinstance(value, dict):
+            self.err(path, f"{'.'.join(map(str, path)) or SECTION} is not a mapping",
+                     f"write {example}")
+            return None
+        for key in value:
+            if key not in allowed:
+                self.err((*path, key), f"unknown key {key!r}", f"use one of {sorted(allowed)}")
+        return value
+
+    def number(self, path: tuple[object, ...], value: Any, default: float | None,
+               minimum: float = 0.0, what: str = "seconds") -> float | None:
+        if value is None:
+            return default
+        if isinstance(value, bool) or not isinstance(value, int | float) or value <= minimum:
+            self.err(path, f"{path[-1]} {value!r} is not a number above {minimum:g}",
+                     f"give {what}, e.g. {path[-1]}: 1.0")
+            return default
+        return float(value)
+
+    def timing(self, path: tuple[object, ...], spec: dict[str, Any]) -> Timing:
+        refresh = self.number((*path, "refresh"), spec.get("refresh"), self.refresh) or 1.0
+        validity = self.number((*path, "validity"), spec.get("validity"), self.validity) or 3.0
+        if validity <= refresh:
+            self.err((*path, "validity"), f"validity {validity:g} s is not above refresh "
+                     f"{refresh:g} s", "give a validity of about 3 refresh periods")
+            validity = 3 * refresh
+        return {"refresh": refresh, "validity": validity}
+
+    def topic(self, path: tuple[object, ...], topic: Any) -> str | None:
+        if not isinstance(topic, str) or not re.fullmatch(r"(/[^/\s*$?#]+)+", topic):
+            self.err(path, f"{topic!r} is not a topic name", "write a name like /odom")
+            return None
+        if self.model is not None and topic not in {
+                t for c in self.model.components.values() for t in c.publishes}:
+            self.err(path, f"topic {topic} is published by no component of the model",
+                     "name a topic some component publishes, or add it to its publishes")
+        return topic
+
+    def node(self, path: tuple[object, ...], name: str) -> bool:
+        if self.model is None:
+            return True
+        c = self.model.components.get(name)
+        if c is None or not c.is_node:
+            self.err(path, f"{name!r} is not a node of the model",
+                     "name a component of kind N, HN or SN")
+            return False
+        return True
+
+    # -- sections --------------------------------------------------------------------------
+    def build(self, section: Any) -> ObserversConfig:
+        config = ObserversConfig(self.file)
+        top = self.mapping((), section, _TOP, "observers: {topics: {/odom: {rate: 10, ...}}}")
+        if top is None:
+            return config
+        t = self.timing((), top)
+        self.refresh, self.validity = t["refresh"], t["validity"]
+        config.poll = self.number(("poll",), top.get("poll"), DEFAULT_POLL) or DEFAULT_POLL
+        config.source = self._source(top.get("source"))
+        obs = config.observers
+        if "hardware" in top:
+            obs += self._hardware(top["hardware"])
+        obs += self._nodes(top.get("nodes"), config.processes)
+        obs += self._topics(top.get("topics"))
+        trends = self._trends(top.get("trends"), obs)
+        obs += self._matched(top.get("matched"), trends)
+        obs += self._diagnostics(top.get("diagnostics"))
+        obs += self._properties(top.get("properties"), config.processes)
+        obs += self._responses(top.get("responses"))
+        self._unique(obs)
+        return config
+
+    def _source(self, value: Any) -> SourceSpec:
+        spec = self.mapping(("source",), value, {"kind", "listen", "connect", "prefix"},
+                            "source: {kind: zenoh, listen: [tcp/127.0.0.1:7447]}")
+        if not spec:
+            return SourceSpec()
+        kind = spec.get("kind", "zenoh")
+        if kind not in ("zenoh", "memory"):
+            self.err(("source", "kind"), f"source kind {kind!r} is unknown",
+                     "use zenoh (the robot's topics) or memory (in-process)")
+        ends: dict[str, tuple[str, ...]] = {}
+        for key, default in (("listen", SourceSpec.listen), ("connect", ())):
+            v = spec.get(key, list(default))
+            if not isinstance(v, list) or not all(isinstance(e, str) and "/" in e for e in v):
+                self.err(("source", key), f"{key} {v!r} is not a list of endpoints",
+                         f"write {key}: [tcp/127.0.0.1:7447]")
+                v = list(default)
+            ends[key] = tuple(v)
+        return SourceSpec(str(kind), ends["listen"], ends["connect"], str(spec.get("prefix", "")))
+
+    def _hardware(self, value: Any) -> list[Observer[Any]]:
+        p: tuple[object, ...] = ("hardware",)
+        spec = self.mapping(p, value, {"link_timeout", "settle", "link", "devices", *_TIMING},
+                            "hardware: {link_timeout: 0.25}")
+        if spec is None:
+            return []
+        devices = self._devices(spec.get("devices"))
+        settle = spec.get("settle", DEFAULT_SETTLE)
+        if not isinstance(settle, int) or isinstance(settle, bool) or settle < 1:
+            self.err((*p, "settle"), f"settle {settle!r} is not a positive integer",
+                     "give the readings a band change needs, e.g. settle: 3")
+            settle = DEFAULT_SETTLE
+        link = spec.get("link", DEFAULT_LINK_ATOM)
+        if link is not None:
+            try:
+                link = parse_literal(str(link)).atom
+            except ValueError as exc:
+                self.err((*p, "link"), str(exc), "write link: link(board), or link: null")
+                link = DEFAULT_LINK_ATOM
+        timeout = self.number((*p, "link_timeout"), spec.get("link_timeout"),
+                              DEFAULT_LINK_TIMEOUT) or DEFAULT_LINK_TIMEOUT
+        return [HardwareObserver(devices, timeout, settle, link, **self.timing(p, spec))]
+
+    def _devices(self, value: Any) -> dict[str, Device]:
+        p: tuple[object, ...] = ("hardware", "devices")
+        if self.model is not None:
+            if value is not None:
+                self.err(p, "devices are given, but the model already lists them",
+                         "remove devices: the switchable components are watched")
+            return {c.name: Device(c.name, c.channel, c.current)
+                    for c in self.model.by_kind(Kind.SH) if c.channel is not None}
+        spec = self.mapping(p, value, set(value) if isinstance(value, dict) else set(),
+                            "devices: {hokuyo: {channel: 3, current: [0.2, 1.2]}}")
+        if not spec:
+            self.err(p, "no devices for the hardware observer",
+                     "list devices: {name: {channel: 3, current: [0.2, 1.2]}}")
+            return {}
+        out: dict[str, Device] = {}
+        for name, d in spec.items():
+            ok = (isinstance(d, dict) and isinstance(d.get("channel"), int)
+                  and (d.get("current") is None or (
+                      isinstance(d["current"], list) and len(d["current"]) == 2
+                      and all(isinstance(x, int | float) for x in d["current"]))))
+            if not ok:
+                self.err((*p, name), f"device {name!r} is not {{channel: N, current: [lo, hi]}}",
+                         "write {channel: 3, current: [0.2, 1.2]}")
+                continue
+            cur = d.get("current")
+            out[str(name)] = Device(str(name), d["channel"],
+                                    None if cur is None else (float(cur[0]), float(cur[1])))
+        return out
+
+    def _nodes(self, value: Any, procs: dict[str, ProcessSpec]) -> list[Observer[Any]]:
+        nodes = self.mapping(("nodes",), value, set(value) if isinstance(value, dict) else set(),
+                             "nodes: {hector_mapping: {match: hector_mapping}}")
+        out: list[Observer[Any]] = []
+        for name, spec in (nodes or {}).items():
+            p = ("nodes", name)
+            s = self.mapping(p, spec, {"pid", "match", "supervised", *_TIMING},
+                             "{match: 'regex'} or {pid: 1234} or {supervised: true}")
+            if s is None or not self.node(p, str(name)):
+                continue
+            given = [k for k in ("pid", "match", "supervised") if s.get(k) not in (None, False)]
+            if len(given) != 1:
+                self.err(p, f"node {name!r} gives {given or 'none'} of pid, match, supervised",
+                         "give exactly one: {match: 'hector_mapping'}, {pid: N} or "
+                         "{supervised: true}")
+                continue
+            pid, match = s.get("pid"), s.get("match")
+            if pid is not None and (not isinstance(pid, int) or isinstance(pid, bool) or pid < 1):
+                self.err((*p, "pid"), f"pid {pid!r} is not a process id", "give pid: 1234")
+                continue
+            if match is not None:
+                try:
+                    re.compile(str(match))
+                except re.error as exc:
+                    self.err((*p, "match"), f"match {match!r} is not a regular expression: {exc}",
+                             "quote it and escape special characters")
+                    continue
+            procs[str(name)] = ProcessSpec(str(name), pid, None if match is None else str(match),
+                                           bool(s.get("supervised", False)))
+            out.append(NodeObserver(str(name), **self.timing(p, s)))
+        return out
+
+    def _topics(self, value: Any) -> list[Observer[Any]]:
+        topics = self.mapping(("topics",), value, set(value) if isinstance(value, dict) else set(),
+                              "topics: {/odom: {rate: 10, tolerance: 3}}")
+        out: list[Observer[Any]] = []
+        for topic, spec in (topics or {}).items():
+            p = ("topics", topic)
+            s = self.mapping(p, spec, {"rate", "tolerance", "window", "silence", *_TIMING},
+                             "{rate: 10, tolerance: 3, window: 1.0}")
+            if s is None or self.topic(p, topic) is None:
+                continue
+            rate = self.number((*p, "rate"), s.get("rate"), None, what="Hz")
+            if rate is None:
+                self.err(p, f"topic {topic} has no rate", "give its expected rate: rate: 10")
+                continue
+            tol = self.number((*p, "tolerance"), s.get("tolerance"), rate * 0.3, what="Hz")
+            window = self.number((*p, "window"), s.get("window"), max(1.0, 2.0 / rate)) or 1.0
+            silence = self.number((*p, "silence"), s.get("silence"), DEFAULT_SILENCE,
+                                  what="periods") or DEFAULT_SILENCE
+            if window * rate < 2:
+                self.err((*p, "window"), f"window {window:g} s holds fewer than 2 messages at "
+                         f"{rate:g} Hz", f"give window: {2 / rate:g} or more")
+                continue
+            out.append(FrequencyObserver(topic, rate, tol or rate * 0.3, window, silence,
+                                         **self.timing(p, s)))
+        return out
+
+    def _trends(self, value: Any, obs: list[Observer[Any]]) -> dict[str, tuple[ValueRef, dict[
+            str, Any]]]:
+        trends = self.mapping(("trends",), value, set(value) if isinstance(value, dict) else set(),
+                              "trends: {v: {topic: /odom, key: x, slope: 0.05}}")
+        out: dict[str, tuple[ValueRef, dict[str, Any]]] = {}
+        for name, spec in (trends or {}).items():
+            p = ("trends", name)
+            s = self.mapping(p, spec, {"topic", "key", "window", "slope", "min_samples",
+                                       *_TIMING}, "{topic: /odom, key: twist.angular.z}")
+            if s is None or self.topic((*p, "topic"), s.get("topic")) is None:
+                continue
+            if not isinstance(s.get("key"), str) or not s["key"]:
+                self.err(p, f"trend {name!r} has no key", "give the payload key: key: yaw_rate")
+                continue
+            n = s.get("min_samples", 3)
+            if not isinstance(n, int) or isinstance(n, bool) or n < 2:
+                self.err((*p, "min_samples"), f"min_samples {n!r} is below 2",
+                         "give min_samples: 3 or more")
+                n = 3
+            slope = s.get("slope", 0.0)
+            if isinstance(slope, bool) or not isinstance(slope, int | float) or slope < 0:
+                self.err((*p, "slope"), f"slope {slope!r} is not a number >= 0",
+                         "give the slope (value units per second) that counts as a trend")
+                slope = 0.0
+            window = self.number((*p, "window"), s.get("window"), 1.0) or 1.0
+            kw: dict[str, Any] = {"window": window, "slope": float(slope), "min_samples": n,
+                                  **self.timing(p, s)}
+            ref = ValueRef(str(name), s["topic"], s["key"])
+            out[str(name)] = (ref, kw)
+            obs.append(TrendObserver(ref, **kw))
+        return out
+
+    def _matched(self, value: Any, trends: dict[str, tuple[ValueRef, dict[str, Any]]]
+                 ) -> list[Observer[Any]]:
+        if value is None:
+            return []
+        if not isinstance(value, list):
+            self.err(("matched",), "matched is not a list", "write matched: [[v1, v2]]")
+            return []
+        out: list[Observer[Any]] = []
+        for i, pair in enumerate(value):
+            p = ("matched", i)
+            if not (isinstance(pair, list) and len(pair) == 2 and pair[0] != pair[1]):
+                self.err(p, f"matched entry {pair!r} is not a pair of two values",
+                         "write [v1, v2]")
+                continue
+            missing = [v for v in pair if v not in trends]
+            if missing:
+                self.err(p, f"matched names {missing}, not declared under trends",
+                         "declare each value under trends: with its topic and key")
+                continue
+            (r1, kw), (r2, _) = trends[pair[0]], trends[pair[1]]
+            out.append(MatchObserver(r1, r2, **kw))
+        return out
+
+    def _diagnostics(self, value: Any) -> list[Observer[Any]]:
+        diags = self.mapping(("diagnostics",), value,
+                             set(value) if isinstance(value, dict) else set(),
+                             "diagnostics: {/diagnostics: [{key: temp, max: 40, literal: ...}]}")
+        out: list[Observer[Any]] = []
+        for topic, rules in (diags or {}).items():
+            p = ("diagnostics", topic)
+            if self.topic(p, topic) is None:
+                continue
+            if not isinstance(rules, list) or not rules:
+                self.err(p, f"diagnostics of {topic} is not a list of rules",
+                         "write - {key: temp_cpu1, max: 40.0, literal: ok(temp_cpu1)}")
+                continue
+            built: list[Threshold] = []
+            for i, r in enumerate(rules):
+                rule = self._threshold((*p, i), r)
+                if rule is not None:
+                    built.append(rule)
+            if built:
+                out.append(DiagnosticObserver(topic, built, refresh=self.refresh,
+                                              validity=self.validity))
+        return out
+
+    def _threshold(self, p: tuple[object, ...], r: Any) -> Threshold | None:
+        s = self.mapping(p, r, {"key", "literal", "min", "max", "equals"},
+                         "{key: temp_cpu1, max: 40.0, literal: ok(temp_cpu1)}")
+        if s is None:
+            return None
+        key, lit = s.get("key"), s.get("literal")
+        if not isinstance(key, str) or not key:
+            self.err(p, "rule has no key", "give the payload key: key: temp_cpu1")
+            return None
+        try:
+            literal = parse_literal(str(lit if lit is not None else f"ok({key})"))
+        except ValueError as exc:
+            self.err((*p, "literal"), str(exc), "write literal: ok(temp_cpu1)")
+            return None
+        if not literal.positive:
+            self.err((*p, "literal"), f"literal {lit} is negated",
+                     "name the atom that holds when the value is in range")
+            return None
+        bounds = {k: s.get(k) for k in ("min", "max")}
+        for k, v in bounds.items():
+            if v is not None and (isinstance(v, bool) or not isinstance(v, int | float)):
+                self.err((*p, k), f"{k} {v!r} is not a number", f"write {k}: 40.0")
+                return None
+        if s.get("equals") is None and bounds["min"] is None and bounds["max"] is None:
+            self.err(p, f"rule for {key} has no min, max or equals", "give max: 40.0")
+            return None
+        lo, hi = bounds["min"], bounds["max"]
+        return Threshold(key, literal.atom, None if lo is None else float(lo),
+                         None if hi is None else float(hi), s.get("equals"))
+
+    def _properties(self, value: Any, procs: dict[str, ProcessSpec]) -> list[Observer[Any]]:
+        props = self.mapping(("properties",), value,
+                             set(value) if isinstance(value, dict) else set(),
+                             "properties: {hector_mapping: {cpu_percent: 90}}")
+        out: list[Observer[Any]] = []
+        for name, spec in (props or {}).items():
+            p = ("properties", name)
+            s = self.mapping(p, spec, {"cpu_percent", "memory_mb", *_TIMING},
+                             "{cpu_percent: 90, memory_mb: 800}")
+            if s is None:
+                continue
+            if name not in procs:
+                self.err(p, f"properties of {name!r}, which has no node observer",
+                         f"add {name} under nodes: (with how to find its process)")
+                continue
+            cpu = self.number((*p, "cpu_percent"), s.get("cpu_percent"), None, what="percent")
+            mem = self.number((*p, "memory_mb"), s.get("memory_mb"), None, what="megabytes")
+            if cpu is None and mem is None:
+                self.err(p, f"properties of {name!r} give no limit",
+                         "give cpu_percent: 90 and/or memory_mb: 800")
+                continue
+            out.append(PropertyObserver(str(name), cpu, mem, **self.timing(p, s)))
+        return out
+
+    def _responses(self, value: Any) -> list[Observer[Any]]:
+        if value is None:
+            return []
+        if not isinstance(value, list):
+            self.err(("responses",), "responses is not a list",
+                     "write responses: [{input: /cmd_vel, output: /odom, within: 0.5}]")
+            return []
+        out: list[Observer[Any]] = []
+        for i, spec in enumerate(value):
+            p = ("responses", i)
+            s = self.mapping(p, spec, {"input", "output", "within", "literal", *_TIMING},
+                             "{input: /cmd_vel, output: /odom, within: 0.5}")
+            if s is None:
+                continue
+            src = self.topic((*p, "input"), s.get("input"))
+            dst = self.topic((*p, "output"), s.get("output"))
+            within = self.number((*p, "within"), s.get("within"), None)
+            if src is None or dst is None or within is None or src == dst:
+                if within is None:
+                    self.err(p, "response has no time limit", "give within: 0.5 (seconds)")
+                elif src is not None and src == dst:
+                    self.err(p, "input and output are the same topic", "name two topics")
+                continue
+            atom = None
+            if s.get("literal") is not None:
+                try:
+                    atom = parse_literal(str(s["literal"])).atom
+                except ValueError as exc:
+                    self.err((*p, "literal"), str(exc), "write literal: ok(/odom)")
+                    continue
+            out.append(ResponseObserver(src, dst, within, atom, **self.timing(p, s)))
+        return out
+
+    def _unique(self, obs: list[Observer[Any]]) -> None:
+        seen: dict[str, str] = {}
+        for o in obs:
+            for atom in o.atoms():
+                if atom in seen and seen[atom] != o.name:
+                    self.problems.append(Problem(
+                        self.file, self.lines(SECTION), f"{atom} is emitted by two observers, "
+                        f"{seen[atom]} and {o.name}", "give one of them another literal: "
+                        "each atom needs one source, or they overwrite each other"))
+                seen.setdefault(atom, o.name)

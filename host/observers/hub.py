@@ -1,0 +1,135 @@
+"""The observer hub: routes inputs to observers and runs their deadlines on the asyncio loop.
+
+The daemon's part of the observers, kept small so the daemon only wires: ``ObserverHub``
+takes the observers and a ``sink`` (called with every non-empty list of updates, in order —
+typically ``lambda u: apply_updates(u, diagnoser)`` followed by a diagnosis); ``start`` subscribes
+each topic observer's topics on a ``TopicSource`` and starts a ``ProcessWatcher``; the board
+stream is fed with ``feed_board(item)``. After every input the hub (re)arms one timer per
+observer at its ``next_deadline()``, so silence, response and link deadlines fire when due and
+refreshes go out on time — no fixed poll. The hub reads the clock (``clock``), as the I/O edge.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from host.observers.base import Observer, Update
+from host.observers.hardware import BoardInput, HardwareObserver
+from host.observers.payload import Message
+from host.observers.processes import ProcessObserver, ProcessSample
+from host.observers.sources.base import Subscription, TopicSource
+from host.observers.topics import TopicObserver
+from host.observers.watcher import ProcessSpec, ProcessWatcher
+
+log = logging.getLogger(__name__)
+
+Sink = Callable[[list[Update]], None]
+
+
+class ObserverHub:
+    def __init__(self, observers: Sequence[Observer[Any]], sink: Sink,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        self.observers = list(observers)
+        self.sink = sink
+        self.clock = clock
+        self._by_topic: dict[str, list[TopicObserver]] = {}
+        self._by_node: dict[str, list[ProcessObserver]] = {}
+        self._hardware: list[HardwareObserver] = []
+        for o in self.observers:
+            if isinstance(o, TopicObserver):
+                for t in o.topics:
+                    self._by_topic.setdefault(t, []).append(o)
+            elif isinstance(o, ProcessObserver):
+                self._by_node.setdefault(o.node, []).append(o)
+            elif isinstance(o, HardwareObserver):
+                self._hardware.append(o)
+        self._timers: dict[int, tuple[float, asyncio.TimerHandle]] = {}
+        self._subs: list[Subscription] = []
+        self.watcher: ProcessWatcher | None = None
+
+    @property
+    def topics(self) -> list[str]:
+        return list(self._by_topic)
+
+    @property
+    def nodes(self) -> list[str]:
+        return list(self._by_node)
+
+    async def start(self, source: TopicSource | None = None,
+                    processes: dict[str, ProcessSpec] | None = None,
+                    poll: float | None = None) -> None:
+        """Subscribe the topics, start watching the processes, arm the first deadlines."""
+        if source is not None:
+            for topic in self._by_topic:
+                self._subs.append(source.subscribe(topic, self.feed_message))
+        if processes:
+            kw = {} if poll is None else {"poll": poll}
+            self.watcher = ProcessWatcher(processes, self.feed_process, clock=self.clock, **kw)
+            self.watcher.start()
+        now = self.clock()
+        for o in self.observers:
+            self._deliver(o, o.tick(now))
+
+    async def close(self) -> None:
+        """Stop everything; the observers' literals are retracted through the sink."""
+        for s in self._subs:
+            s.close()
+        self._subs.clear()
+        if self.watcher is not None:
+            await self.watcher.close()
+        for _, handle in self._timers.values():
+            handle.cancel()
+        self._timers.clear()
+        now = self.clock()
+        for o in self.observers:
+            updates = o.stop(now)
+            if updates:
+                self.sink(updates)
+
+    # -- inputs ----------------------------------------------------------------------------
+    def feed_message(self, msg: Message) -> None:
+        for o in self._by_topic.get(msg.topic, ()):
+            self._deliver(o, o.feed(msg, msg.time))
+
+    def feed_process(self, sample: ProcessSample, now: float) -> None:
+        for o in self._by_node.get(sample.node, ()):
+            self._deliver(o, o.feed(sample, now))
+
+    def feed_board(self, item: BoardInput, now: float | None = None) -> None:
+        t = self.clock() if now is None else now
+        for o in self._hardware:
+            self._deliver(o, o.feed(item, t))
+
+    # -- deadlines -------------------------------------------------------------------------
+    def _deliver(self, o: Observer[Any], updates: list[Update]) -> None:
+        if updates:
+            self.sink(updates)
+        self._arm(o)
+
+    def _arm(self, o: Observer[Any], fired: float | None = None) -> None:
+        deadline = o.next_deadline()
+        key = id(o)
+        old = self._timers.get(key)
+        if old is not None:
+            if old[0] == deadline:
+                return
+            old[1].cancel()
+            del self._timers[key]
+        if deadline is None:
+            return
+        loop = asyncio.get_running_loop()
+        delay = max(0.0, deadline - self.clock())
+        if deadline == fired:  # a timer that fired a hair early: never spin on it
+            delay = max(delay, 0.001)
+        self._timers[key] = (deadline, loop.call_later(delay, self._fire, o))
+
+    def _fire(self, o: Observer[Any]) -> None:
+        fired = self._timers.pop(id(o), (None, None))[0]
+        updates = o.tick(self.clock())
+        if updates:
+            self.sink(updates)
+        self._arm(o, fired)

@@ -1,0 +1,60 @@
+"""The topic-source interface: subscribe a topic name, get ``Message`` callbacks.
+
+A source owns its clock (``clock``, seconds, monotonic by default): it stamps each message
+with the host time it arrived, since it is the I/O edge; observers below it never read a clock.
+Callbacks run on the asyncio loop's thread (a backend with its own threads marshals them
+there), must not block, and see messages of one topic in arrival order. ``close()`` is
+idempotent; sources are async context managers.
+"""
+
+from __future__ import annotations
+
+import time
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+from types import TracebackType
+
+from host.observers.payload import Message
+
+Callback = Callable[[Message], None]
+Clock = Callable[[], float]
+
+
+class Subscription(ABC):
+    @abstractmethod
+    def close(self) -> None:
+        """Stop the callbacks (idempotent)."""
+
+
+class TopicSource(ABC):
+    def __init__(self, clock: Clock = time.monotonic) -> None:
+        self.clock = clock
+        self._closed = False
+
+    @abstractmethod
+    def subscribe(self, topic: str, callback: Callback) -> Subscription:
+        """Deliver every later message of ``topic`` (a name such as ``/odom``)."""
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self._close()
+
+    def _close(self) -> None:  # noqa: B027 - a hook; most backends need no clean-up
+        """Backend clean-up (called once)."""
+
+    async def __aenter__(self) -> TopicSource:
+        return self
+
+    async def __aexit__(self, exc_type: type[BaseException] | None,
+                        exc: BaseException | None, tb: TracebackType | None) -> None:
+        self.close()
+
+
+def check_topic(topic: str) -> str:
+    """``/odom`` style names: a leading slash, non-empty parts, no wildcards."""
+    parts = topic.split("/")
+    if not topic.startswith("/") or any(not p for p in parts[1:]) or any(
+            c in topic for c in "*$?#"):
+        raise ValueError(f"topic {topic!r} is not a name like /odom or /laser/scan")
+    return topic

@@ -1,0 +1,208 @@
+"""The planning pipeline for one robot: diagnosis -> problem -> search -> partial-order plan.
+
+``RepairPlanner(domain, model)`` grounds the domain over the model once (the task depends
+on the model only) and removes the operators that would switch off protected components;
+``plan(bad, observations)`` then builds the problem of that diagnosis (paper 000 §IV-E),
+checks by relaxed reachability that every goal can be reached at all (and says which
+component cannot be repaired, and why, when one cannot), runs a planner from the registry
+(``astar`` by default), validates the returned sequence step by step against the task (any
+planner's plan, ours or Fast Downward's), and returns it deordered into a ``Plan`` an
+executor can run in parallel where steps are independent. Nothing here acts on the robot:
+planning is a dry run by nature.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterable
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from host.errors import DxboardError
+from host.repair.domain import Atom, Domain, load_domain
+from host.repair.errors import NoPlanError, ProblemError
+from host.repair.grounding import ground
+from host.repair.plan import Plan, deorder
+from host.repair.problem import AB, RepairModel, RepairProblem, build_problem, repair_model, to_pddl
+from host.repair.protect import check_plan, enforce
+from host.repair.search import (
+    DEFAULT_MAX_EXPANSIONS,
+    PLANNERS,
+    SearchInput,
+    relevant_ops,
+)
+from host.repair.task import GroundOp, Task, holds, lit_atom
+
+if TYPE_CHECKING:
+    from host.diagnosis.logic import Literal
+
+log = logging.getLogger(__name__)
+
+
+class RepairPlanner:
+    """Plans repairs for one robot model with one domain."""
+
+    def __init__(self, domain: Domain, model: RepairModel) -> None:
+        self.domain = domain
+        self.model = model
+        self._full: Task | None = None
+        self._task: Task | None = None
+        self._goal: tuple[tuple[Atom, ...], tuple[int, ...]] | None = None
+
+    @classmethod
+    def for_system(cls, system_dir: str | Path, domain_path: str | Path | None = None) -> (
+        RepairPlanner
+    ):
+        """Load ``SYSTEM_DIR/system.yaml`` and ``repair.pddl`` (or ``domain_path``)."""
+        from host.diagnosis.model import load_system
+
+        model = repair_model(load_system(system_dir))
+        return cls(load_domain(domain_path if domain_path is not None else system_dir), model)
+
+    @property
+    def task(self) -> Task:
+        """The ground task with the protected components' switch-offs removed (cached)."""
+        if self._task is None:
+            self._full = ground(self.domain, self.model.objects(), self.model.static_facts())
+            self._task = enforce(self._full, self.model.protected)
+        return self._task
+
+    def problem(self, bad: Iterable[str], observations: Iterable[Literal] = ()) -> RepairProblem:
+        return build_problem(self.model, bad, observations)
+
+    def plan(
+        self,
+        bad: Iterable[str],
+        observations: Iterable[Literal] = (),
+        planner: str = "astar",
+        max_expansions: int = DEFAULT_MAX_EXPANSIONS,
+    ) -> Plan:
+        """The repair plan for the diagnosis ``bad``; raises ``NoPlanError`` if none exists."""
+        return self.plan_problem(self.problem(bad, observations), planner, max_expansions)
+
+    def plan_problem(
+        self,
+        problem: RepairProblem,
+        planner: str = "astar",
+        max_expansions: int = DEFAULT_MAX_EXPANSIONS,
+    ) -> Plan:
+        search = PLANNERS.get(planner)
+        if search is None:
+            raise ProblemError(
+                f"unknown planner {planner!r}", f"choose one of {', '.join(sorted(PLANNERS))}"
+            )
+        task = self.task
+        init = task.state((a.pred, a.args) for a in problem.init)
+        goal = self._goal_literals(task, problem)
+        relevant = self._check_reachable(task, init, goal)
+        pddl = to_pddl(problem, self.domain.name) if planner == "fast-downward" else None
+        result = search(
+            SearchInput(task, init, goal, self.domain.path, pddl, max_expansions, relevant)
+        )
+        if result.ops is None:
+            raise NoPlanError(
+                "no plan reaches the goal: the repairs needed interfere with each other",
+                "check the domain's preconditions against system.yaml",
+            )
+        ops = [task.ops[i] for i in result.ops]
+        _validate(task, init, goal, ops, planner)
+        check_plan(task, ops, self.model.protected)
+        notes = [f"assumed {a} (not observed)" for a in problem.assumed]
+        cost = sum(op.cost for op in ops)
+        log.debug("plan by %s: %d steps, stats %s", planner, len(ops), result.stats)
+        return deorder(ops, cost, planner, notes)
+
+    def _goal_literals(self, task: Task, problem: RepairProblem) -> tuple[int, ...]:
+        """G as literals; the goal is the same for every diagnosis, so it is cached."""
+        if self._goal is None or self._goal[0] != problem.goal:
+            lits = tuple(task.literal(a.pred, a.args, False) for a in problem.goal)
+            self._goal = (problem.goal, lits)
+        return self._goal[1]
+
+    def _check_reachable(self, task: Task, init: int, goal: tuple[int, ...]) -> list[int]:
+        """The relevant operators, after making sure every goal is reachable with them."""
+        subset = relevant_ops(task, init, goal)
+        missing = unreachable(task, init, goal, subset)
+        if not missing:
+            return subset
+        why = {x: self._why(task, x) for x in missing}
+        roots = [r for r in why.values() if r is not None]
+        follow = [task.atoms[lit_atom(x)][1][0] for x, r in why.items() if r is None]
+        if follow:
+            names = ", ".join(follow[:6]) + (", ..." if len(follow) > 6 else "")
+            if roots:
+                roots.append(f"and {len(follow)} that need them stay abnormal ({names})")
+            else:
+                roots.append(f"{names}: what their repair needs cannot be reached")
+        raise NoPlanError(
+            "no plan reaches the goal: " + "; ".join(roots),
+            "repair these by hand, or add the action that repairs them to "
+            f"{self.domain.path.name}",
+            tuple(task.describe(x) for x in missing),
+        )
+
+    def _why(self, task: Task, goal_lit: int) -> str | None:
+        """Why a goal literal is unreachable, or None when only what it needs is."""
+        pred, args = task.atoms[lit_atom(goal_lit)]
+        name = args[0] if args else task.describe(goal_lit)
+        what = f"{name} stays abnormal" if pred == AB else f"{task.describe(goal_lit)} unreachable"
+        full = self._full if self._full is not None else task
+        achievers = [full.ops[i] for i in full.achievers().get(goal_lit, ())]
+        removed = {label for label, _ in task.removed}
+        blocked = [op.label() for op in achievers if op.label() in removed]
+        if achievers and len(blocked) == len(achievers):
+            return f"{what}: only {', '.join(blocked)} would repair it, and that switches off a "\
+                "protected component"
+        if blocked:
+            return f"{what}: {', '.join(blocked)} would switch off a protected component and "\
+                "no other repair can become applicable"
+        if not achievers:
+            typ = self.model.types.get(name, "?")
+            return f"{what}: no action of the domain repairs a {typ}"
+        return None
+
+
+def unreachable(
+    task: Task, init: int, goal: Iterable[int], subset: Iterable[int]
+) -> list[int]:
+    """Goal literals not reachable even ignoring the operators' harmful effects."""
+    goal = list(goal)
+    ops = task.ops
+    reached: set[int] = set()
+    for x in goal:
+        if holds(x, init):
+            reached.add(x)
+    waiting: dict[int, list[int]] = {}
+    missing_count: dict[int, int] = {}
+    queue: list[int] = []
+    for i in subset:
+        pre = [x for x in ops[i].pre if not holds(x, init)]
+        missing_count[i] = len(pre)
+        for x in pre:
+            waiting.setdefault(x, []).append(i)
+        if not pre:
+            queue.append(i)
+    while queue:
+        i = queue.pop()
+        for x in ops[i].effect_literals():  # conditional effects optimistically
+            if x in reached or holds(x, init):
+                continue
+            reached.add(x)
+            for j in waiting.get(x, ()):
+                missing_count[j] -= 1
+                if missing_count[j] == 0:
+                    queue.append(j)
+    return [x for x in goal if x not in reached]
+
+
+def _validate(
+    task: Task, init: int, goal: tuple[int, ...], ops: list[GroundOp], planner: str
+) -> None:
+    s = init
+    for k, op in enumerate(ops):
+        if not op.applicable(s):
+            raise DxboardError(f"planner {planner}: step {k} {op.label()} is not applicable")
+        s = op.apply(s)
+    bad = [task.describe(x) for x in goal if not holds(x, s)]
+    if bad:
+        raise DxboardError(f"planner {planner}: the plan leaves {', '.join(bad[:5])} unmet")

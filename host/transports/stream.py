@@ -1,0 +1,104 @@
+"""The native protocol on any byte stream: the codec (``protocol.connection``) plus a backend.
+
+Theory of operation. A ``StreamTransport`` owns a ``Connection(HOST, key)``. ``_open`` connects
+the backend, then waits for the board's HELLO: a board that greets on connect (TCP) sends it at
+once; if none arrives within ``HELLO_WAIT_S`` (a serial line to a board that booted long ago),
+the host asks with HELLO_REQUEST and takes the HELLO that answers it. Messages before the first
+HELLO cannot be trusted to belong to this session and are dropped. ``_send`` signs through the
+codec (the key signs actuation, PROTOCOL.md §5); ``_receive`` feeds bytes to the codec until it
+yields an event, and turns the end of the stream into ``LinkLost``. A frame left incomplete
+when the stream ends becomes a ``BadFrame`` (E_TRUNCATED), never an exception.
+
+Backends implement ``_connect()``, ``_read() -> bytes`` (``b""`` at the end of the stream),
+``_write(data)`` and ``_disconnect()``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import logging
+
+from host.transports.base import AUTH, CONFIG, CYCLE, EVENTS, NAMES, PUSH, SAVE, Transport
+from host.transports.errors import LinkLost, VersionMismatch
+from protocol.connection import HOST, Connection
+from protocol.constants import E_VERSION, PROTOCOL_VERSION
+from protocol.framing import BadFrame
+from protocol.messages import Hello, HelloRequest, Message
+
+log = logging.getLogger(__name__)
+
+HELLO_WAIT_S = 0.3
+READ_SIZE = 4096
+
+
+class StreamTransport(Transport):
+    """The native protocol over a byte stream (see the module docstring)."""
+
+    CAPS = frozenset({PUSH, EVENTS, AUTH, CYCLE, CONFIG, SAVE, NAMES})
+
+    def __init__(self, url: object, key: bytes | None = None) -> None:
+        super().__init__(url, key)  # type: ignore[arg-type]
+        self.conn = Connection(HOST, key)
+        self._events: collections.deque[Message | BadFrame] = collections.deque()
+        self._eof = False
+
+    async def _open(self) -> Hello:
+        self.conn = Connection(HOST, self.key)
+        self._events.clear()
+        self._eof = False
+        await self._connect()
+        try:
+            return await asyncio.wait_for(self._await_hello(None), HELLO_WAIT_S)
+        except TimeoutError:
+            pass
+        req = HelloRequest(req_id=self.conn.next_request_id())
+        await self._write(self.conn.send(req))
+        return await self._await_hello(req.req_id)
+
+    async def _await_hello(self, req_id: int | None) -> Hello:
+        while True:
+            ev = await self._next_event()
+            if isinstance(ev, Hello) and (req_id is None or ev.req_id in (0, req_id)):
+                return ev
+            if isinstance(ev, BadFrame) and ev.code == E_VERSION:
+                raise VersionMismatch(
+                    f"{self.url.text}: the board speaks protocol version {ev.version}, this "
+                    f"host version {PROTOCOL_VERSION}",
+                    "flash matching firmware (dxboard flash) or use a matching dxboard")
+            log.debug("%s: before HELLO, dropped %r", self.url.text, ev)
+
+    async def _next_event(self) -> Message | BadFrame:
+        while not self._events:
+            if self._eof:
+                raise LinkLost(f"{self.url.text}: the board closed the link",
+                               "the board may have rebooted; reconnect")
+            data = await self._read()
+            if not data:
+                self._eof = True
+            self.conn.receive_data(data)
+            self._events.extend(self.conn.events())
+        return self._events.popleft()
+
+    async def _send(self, msg: Message) -> None:
+        await self._write(self.conn.send(msg))
+
+    async def _receive(self) -> Message | BadFrame:
+        return await self._next_event()
+
+    async def _close(self) -> None:
+        await self._disconnect()
+
+    # --- backend ----------------------------------------------------------------------
+
+    async def _connect(self) -> None:
+        raise NotImplementedError
+
+    async def _read(self) -> bytes:
+        raise NotImplementedError
+
+    async def _write(self, data: bytes) -> None:
+        raise NotImplementedError
+
+    async def _disconnect(self) -> None:
+        raise NotImplementedError

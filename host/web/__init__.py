@@ -1,0 +1,30 @@
+"""The daemon's web face: a live status page, a JSON API and Prometheus metrics (aiohttp).
+
+``status`` defines what is shown (``Status``) and the interface the daemon implements
+(``StatusSource``, with ``MemoryStatusSource`` a ready-made one); ``server`` serves the page,
+``/api/status``, ``/api/journal``, ``/metrics`` and the ``/ws`` push channel; ``metrics``
+writes the Prometheus text format; ``static/index.html`` is the page (plain JavaScript and CSS,
+no build step, nothing fetched from the internet).
+"""
+
+from host.web.server import JournalView, WebServer, parse_listen
+from host.web.status import (
+    ChannelStatus,
+    DiagnosisStatus,
+    MemoryStatusSource,
+    RepairStatus,
+    Status,
+    StatusSource,
+)
+
+__all__ = [
+    "ChannelStatus",
+    "DiagnosisStatus",
+    "JournalView",
+    "MemoryStatusSource",
+    "RepairStatus",
+    "Status",
+    "StatusSource",
+    "WebServer",
+    "parse_listen",
+]

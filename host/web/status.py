@@ -1,0 +1,163 @@
+"""What the web page shows, as typed values, and the interface the daemon implements to feed it.
+
+``Status`` is one immutable snapshot of what the daemon knows: the board's channels (state,
+current and a short history of currents for the sparkline), the observed literals (True, False,
+or None when unknown), the current minimal diagnoses, the repair actions of the current and
+recent plans, whether the board link is up, the wall time of the newest data in it, and the
+running counters that ``/metrics`` exports. ``StatusSource`` is the whole contract between the
+daemon and the web server: ``snapshot()`` returns the latest ``Status`` and ``wait_changed``
+waits (on the daemon's loop) until a newer one exists. ``MemoryStatusSource`` is a complete
+implementation that holds a status and lets its owner replace or update it; the daemon can use
+it as it is (call ``update`` on every change), and the tests drive the page with it. The server
+never reads anything else from the daemon; times are the daemon's (``updated``), never read
+here.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import dataclasses
+import logging
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+log = logging.getLogger(__name__)
+
+# the firmware's channel states (protocol/constants.py STATE_NAMES), for the page's colours
+CHANNEL_STATES = ("off", "inrush", "on", "tripped", "latched", "faulted")
+
+
+@dataclass(frozen=True)
+class ChannelStatus:
+    id: int
+    name: str
+    on: bool
+    state: str
+    current_ma: float
+    history_ma: tuple[float, ...] = ()  # recent currents, oldest first, for the sparkline
+
+    def to_json(self) -> dict[str, Any]:
+        return {"id": self.id, "name": self.name, "on": self.on, "state": self.state,
+                "current_ma": self.current_ma, "history_ma": list(self.history_ma)}
+
+
+@dataclass(frozen=True)
+class DiagnosisStatus:
+    bad: tuple[str, ...]
+    probability: float | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        return {"bad": list(self.bad), "probability": self.probability}
+
+
+@dataclass(frozen=True)
+class RepairStatus:
+    action: str
+    args: tuple[str, ...]
+    state: str  # started | succeeded | failed | timeout (| planned, not started yet)
+    started: float | None
+    finished: float | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        return {"action": self.action, "args": list(self.args), "state": self.state,
+                "started": self.started, "finished": self.finished}
+
+
+@dataclass(frozen=True)
+class Status:
+    """One snapshot; ``version`` grows with every change (the source sets it)."""
+
+    channels: tuple[ChannelStatus, ...] = ()
+    observations: Mapping[str, bool | None] = field(default_factory=dict)
+    diagnoses: tuple[DiagnosisStatus, ...] = ()
+    diagnosis_complete: bool = True
+    repairs: tuple[RepairStatus, ...] = ()
+    board_link_up: bool = False
+    updated: float = 0.0  # wall time (daemon's clock) of the newest data in this snapshot
+    robot: str = ""
+    # running counters for /metrics
+    observation_changes: int = 0
+    diagnosis_runs: int = 0
+    diagnosis_latency_sum_s: float = 0.0
+    diagnosis_last_latency_s: float | None = None
+    repairs_by_outcome: Mapping[str, int] = field(default_factory=dict)
+    version: int = 0
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "version": self.version,
+            "robot": self.robot,
+            "updated": self.updated,
+            "board_link_up": self.board_link_up,
+            "channels": [c.to_json() for c in self.channels],
+            "observations": dict(sorted(self.observations.items())),
+            "diagnoses": [d.to_json() for d in self.diagnoses],
+            "diagnosis_complete": self.diagnosis_complete,
+            "repairs": [r.to_json() for r in self.repairs],
+            "counters": {
+                "observation_changes": self.observation_changes,
+                "diagnosis_runs": self.diagnosis_runs,
+                "diagnosis_latency_sum_s": self.diagnosis_latency_sum_s,
+                "diagnosis_last_latency_s": self.diagnosis_last_latency_s,
+                "repairs_by_outcome": dict(self.repairs_by_outcome),
+            },
+        }
+
+
+class StatusSource(Protocol):
+    """What the daemon gives the web server."""
+
+    def snapshot(self) -> Status:
+        """The latest status (cheap: called on every request and push)."""
+        ...
+
+    async def wait_changed(self, version: int) -> Status:
+        """Return the latest status as soon as its ``version`` differs from ``version``."""
+        ...
+
+
+class MemoryStatusSource:
+    """A ``StatusSource`` holding one status in memory; change it with ``set`` or ``update``.
+
+    Call it from the event loop's thread (the daemon's loop); waiters wake on every change.
+    """
+
+    def __init__(self, status: Status | None = None) -> None:
+        self._status = dataclasses.replace(status or Status(), version=1)
+        self._changed = asyncio.Event()
+
+    def snapshot(self) -> Status:
+        return self._status
+
+    async def wait_changed(self, version: int) -> Status:
+        while self._status.version == version:
+            event = self._changed
+            await event.wait()
+        return self._status
+
+    def set(self, status: Status) -> Status:
+        """Replace the whole status (its ``version`` is overwritten)."""
+        self._status = dataclasses.replace(status, version=self._status.version + 1)
+        event, self._changed = self._changed, asyncio.Event()
+        event.set()
+        return self._status
+
+    def update(self, **changes: Any) -> Status:
+        """Change some fields of the status, e.g. ``update(board_link_up=False)``."""
+        return self.set(dataclasses.replace(self._status, **changes))
+
+    def update_channel(self, channel_id: int, *, history_len: int = 120,
+                       **changes: Any) -> Status:
+        """Change one channel; a new ``current_ma`` is also appended to its history."""
+        channels = []
+        for c in self._status.channels:
+            if c.id == channel_id:
+                if "current_ma" in changes and "history_ma" not in changes:
+                    history = (*c.history_ma, float(changes["current_ma"]))
+                    changes["history_ma"] = history[-history_len:]
+                c = dataclasses.replace(c, **changes)
+            channels.append(c)
+        if all(c.id != channel_id for c in channels):
+            raise KeyError(f"no channel {channel_id}")
+        return self.update(channels=tuple(channels))

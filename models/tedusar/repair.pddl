@@ -1,0 +1,60 @@
+; The repair domain of the TEDUSAR robot (paper 000 §IV-E), read by `dxboard plan` and the
+; repair engine. One predicate per fact the planner needs:
+;   (ab ?c)          component ?c is abnormal: the diagnosis' AB(c); the goal is (not (ab c))
+;   (on ?h)          switchable hardware ?h is powered (board channel on)
+;   (running ?n)     software node ?n runs
+;   (needs ?n ?c)    static: node ?n works only while ?c works (its hardware, the publishers
+;                    of its input topics); generated from system.yaml
+;   (protected ?c)   static: ?c is never switched off (the board's protected channels)
+; Beyond the paper's power_up, shutdown, start_node and stop_node: power_cycle (one board
+; command, off then on), a driver cannot start before the hardware it needs is healthy, and
+; switching a device's power while its driver runs leaves the driver abnormal (it lost its
+; device: the jaguar scenario's stop_node + start_node).
+(define (domain dxboard-repair)
+  (:requirements :strips :typing :negative-preconditions :disjunctive-preconditions
+                 :universal-preconditions :conditional-effects)
+  (:types hardware node - component
+          switchable - hardware
+          driver - node)
+  (:predicates (ab ?c - component)
+               (on ?h - switchable)
+               (running ?n - node)
+               (needs ?n - node ?c - component)
+               (protected ?c - component))
+
+  ; power a switched-off faulty device; its running drivers lose it
+  (:action power_up
+    :parameters (?h - switchable)
+    :precondition (and (not (on ?h)) (ab ?h))
+    :effect (and (on ?h) (not (ab ?h))
+                 (forall (?n - node)
+                   (when (and (needs ?n ?h) (running ?n)) (ab ?n)))))
+
+  ; switch a device off (never a protected one); it is abnormal while off
+  (:action shutdown
+    :parameters (?h - switchable)
+    :precondition (and (on ?h) (not (protected ?h)))
+    :effect (and (not (on ?h)) (ab ?h)
+                 (forall (?n - node)
+                   (when (and (needs ?n ?h) (running ?n)) (ab ?n)))))
+
+  ; off and on again in one board command: repairs a hung, powered device
+  (:action power_cycle
+    :parameters (?h - switchable)
+    :precondition (and (on ?h) (ab ?h) (not (protected ?h)))
+    :effect (and (not (ab ?h))
+                 (forall (?n - node)
+                   (when (and (needs ?n ?h) (running ?n)) (ab ?n)))))
+
+  ; start a node once everything it needs works
+  (:action start_node
+    :parameters (?n - node)
+    :precondition (and (not (running ?n))
+                       (forall (?c - component) (imply (needs ?n ?c) (not (ab ?c)))))
+    :effect (and (running ?n) (not (ab ?n))))
+
+  ; stop a running node (never a protected one); a stopped node is abnormal
+  (:action stop_node
+    :parameters (?n - node)
+    :precondition (and (running ?n) (not (protected ?n)))
+    :effect (and (not (running ?n)) (ab ?n))))

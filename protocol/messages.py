@@ -1,0 +1,609 @@
+"""The message catalogue of PROTOCOL.md §4: one class per message type.
+
+Every message has ``TYPE`` (the frame's type byte), ``FIELDS`` (its payload layout, see
+``protocol.fields``), ``AUTH`` (True when the board requires an HMAC trailer, PROTOCOL.md
+§5), ``DIR`` (who sends it: "H" host to board, "B" board to host) and a ``req_id`` (the
+frame's request id: a reply carries its request's id; pushes carry 0). Messages compare by
+value, and ``to_dict``/``message_from_dict`` give the JSON form used by the golden vectors.
+"""
+
+from protocol.fields import Record, from_dict_values, pack, to_dict, unpack
+
+if False:  # typing only; MicroPython never imports typing
+    from typing import Any
+
+
+class Message:
+    TYPE = 0
+    FIELDS: "tuple[tuple[str, Any], ...]" = ()
+    AUTH = False
+    DIR = "H"
+
+    req_id = 0
+
+    def payload(self) -> bytes:
+        return pack(self, self.FIELDS)
+
+    @classmethod
+    def from_payload(cls, payload: bytes, req_id: int) -> "Message":
+        values, end = unpack(payload, cls.FIELDS)
+        if end != len(payload):
+            raise ValueError("%d unexpected bytes after the payload" % (len(payload) - end))
+        msg = cls(**values)
+        msg.req_id = req_id
+        return msg
+
+    def to_dict(self) -> "dict[str, Any]":
+        return to_dict(self)
+
+    def __eq__(self, other: object) -> bool:
+        return (
+            type(other) is type(self)
+            and self.req_id == getattr(other, "req_id", None)
+            and to_dict(self) == to_dict(other)
+        )
+
+    def __repr__(self) -> str:
+        args = ["%s=%r" % (n, getattr(self, n)) for n, _ in self.FIELDS]
+        args.append("req_id=%d" % self.req_id)
+        return "%s(%s)" % (type(self).__name__, ", ".join(args))
+
+
+# --- session and link ------------------------------------------------------------------
+
+
+class Hello(Message):
+    """Board -> host, first frame of every session: who the board is and the session nonce."""
+
+    TYPE = 0x01
+    DIR = "B"
+    FIELDS = (
+        ("version", "B"),
+        ("board_id", "str"),
+        ("firmware", "str"),
+        ("channels", "B"),
+        ("capabilities", "H"),
+        ("boot_id", "I"),
+        ("nonce", "nonce"),
+        ("reset_cause", "B"),
+        ("config_status", "B"),
+    )
+
+    def __init__(
+        self,
+        version: int,
+        board_id: str,
+        firmware: str,
+        channels: int,
+        capabilities: int,
+        boot_id: int,
+        nonce: bytes,
+        reset_cause: int,
+        config_status: int,
+        req_id: int = 0,
+    ) -> None:
+        self.version = version
+        self.board_id = board_id
+        self.firmware = firmware
+        self.channels = channels
+        self.capabilities = capabilities
+        self.boot_id = boot_id
+        self.nonce = nonce
+        self.reset_cause = reset_cause
+        self.config_status = config_status
+        self.req_id = req_id
+
+
+class HelloRequest(Message):
+    """Host -> board: start a new session (the board answers with a fresh HELLO)."""
+
+    TYPE = 0x02
+
+    def __init__(self, req_id: int = 0) -> None:
+        self.req_id = req_id
+
+
+class Ping(Message):
+    """Host -> board keepalive; also feeds the board's host dead-man timer."""
+
+    TYPE = 0x03
+    FIELDS = (("token", "I"),)
+
+    def __init__(self, token: int, req_id: int = 0) -> None:
+        self.token = token
+        self.req_id = req_id
+
+
+class Pong(Message):
+    """Board -> host: the PING's token and the board's uptime."""
+
+    TYPE = 0x04
+    DIR = "B"
+    FIELDS = (("token", "I"), ("uptime_ms", "I"))
+
+    def __init__(self, token: int, uptime_ms: int, req_id: int = 0) -> None:
+        self.token = token
+        self.uptime_ms = uptime_ms
+        self.req_id = req_id
+
+
+# --- reading ---------------------------------------------------------------------------
+
+
+class GetState(Message):
+    """Host -> board: ask for STATE."""
+
+    TYPE = 0x10
+
+    def __init__(self, req_id: int = 0) -> None:
+        self.req_id = req_id
+
+
+class ChannelStatus(Record):
+    """One channel inside STATE."""
+
+    FIELDS = (
+        ("channel", "B"),
+        ("commanded", "?"),
+        ("physical", "?"),
+        ("state", "B"),
+        ("current_ma", "i"),
+        ("live_faults", "H"),
+        ("sticky_faults", "H"),
+        ("trips", "H"),
+        ("retries", "B"),
+    )
+
+    def __init__(
+        self,
+        channel: int,
+        commanded: bool,
+        physical: bool,
+        state: int,
+        current_ma: int,
+        live_faults: int,
+        sticky_faults: int,
+        trips: int,
+        retries: int,
+    ) -> None:
+        self.channel = channel
+        self.commanded = commanded
+        self.physical = physical
+        self.state = state
+        self.current_ma = current_ma
+        self.live_faults = live_faults
+        self.sticky_faults = sticky_faults
+        self.trips = trips
+        self.retries = retries
+
+
+class State(Message):
+    """Board -> host: the whole board, every channel."""
+
+    TYPE = 0x11
+    DIR = "B"
+    FIELDS = (
+        ("uptime_ms", "I"),
+        ("input_mv", "H"),
+        ("total_ma", "i"),
+        ("reset_cause", "B"),
+        ("config_status", "B"),
+        ("board_flags", "H"),
+        ("channels", ChannelStatus),
+    )
+
+    def __init__(
+        self,
+        uptime_ms: int,
+        input_mv: int,
+        total_ma: int,
+        reset_cause: int,
+        config_status: int,
+        board_flags: int,
+        channels: "list[ChannelStatus]",
+        req_id: int = 0,
+    ) -> None:
+        self.uptime_ms = uptime_ms
+        self.input_mv = input_mv
+        self.total_ma = total_ma
+        self.reset_cause = reset_cause
+        self.config_status = config_status
+        self.board_flags = board_flags
+        self.channels = channels
+        self.req_id = req_id
+
+
+class Subscribe(Message):
+    """Host -> board: send MEASUREMENT at ``rate_hz`` (1-100) on this session; 0 stops."""
+
+    TYPE = 0x12
+    FIELDS = (("rate_hz", "B"),)
+
+    def __init__(self, rate_hz: int, req_id: int = 0) -> None:
+        self.rate_hz = rate_hz
+        self.req_id = req_id
+
+
+class Measurement(Message):
+    """Board -> host push: every channel's current, numbered so gaps show."""
+
+    TYPE = 0x13
+    DIR = "B"
+    FIELDS = (
+        ("seq", "I"),
+        ("uptime_ms", "I"),
+        ("input_mv", "H"),
+        ("on_mask", "H"),
+        ("fault_mask", "H"),
+        ("currents_ma", "[i"),
+    )
+
+    def __init__(
+        self,
+        seq: int,
+        uptime_ms: int,
+        input_mv: int,
+        on_mask: int,
+        fault_mask: int,
+        currents_ma: "list[int]",
+        req_id: int = 0,
+    ) -> None:
+        self.seq = seq
+        self.uptime_ms = uptime_ms
+        self.input_mv = input_mv
+        self.on_mask = on_mask
+        self.fault_mask = fault_mask
+        self.currents_ma = currents_ma
+        self.req_id = req_id
+
+
+class Event(Message):
+    """Board -> host push, sent at once: a trip, state change, fault, reboot, warning, shed."""
+
+    TYPE = 0x14
+    DIR = "B"
+    FIELDS = (
+        ("seq", "I"),
+        ("uptime_ms", "I"),
+        ("kind", "B"),
+        ("channel", "B"),
+        ("old_state", "B"),
+        ("new_state", "B"),
+        ("faults", "H"),
+        ("value_ma", "i"),
+        ("dropped", "H"),
+    )
+
+    def __init__(
+        self,
+        seq: int,
+        uptime_ms: int,
+        kind: int,
+        channel: int,
+        old_state: int,
+        new_state: int,
+        faults: int,
+        value_ma: int,
+        dropped: int = 0,
+        req_id: int = 0,
+    ) -> None:
+        self.seq = seq
+        self.uptime_ms = uptime_ms
+        self.kind = kind
+        self.channel = channel
+        self.old_state = old_state
+        self.new_state = new_state
+        self.faults = faults
+        self.value_ma = value_ma
+        self.dropped = dropped
+        self.req_id = req_id
+
+
+# --- actuation (authenticated) ---------------------------------------------------------
+
+
+class Switch(Message):
+    """Host -> board: switch a channel on or off; ``force`` is needed to switch off a
+    protected channel. Answered with SWITCHED (the physical state read back) or ERROR."""
+
+    TYPE = 0x20
+    AUTH = True
+    FIELDS = (("channel", "B"), ("on", "?"), ("force", "?"))
+
+    def __init__(self, channel: int, on: bool, force: bool = False, req_id: int = 0) -> None:
+        self.channel = channel
+        self.on = on
+        self.force = force
+        self.req_id = req_id
+
+
+class Switched(Message):
+    """Board -> host: a channel after a SWITCH, POWER_CYCLE or CLEAR, read back."""
+
+    TYPE = 0x21
+    DIR = "B"
+    FIELDS = (("channel", "B"), ("commanded", "?"), ("physical", "?"), ("state", "B"))
+
+    def __init__(
+        self, channel: int, commanded: bool, physical: bool, state: int, req_id: int = 0
+    ) -> None:
+        self.channel = channel
+        self.commanded = commanded
+        self.physical = physical
+        self.state = state
+        self.req_id = req_id
+
+
+class PowerCycle(Message):
+    """Host -> board: switch off, wait ``off_ms``, switch on again (the board times it)."""
+
+    TYPE = 0x22
+    AUTH = True
+    FIELDS = (("channel", "B"), ("off_ms", "H"), ("force", "?"))
+
+    def __init__(self, channel: int, off_ms: int, force: bool = False, req_id: int = 0) -> None:
+        self.channel = channel
+        self.off_ms = off_ms
+        self.force = force
+        self.req_id = req_id
+
+
+class Clear(Message):
+    """Host -> board: clear a latched or faulted channel and its sticky faults (stays off)."""
+
+    TYPE = 0x23
+    AUTH = True
+    FIELDS = (("channel", "B"),)
+
+    def __init__(self, channel: int, req_id: int = 0) -> None:
+        self.channel = channel
+        self.req_id = req_id
+
+
+# --- configuration ---------------------------------------------------------------------
+
+
+class GetConfig(Message):
+    """Host -> board: one channel's CHANNEL_CONFIG, or BOARD_CONFIG for channel 255."""
+
+    TYPE = 0x30
+    FIELDS = (("channel", "B"),)
+
+    def __init__(self, channel: int, req_id: int = 0) -> None:
+        self.channel = channel
+        self.req_id = req_id
+
+
+_CHANNEL_CONFIG_FIELDS = (
+    ("channel", "B"),
+    ("name", "str"),
+    ("rated_ma", "I"),
+    ("inrush_ms", "H"),
+    ("inrush_factor_x10", "B"),
+    ("trip_factor_x10", "B"),
+    ("trip_samples", "B"),
+    ("overload_start_x100", "B"),
+    ("i2t_ms", "H"),
+    ("retry_reset_ms", "I"),
+    ("short_retries", "B"),
+    ("open_load_ma", "H"),
+    ("open_load_ms", "H"),
+    ("stuck_on_ma", "H"),
+    ("stuck_on_ms", "H"),
+    ("powerup", "?"),
+    ("priority", "B"),
+    ("protected", "?"),
+    ("retry_ms", "[H"),
+)
+CHANNEL_CONFIG_KEYS = tuple(name for name, _ in _CHANNEL_CONFIG_FIELDS)
+
+
+class ChannelConfig(Message):
+    """Board -> host: one channel's configuration (field meanings in PROTOCOL.md §4.4)."""
+
+    TYPE = 0x31
+    DIR = "B"
+    FIELDS = _CHANNEL_CONFIG_FIELDS
+
+    def __init__(
+        self,
+        channel: int,
+        name: str,
+        rated_ma: int,
+        inrush_ms: int,
+        inrush_factor_x10: int,
+        trip_factor_x10: int,
+        trip_samples: int,
+        overload_start_x100: int,
+        i2t_ms: int,
+        retry_reset_ms: int,
+        short_retries: int,
+        open_load_ma: int,
+        open_load_ms: int,
+        stuck_on_ma: int,
+        stuck_on_ms: int,
+        powerup: bool,
+        priority: int,
+        protected: bool,
+        retry_ms: "list[int]",
+        req_id: int = 0,
+    ) -> None:
+        self.channel = channel
+        self.name = name
+        self.rated_ma = rated_ma
+        self.inrush_ms = inrush_ms
+        self.inrush_factor_x10 = inrush_factor_x10
+        self.trip_factor_x10 = trip_factor_x10
+        self.trip_samples = trip_samples
+        self.overload_start_x100 = overload_start_x100
+        self.i2t_ms = i2t_ms
+        self.retry_reset_ms = retry_reset_ms
+        self.short_retries = short_retries
+        self.open_load_ma = open_load_ma
+        self.open_load_ms = open_load_ms
+        self.stuck_on_ma = stuck_on_ma
+        self.stuck_on_ms = stuck_on_ms
+        self.powerup = powerup
+        self.priority = priority
+        self.protected = protected
+        self.retry_ms = retry_ms
+        self.req_id = req_id
+
+
+class SetChannelConfig(ChannelConfig):
+    """Host -> board: replace one channel's configuration (answered with CHANNEL_CONFIG)."""
+
+    TYPE = 0x32
+    DIR = "H"
+    AUTH = True
+
+
+_BOARD_CONFIG_FIELDS = (
+    ("total_limit_ma", "I"),
+    ("uv_warn_mv", "H"),
+    ("uv_shed_mv", "H"),
+    ("uv_off_mv", "H"),
+    ("uv_hyst_mv", "H"),
+    ("tick_ms", "H"),
+    ("powerup_spacing_ms", "H"),
+    ("deadman_ms", "I"),
+    ("deadman_on_mask", "H"),
+    ("modbus_write", "?"),
+    ("board_id", "str"),
+    ("modbus_allow", "[I"),
+)
+BOARD_CONFIG_KEYS = tuple(name for name, _ in _BOARD_CONFIG_FIELDS)
+
+
+class BoardConfig(Message):
+    """Board -> host: the board-wide configuration (PROTOCOL.md §4.6); never the key."""
+
+    TYPE = 0x33
+    DIR = "B"
+    FIELDS = _BOARD_CONFIG_FIELDS
+
+    def __init__(
+        self,
+        total_limit_ma: int,
+        uv_warn_mv: int,
+        uv_shed_mv: int,
+        uv_off_mv: int,
+        uv_hyst_mv: int,
+        tick_ms: int,
+        powerup_spacing_ms: int,
+        deadman_ms: int,
+        deadman_on_mask: int,
+        modbus_write: bool,
+        board_id: str,
+        modbus_allow: "list[int]",
+        req_id: int = 0,
+    ) -> None:
+        self.total_limit_ma = total_limit_ma
+        self.uv_warn_mv = uv_warn_mv
+        self.uv_shed_mv = uv_shed_mv
+        self.uv_off_mv = uv_off_mv
+        self.uv_hyst_mv = uv_hyst_mv
+        self.tick_ms = tick_ms
+        self.powerup_spacing_ms = powerup_spacing_ms
+        self.deadman_ms = deadman_ms
+        self.deadman_on_mask = deadman_on_mask
+        self.modbus_write = modbus_write
+        self.board_id = board_id
+        self.modbus_allow = modbus_allow
+        self.req_id = req_id
+
+
+class SetBoardConfig(BoardConfig):
+    """Host -> board: replace the board-wide configuration (answered with BOARD_CONFIG)."""
+
+    TYPE = 0x34
+    DIR = "H"
+    AUTH = True
+
+
+class SaveConfig(Message):
+    """Host -> board: persist the running configuration (answered with ACK)."""
+
+    TYPE = 0x35
+    AUTH = True
+
+    def __init__(self, req_id: int = 0) -> None:
+        self.req_id = req_id
+
+
+class Reboot(Message):
+    """Host -> board: answer ACK, then reset the board."""
+
+    TYPE = 0x36
+    AUTH = True
+
+    def __init__(self, req_id: int = 0) -> None:
+        self.req_id = req_id
+
+
+# --- generic replies -------------------------------------------------------------------
+
+
+class Ack(Message):
+    """Board -> host: the request of type ``of_type`` was done."""
+
+    TYPE = 0x7E
+    DIR = "B"
+    FIELDS = (("of_type", "B"),)
+
+    def __init__(self, of_type: int, req_id: int = 0) -> None:
+        self.of_type = of_type
+        self.req_id = req_id
+
+
+class Error(Message):
+    """Board -> host: the request of type ``of_type`` failed with ``code`` (E_*)."""
+
+    TYPE = 0x7F
+    DIR = "B"
+    FIELDS = (("code", "H"), ("of_type", "B"), ("text", "str"))
+
+    def __init__(self, code: int, of_type: int, text: str, req_id: int = 0) -> None:
+        self.code = code
+        self.of_type = of_type
+        self.text = text
+        self.req_id = req_id
+
+
+ALL = (
+    Hello,
+    HelloRequest,
+    Ping,
+    Pong,
+    GetState,
+    State,
+    Subscribe,
+    Measurement,
+    Event,
+    Switch,
+    Switched,
+    PowerCycle,
+    Clear,
+    GetConfig,
+    ChannelConfig,
+    SetChannelConfig,
+    BoardConfig,
+    SetBoardConfig,
+    SaveConfig,
+    Reboot,
+    Ack,
+    Error,
+)
+BY_TYPE = {cls.TYPE: cls for cls in ALL}
+BY_NAME = {cls.__name__: cls for cls in ALL}
+
+
+def message_from_dict(name: str, data: "dict[str, Any]", req_id: int = 0) -> Message:
+    """Build a message from its class name and a dict as made by ``Message.to_dict``."""
+    cls = BY_NAME[name]
+    msg = cls(**from_dict_values(data, cls.FIELDS))
+    msg.req_id = req_id
+    return msg
+
+
+__all__ = ["ALL", "BY_NAME", "BY_TYPE", "ChannelStatus", "Message", "message_from_dict"]

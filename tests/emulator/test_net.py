@@ -1,0 +1,164 @@
+"""The TCP front end's limits, in-process: read timeout, connection limit, slow readers."""
+
+from __future__ import annotations
+
+import asyncio
+import itertools
+import json
+from collections.abc import Iterator
+
+import pytest
+
+from emulator import model
+from emulator.control import Background
+from emulator.frontends import FrontEnds
+from emulator.sim import Emulator
+from protocol.connection import HOST, Connection
+from protocol.messages import Ack, GetState, Measurement, Ping, Pong, State, Subscribe
+from tests.emulator.conftest import TEDUSAR
+from tests.emulator.wire import KEY, Wire
+
+
+@pytest.fixture(params=[600])
+def served(request: pytest.FixtureRequest) -> Iterator[tuple[Background, FrontEnds,
+                                                             tuple[str, int]]]:
+    """The board's front ends with a read timeout of ``param`` ms and at most 6 clients."""
+    cfg = json.loads((TEDUSAR / "board.json").read_text())
+    cfg["board"]["key"] = KEY.hex()
+    emu = Emulator(model.load(TEDUSAR), board_config=cfg)
+    fronts = FrontEnds(emu, read_timeout_ms=request.param, max_clients=6)
+    with Background(emu) as bg:
+        urls = bg.run(fronts.start())
+        host, port = urls["board"].split("://")[1].rsplit(":", 1)
+        yield bg, fronts, (host, int(port))
+        bg.run(fronts.stop())
+
+
+async def _closed_within(reader: asyncio.StreamReader, seconds: float) -> bool:
+    loop = asyncio.get_running_loop()
+    end = loop.time() + seconds
+    try:
+        while loop.time() < end:
+            if not await asyncio.wait_for(reader.read(65536), end - loop.time()):
+                return True
+    except (TimeoutError, ConnectionResetError):
+        pass
+    return False
+
+
+async def test_silent_connection_closed_pinging_one_kept(
+        served: tuple[Background, FrontEnds, tuple[str, int]]) -> None:
+    _, _, address = served
+    silent = await Wire.open(address)
+    alive = await Wire.open(address)
+    for _ in range(6):  # 1.2 s, twice the read timeout
+        assert isinstance(await alive.request(Ping(1)), Pong)
+        await asyncio.sleep(0.2)
+    assert await _closed_within(silent.reader, 1.0)
+    assert isinstance(await alive.request(GetState()), State)
+    await alive.close()
+
+
+async def test_connection_limit(served: tuple[Background, FrontEnds, tuple[str, int]]) -> None:
+    _, _, address = served
+    wires = [await Wire.open(address) for _ in range(6)]
+    r, w = await asyncio.open_connection(*address)
+    assert await _closed_within(r, 2.0)  # the seventh is closed at once
+    w.close()
+    await wires[0].close()
+    await asyncio.sleep(0.2)
+    again = await Wire.open(address)  # a slot is free again
+    assert isinstance(await again.request(GetState()), State)
+    for x in [*wires[1:], again]:
+        await x.close()
+
+
+@pytest.mark.parametrize("served", [30000], indirect=True)
+async def test_a_client_that_never_reads_does_not_hold_up_others(
+        served: tuple[Background, FrontEnds, tuple[str, int]]) -> None:
+    _, _, address = served
+    slow = await Wire.open(address)
+    fast = await Wire.open(address)
+    for c in (slow, fast):
+        assert isinstance(await c.request(Subscribe(100)), Ack)
+    seqs: list[int] = []
+    loop = asyncio.get_running_loop()
+    end = loop.time() + 2.0
+    while loop.time() < end:  # the slow one never reads; the fast one drains everything
+        try:
+            m = await fast.next(lambda e: isinstance(e, Measurement), timeout=0.5)
+        except AssertionError:
+            continue
+        assert isinstance(m, Measurement)
+        seqs.append(m.seq)
+    assert len(seqs) > 100
+    assert seqs == list(range(seqs[0], seqs[0] + len(seqs)))
+    await slow.close()
+    await fast.close()
+
+
+class _Blocked:
+    """A writer whose peer does not read: ``drain`` waits until ``release``."""
+
+    def __init__(self) -> None:
+        self.data = bytearray()
+        self.go = asyncio.Event()
+
+    def write(self, data: bytes) -> None:
+        self.data += data
+
+    async def drain(self) -> None:
+        await self.go.wait()
+
+    def close(self) -> None:
+        pass
+
+    async def wait_closed(self) -> None:
+        pass
+
+
+def _seqs(conn: Connection, data: bytes) -> list[int]:
+    out = []
+    for i in range(0, len(data), 1024):
+        conn.receive_data(data[i:i + 1024])
+        out.extend(m.seq for m in conn.events() if isinstance(m, Measurement))
+    return out
+
+
+async def test_net_skips_measurements_for_a_stuck_writer_only() -> None:
+    """Net over in-memory streams, on the test HAL's simulated clock."""
+    from firmware.net import HARD_CAP, Net
+    from tests.firmware.testhal import Rig
+
+    rig = Rig(board={"key": KEY.hex()})
+    net = Net(rig.app, "test", 0)
+    stuck, free = _Blocked(), _Blocked()
+    free.go.set()
+    conns = []
+    tasks = []
+    for w in (stuck, free):
+        reader = asyncio.StreamReader()
+        conn = Connection(HOST, KEY)
+        tasks.append(asyncio.create_task(net.serve_stream(reader, w)))
+        await asyncio.sleep(0)
+        reader.feed_data(conn.send(Subscribe(100, req_id=1)))
+        conns.append(conn)
+    for _ in range(1000):  # 10 simulated seconds
+        rig.run(10)
+        net.pump(rig.hal.now)
+        await asyncio.sleep(0)
+    stuck_client = next(c for c in net.clients if c.writer is stuck)
+    assert stuck_client.skipped > 900
+    assert stuck_client.n <= HARD_CAP and not stuck_client.closed
+    seqs = _seqs(conns[1], bytes(free.data))
+    assert seqs == list(range(1, 1001))
+    stuck.go.set()  # the peer reads at last: what it gets shows the gap
+    for _ in range(5):
+        rig.run(10)
+        net.pump(rig.hal.now)
+        await asyncio.sleep(0)
+    got = _seqs(conns[0], bytes(stuck.data))
+    assert got[0] < 100 and got[-1] > 1000
+    assert any(b - a > 1 for a, b in itertools.pairwise(got))
+    for t in tasks:
+        t.cancel()

@@ -1,0 +1,117 @@
+"""Test helpers: ``dxboard emulate`` as a subprocess, and a minimal native-protocol client.
+
+``Emulate(*options)`` starts ``dxboard emulate models/tedusar`` with a key in the environment
+and parses the URLs it prints; ``Wire`` is a raw asyncio client on ``protocol.connection``
+(the host's own BoardClient is tested elsewhere; these tests look at the board's bytes).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+from protocol.connection import HOST, Connection
+from protocol.framing import BadFrame
+from protocol.messages import Hello, Message
+
+ROOT = Path(__file__).resolve().parents[2]
+TEDUSAR = ROOT / "models" / "tedusar"
+KEY = bytes(range(32))
+DXBOARD = str(Path(sys.executable).parent / "dxboard")
+
+
+class Emulate:
+    def __init__(self, *options: str, key: bytes | None = KEY) -> None:
+        env = dict(os.environ)
+        env.pop("DXBOARD_KEY", None)
+        if key is not None:
+            env["DXBOARD_KEY"] = key.hex()
+        self.proc = subprocess.Popen([DXBOARD, "emulate", str(TEDUSAR), *options],
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
+                                     text=True, cwd=ROOT)
+        self.urls: dict[str, str] = {}
+        assert self.proc.stdout is not None
+        want = 2 + sum(o in ("--modbus", "--serial", "--can") for o in options)
+        while len(self.urls) < want:
+            line = self.proc.stdout.readline()
+            if not line:
+                raise AssertionError("dxboard emulate ended: " + self.proc.stderr.read()
+                                     if self.proc.stderr else "")
+            name, _, url = line.strip().partition(": ")
+            self.urls[name] = url
+
+    def address(self, name: str = "board") -> tuple[str, int]:
+        rest = self.urls[name].split("://", 1)[1]
+        host, _, port = rest.rpartition(":")
+        return host, int(port)
+
+    def stop(self) -> int:
+        self.proc.send_signal(signal.SIGTERM)
+        try:
+            return self.proc.wait(10)
+        finally:
+            if self.proc.poll() is None:
+                self.proc.kill()
+
+    def __enter__(self) -> Emulate:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.proc.poll() is None:
+            self.stop()
+
+
+class Wire:
+    """A host end over TCP: ``send`` requests, ``expect`` replies, collect pushes."""
+
+    def __init__(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter,
+                 key: bytes | None = KEY) -> None:
+        self.reader = reader
+        self.writer = writer
+        self.conn = Connection(HOST, key)
+        self.hello: Hello | None = None
+        self.backlog: list[Message | BadFrame] = []
+
+    @classmethod
+    async def open(cls, address: tuple[str, int], key: bytes | None = KEY) -> Wire:
+        r, w = await asyncio.open_connection(*address)
+        wire = cls(r, w, key)
+        got = await wire.next(lambda m: isinstance(m, Hello))
+        assert isinstance(got, Hello)
+        wire.hello = got
+        return wire
+
+    async def next(self, pred: Any, timeout: float = 5.0) -> Message | BadFrame:
+        """The next event matching ``pred``; others stay in ``backlog``."""
+        loop = asyncio.get_running_loop()
+        end = loop.time() + timeout
+        while True:
+            for i, ev in enumerate(self.backlog):
+                if pred(ev):
+                    return self.backlog.pop(i)
+            left = end - loop.time()
+            if left <= 0:
+                raise AssertionError(f"nothing matching within {timeout} s: {self.backlog!r}")
+            data = await asyncio.wait_for(self.reader.read(65536), left)
+            if not data:
+                raise AssertionError("connection closed")
+            self.conn.receive_data(data)
+            self.backlog.extend(self.conn.events())
+
+    async def request(self, msg: Message, timeout: float = 5.0) -> Message | BadFrame:
+        msg.req_id = self.conn.next_request_id()
+        self.writer.write(self.conn.send(msg))
+        await self.writer.drain()
+        rid = msg.req_id
+        return await self.next(lambda m: getattr(m, "req_id", None) == rid, timeout)
+
+    async def close(self) -> None:
+        self.writer.close()
+        with contextlib.suppress(OSError):
+            await self.writer.wait_closed()

@@ -1,0 +1,88 @@
+# cpython-only: hypothesis does not run on MicroPython
+"""Property test: at least 100,000 random and mutated frames, split at random, never make
+the codec raise; every event is a message or a ``BadFrame``; the messages found do not
+depend on how the bytes were split; and a good frame after the damage is still decoded.
+"""
+
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from protocol import messages as m
+from protocol.connection import BOARD, HOST, Connection
+from protocol.framing import BadFrame
+from tests.protocol.samples import samples
+from tests.protocol.util import KEY, hello
+
+FRAMES_PER_EXAMPLE = 40
+EXAMPLES = 2500  # x 40 = 100,000 frames
+
+_board = Connection(BOARD, KEY)
+_host = Connection(HOST, KEY)
+_host.receive_data(_board.send(hello()))
+_host.events()
+# Valid frames of every message in both directions, signed ones included.
+VALID = [(_board if s.DIR == "B" else _host).send(s) for s in samples()]
+TRAILER = _board.send(m.Pong(0xABCD, 1, req_id=1))
+
+
+@st.composite
+def mutated_frame(draw: st.DrawFn) -> bytes:
+    kind = draw(st.sampled_from(["valid", "flip", "cut", "insert", "random", "splice"]))
+    frame = bytearray(draw(st.sampled_from(VALID)))
+    if kind == "flip":
+        for _ in range(draw(st.integers(1, 4))):
+            frame[draw(st.integers(0, len(frame) - 1))] ^= 1 << draw(st.integers(0, 7))
+    elif kind == "cut":
+        frame = frame[: draw(st.integers(0, len(frame) - 1))]
+    elif kind == "insert":
+        at = draw(st.integers(0, len(frame)))
+        frame[at:at] = draw(st.binary(min_size=1, max_size=8))
+    elif kind == "random":
+        frame = bytearray(b"\xdb\x58" + draw(st.binary(max_size=40)))
+    elif kind == "splice":
+        other = draw(st.sampled_from(VALID))
+        frame = frame[: len(frame) // 2] + other[len(other) // 2 :]
+    return bytes(frame)
+
+
+def _decode(role: str, data: bytes, cuts: "list[int]") -> "list[object]":
+    conn = Connection(role, KEY)
+    if role == BOARD:
+        conn.send(hello())
+    else:
+        conn.receive_data(_board.send(hello()))
+        conn.events()
+    events: list[object] = []
+    prev = 0
+    for cut in [*sorted(c % (len(data) + 1) for c in cuts), len(data)]:
+        if cut > prev:  # an empty chunk would mean the end of the stream
+            conn.receive_data(data[prev:cut])
+            events.extend(conn.events())
+            prev = cut
+    conn.receive_data(b"")
+    events.extend(conn.events())
+    return events
+
+
+@settings(
+    max_examples=EXAMPLES,
+    derandomize=True,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
+@given(
+    frames=st.lists(mutated_frame(), min_size=FRAMES_PER_EXAMPLE, max_size=FRAMES_PER_EXAMPLE),
+    cuts=st.lists(st.integers(0, 1 << 16), max_size=12),
+    role=st.sampled_from([BOARD, HOST]),
+)
+def test_nothing_escapes(frames: "list[bytes]", cuts: "list[int]", role: str) -> None:
+    data = b"".join(frames) + b"\x00" * 8 + TRAILER
+    split = _decode(role, data, cuts)
+    whole = _decode(role, data, [])
+    for ev in split:
+        assert isinstance(ev, (m.Message, BadFrame))
+    assert [e for e in split if isinstance(e, m.Message)] == [
+        e for e in whole if isinstance(e, m.Message)
+    ]
+    if role == HOST:  # the trailer is a board message: the host must still decode it
+        assert split[-1] == m.Pong(0xABCD, 1, req_id=1)

@@ -1,0 +1,85 @@
+"""``dxboard plan`` end to end through ``host.cli.main``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from pddl.parser.problem import ProblemParser
+
+import host.cli
+
+from .conftest import TEDUSAR
+
+
+@pytest.fixture(autouse=True)
+def only_plan(monkeypatch: pytest.MonkeyPatch) -> None:
+    # other sub-commands are built by other people in parallel; test ours on its own
+    monkeypatch.setattr(host.cli, "COMMANDS", {"plan": "host.commands.plan"})
+
+
+def test_json_plan_for_the_jaguar_scenario(capsys: pytest.CaptureFixture[str]) -> None:
+    assert host.cli.main(["plan", str(TEDUSAR), "--bad", "jaguar", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert [{"action": s["action"], "args": s["args"]} for s in out["plan"]] == [
+        {"action": "power_up", "args": ["jaguar"]},
+        {"action": "stop_node", "args": ["jaguar_node"]},
+        {"action": "start_node", "args": ["jaguar_node"]},
+    ]
+    assert [s["after"] for s in out["plan"]] == [[], [0], [1]]
+    assert out["strategy"] == "single"
+
+
+def test_observations_file_and_problem_output(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    obs = tmp_path / "obs.txt"
+    obs.write_text("# the board says hokuyo is powered\non(hokuyo)\nok(/scan)\n")
+    problem = tmp_path / "problem.pddl"
+    code = host.cli.main(["plan", str(TEDUSAR), "--bad", "hokuyo", "--obs", str(obs),
+                          "--write-problem", str(problem)])
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "power_cycle(hokuyo)" in text and "start_node(hokuyo_node)" in text
+    parsed = ProblemParser()(problem.read_text())
+    assert "(on hokuyo)" in {str(f) for f in parsed.init}
+
+
+def test_diagnoses_file_from_dxboard_diagnose(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    diag = tmp_path / "d.json"
+    diag.write_text(json.dumps({"diagnoses": [
+        {"bad": ["hokuyo"], "good": [], "probability": 0.9},
+        {"bad": ["jaguar"], "good": [], "probability": 0.1}]}))
+    assert host.cli.main(["plan", str(TEDUSAR), "--diagnoses", str(diag), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["repairs"] == ["hokuyo"] and out["strategy"] == "most-probable"
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (["--bad", "nosuch"], "nosuch"),
+        (["--bad", "imu"], "imu stays abnormal"),
+        (["--bad", "jaguar", "--planner", "magic"], "magic"),
+        (["--bad", "jaguar", "--obs", "/nonexistent/obs.txt"], "/nonexistent/obs.txt"),
+        ([], "--bad"),
+    ],
+)
+def test_user_errors_are_one_line_with_exit_2(
+    argv: list[str], needle: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert host.cli.main(["plan", str(TEDUSAR), *argv]) == 2
+    err = capsys.readouterr().err
+    assert needle in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_bad_observation_line_names_file_and_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    obs = tmp_path / "obs.txt"
+    obs.write_text("on(jaguar)\non(jaguar\n")
+    assert host.cli.main(["plan", str(TEDUSAR), "--bad", "jaguar", "--obs", str(obs)]) == 2
+    assert f"{obs}:2" in capsys.readouterr().err

@@ -1,0 +1,1 @@
+"""Tests of the web page, JSON API and metrics (host/web)."""

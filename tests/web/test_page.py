@@ -1,0 +1,92 @@
+"""The page in real headless Chromium: it loads, shows the board, and follows changes live.
+
+Chromium (Debian's package) is driven over the DevTools protocol (``tests/web/chromium.py``);
+the server is real and fed by ``MemoryStatusSource``. The tests change the status, the journal
+and the connection and wait for the page's DOM to show it.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from host.journal import Journal, Note
+from host.web import DiagnosisStatus, MemoryStatusSource, WebServer
+from tests.web.chromium import Chromium
+
+CHANNEL_STATE = "document.querySelector('[data-channel-id=\"{}\"]')?.dataset.state"
+PILL = "document.getElementById('conn-state').dataset.state"
+
+
+async def test_page_shows_the_board_and_follows_changes(
+        server: WebServer, source: MemoryStatusSource, journal: Journal) -> None:
+    async with Chromium.launch(f"http://127.0.0.1:{server.port}/") as page:
+        assert await page.wait_for("document.querySelectorAll('.channel').length") == 10
+        names = await page.evaluate(
+            "[...document.querySelectorAll('.channel .name')].map(e => e.textContent)")
+        assert names[:4] == ["sensor_head", "laser_alignment", "pc", "hokuyo"]
+        assert await page.evaluate(CHANNEL_STATE.format(6)) == "tripped"
+        assert await page.evaluate(
+            "document.querySelectorAll('[data-channel-id=\"3\"] svg.spark polyline').length") == 1
+        assert await page.wait_for(f"{PILL} === 'live'")
+        chips = await page.evaluate(
+            "[...document.querySelectorAll('#diagnoses .diagnosis')].map(d =>"
+            " [...d.querySelectorAll('.chip')].map(c => c.textContent))")
+        assert chips == [["jaguar_node"], ["jaguar_teleop_node", "jaguar_node"]]
+        assert await page.evaluate("document.querySelectorAll('#repairs .repair').length") == 3
+        assert await page.evaluate(
+            "document.querySelector('.obs[data-value=\"false\"]').textContent") in {
+            "ok(jaguar_node)", "ok(jaguar_teleop_node)"}
+        assert await page.wait_for("document.querySelectorAll('#journal .row').length") == 13
+
+        # the thermal camera is reset: the channel, the diagnosis and the journal follow
+        source.update_channel(6, state="on", on=True, current_ma=2450.0)
+        source.update(diagnoses=(DiagnosisStatus((), 1.0),), updated=time.time())
+        journal.record(Note("thermal camera back"), wall=time.time(), mono=9000.0)
+        assert await page.wait_for(f"{CHANNEL_STATE.format(6)} === 'on'")
+        assert await page.evaluate(
+            "document.querySelector('[data-channel-id=\"6\"] .current').textContent") == "2.45A"
+        assert await page.wait_for(
+            "document.querySelector('#diagnoses .healthy')?.textContent")
+        assert await page.wait_for(
+            "document.querySelector('#journal .row:first-child')?.textContent"
+            ".includes('thermal camera back')")
+
+
+async def test_page_shows_stale_data_and_a_lost_link(
+        source: MemoryStatusSource, journal: Journal) -> None:
+    web = WebServer(source, journal.reader, push_interval_s=0.05, heartbeat_s=0.5,
+                    stale_after_s=5.0)
+    port = await web.start("127.0.0.1", 0)
+    async with Chromium.launch(f"http://127.0.0.1:{port}/") as page:
+        try:
+            assert await page.wait_for(f"{PILL} === 'live'")
+            assert not await page.evaluate("document.body.classList.contains('stale')")
+            source.update(board_link_up=False)
+            assert await page.wait_for(f"{PILL} === 'board-down'")
+            source.update(board_link_up=True, updated=time.time() - 30)  # the daemon froze
+            assert await page.wait_for(f"{PILL} === 'stale'")
+            assert await page.evaluate("document.body.classList.contains('stale')")
+            assert "s old" in await page.evaluate("document.getElementById('banner').textContent")
+            source.update(updated=time.time())
+            assert await page.wait_for(f"{PILL} === 'live'")
+        finally:
+            await web.close()
+        assert await page.wait_for(f"{PILL} === 'lost'")
+        assert "reconnecting" in await page.evaluate(
+            "document.getElementById('banner').textContent")
+        # the daemon comes back on the same port: the page reconnects by itself
+        web = WebServer(source, journal.reader, push_interval_s=0.05, heartbeat_s=0.5)
+        await web.start("127.0.0.1", port)
+        try:
+            assert await page.wait_for(f"{PILL} === 'live'", timeout=20)
+        finally:
+            await web.close()
+
+
+async def test_screenshot_of_the_page_is_a_png(server: WebServer, tmp_path: Path) -> None:
+    async with Chromium.launch(f"http://127.0.0.1:{server.port}/", width=1000) as page:
+        await page.wait_for("document.querySelectorAll('.channel').length === 10")
+        shot = tmp_path / "page.png"
+        await page.screenshot(shot)
+    assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
