@@ -14,16 +14,15 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[test]'
 	touch $(STAMP)
 
-# The main job on the emulated board. Until the daemon (`dxboard run`) lands, this is the
-# TEDUSAR robot's board: the real firmware on simulated electronics, with a development key.
+# The main job on the emulated board: the daemon keeps the virtual TEDUSAR robot healthy.
+# A development key lets a person switch channels too (see README.md).
 DEV_KEY := .dxboard-dev.key
 run: $(STAMP)
 	test -s $(DEV_KEY) || (umask 077; $(BIN)/python -c "import secrets; print(secrets.token_hex(32))" > $(DEV_KEY))
-	@echo "dxboard: the TEDUSAR board, emulated; in another shell try:"
-	@echo "  DXBOARD_KEY=$$(cat $(DEV_KEY)) .venv/bin/dxboard board tcp://127.0.0.1:7000 status"
-	@echo "  .venv/bin/dxboard inject 127.0.0.1:7001 hokuyo short     (Ctrl-C stops the board)"
-	$(BIN)/dxboard emulate models/tedusar --listen 127.0.0.1:7000 --control 127.0.0.1:7001 \
-		--modbus 127.0.0.1:7502 --key-file $(DEV_KEY)
+	@echo "dxboard: the TEDUSAR robot on the emulated board; open the web address below."
+	@echo "  try: .venv/bin/dxboard inject 127.0.0.1:7001 hokuyo hang    (Ctrl-C stops everything)"
+	$(BIN)/dxboard run models/tedusar --emulate --control 127.0.0.1:7001 \
+		--web 127.0.0.1:8080 --journal dxboard-journal.sqlite --key-file $(DEV_KEY)
 
 test: $(STAMP) lint pytest mpytest
 

@@ -10,7 +10,6 @@ emulated board, not to the boot.
 from __future__ import annotations
 
 import os
-
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:

@@ -20,12 +20,14 @@ from host.errors import UserError
 
 # sub-command -> module implementing it (in the order --help lists them)
 COMMANDS: dict[str, str] = {
+    "run": "host.commands.run",
     "protocol": "host.commands.protocol",
     "model": "host.commands.model",
     "diagnose": "host.commands.diagnose",
     "plan": "host.commands.plan",
     "inject": "host.commands.inject",
     "journal": "host.commands.journal",
+    "report": "host.commands.report",
     "board": "host.commands.board",
     "flash": "host.commands.flash",
     "emulate": "host.commands.emulate",

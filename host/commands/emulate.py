@@ -2,7 +2,7 @@
 
 ``dxboard emulate SYSTEM_DIR [--listen H:P] [--control H:P] [--modbus H:P] [--serial]
 [--can INTERFACE:CHANNEL] [--runtime cpython|micropython] [--scenario FILE] [--seed N]
-[--key-file FILE]`` loads ``SYSTEM_DIR/emulator.yaml`` (the loads) and ``board.json`` (the
+[--key-file FILE] [--robot]`` loads ``SYSTEM_DIR/emulator.yaml`` (the loads) and ``board.json`` (the
 board configuration, written to the emulated flash on first boot), boots the firmware, starts
 its front ends and prints one URL a line, then runs on the wall clock until SIGINT/SIGTERM::
 
@@ -11,11 +11,15 @@ its front ends and prints one URL a line, then runs on the wall clock until SIGI
     modbus: modbus+tcp://127.0.0.1:5020     (with --modbus)
     serial: serial:///dev/pts/5             (with --serial: a pty pair)
     can: can://virtual/dxboard              (with --can virtual:dxboard)
+    device: hokuyo tcp://127.0.0.1:40321    (with --robot: one line per device)
 
 Port 0 (the default) picks a free port; the URL shows the real one. The actuation key is
 provisioned from ``--key-file`` or ``$DXBOARD_KEY`` (hex), as ``dxboard board`` reads it;
 without one the board refuses every actuation. ``--runtime micropython`` runs the firmware
 inside the ``micropython`` interpreter (its own TCP server, behind the same link-fault proxy).
+``--robot`` also serves the virtual robot's devices of ``SYSTEM_DIR/robot.yaml`` (each on a
+free TCP port, powered by its channel: ``emulator.robot``) for the nodes of
+``python -m emulator.robot.node NAME SYSTEM_DIR`` to read.
 """
 
 from __future__ import annotations
@@ -50,6 +54,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, help="random seed of the electronics")
     parser.add_argument("--key-file", metavar="FILE",
                         help="actuation key (hex); default $DXBOARD_KEY")
+    parser.add_argument("--robot", action="store_true",
+                        help="also serve the virtual robot's devices (SYSTEM_DIR/robot.yaml)")
 
 
 def parse_address(text: str, option: str) -> tuple[str, int]:
@@ -102,6 +108,11 @@ def run(args: argparse.Namespace) -> int:
         if key is not None:
             board_config.setdefault("board", {})["key"] = key.hex()
         make_config(board_config, len(model.channels))  # checks it: a ModelError names the field
+        device_specs = None
+        if args.robot:
+            from emulator.robot.config import load_devices
+
+            device_specs = load_devices(system, model)
     except emodel.ModelError as exc:
         raise UserError(str(exc), "fix the file") from None
     except (OSError, ValueError) as exc:
@@ -162,11 +173,26 @@ def run(args: argparse.Namespace) -> int:
             bg.stop()
             raise UserError(f"--tug: cannot listen on {args.tug}: {exc}",
                             "choose another address or port") from None
+    robot = None
+    if device_specs is not None:
+        from emulator.robot.server import Robot
+
+        robot = Robot(emu, device_specs)
+        try:
+            devices = bg.run(robot.start())
+        except OSError as exc:
+            bg.run(fronts.stop(), timeout=5)
+            bg.stop()
+            raise UserError(f"--robot: cannot listen for the devices: {exc}",
+                            "free some ports") from None
     print(f"board: {urls['board']}")
     print(f"control: {bg.url}")
     for name in ("modbus", "serial", "can", "tug"):
         if name in urls:
             print(f"{name}: {urls[name]}")
+    if robot is not None:
+        for name, url in devices.items():
+            print(f"device: {name} {url}")
     sys.stdout.flush()
 
     done = threading.Event()
@@ -179,6 +205,8 @@ def run(args: argparse.Namespace) -> int:
     while not done.wait(0.5):
         pass
     try:
+        if robot is not None:
+            bg.run(robot.stop(), timeout=5)
         if tug is not None:
             bg.run(tug.stop(), timeout=5)
         bg.run(fronts.stop(), timeout=5)

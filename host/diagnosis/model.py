@@ -146,8 +146,11 @@ class ModelError(UserError):
         self.problems = problems
 
 
-# "observers" is read by host.observers.config, from the same file.
-_TOP_KEYS = {"robot", "board", "components", "values", "related", "description", "observers"}
+# "observers" is read by host.observers.config and "processes" by host.repair.processes,
+# from the same file.
+_TOP_KEYS = {
+    "robot", "board", "components", "values", "related", "description", "observers", "processes",
+}
 _COMMON_KEYS = {"kind", "prior", "description"}
 _KIND_KEYS = {
     Kind.N: {"publishes", "subscribes"},

@@ -1,0 +1,83 @@
+"""The robot's topics on Eclipse Zenoh, for the node processes: a peer session, JSON payloads.
+
+The same conventions as the host's observers (``host.observers.sources.zenoh_peer``; the
+emulator does not import the host, so these few lines are its own): peer mode, multicast
+scouting off, *connect* to the daemon's endpoint (``$DXBOARD_ZENOH``, default
+``tcp/127.0.0.1:7447``) and listen on a free loopback port so that peers introduced by gossip
+can reach each other directly; topic ``/scan`` is key ``scan``; a payload is one JSON object
+(compact, UTF-8). Zenoh retries a connection the peer refuses, so a node may start before the
+daemon. Subscribers' callbacks run on zenoh's threads; ``subscribe`` hands each message to
+the asyncio loop, in order.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+from collections.abc import Callable
+from typing import Any
+
+import zenoh
+
+DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
+LISTEN = "tcp/127.0.0.1:0"
+
+Handler = Callable[[str, dict[str, Any]], None]
+
+
+def key_of(topic: str) -> str:
+    if not topic.startswith("/") or len(topic) < 2:
+        raise ValueError(f"a topic starts with / (e.g. /scan), not {topic!r}")
+    return topic[1:]
+
+
+def encode(values: dict[str, Any]) -> bytes:
+    return json.dumps(values, separators=(",", ":"), allow_nan=False).encode()
+
+
+def decode(payload: bytes) -> dict[str, Any]:
+    """The JSON object in ``payload`` ({} when it is not one: it still counts as a message)."""
+    try:
+        obj = json.loads(payload)
+    except (UnicodeDecodeError, ValueError):
+        return {}
+    return obj if isinstance(obj, dict) else {}
+
+
+class Bus:
+    def __init__(self, connect: str = DEFAULT_ENDPOINT, listen: str = LISTEN) -> None:
+        cfg = zenoh.Config()
+        cfg.insert_json5("mode", '"peer"')
+        cfg.insert_json5("scouting/multicast/enabled", "false")
+        cfg.insert_json5("listen/endpoints", json.dumps([listen]))
+        cfg.insert_json5("connect/endpoints", json.dumps([connect]))
+        self.session = zenoh.open(cfg)
+        self._pubs: dict[str, zenoh.Publisher] = {}
+        self._subs: list[Any] = []
+
+    def publish(self, topic: str, values: dict[str, Any]) -> None:
+        pub = self._pubs.get(topic)
+        if pub is None:
+            pub = self._pubs[topic] = self.session.declare_publisher(key_of(topic))
+        pub.put(encode(values))
+
+    def subscribe(self, topic: str, handler: Handler) -> None:
+        """Call ``handler(topic, values)`` on the running loop for every message."""
+        loop = asyncio.get_running_loop()
+
+        def on_sample(sample: zenoh.Sample) -> None:  # on a zenoh thread
+            values = decode(sample.payload.to_bytes())
+            with contextlib.suppress(RuntimeError):  # the loop closed while zenoh delivered
+                loop.call_soon_threadsafe(handler, topic, values)
+
+        self._subs.append(self.session.declare_subscriber(key_of(topic), on_sample))
+
+    def close(self) -> None:
+        if self.session.is_closed():
+            return
+        for sub in self._subs:
+            sub.undeclare()
+        for pub in self._pubs.values():
+            pub.undeclare()  # type: ignore[no-untyped-call]  # zenoh's stub lacks -> None
+        self.session.close()  # type: ignore[no-untyped-call]

@@ -1,0 +1,213 @@
+"""The virtual robot's devices as TCP servers, powered by the emulated board's electronics.
+
+``Robot(emu, specs)`` serves every device of ``robot.yaml`` on its own TCP port (port 0: a free
+one, kept for the whole run so the printed URL stays valid across power cycles). It runs on the
+emulator's event loop (``Background.run(robot.start())``), so it reads the electronics from the
+thread that advances them and never from another.
+
+A device on a board channel follows the channel's ``Load`` (``emulator.electronics``), whose
+faults it never re-implements::
+
+    state     when (read from the load)                    the device's socket
+    off       not powered, or open_load / short            closed: connections refused,
+                                                             open ones dropped
+    booting   powered, less than boot_ms since power-on    accepts, sends nothing
+    hung      powered, booted, ``hang`` injected           connections stay open, no data
+    ready     ``Load.ready(now)``                          a frame every 1/rate_hz s
+
+A power cycle (a new ``on_since``, even one shorter than a poll) drops every connection and
+restarts the device's counters, as a real device's reboot does. A ``hang`` keeps drawing its
+current (the load's ``idle_ma``) and a non-permanent one is cured by power-cycling: both are
+the load's. A ``dropout`` changes only the measured current, not ``Load.ready``, so the data
+continues through it. Devices without a channel are always ready.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+import random
+import time
+from typing import Any
+
+from emulator.robot import devices as D
+from emulator.robot.config import DeviceSpec
+from emulator.sim import Emulator
+
+log = logging.getLogger(__name__)
+
+MAX_LINE = 65536
+MAX_BACKLOG = 1 << 20  # bytes queued to a client that does not read: it is dropped
+POLL_S = 0.005
+OFF, BOOTING, HUNG, READY = "off", "booting", "hung", "ready"
+
+
+def device_state(emu: Emulator, channel: int | None) -> tuple[str, int]:
+    """The device's state and the time it was last powered on (ms), from the electronics."""
+    if channel is None:
+        return READY, 0
+    load = emu.electronics.loads[channel]
+    if not load.powered or "open_load" in load.faults or "short" in load.faults:
+        return OFF, load.on_since
+    if load.ready(emu.now):
+        return READY, load.on_since
+    return (HUNG if load.hung else BOOTING), load.on_since
+
+
+class DeviceServer:
+    def __init__(self, device: D.Device, emu: Emulator, host: str) -> None:
+        self.device = device
+        self.emu = emu
+        self.host = host
+        self.port = 0
+        self.server: asyncio.Server | None = None
+        self.clients: set[asyncio.StreamWriter] = set()
+        self.state = OFF
+        self.on_since = -1
+        self.next_due = 0.0
+
+    @property
+    def name(self) -> str:
+        return self.device.spec.name
+
+    @property
+    def url(self) -> str:
+        return f"tcp://{self.host}:{self.port}"
+
+    async def bind(self) -> None:
+        """Take a port (not yet listening: connections are refused until ``open``)."""
+        self.server = await asyncio.start_server(self._client, self.host, self.port,
+                                                 limit=MAX_LINE, start_serving=False)
+        self.port = self.server.sockets[0].getsockname()[1]
+
+    async def open(self) -> None:
+        if self.server is None:
+            await self.bind()
+        assert self.server is not None
+        await self.server.start_serving()
+
+    def close(self) -> None:
+        if self.server is not None:
+            self.server.close()
+            self.server = None
+        for w in list(self.clients):
+            w.transport.abort()
+        self.clients.clear()
+
+    async def update(self, wall: float) -> None:
+        """Follow the electronics; send a frame if one is due."""
+        state, on_since = device_state(self.emu, self.device.spec.channel)
+        now = self.emu.now
+        was_on = self.state != OFF
+        if was_on and (state == OFF or on_since != self.on_since):
+            log.info("%s: power off", self.name)
+            self.close()
+            was_on = False
+        if state != OFF and not was_on:
+            log.info("%s: power on", self.name)
+            try:
+                await self.open()
+            except OSError as exc:  # the port was taken while the device was off: retry
+                log.warning("%s: cannot listen on port %d again: %s", self.name, self.port, exc)
+                self.state = OFF
+                return
+            self.device.reset(now)
+        if (state == READY) != (self.state == READY):
+            log.info("%s: %s", self.name, "working" if state == READY else state)
+            self.device.working(state == READY, now)
+            self.next_due = wall
+        self.state, self.on_since = state, on_since
+        if state == READY and wall >= self.next_due:
+            self.next_due += 1.0 / self.device.spec.rate_hz
+            if self.next_due < wall:  # fell behind (a stalled loop): no burst to catch up
+                self.next_due = wall + 1.0 / self.device.spec.rate_hz
+            self._send(self.device.frame(now))
+
+    def _send(self, frame: dict[str, Any]) -> None:
+        line = json.dumps(frame, separators=(",", ":")).encode() + b"\n"
+        for w in list(self.clients):
+            if w.transport.get_write_buffer_size() > MAX_BACKLOG:
+                log.warning("%s: a client does not read; dropping it", self.name)
+                w.transport.abort()
+                self.clients.discard(w)
+            else:
+                w.write(line)
+
+    async def _client(self, reader: asyncio.StreamReader,
+                      writer: asyncio.StreamWriter) -> None:
+        self.clients.add(writer)
+        try:
+            while True:
+                try:
+                    line = await reader.readuntil(b"\n")
+                except asyncio.LimitOverrunError:
+                    writer.write(b'{"error": "line too long"}\n')
+                    break
+                except asyncio.IncompleteReadError:
+                    break
+                if self.state != READY:
+                    continue  # booting or hung: nobody listens
+                reply = self._command(line)
+                if reply is not None:
+                    writer.write(json.dumps(reply).encode() + b"\n")
+        except ConnectionError:
+            pass
+        finally:
+            self.clients.discard(writer)
+            writer.transport.abort()
+
+    def _command(self, line: bytes) -> dict[str, Any] | None:
+        try:
+            msg = json.loads(line)
+        except (ValueError, UnicodeDecodeError):
+            return {"error": "not a JSON object on one line"}
+        if not isinstance(msg, dict):
+            return {"error": "not a JSON object on one line"}
+        try:
+            self.device.command(msg, self.emu.now)
+        except ValueError as exc:
+            return {"error": str(exc)}
+        return None
+
+
+class Robot:
+    """Every device of the robot, served while the emulator runs."""
+
+    def __init__(self, emu: Emulator, specs: list[DeviceSpec], host: str = "127.0.0.1") -> None:
+        self.emu = emu
+        self.world = D.World()
+        seed = emu.model.board.seed
+        self.servers = [DeviceServer(D.make(s, self.world, random.Random(f"{seed}:{s.name}")),
+                                     emu, host) for s in specs]
+        self._task: asyncio.Task[None] | None = None
+
+    async def start(self) -> dict[str, str]:
+        """Bind every device's port; returns device name -> ``tcp://`` URL."""
+        for s in self.servers:
+            await s.bind()
+        self.world.t_ms = self.emu.now
+        wall = time.monotonic()
+        for s in self.servers:
+            await s.update(wall)
+        self._task = asyncio.get_running_loop().create_task(self._run())
+        return {s.name: s.url for s in self.servers}
+
+    async def _run(self) -> None:
+        while True:
+            wall = time.monotonic()
+            for s in self.servers:
+                await s.update(wall)
+            due = [s.next_due for s in self.servers if s.state == READY]
+            wait = min([POLL_S, *(d - time.monotonic() for d in due)])
+            await asyncio.sleep(max(0.0, wait))
+
+    async def stop(self) -> None:
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._task
+            self._task = None
+        for s in self.servers:
+            s.close()

@@ -1,0 +1,130 @@
+"""Run the daemon: watch the board, the processes and the topics; diagnose; repair.
+
+``dxboard run SYSTEM_DIR [--board URL | --emulate [--control H:P]] [--web H:P] [--journal FILE]
+[--dry-run]`` loads the robot directory (``system.yaml``: the model, its ``observers:`` and
+``processes:``; ``repair.pddl``), connects to the board, and then diagnoses on every change of
+what the observers see and repairs what it finds (power-cycles, driver restarts), verifying each
+step. ``--emulate`` also starts the robot's emulated board (``dxboard emulate``, with its
+virtual devices when the robot has them) and prints its board and fault-injection (control)
+URLs. It prints one URL a line (``board:``, ``control:``, ``web:``, ``journal:``) and runs until
+Ctrl-C, which stops everything cleanly.
+
+The key for switching comes from ``$DXBOARD_KEY`` or ``--key-file``; with ``--emulate`` the
+emulated board gets the ``--key-file`` key, or a fresh one. ``--dry-run`` diagnoses and plans
+but never acts. The web page (read-only) is on 127.0.0.1:8080 unless ``--web`` says otherwise
+(``--web off`` for none); the journal is ``dxboard-journal.sqlite`` unless ``--journal`` says
+otherwise.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import json
+import logging
+import signal
+from pathlib import Path
+
+from host.errors import UserError
+
+NAME = "run"
+HELP = "run the daemon: observe, diagnose and repair the robot"
+
+log = logging.getLogger(__name__)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("system_dir", metavar="SYSTEM_DIR", help="robot directory (models/NAME)")
+    where = parser.add_mutually_exclusive_group(required=True)
+    where.add_argument("--board", metavar="URL", help="the board, e.g. tcp://192.168.0.7:7000")
+    where.add_argument("--emulate", action="store_true",
+                       help="start the robot's emulated board and use it")
+    parser.add_argument("--control", metavar="H:P", default="127.0.0.1:0",
+                        help="with --emulate: the fault-injection endpoint (default: free port)")
+    parser.add_argument("--web", metavar="H:P", default="127.0.0.1:8080",
+                        help="the web page's address (default 127.0.0.1:8080; 'off' for none)")
+    parser.add_argument("--journal", metavar="FILE", default="dxboard-journal.sqlite",
+                        help="the journal file (default dxboard-journal.sqlite)")
+    parser.add_argument("--dry-run", action="store_true", help="diagnose and plan, never act")
+    parser.add_argument("--key-file", metavar="FILE", help="the board's key (else $DXBOARD_KEY)")
+    parser.add_argument("--rate", type=int, default=100, metavar="HZ",
+                        help="board readings per second (1-100, default 100)")
+    parser.add_argument("--zenoh", metavar="ENDPOINT", action="append",
+                        help="zenoh endpoint the daemon listens on for topics "
+                             "(default: the model's, tcp/127.0.0.1:7447)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from host.web.server import parse_listen
+
+    system_dir = Path(args.system_dir)
+    if not (system_dir / "system.yaml").is_file():
+        raise UserError(f"{system_dir}: no system.yaml here",
+                        "give a robot directory, e.g. models/tedusar")
+    web = None if args.web == "off" else parse_listen(args.web)
+    if not 1 <= args.rate <= 100:
+        raise UserError(f"--rate {args.rate} is out of range", "give 1..100")
+    return asyncio.run(_main(args, system_dir, web))
+
+
+async def _main(args: argparse.Namespace, system_dir: Path, web: tuple[str, int] | None) -> int:
+    from host.board.keys import load_key
+    from host.daemon.core import Daemon, DaemonOptions
+    from host.daemon.emulated import EmulatedBoard
+
+    emulated: EmulatedBoard | None = None
+    daemon: Daemon | None = None
+    key: bytes | None
+    loop = asyncio.get_running_loop()
+    stop = asyncio.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(sig, stop.set)
+    try:
+        if args.emulate:
+            emulated = await EmulatedBoard.start(
+                system_dir, args.control, ("--robot",) if _has_robot(system_dir) else (),
+                key=load_key(args.key_file) if args.key_file else None)
+            board_url, key = emulated.board_url, emulated.key
+            node_env = {"DXBOARD_DEVICES": json.dumps(emulated.devices)}
+            print(f"board: {board_url}")
+            print(f"control: {emulated.control_url}")
+            for name, url in sorted(emulated.devices.items()):
+                print(f"device: {name} {url}")
+        else:
+            board_url, key, node_env = args.board, load_key(args.key_file), {}
+            print(f"board: {board_url}")
+        opts = DaemonOptions(
+            system_dir=system_dir, board_url=board_url, key=key, web=web,
+            journal=Path(args.journal), dry_run=args.dry_run, rate_hz=args.rate,
+            zenoh_listen=args.zenoh, node_env=node_env,
+        )
+        daemon = Daemon(opts)
+        await daemon.start()
+        if daemon.web_port is not None and web is not None:
+            print(f"web: http://{web[0]}:{daemon.web_port}/")
+        print(f"journal: {args.journal}", flush=True)
+        waiter = asyncio.ensure_future(daemon.wait())
+        stopper = asyncio.ensure_future(stop.wait())
+        done, _ = await asyncio.wait([waiter, stopper], return_when=asyncio.FIRST_COMPLETED)
+        for task in (waiter, stopper):
+            if task not in done:
+                task.cancel()
+        if waiter in done:
+            waiter.result()  # a failed task: raise it
+        return 0
+    finally:
+        try:
+            if daemon is not None:
+                await daemon.close()
+        finally:
+            if emulated is not None:
+                await emulated.stop()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            with contextlib.suppress(Exception):
+                loop.remove_signal_handler(sig)
+
+
+def _has_robot(system_dir: Path) -> bool:
+    """True when the robot has virtual devices the emulator can serve (``--robot``)."""
+    return (system_dir / "robot.yaml").is_file()

@@ -1,0 +1,79 @@
+"""The observable effect of each repair action, and how long it takes to settle.
+
+The domain's effects name planning atoms (``on(d)``, ``running(n)``, ``ab(c)``); the executor
+can only verify what observers report. ``expected_effects(step, model)`` maps a step to the
+observation literals that must hold once it has worked:
+
+==================  ==========================================================================
+``power_up(d)``     ``on(d)``, and ``in_band(d)`` (its current in band) when ``d`` has a band
+``power_cycle(d)``  the same, after the off time
+``shutdown(d)``     ``~on(d)``
+``start_node(n)``   ``running(n)``, and ``ok(t)`` for every topic ``t`` that ``n`` publishes
+``stop_node(n)``    ``~running(n)``
+==================  ==========================================================================
+
+Only atoms some observer actually reports are expected (``observable``; None: all): a topic no
+observer watches cannot be verified, and waiting for it would fail every repair. The effect is
+checked in observations made at least ``settle`` seconds after the step ended — the device's
+boot time or the node's ``settle_s`` — so a node that starts and dies at once, or a device
+that comes on and trips, does not pass. Nothing here is specific to one robot: all comes from
+the ``SystemModel`` and the ``processes:`` section.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Mapping
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from host.diagnosis.model import SystemModel
+    from host.repair.plan import Step
+    from host.repair.processes import ProcessConfig
+
+DEFAULT_DEVICE_SETTLE_S = 1.0
+DEFAULT_NODE_SETTLE_S = 2.0
+#: actions whose effect is immediate (no settling: a stopped process or a switched-off
+#: channel is seen at once)
+IMMEDIATE = frozenset({"shutdown", "stop_node"})
+
+
+def expected_effects(step: Step, model: SystemModel,
+                     observable: Collection[str] | None = None) -> dict[str, bool]:
+    """The literals (atom -> value) that show ``step`` worked (see the module docstring)."""
+    if not step.args:
+        return {}
+    name = step.args[0]
+    comp = model.components.get(name)
+    out: dict[str, bool] = {}
+    if step.action in ("power_up", "power_cycle"):
+        out[f"on({name})"] = True
+        if comp is not None and comp.current is not None:
+            out[f"in_band({name})"] = True
+    elif step.action == "shutdown":
+        out[f"on({name})"] = False
+    elif step.action == "start_node":
+        out[f"running({name})"] = True
+        if comp is not None:
+            for topic in comp.publishes:
+                out[f"ok({topic})"] = True
+    elif step.action == "stop_node":
+        out[f"running({name})"] = False
+    if observable is not None:
+        out = {a: v for a, v in out.items() if a in observable}
+    return out
+
+
+def settle_times(model: SystemModel, processes: Mapping[str, ProcessConfig] | None = None,
+                 devices: Mapping[str, float] | None = None,
+                 device_default: float = DEFAULT_DEVICE_SETTLE_S,
+                 node_default: float = DEFAULT_NODE_SETTLE_S) -> dict[str, float]:
+    """Settle time per component: nodes from ``processes`` (``settle_s``), devices from
+    ``devices`` (their boot times), else the defaults."""
+    out: dict[str, float] = {}
+    for c in model.components.values():
+        if c.is_node:
+            cfg = (processes or {}).get(c.name)
+            out[c.name] = cfg.settle_s if cfg is not None else node_default
+        elif c.channel is not None:
+            out[c.name] = (devices or {}).get(c.name, device_default)
+    return out

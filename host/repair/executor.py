@@ -1,0 +1,324 @@
+"""The executor: runs a repair plan through the actuators and verifies every effect.
+
+``Executor.execute(plan)`` runs the plan's steps as its partial order allows: every step whose
+predecessors are done starts at once, so independent steps run in parallel (the actuators
+still space switch-ons on the board). Each step:
+
+1. is checked (a protected component is never switched off; an action without actuator is
+   refused) and reported ``started``;
+2. runs through its actuator within ``step_timeout`` seconds (longer for a ``stop_node``
+   whose process may take ``stop_timeout_s`` to stop) — else ``timeout``;
+3. waits for its intended effect (``host.repair.effects``): fresh observations, made at least
+   the component's settle time after the actuator returned, showing the expected literals,
+   within settle + ``verify_s`` seconds (``Beliefs.wait_for``) — else ``failed`` with what was
+   seen instead; then ``succeeded``.
+
+On the first failed step nothing new starts; steps already running finish, and ``execute``
+returns ``ExecutionResult(outcome=FAILED, failed=step, reason=...)`` so the caller
+re-diagnoses and replans (``host.repair.loop.RepairLoop``). Every step's states are reported
+through ``report`` as ``StepReport`` values (``to_record()`` gives the journal's
+``ActionRecord``), and every quarantine as a ``Quarantined``.
+
+Limits (``host.repair.limits``): each execution counts one attempt for every component its
+steps touch or it repairs. A component that has used ``max_attempts`` in the window is
+quarantined — after its failed step, or before a plan touching it would run — put in its safe
+state (a device switched off, a node stopped; never a protected component; the safe-state
+actions are reported like steps, under the plan id ``quarantine:<component>``) and no step
+touching it runs again (``BLOCKED``) until ``clear_quarantine(component)``. Two executions
+touching the same component never overlap (``BUSY``). With ``dry_run=True`` the executor
+checks and reports every step and acts on nothing: no actuator, no wait, no attempt counted.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import itertools
+import logging
+import time
+from collections.abc import Callable, Collection, Iterable, Mapping
+from dataclasses import dataclass
+from enum import StrEnum
+
+from host.errors import DxboardError
+from host.journal.entries import ActionRecord, ActionState, PlanRecord, PlanStep
+from host.repair.actuators import Actuators, Refused
+from host.repair.beliefs import Beliefs
+from host.repair.effects import DEFAULT_DEVICE_SETTLE_S, IMMEDIATE, expected_effects
+from host.repair.limits import AttemptLimiter, Quarantine, Quarantined
+from host.repair.plan import Plan, Step
+
+log = logging.getLogger(__name__)
+
+DEFAULT_STEP_TIMEOUT_S = 10.0
+DEFAULT_VERIFY_S = 5.0
+QUARANTINE_PLAN = "quarantine"
+
+
+class Outcome(StrEnum):
+    DONE = "done"  # every step ran and its effect was observed
+    FAILED = "failed"  # a step failed, timed out or its effect did not appear
+    QUARANTINED = "quarantined"  # a component used its attempts: quarantined, plan not run
+    BLOCKED = "blocked"  # the plan touches a quarantined component: not run
+    BUSY = "busy"  # another execution is repairing one of its components: not run
+
+
+@dataclass(frozen=True)
+class StepReport:
+    """One state of one step (``started``, then ``succeeded``, ``failed`` or ``timeout``)."""
+
+    plan_id: str
+    action_id: str
+    step: Step
+    state: ActionState
+    started: float
+    finished: float | None = None
+    detail: str = ""
+
+    def to_record(self) -> ActionRecord:
+        return ActionRecord(self.action_id, self.step.action, self.step.args, self.state,
+                            self.started, self.finished, self.plan_id, self.detail)
+
+
+Event = StepReport | Quarantined
+
+
+Reporter = Callable[[Event], None]
+
+
+@dataclass(frozen=True)
+class ExecutionResult:
+    outcome: Outcome
+    plan_id: str
+    done: tuple[Step, ...] = ()
+    failed: Step | None = None
+    reason: str = ""
+    quarantined: tuple[Quarantined, ...] = ()
+    dry_run: bool = False
+
+    @property
+    def ok(self) -> bool:
+        return self.outcome is Outcome.DONE
+
+
+def plan_record(plan: Plan, plan_id: str, repairs: Iterable[str] = ()) -> PlanRecord:
+    """The journal's record of a plan."""
+    return PlanRecord(plan_id, tuple(PlanStep(s.action, s.args) for s in plan.steps),
+                      tuple(sorted(repairs)))
+
+
+def touched(plan: Plan, repairs: Iterable[str] = ()) -> frozenset[str]:
+    """The components a plan acts on or repairs."""
+    return frozenset(s.args[0] for s in plan.steps if s.args) | frozenset(repairs)
+
+
+class Executor:
+    def __init__(self, actuators: Actuators, beliefs: Beliefs, *,
+                 settle: Mapping[str, float] | None = None,
+                 limiter: AttemptLimiter | None = None, report: Reporter | None = None,
+                 dry_run: bool = False, step_timeout: float = DEFAULT_STEP_TIMEOUT_S,
+                 verify_s: float = DEFAULT_VERIFY_S, observable: Collection[str] | None = None,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        self.actuators = actuators
+        self.model = actuators.model
+        self.beliefs = beliefs
+        self.settle = dict(settle or {})
+        self.limiter = limiter or AttemptLimiter()
+        self.quarantine = Quarantine()
+        self.report = report
+        self.dry_run = dry_run
+        self.step_timeout = step_timeout
+        self.verify_s = verify_s
+        self.observable = observable
+        self.clock = clock
+        self._busy: set[str] = set()
+        self._ids = itertools.count(1)
+
+    # -- public ----------------------------------------------------------------------------
+    async def execute(self, plan: Plan, plan_id: str = "",
+                      repairs: Iterable[str] = ()) -> ExecutionResult:
+        """Run ``plan`` (see the module docstring); never raises for a failed step."""
+        plan_id = plan_id or f"plan-{next(self._ids)}"
+        comps = touched(plan, repairs)
+        blocked = sorted(c for c in comps if c in self.quarantine)
+        if blocked:
+            return ExecutionResult(Outcome.BLOCKED, plan_id, reason=f"{', '.join(blocked)} "
+                                   "quarantined: cleared only by a person", dry_run=self.dry_run)
+        busy = sorted(comps & self._busy)
+        if busy:
+            return ExecutionResult(Outcome.BUSY, plan_id, reason=f"{', '.join(busy)} already "
+                                   "being repaired", dry_run=self.dry_run)
+        if self.dry_run:
+            return await self._dry_run(plan, plan_id)
+        now = self.clock()
+        spent = sorted(c for c in comps if self.limiter.exhausted(c, now))
+        if spent:
+            q = [await self.quarantine_component(
+                c, f"{self.limiter.count(c, now)} repair attempts in "
+                f"{self.limiter.window_s:g} s") for c in spent]
+            return ExecutionResult(Outcome.QUARANTINED, plan_id, quarantined=tuple(q),
+                                   reason=f"{', '.join(spent)} used their repair attempts")
+        for c in comps:
+            self.limiter.record(c, now)
+        self._busy |= comps
+        try:
+            return await self._run(plan, plan_id)
+        finally:
+            self._busy -= comps
+
+    async def quarantine_component(self, component: str, reason: str) -> Quarantined:
+        """Take ``component`` out of automatic repair and leave it in a safe state."""
+        old = self.quarantine.get(component)
+        if old is not None:
+            return old
+        safe = "left as is (dry run)" if self.dry_run else await self._safe_state(component)
+        entry = Quarantined(component, self.clock(), reason, safe)
+        self.quarantine.add(entry)
+        log.warning("quarantined %s: %s; %s", component, reason, safe)
+        self._emit(entry)
+        return entry
+
+    def clear_quarantine(self, component: str) -> bool:
+        """A person cleared ``component``: it may be repaired again, with fresh attempts."""
+        self.limiter.reset(component)
+        return self.quarantine.clear(component)
+
+    # -- running a plan --------------------------------------------------------------------
+    async def _run(self, plan: Plan, plan_id: str) -> ExecutionResult:
+        done: list[Step] = []
+        started: set[int] = set()
+        failure: tuple[Step, str] | None = None
+        tasks: dict[asyncio.Task[str | None], Step] = {}
+        try:
+            while True:
+                if failure is None:
+                    for s in plan.ready({d.id for d in done}, started):
+                        started.add(s.id)
+                        task = asyncio.get_running_loop().create_task(
+                            self._step(s, plan_id), name=f"step:{s}")
+                        tasks[task] = s
+                if not tasks:
+                    break
+                finished, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+                for t in finished:
+                    s = tasks.pop(t)
+                    why = t.result()
+                    if why is None:
+                        done.append(s)
+                    elif failure is None:
+                        failure = (s, why)
+        finally:
+            for t in tasks:
+                t.cancel()
+        if failure is None:
+            return ExecutionResult(Outcome.DONE, plan_id, tuple(done))
+        step, why = failure
+        q: list[Quarantined] = []
+        now = self.clock()
+        for c in step.args[:1]:
+            if self.limiter.exhausted(c, now):
+                q.append(await self.quarantine_component(
+                    c, f"{step} failed ({why}) after {self.limiter.count(c, now)} repair "
+                    f"attempts in {self.limiter.window_s:g} s"))
+        return ExecutionResult(Outcome.FAILED, plan_id, tuple(done), step, why, tuple(q))
+
+    def _timeout(self, step: Step) -> float:
+        if step.action == "stop_node" and self.actuators.supervisor is not None:
+            cfg = self.actuators.supervisor.configs.get(step.args[0])
+            if cfg is not None:
+                return max(self.step_timeout, cfg.stop_timeout_s + 2.0)
+        return self.step_timeout
+
+    def settle_of(self, step: Step) -> float:
+        if step.action in IMMEDIATE or not step.args:
+            return 0.0
+        settle = self.settle.get(step.args[0], DEFAULT_DEVICE_SETTLE_S)
+        if step.action == "power_cycle":
+            settle += self.actuators.off_s
+        return settle
+
+    async def _step(self, step: Step, plan_id: str) -> str | None:
+        """Run one step; None when it worked, else why not (already reported)."""
+        action_id = f"{plan_id}/{step.id}"
+        t0 = self.clock()
+        self._emit(StepReport(plan_id, action_id, step, ActionState.STARTED, t0))
+
+        def finish(state: ActionState, detail: str) -> None:
+            self._emit(StepReport(plan_id, action_id, step, state, t0, self.clock(), detail))
+
+        timeout = self._timeout(step)
+        try:
+            detail = await asyncio.wait_for(self.actuators.run(step), timeout)
+        except TimeoutError:
+            why = f"no answer within {timeout:g} s"
+            finish(ActionState.TIMEOUT, why)
+            return why
+        except Refused as exc:
+            finish(ActionState.FAILED, f"refused: {exc}")
+            return f"refused: {exc}"
+        except DxboardError as exc:
+            finish(ActionState.FAILED, str(exc))
+            return str(exc)
+        end = self.clock()
+        expected = expected_effects(step, self.model, self.observable)
+        if expected:
+            settle = self.settle_of(step)
+            if not await self.beliefs.wait_for(expected, end + settle, settle + self.verify_s):
+                seen = self.beliefs.missing(expected, end + settle)
+                why = "effect not observed within {:g} s: {}".format(
+                    settle + self.verify_s, "; ".join(f"{a} {v}" for a, v in seen.items()))
+                finish(ActionState.FAILED, f"{detail}; {why}")
+                return why
+            detail += "; observed " + ", ".join(
+                a if v else f"~{a}" for a, v in sorted(expected.items()))
+        finish(ActionState.SUCCEEDED, detail)
+        return None
+
+    async def _dry_run(self, plan: Plan, plan_id: str) -> ExecutionResult:
+        done: list[Step] = []
+        for layer in plan.layers():
+            for step in layer:
+                action_id = f"{plan_id}/{step.id}"
+                t = self.clock()
+                self._emit(StepReport(plan_id, action_id, step, ActionState.STARTED, t))
+                try:
+                    self.actuators.check(step)
+                except Refused as exc:
+                    self._emit(StepReport(plan_id, action_id, step, ActionState.FAILED, t, t,
+                                          f"dry run: refused: {exc}"))
+                    return ExecutionResult(Outcome.FAILED, plan_id, tuple(done), step,
+                                           f"refused: {exc}", dry_run=True)
+                expected = expected_effects(step, self.model, self.observable)
+                self._emit(StepReport(plan_id, action_id, step, ActionState.SUCCEEDED, t, t,
+                                      "dry run: not carried out; would expect "
+                                      + (", ".join(a if v else f"~{a}"
+                                                   for a, v in sorted(expected.items()))
+                                         or "nothing observable")))
+                done.append(step)
+        return ExecutionResult(Outcome.DONE, plan_id, tuple(done), dry_run=True)
+
+    # -- quarantine ------------------------------------------------------------------------
+    async def _safe_state(self, component: str) -> str:
+        """Switch ``component`` off or stop it where allowed; what was done."""
+        if component in self.actuators.protected:
+            return "left as is: protected"
+        c = self.model.components.get(component)
+        if c is None:
+            return "left as is: not a component of the model"
+        sup = self.actuators.supervisor
+        if c.channel is not None and self.actuators.board is not None:
+            action = "shutdown"
+        elif c.is_node and sup is not None and component in sup.configs:
+            action = "stop_node"
+        else:
+            return "left as is: nothing can switch it off"
+        step = Step(0, action, (component,))
+        why = await self._step(step, f"{QUARANTINE_PLAN}:{component}")
+        return f"{step}" if why is None else f"{step} failed: {why}"
+
+    def _emit(self, event: Event) -> None:
+        if self.report is None:
+            return
+        try:
+            self.report(event)
+        except Exception:  # a broken journal must not stop a repair half-way
+            log.exception("reporting %s failed", event)

@@ -1,0 +1,308 @@
+"""Drawing a ``Timeline`` with matplotlib (Agg, no display): the paper's figures 5 and 6.
+
+The figure, top to bottom: a title (robot and journal) with a subtitle (journal ids, start
+time, clock); the repair actions, one bar per action from its start to its end on a few lanes
+(packed so that no two labels overlap), each labelled with its call and, unless it succeeded,
+its outcome (failed and timed-out actions hatched in their own colours); then one row per
+component in groups (hardware, drivers, nodes, other), each a band coloured by its state over
+time (normal pale green, abnormal red, unknown hatched grey); a dashed green line where the whole
+system became normal again, labelled with the time and how long the repair took from its first
+action; the time axis in seconds; a legend. Faint vertical guides carry each action's start
+down through the rows, so cause and effect line up.
+
+Sizes are fixed in inches (the height grows with the rows and lanes), so a chart is as legible
+in a paper as on a screen; ``render`` returns a ``Layout`` telling where (in pixels) each row
+and each second lies, which the tests use to check the colours of the image.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+
+import matplotlib
+
+# Figure.savefig needs no pyplot; Agg all the same, so nothing here ever wants a display
+matplotlib.use("Agg")
+
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.font_manager import FontProperties
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch, Rectangle
+from matplotlib.textpath import TextToPath
+from matplotlib.ticker import MaxNLocator
+
+from host.report.timeline import (
+    GROUP_ORDER,
+    RUNNING,
+    ActionSpan,
+    ComponentRow,
+    State,
+    Timeline,
+)
+
+log = logging.getLogger(__name__)
+
+# colours (also what the tests look for in the image)
+STATE_COLORS = {State.NORMAL: "#bfe3c6", State.ABNORMAL: "#d7263d", State.UNKNOWN: "#e3e3e3"}
+OUTCOME_COLORS = {"succeeded": "#2b6cb0", "failed": "#e8590c", "timeout": "#b7791f",
+                  RUNNING: "#7f8c9a"}
+OUTCOME_HATCH = {"failed": "xxxx", "timeout": "....", RUNNING: "////"}
+RECOVERY_COLOR = "#1e7b34"
+TEXT = "#222222"
+MUTED = "#666666"
+
+FORMATS = (".png", ".svg")
+
+# the geometry, in inches (fonts in points)
+_W = 10.0
+_LEFT, _RIGHT = 2.05, 0.3
+_TITLE_H = 0.62
+_LANE_H = 0.27
+_ACTIONS_PAD = 0.12
+_GAP = 0.1
+_RECOVERY_H = 0.3  # the strip between actions and rows that holds "all normal at ..."
+_ROW_H = 0.27
+_HEADER_H = 0.25
+_AXIS_H = 0.5
+_LEGEND_H = 0.42
+_LABEL_PT = 7.5
+_ROW_PT = 8.5
+_GROUP_PT = 8.0
+_DPI = 150
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Where things landed in the image: pixels from the top-left corner."""
+
+    width_px: int
+    height_px: int
+    row_y_px: dict[str, float]
+    lane_count: int
+    x_px: Callable[[float], float]
+
+
+def _text_width_in(text: str, size_pt: float, bold: bool = False) -> float:
+    props = FontProperties(size=size_pt, weight="bold" if bold else "normal")
+    width, _h, _d = TextToPath().get_text_width_height_descent(text, props, ismath=False)
+    return float(width) / 72.0
+
+
+def action_label(span: ActionSpan) -> str:
+    """The text next to an action's bar: its call, and its outcome unless it succeeded."""
+    if span.ok:
+        return span.label
+    mark = {"failed": "\u2717 failed", "timeout": "\u2717 timeout", RUNNING: "\u2026 running"}
+    return f"{span.label}  {mark.get(span.outcome, span.outcome)}"
+
+
+@dataclass(frozen=True)
+class _Placed:
+    span: ActionSpan
+    lane: int
+    text: str
+    text_x: float  # data x of the label's anchor
+    align: str  # "left" (after the bar) or "right" (before it)
+
+
+def _pack(actions: tuple[ActionSpan, ...], end: float, sec_per_in: float) -> list[_Placed]:
+    """Lanes for the actions, first fit, so no two bars or labels overlap."""
+    gap = 0.06 * sec_per_in
+    lanes: list[float] = []  # per lane: where it is free from
+    placed: list[_Placed] = []
+    for s in actions:
+        text = action_label(s)
+        bar_end = end if s.end is None else max(s.end, s.start + 0.04 * sec_per_in)
+        w = _text_width_in(text, _LABEL_PT, bold=not s.ok) * sec_per_in
+        if bar_end + gap + w <= end or s.start - gap - w < 0:
+            lo, hi, tx, align = s.start, bar_end + gap + w, bar_end + gap, "left"
+        else:
+            lo, hi, tx, align = s.start - gap - w, bar_end, s.start - gap, "right"
+        for i, free in enumerate(lanes):
+            if lo >= free:
+                lanes[i] = hi + 2 * gap
+                placed.append(_Placed(s, i, text, tx, align))
+                break
+        else:
+            lanes.append(hi + 2 * gap)
+            placed.append(_Placed(s, len(lanes) - 1, text, tx, align))
+    return placed
+
+
+def _row_slots(rows: tuple[ComponentRow, ...]) -> list[tuple[str, str]]:
+    """Top to bottom: ("group", name) headers and ("row", component) rows."""
+    slots: list[tuple[str, str]] = []
+    groups = [g for g in GROUP_ORDER if any(r.group is g for r in rows)]
+    for g in groups:
+        if len(groups) > 1 or g.value != "other":
+            slots.append(("group", g.value))
+        slots.extend(("row", r.name) for r in rows if r.group is g)
+    return slots
+
+
+def _title(t: Timeline) -> tuple[str, str]:
+    head = f"{t.robot}: {t.name}" if t.robot else t.name
+    when = datetime.fromtimestamp(t.origin_wall, UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
+    n_fail = sum(1 for a in t.actions if not a.ok)
+    acts = f"{len(t.actions)} repair action{'s' if len(t.actions) != 1 else ''}"
+    if n_fail:
+        acts += f" ({n_fail} not succeeded)"
+    sub = (f"journal entries #{t.first_id}\u2013#{t.last_id}, t = 0 at {when}  \u00b7  "
+           f"{len(t.rows)} components  \u00b7  {acts}")
+    return head, sub
+
+
+def render(t: Timeline, out: str | os.PathLike[str], *, title: str | None = None,
+           dpi: int = _DPI) -> Layout:
+    """Draw ``t`` into ``out`` (PNG or SVG by its suffix); returns where things landed."""
+    path = Path(out)
+    fmt = path.suffix.lower()
+    if fmt not in FORMATS:
+        raise ValueError(f"cannot write {path.suffix or 'a file without suffix'}")
+    end = max(t.end, 1e-3)
+    axw = _W - _LEFT - _RIGHT
+    sec_per_in = end / axw
+    placed = _pack(t.actions, end, sec_per_in)
+    lanes = max([p.lane + 1 for p in placed], default=1)
+    slots = _row_slots(t.rows)
+    rows_h = sum(_HEADER_H if kind == "group" else _ROW_H for kind, _ in slots)
+    act_h = lanes * _LANE_H + 2 * _ACTIONS_PAD
+    gap = _RECOVERY_H if t.recoveries else _GAP
+    legend_rows = 1 if _legend_count(t) <= 6 else 2
+    legend_h = _LEGEND_H + (legend_rows - 1) * 0.2
+    height = _TITLE_H + act_h + gap + rows_h + _AXIS_H + legend_h
+
+    fig = Figure(figsize=(_W, height), dpi=dpi)
+    fig.patch.set_facecolor("white")
+    rows_bottom = _AXIS_H + legend_h
+    ax = fig.add_axes((_LEFT / _W, rows_bottom / height, axw / _W, rows_h / height))
+    top = fig.add_axes((_LEFT / _W, (rows_bottom + rows_h + gap) / height, axw / _W,
+                        act_h / height), sharex=ax)
+    head, sub = _title(t)
+    fig.text(0.5 * (_LEFT + _W - _RIGHT) / _W, 1 - 0.2 / height, title or head, ha="center",
+             va="center", fontsize=13, fontweight="bold", color=TEXT)
+    fig.text(0.5 * (_LEFT + _W - _RIGHT) / _W, 1 - 0.45 / height, sub, ha="center",
+             va="center", fontsize=8, color=MUTED)
+
+    # --- component rows (y in inches from the bottom of the rows axis) ----------------------
+    row_y: dict[str, float] = {}
+    y = rows_h
+    for kind, name in slots:
+        h = _HEADER_H if kind == "group" else _ROW_H
+        y -= h
+        if kind == "group":
+            ax.text(-_LEFT / axw + 0.08 / axw, y + h * 0.45, name.upper(),
+                    transform=_blend(ax), ha="left", va="center", fontsize=_GROUP_PT,
+                    fontweight="bold", color=MUTED)
+            if y + h < rows_h - 1e-9:
+                ax.axhline(y + h, color="#999999", lw=0.8, zorder=3)
+            continue
+        row = t.row(name)
+        row_y[name] = y + h / 2
+        for iv in row.intervals:
+            ax.add_patch(Rectangle(
+                (iv.start, y + 0.14 * h), iv.duration, 0.72 * h,
+                facecolor=STATE_COLORS[iv.state], edgecolor="white" if iv.state is
+                State.UNKNOWN else "none", hatch="////" if iv.state is State.UNKNOWN else None,
+                lw=0, zorder=2))
+        ax.text(-0.1 / axw, y + h / 2, name, transform=_blend(ax), ha="right", va="center",
+                fontsize=_ROW_PT, color=TEXT)
+    ax.set_ylim(0, rows_h)
+    ax.set_yticks([])
+    ax.set_xlim(0, end)
+    ax.xaxis.set_major_locator(MaxNLocator(nbins=12, steps=[1, 2, 2.5, 5, 10]))
+    ax.grid(axis="x", color="#e6e6e6", lw=0.6, zorder=0)
+    ax.set_axisbelow(True)
+    ax.tick_params(axis="x", labelsize=8.5, colors=TEXT)
+    origin = f"the window ({t.window})" if t.window else "the journal"
+    ax.set_xlabel(f"time since the start of {origin} [s]", fontsize=9, color=TEXT)
+    for side in ("top", "right", "left"):
+        ax.spines[side].set_visible(False)
+
+    # --- actions along the top ----------------------------------------------------------------
+    top.set_ylim(0, act_h)
+    top.set_yticks([])
+    top.tick_params(axis="x", bottom=False, labelbottom=False)
+    for side in ("top", "right", "left"):
+        top.spines[side].set_visible(False)
+    top.spines["bottom"].set_color("#bbbbbb")
+    top.text(-0.1 / axw, act_h / 2, "repair actions", transform=_blend(top), ha="right",
+             va="center", fontsize=_GROUP_PT, fontweight="bold", color=MUTED)
+    for p in placed:
+        s = p.span
+        color = OUTCOME_COLORS.get(s.outcome, OUTCOME_COLORS["failed"])
+        yc = act_h - _ACTIONS_PAD - (p.lane + 0.5) * _LANE_H
+        bar_end = end if s.end is None else max(s.end, s.start + 0.04 * sec_per_in)
+        top.add_patch(Rectangle((s.start, yc - 0.07), bar_end - s.start, 0.14,
+                                facecolor=color if s.ok else "white", edgecolor=color,
+                                hatch=OUTCOME_HATCH.get(s.outcome), lw=1.0, zorder=3))
+        top.text(p.text_x, yc, p.text, ha=p.align, va="center", fontsize=_LABEL_PT,
+                 color=TEXT if s.ok else color, fontweight="normal" if s.ok else "bold",
+                 zorder=6, bbox={"boxstyle": "square,pad=0.1", "facecolor": "white",
+                                 "edgecolor": "none"})
+        ax.axvline(s.start, color=color, lw=0.6, alpha=0.35, ls=(0, (2, 2)), zorder=1)
+    for plan in t.plans:
+        top.plot([plan.time], [0.045], marker="^", ms=4.5, color=MUTED, zorder=3,
+                 clip_on=False)
+
+    # --- all normal again -------------------------------------------------------------------
+    for r in t.recoveries:
+        top.axvline(r.normal_at, color=RECOVERY_COLOR, lw=1.4, ls=(0, (5, 2)), zorder=5)
+        ax.plot([r.normal_at] * 2, [0, rows_h + gap], color=RECOVERY_COLOR, lw=1.4,
+                ls=(0, (5, 2)), zorder=5, clip_on=False)
+        text = f"all normal at {r.normal_at:.1f} s"
+        if r.repair_s is not None:
+            text += f"  ({r.repair_s:.1f} s after the first repair action)"
+        right_half = r.normal_at > 0.5 * end
+        ax.text(r.normal_at + (-1 if right_half else 1) * 0.07 * sec_per_in,
+                rows_h + gap / 2, text, ha="right" if right_half else "left", va="center",
+                fontsize=8.5, color=RECOVERY_COLOR, fontweight="bold", zorder=6,
+                clip_on=False)
+
+    _legend(fig, t, height, legend_rows)
+    fig.savefig(path, format=fmt[1:], dpi=dpi, facecolor="white",
+                metadata=None if fmt == ".svg" else {"Software": "dxboard report"})
+
+    def x_px(sec: float) -> float:
+        return (_LEFT + sec / sec_per_in) * dpi
+
+    row_px = {n: (height - rows_bottom - yy) * dpi for n, yy in row_y.items()}
+    return Layout(round(_W * dpi), round(height * dpi), row_px, lanes, x_px)
+
+
+def _blend(ax: Axes) -> matplotlib.transforms.Transform:
+    """x in axes fractions, y in the axis' data units (inches here)."""
+    return matplotlib.transforms.blended_transform_factory(ax.transAxes, ax.transData)
+
+
+def _legend_count(t: Timeline) -> int:
+    states = {iv.state for r in t.rows for iv in r.intervals}
+    return (len(states) + len({a.outcome for a in t.actions}) + bool(t.plans)
+            + bool(t.recoveries))
+
+
+def _legend(fig: Figure, t: Timeline, height: float, rows: int) -> None:
+    states = [s for s in State if any(iv.state is s for r in t.rows for iv in r.intervals)]
+    handles: list[Patch | Line2D] = [
+        Patch(facecolor=STATE_COLORS[s], edgecolor="white" if s is State.UNKNOWN else "none",
+              hatch="////" if s is State.UNKNOWN else None, label=s.value) for s in states]
+    outcomes = sorted({a.outcome for a in t.actions},
+                      key=lambda o: list(OUTCOME_COLORS).index(o) if o in OUTCOME_COLORS else 9)
+    for o in outcomes:
+        c = OUTCOME_COLORS.get(o, OUTCOME_COLORS["failed"])
+        handles.append(Patch(facecolor=c if o == "succeeded" else "white", edgecolor=c,
+                             hatch=OUTCOME_HATCH.get(o), label=f"action {o}"))
+    if t.plans:
+        handles.append(Line2D([], [], marker="^", ls="none", color=MUTED, label="plan made"))
+    if t.recoveries:
+        handles.append(Line2D([], [], color=RECOVERY_COLOR, ls=(0, (5, 2)), lw=1.4,
+                              label="all normal"))
+    fig.legend(handles=handles, loc="lower center", ncol=-(-len(handles) // rows), fontsize=8,
+               frameon=False, bbox_to_anchor=(0.5, 0.02 / height),
+               handlelength=1.8, columnspacing=1.4)

@@ -1,0 +1,123 @@
+"""``dxboard run --emulate`` as a real subprocess, for the daemon's end-to-end tests.
+
+``RunningDaemon`` starts it on free ports (web, zenoh) with a journal in a temporary folder,
+reads the URLs it prints, and offers what a person would use: the JSON API (``status()``),
+``dxboard inject`` on the printed control URL, the journal (``journal()``), and SIGINT.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from host.journal import Entry, JournalReader
+
+ROOT = Path(__file__).resolve().parents[2]
+TEDUSAR = ROOT / "models" / "tedusar"
+
+
+def fast_copy(tmp: Path, boot_ms: dict[str, int] | None = None) -> Path:
+    """``models/tedusar`` with short device boot times, its node commands pointing at it."""
+    d = tmp / "tedusar"
+    shutil.copytree(TEDUSAR, d)
+    emu = yaml.safe_load((d / "emulator.yaml").read_text())
+    for ch in emu["channels"]:
+        ch["boot_ms"] = (boot_ms or FAST_BOOT_MS).get(ch["name"], ch.get("boot_ms", 0))
+    (d / "emulator.yaml").write_text(yaml.safe_dump(emu))
+    system = (d / "system.yaml").read_text()
+    (d / "system.yaml").write_text(system.replace(" models/tedusar]", f" {d}]"))
+    return d
+
+
+FAST_BOOT_MS = {"hokuyo": 1500, "jaguar": 300, "laser_alignment": 300}
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+class RunningDaemon:
+    def __init__(self, tmp: Path, system_dir: Path = TEDUSAR,
+                 extra_args: tuple[str, ...] = ()) -> None:
+        self.journal_path = tmp / "journal.sqlite"
+        argv = [sys.executable, "-m", "host.cli", "run", str(system_dir), "--emulate",
+                "--web", "127.0.0.1:0", "--journal", str(self.journal_path),
+                "--zenoh", f"tcp/127.0.0.1:{free_port()}", *extra_args]
+        self.err_path = tmp / "daemon.err"
+        with self.err_path.open("wb") as err:
+            self.proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=err,
+                                         text=True)
+        self.urls: dict[str, str] = {}
+        assert self.proc.stdout is not None
+        while "journal" not in self.urls:
+            line = self.proc.stdout.readline()
+            if not line:
+                raise AssertionError("dxboard run exited: " + self.err_path.read_text()[-2000:])
+            name, _, rest = line.strip().partition(": ")
+            self.urls[name] = rest
+
+    def status(self) -> dict[str, Any]:
+        with urllib.request.urlopen(self.urls["web"] + "api/status", timeout=5) as r:
+            data: dict[str, Any] = json.load(r)
+        return data
+
+    def wait_for(self, what: Callable[[dict[str, Any]], bool], timeout: float = 20.0,
+                 label: str = "") -> dict[str, Any]:
+        end = time.monotonic() + timeout
+        st = self.status()
+        while not what(st):
+            if time.monotonic() > end:
+                raise AssertionError(f"timed out waiting for {label}; last status: "
+                                     f"diagnoses={st['diagnoses']} repairs={st['repairs']}")
+            time.sleep(0.1)
+            st = self.status()
+        return st
+
+    def inject(self, *args: str) -> None:
+        subprocess.run([sys.executable, "-m", "host.cli", "inject", self.urls["control"],
+                        *args], check=True, cwd=ROOT, capture_output=True, timeout=10)
+
+    def journal(self, kind: str | None = None) -> list[Entry]:
+        return JournalReader(self.journal_path).query(kind=kind, limit=100000)
+
+    def board(self, *args: str, key_file: Path) -> str:
+        """``dxboard board BOARD_URL ARGS`` with the key file, as an operator would."""
+        out = subprocess.run([sys.executable, "-m", "host.cli", "board", self.urls["board"],
+                              *args, "--key-file", str(key_file)], check=True, cwd=ROOT,
+                             capture_output=True, text=True, timeout=15)
+        return out.stdout
+
+    def interrupt(self, timeout: float = 20.0) -> int:
+        self.proc.send_signal(signal.SIGINT)
+        return self.proc.wait(timeout)
+
+    def close(self) -> None:
+        if self.proc.poll() is None:  # stop it as a person would; kill only if it hangs
+            self.proc.send_signal(signal.SIGINT)
+            try:
+                self.proc.wait(20)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        if self.proc.stdout is not None:
+            self.proc.stdout.close()
+
+
+def bad_sets(status: dict[str, Any]) -> list[set[str]]:
+    return [set(d["bad"]) for d in status["diagnoses"]]
+
+
+__all__ = ["RunningDaemon", "bad_sets", "fast_copy", "free_port"]

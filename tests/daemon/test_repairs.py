@@ -1,0 +1,177 @@
+"""``dxboard run --emulate`` on the virtual TEDUSAR robot: it brings the robot up by itself,
+then each fault is injected with ``dxboard inject`` (or, for the paper's device shut-down,
+an operator's ``dxboard board off``) and the daemon must diagnose it, repair what a repair
+can help, verify the repair, and leave alone what it cannot (quarantine, link loss).
+
+One daemon serves the whole module, in order: every test starts and ends with a healthy
+robot, except the last, which quarantines a permanently hung device. Device boot times are
+shortened (``fast_copy``); everything else is the real model, processes and sockets.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from host.journal import ActionRecord, DiagnosisRecord, Note, Observation, PlanRecord
+from tests.daemon.runner import RunningDaemon, bad_sets, fast_copy
+
+KEY = bytes(range(32))
+ROBOT = {"jaguar", "hokuyo", "laser_alignment", "jaguar_node", "hokuyo_node",
+         "laser_alignment_node", "imu_node", "joy_node", "jaguar_teleop_node", "hector_mapping",
+         "laser_alignment_control"}
+HEAL_S = 60.0
+
+
+@pytest.fixture(scope="module")
+def robot(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[RunningDaemon, Path]]:
+    tmp = tmp_path_factory.mktemp("repairs")
+    key_file = tmp / "key"
+    key_file.write_text(KEY.hex())
+    key_file.chmod(0o600)
+    d = RunningDaemon(tmp, fast_copy(tmp), extra_args=("--key-file", str(key_file)))
+    try:
+        yield d, key_file
+    finally:
+        d.close()
+
+
+def healthy(s: dict[str, Any]) -> bool:
+    return bool(s["board_link_up"]) and not s["diagnoses"] and bool(s["repairs"]) and all(
+        r["state"] in ("succeeded", "failed", "timeout") for r in s["repairs"])
+
+
+def actions_since(d: RunningDaemon, after: int) -> list[ActionRecord]:
+    return [e.payload for e in d.journal("action")
+            if e.id > after and isinstance(e.payload, ActionRecord)]
+
+
+def finished(records: list[ActionRecord]) -> list[tuple[str, tuple[str, ...], str]]:
+    return [(r.action, tuple(r.args), str(r.state)) for r in records if r.finished is not None]
+
+
+def last_id(d: RunningDaemon) -> int:
+    return max((e.id for e in d.journal()), default=0)
+
+
+def test_power_up_brings_the_whole_robot_up(robot: tuple[RunningDaemon, Path]) -> None:
+    d, _ = robot
+    st = d.wait_for(healthy, HEAL_S, "the robot powered up and healthy")
+    assert all(st["observations"][f"running({n})"] for n in
+               ("jaguar_node", "hokuyo_node", "imu_node", "hector_mapping"))
+    assert st["observations"]["ok(/scan)"] and st["observations"]["ok(/map)"]
+    first = next(p.payload for p in d.journal("diagnosis")
+                 if isinstance(p.payload, DiagnosisRecord) and p.payload.diagnoses
+                 and p.payload.diagnoses[0])
+    assert set(first.diagnoses[0]) <= ROBOT  # the paper's power-up: all abnormal
+    done = finished(actions_since(d, 0))
+    assert all(state == "succeeded" for _, _, state in done)
+    acts = [(a, args[0]) for a, args, _ in done]
+    for dev in ("jaguar", "hokuyo", "laser_alignment"):
+        assert ("power_up", dev) in acts
+    # hardware is powered before its driver starts (the end of power_up precedes the start)
+    records = actions_since(d, 0)
+    up_end = {r.args[0]: r.finished for r in records
+              if r.action == "power_up" and r.finished is not None}
+    node_start = {r.args[0]: r.started for r in records if r.action == "start_node"}
+    for dev, node in (("jaguar", "jaguar_node"), ("hokuyo", "hokuyo_node")):
+        assert up_end[dev] is not None and node_start[node] >= up_end[dev]
+
+
+def test_device_shut_down_is_repaired_as_in_the_paper(robot: tuple[RunningDaemon, Path]) -> None:
+    d, key = robot
+    d.wait_for(healthy, HEAL_S, "healthy")
+    mark = last_id(d)
+    d.board("off", "jaguar", key_file=key)
+    d.wait_for(lambda s: {"jaguar"} in bad_sets(s) or any("jaguar" in b for b in bad_sets(s)),
+               15, "jaguar diagnosed")
+    d.wait_for(lambda s: healthy(s) and len(actions_since(d, mark)) >= 6, HEAL_S,
+               "jaguar repaired")
+    done = finished(actions_since(d, mark))
+    # paper 000 §VI-B: power_up(jaguar), stop_node(jaguar_node), start_node(jaguar_node)
+    assert done == [("power_up", ("jaguar",), "succeeded"),
+                    ("stop_node", ("jaguar_node",), "succeeded"),
+                    ("start_node", ("jaguar_node",), "succeeded")]
+
+
+def test_a_hung_lidar_is_power_cycled_and_its_driver_restarted(
+        robot: tuple[RunningDaemon, Path]) -> None:
+    d, _ = robot
+    d.wait_for(healthy, HEAL_S, "healthy")
+    mark = last_id(d)
+    d.inject("hokuyo", "hang")
+    # /scan stops while the lidar's current stays in its band: found through the topic
+    st = d.wait_for(lambda s: s["observations"].get("ok(/scan)") is False, 10, "/scan silent")
+    assert st["observations"]["in_band(hokuyo)"] is True
+    d.wait_for(lambda s: healthy(s) and any(
+        a == "power_cycle" for a, _, _ in finished(actions_since(d, mark))), HEAL_S,
+        "hokuyo repaired")
+    done = finished(actions_since(d, mark))
+    assert ("power_cycle", ("hokuyo",), "succeeded") in done
+    assert ("start_node", ("hokuyo_node",), "succeeded") in done
+
+
+def test_an_overcurrent_trip_is_diagnosed_and_the_device_restored(
+        robot: tuple[RunningDaemon, Path]) -> None:
+    d, _ = robot
+    d.wait_for(healthy, HEAL_S, "healthy")
+    mark = last_id(d)
+    d.inject("laser_alignment", "overcurrent", "amps=5")  # 5x its 1 A rating: a short
+    d.wait_for(lambda s: any("laser_alignment" in b for b in bad_sets(s)), 10,
+               "laser_alignment diagnosed")
+    d.inject("clear")
+    d.wait_for(healthy, HEAL_S, "healthy again")
+    tripped = [e.payload for e in d.journal("observation") if e.id > mark
+               and isinstance(e.payload, Observation)
+               and e.payload.literal == "tripped(laser_alignment)" and e.payload.value]
+    assert tripped, "the trip was observed"
+
+
+def test_link_loss_is_blamed_on_the_link_and_nothing_is_switched(
+        robot: tuple[RunningDaemon, Path]) -> None:
+    d, _ = robot
+    d.wait_for(healthy, HEAL_S, "healthy")
+    mark = last_id(d)
+    d.inject("board", "link_disconnect")
+    st = d.wait_for(lambda s: bad_sets(s) == [{"board"}], 15, "the link diagnosed")
+    assert st["observations"].get("on(hokuyo)") is None  # unknown, not false
+    time.sleep(2.0)  # a repair would have started by now
+    assert not actions_since(d, mark)
+    d.inject("clear")
+    d.wait_for(lambda s: s["board_link_up"] and not s["diagnoses"], 30, "the link back")
+    assert not actions_since(d, mark)
+    notes = [e.payload.text for e in d.journal("note") if e.id > mark
+             and isinstance(e.payload, Note)]
+    assert any("link is down" in t for t in notes) or not any(
+        isinstance(e.payload, PlanRecord) for e in d.journal("plan") if e.id > mark)
+
+
+def test_a_permanent_hang_is_quarantined_and_the_rest_keeps_running(
+        robot: tuple[RunningDaemon, Path]) -> None:
+    d, _ = robot
+    d.wait_for(healthy, HEAL_S, "healthy")
+    mark = last_id(d)
+    d.inject("hokuyo", "hang", "permanent=true")
+    end = time.monotonic() + 120
+    while time.monotonic() < end:
+        notes = [e.payload.text for e in d.journal("note") if e.id > mark
+                 and isinstance(e.payload, Note)]
+        if any(t.startswith("quarantined") for t in notes):
+            break
+        time.sleep(0.5)
+    else:
+        raise AssertionError("nothing was quarantined")
+    cycles = [r for r in actions_since(d, mark)
+              if r.action == "power_cycle" and r.finished is not None]
+    assert 1 <= len(cycles) <= 3  # bounded: at most 3 attempts, then quarantine
+    time.sleep(3.0)
+    count = len(actions_since(d, mark))
+    time.sleep(3.0)
+    assert len(actions_since(d, mark)) == count  # no loop of repairs
+    st = d.status()
+    assert st["observations"]["ok(/odom)"] is True  # the base still works
+    assert st["observations"]["ok(/imu_data)"] is True

@@ -1,0 +1,201 @@
+"""The executor against the emulated board and real processes, effects seen by real observers.
+
+The paper's device-shut-down scenario (§VI-B) repaired for real; a node that dies at once
+retried, replanned and quarantined (not a loop); protected channels that stay on whatever a
+plan or a hand-written domain says; parallel steps with spaced switch-ons; a dry run that
+touches nothing.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from pathlib import Path
+
+import pytest
+
+from host.diagnosis.logic import parse_literal
+from host.journal.entries import ActionState
+from host.repair.actuators import Refused
+from host.repair.errors import NoPlanError
+from host.repair.executor import Outcome, StepReport
+from host.repair.limits import Quarantined
+from host.repair.loop import LoopOutcome, RepairLoop
+from host.repair.plan import Plan, Step
+from tests.executor.conftest import ODOM_NODE, TEDUSAR, Rig, robot_dir
+
+JAGUAR = 7
+PC = 2
+
+
+def reports(rig: Rig) -> list[StepReport]:
+    return [e for e in rig.events if isinstance(e, StepReport)]
+
+
+def final(rig: Rig) -> list[tuple[str, ActionState]]:
+    return [(str(e.step), e.state) for e in reports(rig) if e.state != ActionState.STARTED]
+
+
+async def test_jaguar_shut_down_is_repaired_for_real(tmp_path: Path, endpoint: str) -> None:
+    (tmp_path / "jaguar_node.py").write_text(ODOM_NODE)
+    robot = robot_dir(tmp_path, f"""\
+jaguar_node:
+  command: [python, {tmp_path / 'jaguar_node.py'}]
+  env: {{ENDPOINT: "{endpoint}", PYTHONPATH: "{TEDUSAR.parents[1]}"}}
+  settle_s: 1.0
+  stop_timeout_s: 2
+""")
+    async with Rig(robot, ["jaguar"], ["jaguar_node"], ["/odom"], endpoint) as rig:
+        # the robot works: the base is on, its driver runs and publishes odometry
+        await rig.client.switch(JAGUAR, True)
+        await rig.supervisor.start("jaguar_node")
+        first_pid = rig.supervisor.pid("jaguar_node")
+        await rig.until({"on(jaguar)": True, "in_band(jaguar)": True,
+                         "running(jaguar_node)": True, "ok(/odom)": True}, timeout=20)
+        # the fault: the base loses power
+        await rig.client.switch(JAGUAR, False)
+        await rig.until({"on(jaguar)": False})
+        loop = RepairLoop(rig.planner, rig.executor, rig.diagnose)
+        result = await loop.run()
+
+        assert result.outcome is LoopOutcome.HEALTHY, result
+        first = result.rounds[0]
+        assert first.choice is not None and first.choice.bad == {"jaguar"}
+        assert [str(s) for s in first.choice.plan.steps] == [
+            "power_up(jaguar)", "stop_node(jaguar_node)", "start_node(jaguar_node)"]
+        assert first.result is not None and first.result.outcome is Outcome.DONE
+        assert final(rig) == [("power_up(jaguar)", ActionState.SUCCEEDED),
+                              ("stop_node(jaguar_node)", ActionState.SUCCEEDED),
+                              ("start_node(jaguar_node)", ActionState.SUCCEEDED)]
+        # the effects really hold: the channel is on, a new driver process publishes
+        assert (await rig.client.state()).channels[JAGUAR].physical
+        assert rig.supervisor.pid("jaguar_node") not in (None, first_pid)
+        assert rig.beliefs.value("ok(/odom)") is True
+        done = [e for e in reports(rig) if e.state is ActionState.SUCCEEDED]
+        assert "observed ok(/odom), running(jaguar_node)" in done[-1].detail
+        rec = done[0].to_record()
+        assert rec.action == "power_up" and rec.args == ("jaguar",) and rec.plan_id == "repair-1"
+
+
+async def test_node_that_dies_at_once_is_replanned_then_quarantined(tmp_path: Path) -> None:
+    robot = robot_dir(tmp_path, """\
+jaguar_node:
+  command: [python, -c, "import sys; print('no device'); sys.exit(3)"]
+  settle_s: 0.3
+""")
+    async with Rig(robot, ["jaguar"], ["jaguar_node"]) as rig:
+        await rig.client.switch(JAGUAR, True)
+        await rig.until({"on(jaguar)": True, "running(jaguar_node)": False})
+        loop = RepairLoop(rig.planner, rig.executor, rig.diagnose)
+        result = await loop.run()
+
+        assert result.outcome is LoopOutcome.QUARANTINED, result
+        executed = [r.result for r in result.rounds if r.result is not None]
+        assert [r.outcome for r in executed] == [Outcome.FAILED] * 3
+        assert all(r.failed == Step(0, "start_node", ("jaguar_node",)) for r in executed)
+        assert "running(jaguar_node) false" in executed[0].reason
+        assert rig.starts("jaguar_node") == 3  # replanned twice, then no more
+        q = [e for e in rig.events if isinstance(e, Quarantined)]
+        assert [e.component for e in q] == ["jaguar_node"]
+        assert "3 repair attempts" in q[0].reason
+        assert rig.executor.quarantine.components == {"jaguar_node"}
+        # not a loop: asking again does nothing until a person clears it
+        again = await loop.run()
+        assert again.outcome is LoopOutcome.QUARANTINED and rig.starts("jaguar_node") == 3
+        blocked = await rig.executor.execute(result.rounds[0].choice.plan)  # type: ignore[union-attr]
+        assert blocked.outcome is Outcome.BLOCKED and rig.starts("jaguar_node") == 3
+        assert rig.executor.clear_quarantine("jaguar_node")
+        retried = await rig.executor.execute(result.rounds[0].choice.plan)  # type: ignore[union-attr]
+        assert retried.outcome is Outcome.FAILED and rig.starts("jaguar_node") == 4
+
+
+async def test_device_with_a_permanent_fault_is_quarantined_and_left_off(
+        tmp_path: Path) -> None:
+    robot = robot_dir(tmp_path, "{}\n")
+    async with Rig(robot, ["hokuyo"], [], max_attempts=2) as rig:
+        rig.board.emu.inject("hokuyo", "open_load", {})  # draws nothing: never in band
+        await rig.until({"on(hokuyo)": False})
+        plan = rig.planner.plan({"hokuyo"}, [parse_literal("~running(hokuyo_node)")])
+        assert [str(s) for s in plan.steps] == ["power_up(hokuyo)"]
+        r1 = await rig.executor.execute(plan, repairs={"hokuyo"})
+        assert r1.outcome is Outcome.FAILED and "in_band(hokuyo)" in r1.reason
+        await rig.client.switch("hokuyo", False)  # what the re-diagnosis would plan around
+        r2 = await rig.executor.execute(plan, repairs={"hokuyo"})
+        assert r2.outcome is Outcome.FAILED
+        assert [q.component for q in r2.quarantined] == ["hokuyo"]
+        assert r2.quarantined[0].safe_state == "shutdown(hokuyo)"
+        assert not (await rig.client.state()).channels[3].physical  # safe: off
+        r3 = await rig.executor.execute(plan, repairs={"hokuyo"})
+        assert r3.outcome is Outcome.BLOCKED
+
+
+UNGUARDED = (TEDUSAR / "repair.pddl").read_text().replace(
+    "(and (on ?h) (not (protected ?h)))", "(on ?h)").replace(
+    "(and (on ?h) (ab ?h) (not (protected ?h)))", "(and (on ?h) (ab ?h))")
+
+
+async def test_protected_channel_stays_on_whatever_the_plan(tmp_path: Path) -> None:
+    assert "protected ?h" not in UNGUARDED.split("(:action shutdown")[1].split("(:action")[0]
+    robot = robot_dir(tmp_path, "{}\n", domain=UNGUARDED)
+    async with Rig(robot, ["hokuyo"], []) as rig:
+        for _ in range(100):  # the board's power-up queue switches pc on after boot
+            if (await rig.client.state()).channels[PC].physical:
+                break
+            await asyncio.sleep(0.05)
+        assert (await rig.client.state()).channels[PC].physical
+        # a hand-written domain without the guard: the planner still will not switch pc off
+        with pytest.raises(NoPlanError, match="protected"):
+            rig.planner.plan({"channel2"}, [parse_literal("on(channel2)")])
+        # a hand-made plan that tries anyway: refused by the actuators, nothing sent
+        evil = Plan((Step(0, "shutdown", ("channel2",)), Step(1, "power_cycle", ("channel2",))),
+                    (frozenset(), frozenset()))
+        res = await rig.executor.execute(evil)
+        assert res.outcome is Outcome.FAILED and "protected" in res.reason
+        assert {e.state for e in reports(rig) if e.state != ActionState.STARTED} == {
+            ActionState.FAILED}
+        with pytest.raises(Refused, match="protected"):
+            await rig.actuators.shutdown("channel2")
+        # quarantine never switches a protected component off either
+        q = await rig.executor.quarantine_component("channel2", "test")
+        assert q.safe_state == "left as is: protected"
+        st = await rig.client.state()
+        assert st.channels[PC].physical and st.channels[PC].commanded
+
+
+async def test_independent_steps_run_in_parallel_with_spaced_switch_ons(
+        tmp_path: Path) -> None:
+    robot = robot_dir(tmp_path, "{}\n")
+    async with Rig(robot, ["hokuyo", "laser_alignment"], []) as rig:
+        await rig.until({"on(hokuyo)": False, "on(laser_alignment)": False})
+        plan = rig.planner.plan({"hokuyo", "laser_alignment"}, [
+            *rig.diagnoser.observations.literals(), parse_literal("~running(hokuyo_node)"),
+            parse_literal("~running(laser_alignment_node)")])
+        assert len(plan.layers()) == 1 and len(plan.steps) == 2
+        res = await rig.executor.execute(plan)
+        assert res.outcome is Outcome.DONE, res.reason
+        ends = {e.step.id: (e.started, e.finished) for e in reports(rig)
+                if e.state is ActionState.SUCCEEDED}
+        (s0, f0), (s1, f1) = ends[0], ends[1]
+        assert f0 is not None and f1 is not None
+        assert s0 < f1 and s1 < f0  # both ran at the same time
+        (t0, _), (t1, _) = rig.actuators.switch_ons
+        assert abs(t1 - t0) >= 0.2 - 1e-3  # but the board switched them on 0.2 s apart
+        st = await rig.client.state()
+        assert st.channels[1].physical and st.channels[3].physical
+
+
+async def test_dry_run_acts_on_nothing(tmp_path: Path) -> None:
+    robot = robot_dir(tmp_path, """\
+jaguar_node: {command: [python, -c, "import time; time.sleep(30)"]}
+""")
+    async with Rig(robot, ["jaguar"], ["jaguar_node"], dry_run=True) as rig:
+        await rig.until({"on(jaguar)": False})
+        loop = RepairLoop(rig.planner, rig.executor, rig.diagnose)
+        result = await loop.run()
+        assert result.rounds[0].result is not None
+        assert result.rounds[0].result.dry_run and result.rounds[0].result.ok
+        assert [str(e.step) for e in reports(rig) if e.state is ActionState.SUCCEEDED] == [
+            str(s) for s in result.rounds[0].choice.plan.steps]  # type: ignore[union-attr]
+        assert all("dry run" in e.detail for e in reports(rig) if e.finished is not None)
+        assert not (await rig.client.state()).channels[JAGUAR].physical
+        assert rig.supervisor.pid("jaguar_node") is None and rig.starts("jaguar_node") == 0
+        assert rig.actuators.switch_ons == []
