@@ -171,17 +171,20 @@ class Board:
         samples = self.samples
         hal.read_currents_ma(samples)  # type: ignore[attr-defined]
         total = 0
+        live = 0  # the current of channels still switched on after this step
         for ch in self.channels:
             ma = samples[ch.index]
             total += ma
             ch.step(now, ma, hal.read_switch(ch.index), dt)  # type: ignore[attr-defined]
+            if ch.state == ST_ON or ch.state == ST_INRUSH:
+                live += ma
         self.total_ma = total
         self.input_mv = hal.read_input_mv()  # type: ignore[attr-defined]
         if self.queue and now >= self.queue_at:
             self._run_queue(now)
         b = self.cfg["board"]
-        if b["total_limit_ma"]:
-            self._total_rule(now, total, b["total_limit_ma"])
+        if b["total_limit_ma"]:  # a channel that tripped in this step no longer counts
+            self._total_rule(now, live, b["total_limit_ma"])
         if b["uv_warn_mv"] or b["uv_shed_mv"] or b["uv_off_mv"]:
             self._uv_rule(now, self.input_mv, b)
         if b["deadman_ms"] and not self.flags & B_DEADMAN \

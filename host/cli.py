@@ -31,6 +31,7 @@ COMMANDS: dict[str, str] = {
     "board": "host.commands.board",
     "flash": "host.commands.flash",
     "emulate": "host.commands.emulate",
+    "experiment": "host.commands.experiment",
 }
 
 

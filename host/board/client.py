@@ -88,6 +88,7 @@ log = logging.getLogger(__name__)
 
 AUTH_CODES = (E_AUTH_REQUIRED, E_BAD_TAG, E_REPLAYED, E_NO_SESSION)
 QUEUE_LIMIT = 4096  # items a subscriber may fall behind before the oldest are dropped
+KEEPALIVE_S = 10.0  # PING period while connected (the board closes silent sessions at 30 s)
 UPTIME_SLACK_MS = 500  # uptime may lag the host's clock by this much (+5 %) without a reboot
 
 
@@ -153,7 +154,24 @@ class BoardClient(ActuateMixin, ConfigMixin):
         info = self._accept_hello(hello)
         self._reader = asyncio.create_task(self._read_loop(), name=f"board-reader {self.url}")
         self._up.set()
+        if not any(t.get_name() == "keepalive" for t in self._tasks):
+            self._spawn(self._keepalive(), name="keepalive")
         return info
+
+    async def _keepalive(self) -> None:
+        """PING every ``KEEPALIVE_S`` while connected (PROTOCOL.md §3): a board closes a
+        session that sent it nothing for 30 s, and a client that only listens to its
+        subscription would otherwise lose the link twice a minute."""
+        while not self._closing:
+            await asyncio.sleep(KEEPALIVE_S)
+            if not self.connected:
+                continue
+            try:
+                await self.ping()
+            except NotSupported:
+                return
+            except (BoardUnreachable, LinkLost, RequestTimeout, BoardRefused) as exc:
+                log.debug("%s: keepalive: %s", self.url, exc)  # the reader handles the link
 
     def _accept_hello(self, hello: Hello) -> BoardInfo:
         if hello.version != PROTOCOL_VERSION:
@@ -289,8 +307,8 @@ class BoardClient(ActuateMixin, ConfigMixin):
             return True
         return False
 
-    def _spawn(self, coro: Coroutine[Any, Any, None]) -> None:
-        task = asyncio.get_running_loop().create_task(coro)
+    def _spawn(self, coro: Coroutine[Any, Any, None], name: str | None = None) -> None:
+        task = asyncio.get_running_loop().create_task(coro, name=name)
         self._tasks.add(task)
         task.add_done_callback(self._tasks.discard)
 

@@ -29,7 +29,7 @@ import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from host.board import BoardClient
 from host.board.types import BoardEvent, BoardState, LinkDown, LinkUp, Reading, Rebooted
@@ -58,6 +58,9 @@ from protocol.constants import EVENT_NAMES, FAULT_NAMES, RESET_NAMES, STATE_NAME
 
 from .view import BoardView
 
+if TYPE_CHECKING:
+    from host.daemon.repairs import Repairs
+
 log = logging.getLogger(__name__)
 
 SOURCE = "daemon"
@@ -79,6 +82,7 @@ class DaemonOptions:
     max_count: int = 20
     time_budget_s: float = 0.5
     node_env: Mapping[str, str] = field(default_factory=dict)  # for the processes it starts
+    max_parallel_steps: int | None = None  # repair steps at once; None: as the plan allows
 
 
 def flag_names(mask: int, names: tuple[str, ...]) -> list[str]:
@@ -125,7 +129,7 @@ class Daemon:
         self._telemetry = TelemetryDownsampler(period_s=1.0)
         self._counters = {"observation_changes": 0, "diagnosis_runs": 0}
         self._latency_sum = 0.0
-        self.repairs: Any = None  # host.daemon.repairs.Repairs, built in run()
+        self.repairs: Repairs | None = None  # built in start()
 
     # --- the journal ------------------------------------------------------------------
 
@@ -159,7 +163,6 @@ class Daemon:
             ) from None
         await self.hub.start(self.source, self.observers_cfg.processes,
                              poll=self.observers_cfg.poll)
-        self.repairs.attach_watcher()
         self._tasks = [
             asyncio.ensure_future(self._board_task()),
             asyncio.ensure_future(self._diagnosis_task()),

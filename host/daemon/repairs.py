@@ -1,20 +1,23 @@
-"""Repairs: from a changed diagnosis to verified actions, one repair at a time, never on stale data.
+"""Repairs: from a changed diagnosis to verified actions, one repair at a time, never on stale
+data.
 
 ``Repairs`` is the daemon's bridge to ``host.repair``. It builds, from the robot directory, the
-planner (``repair.pddl``), the process supervisor (``processes:`` of ``system.yaml``; every
-node it starts gets ``DXBOARD_ZENOH`` — the daemon's topic endpoint — and, with
-``--emulate``, ``DXBOARD_DEVICES``), the actuators (board power through the daemon's
-``BoardClient``, nodes through the supervisor), the beliefs the executor waits on (fed with
-every observer update) and the ``RepairLoop``.
+planner (``repair.pddl``), the process supervisor (``processes:`` of ``system.yaml``; every node
+it starts gets ``DXBOARD_ZENOH`` — the daemon's topic endpoint — and, with ``--emulate``,
+``DXBOARD_DEVICES``), the actuators (board power through the daemon's ``BoardClient``, nodes
+through the supervisor), the beliefs the executor waits on (fed with every observer update) and
+the ``RepairLoop``.
 
-When a diagnosis changes and names broken components, a repair starts after a short debounce
-— unless the board link is down (then every board literal is unknown: nothing to act on), or
-a repair is already running (the running loop re-diagnoses after each plan, so it sees the
-change). The loop diagnoses, chooses, plans, executes with verified effects and repeats until
-healthy, bounded by the executor's attempt limiter and quarantine. Every plan, action and
-quarantine is journaled and shown on the page; with ``--dry-run`` plans are made and reported
-but nothing acts. Device settle times are their boot times, from the robot's
-``emulator.yaml`` (``boot_ms``, the real devices' figures) when it has one.
+When a diagnosis changes and names broken components, a repair starts after a short debounce —
+unless the board link is down (then every board literal is unknown: nothing to act on), or a
+repair is already running (the running loop re-diagnoses after each plan, so it sees the
+change). While the board's own protection has the channels (it sheds them for input under-
+voltage and restores them itself afterwards), repairs wait for it rather than fight it. The loop
+diagnoses, chooses, plans, executes with verified effects and repeats until healthy, bounded by
+the executor's attempt limiter and quarantine. Every plan, action and quarantine is journaled
+and shown on the page; with ``--dry-run`` plans are made and reported but nothing acts. Device
+settle times are their boot times, from the robot's ``emulator.yaml`` (``boot_ms``, the real
+devices' figures) when it has one.
 """
 
 from __future__ import annotations
@@ -42,6 +45,7 @@ from host.repair.loop import LoopOutcome, RepairLoop
 from host.repair.processes import load_processes
 from host.repair.supervisor import ProcessSupervisor
 from host.web.status import RepairStatus
+from protocol.constants import B_UV_OFF, B_UV_SHED, F_SHED_UV
 
 if TYPE_CHECKING:
     from host.daemon.core import Daemon
@@ -49,6 +53,7 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 RECENT_ACTIONS = 30
+BOARD_POLL_S = 0.5
 
 
 class Repairs:
@@ -71,7 +76,7 @@ class Repairs:
             self.actuators, self.beliefs,
             settle=settle_times(model, procs, devices=device_boot_s(opts.system_dir)),
             limiter=AttemptLimiter(3, 600.0), report=self._report, dry_run=opts.dry_run,
-            observable=observable, clock=daemon.clock)
+            observable=observable, clock=daemon.clock, max_parallel=opts.max_parallel_steps)
         self.loop = RepairLoop(self.planner, self.executor, self._diagnose,
                                on_plan=self._plan)
         self._pending: asyncio.Task[Any] | None = None
@@ -80,9 +85,6 @@ class Repairs:
         self._outcomes: Counter[str] = Counter()
 
     # --- wiring -------------------------------------------------------------------------
-
-    def attach_watcher(self) -> None:
-        """Nodes already started (none at boot) are tracked once the hub's watcher runs."""
 
     def _started(self, node: str, pid: int) -> None:
         watcher = self.daemon.hub.watcher
@@ -116,7 +118,34 @@ class Repairs:
             return
         self._running = asyncio.ensure_future(self._repair())
 
+    async def _board_busy(self) -> str:
+        """Why the board's own protection has the channels now (empty: it has not).
+
+        Under input under-voltage the board sheds channels, refuses to switch them on and
+        restores them itself, spaced, once the voltage is back: a repair would fight it and
+        spend the devices' attempts on refusals. So repairs wait until the board is done."""
+        client = self.daemon.client
+        if client is None:
+            return "the board link is down"
+        state = await client.state()
+        if state.board_flags & (B_UV_SHED | B_UV_OFF):
+            return "the board sheds channels for input under-voltage"
+        shed = [c.name for c in state.channels if c.live_faults & F_SHED_UV]
+        if shed:
+            return f"the board is restoring {', '.join(shed)} after an under-voltage"
+        return ""
+
+    async def _wait_for_board(self) -> None:
+        """Wait (noting why, once) while the board's own protection has the channels."""
+        said = ""
+        while reason := await self._board_busy():
+            if reason != said:
+                self.daemon.record(Note(f"repairs wait: {reason}"))
+                said = reason
+            await asyncio.sleep(BOARD_POLL_S)
+
     async def _repair(self) -> None:
+        await self._wait_for_board()
         self.actuators.board = self.daemon.client
         res = await self.loop.run()
         self._outcomes[str(res.outcome)] += 1
@@ -130,6 +159,7 @@ class Repairs:
         if not self.daemon.link_up:  # board literals are unknown: only the link is to blame
             link = Candidate(frozenset({self.daemon.model.board or "board"}), 1.0)
             return [link], self.daemon.diagnoser.observations.literals()
+        await self._wait_for_board()
         result = self.daemon.diagnose("repair")
         cands = [Candidate(frozenset(d.bad), d.probability) for d in result.diagnoses]
         return cands, self.daemon.diagnoser.observations.literals()

@@ -3,7 +3,8 @@
 Build one per context (the robot's hardware/software model now; later one per layer of a
 hierarchy, over any propositions)::
 
-    d = Diagnoser(theory)               # algorithm: "cardinality" | "maxsat" | "hitting-set"
+    d = Diagnoser(theory)   # or algorithm= "cardinality" | "top-level" | "maxsat" |
+                            # "hitting-set"; the default "auto" picks by size (search.py)
     d.observe("~on(jaguar)", now=12.5, source="hobs", validity=3.0)   # S ⊕ o
     d.expire(now=20.0)                           # silent observers' literals become unknown
     result = d.diagnose(max_card=5, max_count=100, time_budget_s=0.5)

@@ -15,11 +15,15 @@ from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
 
 from pysat.card import ITotalizer  # type: ignore[import-untyped]
 from pysat.solvers import Solver  # type: ignore[import-untyped]
 
 from host.diagnosis.logic import Literal, Theory, ab
+from host.diagnosis.structure import Structure, infer_structure
 
 
 class _Watchdog:
@@ -28,6 +32,7 @@ class _Watchdog:
 
     def __init__(self, solver: Solver) -> None:
         self._solver = solver
+        self._target: Any = solver  # what gets interrupted: the solver, or a MaxSAT run
         self._cv = threading.Condition()
         self._deadline: float | None = None
         self._closed = False
@@ -41,6 +46,11 @@ class _Watchdog:
                                                 name="diagnosis-watchdog")
                 self._thread.start()
             self._cv.notify()
+
+    def retarget(self, target: Any) -> None:
+        """Interrupt ``target`` (anything with ``interrupt()``; None: the solver) from now on."""
+        with self._cv:
+            self._target = self._solver if target is None else target
 
     def disarm(self) -> None:
         with self._cv:  # after this no interrupt can come for the finished run
@@ -62,7 +72,7 @@ class _Watchdog:
                     continue
                 remaining = self._deadline - time.perf_counter()
                 if remaining <= 0:
-                    self._solver.interrupt()
+                    self._target.interrupt()
                     self._deadline = None
                 else:
                     self._cv.wait(remaining)
@@ -84,6 +94,8 @@ class SatContext:
         self._deadline: float | None = None
         self._watchdog = _Watchdog(self.solver)
         self.calls = 0
+        self._structure: Structure | bool | None = False  # False: not inferred yet
+        self._atom_of: dict[int, str] | None = None
 
     # -- variables -------------------------------------------------------------------------
     def var(self, atom: str) -> int:
@@ -100,6 +112,19 @@ class SatContext:
     def lit(self, literal: Literal) -> int:
         v = self.var(literal.atom)
         return v if literal.positive else -v
+
+    def atom_of(self, lit: int) -> str | None:
+        """The atom of a solver literal (None for auxiliary variables)."""
+        if self._atom_of is None or len(self._atom_of) != len(self.vars):
+            self._atom_of = {v: a for a, v in self.vars.items()}
+        return self._atom_of.get(abs(lit))
+
+    def structure(self) -> Structure | None:
+        """The theory's circuit structure (``structure.infer_structure``), inferred once."""
+        if self._structure is False:
+            self._structure = infer_structure(self.theory)
+        assert not isinstance(self._structure, bool)
+        return self._structure
 
     # -- runs, bounds and budget -----------------------------------------------------------
     def new_run(self) -> int:
@@ -138,6 +163,35 @@ class SatContext:
             self._watchdog.disarm()
             self.solver.clear_interrupt()
         self._deadline = None
+
+    @contextmanager
+    def interrupting(self, target: Any) -> Iterator[None]:
+        """While inside, the budget interrupts ``target`` (e.g. an RC2 run) instead."""
+        self._watchdog.retarget(target)
+        try:
+            yield
+        finally:
+            self._watchdog.retarget(None)
+
+    @contextmanager
+    def sub_budget(self, seconds: float) -> Iterator[None]:
+        """Inside, the deadline is at most ``seconds`` away; the previous one comes back on
+        exit."""
+        saved = self._deadline
+        now = time.perf_counter()
+        self.start_budget(seconds if saved is None else min(seconds, saved - now))
+        try:
+            yield
+        finally:
+            self.stop_budget()
+            if saved is not None:
+                self._deadline = saved
+                if self._interruptible:
+                    self._watchdog.arm(saved)
+
+    def remaining(self) -> float | None:
+        """Seconds left of the budget (None: no budget)."""
+        return None if self._deadline is None else self._deadline - time.perf_counter()
 
     def out_of_time(self) -> bool:
         return self._deadline is not None and time.perf_counter() >= self._deadline

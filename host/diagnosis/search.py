@@ -20,7 +20,24 @@ any diagnosis exists at all).
   with all other components assumed healthy; an unsatisfiable core over those assumptions is a
   new conflict. Suits models with few, small conflicts.
 
-Both are cross-checked against brute force in ``tests/diagnosis``.
+- ``top-level`` (minimal-cardinality requests; others go to ``cardinality``): when the theory
+  has circuit structure (``structure.infer_structure``: weak fault model, acyclic, total
+  component behaviours), only the *top-level* components (not dominated on their way to the
+  observed atoms) can be needed for the minimum, so RC2 (Glucose 3, ``exhaust``, soft clauses
+  in topological order, which lets the assumptions propagate forward like a simulation) finds
+  the minimum over those alone; the other diagnoses of that size come from ``cardinality``
+  enumeration over all components. Without structure, RC2 runs over all components. Each
+  call builds its RC2 afresh (observations are hard clauses); the budget interrupts it.
+- ``auto`` (default): ``cardinality``, except minimal-cardinality requests on models of at
+  least ``AUTO_FROM`` (500) components: straight to ``top-level`` when at least
+  ``TOP_LEVEL_DIRECT`` (1000) components are top-level, else ``cardinality`` for
+  ``AUTO_SLICE_S`` (20 ms) and then ``top-level`` if that did not settle it. Measured on
+  ISCAS-85 (benchmarks/RESULTS.md): ``cardinality`` is the faster one where the totalizer
+  bound's UNSAT proofs are easy (every circuit but c6288, and small models), ``top-level``
+  where they are not (c6288, minimum cardinality 4-5: seconds to minutes for ``cardinality``).
+  Robot-model re-diagnosis (no ``min_card_only``) is plain ``cardinality``.
+
+All are cross-checked against brute force in ``tests/diagnosis``.
 """
 
 from __future__ import annotations
@@ -206,9 +223,118 @@ def hitting_set_search(
         hitman.delete()
 
 
+def _top_level(ctx: SatContext, obs: list[int]) -> list[int]:
+    """The top-level components under these observations (all components when the theory
+    has no circuit structure), in topological order (inputs first) if known."""
+    structure = ctx.structure()
+    if structure is None:
+        return list(range(len(ctx.ab_vars)))
+    top = structure.top_level({a for a in map(ctx.atom_of, obs) if a is not None})
+    return [c for c in structure.order if c in top]
+
+
+def top_level_search(
+    ctx: SatContext,
+    obs: list[int],
+    max_card: int | None,
+    max_count: int | None,
+    min_card_only: bool = False,
+) -> SearchOutcome:
+    """Minimal-cardinality diagnoses: the minimum by core-guided MaxSAT over the top-level
+    (undominated) components only, then the other diagnoses of that size by ``cardinality``
+    enumeration over all components. Other requests go to ``cardinality_search``."""
+    if not min_card_only:
+        return cardinality_search(ctx, obs, max_card, max_count, min_card_only)
+    out = SearchOutcome([])
+    order = _top_level(ctx, obs)
+    wcnf = WCNF()
+    for clause in ctx.theory.clauses:
+        wcnf.append([ctx.lit(lit) for lit in clause.lits])
+    for lit in obs:
+        wcnf.append([lit])
+    keep = set(order)
+    for i, v in enumerate(ctx.ab_vars):
+        if i not in keep:
+            wcnf.append([-v])
+    for i in order:  # the order matters: inputs-first lets assumptions propagate forward
+        wcnf.append([-ctx.ab_vars[i]], weight=1)
+    if ctx.out_of_time():
+        out.cut_by = Bound.TIME_BUDGET
+        return out
+    with RC2(wcnf, solver="g3", exhaust=True) as rc2, ctx.interrupting(rc2):
+        ctx.calls += 1
+        model = rc2.compute(expect_interrupt=True)
+        interrupted = rc2.interrupted
+        k = rc2.cost
+    if model is None:
+        if interrupted:
+            out.cut_by = Bound.TIME_BUDGET
+        else:  # a diagnosis maps onto a top-level one: none there, none at all
+            out.explainable = False
+        return out
+    if max_card is not None and k > max_card:
+        out.cut_by = Bound.MAX_CARD
+        return out
+    true = {lit for lit in model if lit > 0}
+    first = frozenset(i for i, v in enumerate(ctx.ab_vars) if v in true)
+    out.bad_sets.append(first)
+    act = ctx.new_run()
+    base = [*obs, act]
+    try:
+        ctx.solver.add_clause([-ctx.ab_vars[i] for i in first] + [-act])
+        bound = ctx.at_most(k)
+        while True:  # the other diagnoses of size k, with all components
+            if max_count is not None and len(out.bad_sets) >= max_count:
+                out.cut_by = Bound.MAX_COUNT
+                return out
+            r = ctx.solve(base + bound)
+            if r is None:
+                out.cut_by = Bound.TIME_BUDGET
+                return out
+            if not r:
+                return out
+            bad = ctx.model_bad()
+            out.bad_sets.append(bad)
+            ctx.solver.add_clause([-ctx.ab_vars[i] for i in bad] + [-act])
+    finally:
+        ctx.end_run(act)
+
+
+#: ``auto``: from this many components, a minimal-cardinality request goes to ``top-level``
+#: at once when at least ``TOP_LEVEL_DIRECT`` components are top-level (the reduction left a
+#: big search, as on the c6288 multiplier), else it first gets ``AUTO_SLICE_S`` of
+#: ``cardinality`` and then, if that did not settle it, ``top-level``.
+AUTO_FROM = 500
+AUTO_SLICE_S = 0.02
+TOP_LEVEL_DIRECT = 1000
+
+
+def auto_search(
+    ctx: SatContext,
+    obs: list[int],
+    max_card: int | None,
+    max_count: int | None,
+    min_card_only: bool = False,
+) -> SearchOutcome:
+    """``cardinality``, except for minimal-cardinality requests on models of at least
+    ``AUTO_FROM`` components that it does not answer within ``AUTO_SLICE_S``: those go on
+    with ``top-level`` (the slice's work is dropped; both are exact)."""
+    if not min_card_only or len(ctx.ab_vars) < AUTO_FROM:
+        return cardinality_search(ctx, obs, max_card, max_count, min_card_only)
+    if len(_top_level(ctx, obs)) >= TOP_LEVEL_DIRECT:
+        return top_level_search(ctx, obs, max_card, max_count, min_card_only)
+    with ctx.sub_budget(AUTO_SLICE_S):
+        out = cardinality_search(ctx, obs, max_card, max_count, min_card_only)
+    if out.cut_by is not Bound.TIME_BUDGET or ctx.out_of_time():
+        return out
+    return top_level_search(ctx, obs, max_card, max_count, min_card_only)
+
+
 ALGORITHMS: dict[str, Search] = {
+    "auto": auto_search,
     "cardinality": cardinality_search,
     "hitting-set": hitting_set_search,
     "maxsat": maxsat_search,
+    "top-level": top_level_search,
 }
-DEFAULT_ALGORITHM = "cardinality"
+DEFAULT_ALGORITHM = "auto"

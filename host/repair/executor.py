@@ -2,7 +2,8 @@
 
 ``Executor.execute(plan)`` runs the plan's steps as its partial order allows: every step whose
 predecessors are done starts at once, so independent steps run in parallel (the actuators
-still space switch-ons on the board). Each step:
+still space switch-ons on the board); ``max_parallel=1`` runs them one at a time, in the
+plan's order (``dxboard experiment`` compares the two). Each step:
 
 1. is checked (a protected component is never switched off; an action without actuator is
    refused) and reported ``started``;
@@ -117,7 +118,8 @@ class Executor:
                  limiter: AttemptLimiter | None = None, report: Reporter | None = None,
                  dry_run: bool = False, step_timeout: float = DEFAULT_STEP_TIMEOUT_S,
                  verify_s: float = DEFAULT_VERIFY_S, observable: Collection[str] | None = None,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic,
+                 max_parallel: int | None = None) -> None:
         self.actuators = actuators
         self.model = actuators.model
         self.beliefs = beliefs
@@ -130,6 +132,7 @@ class Executor:
         self.verify_s = verify_s
         self.observable = observable
         self.clock = clock
+        self.max_parallel = max_parallel  # steps running at once; None: as the order allows
         self._busy: set[str] = set()
         self._ids = itertools.count(1)
 
@@ -192,6 +195,8 @@ class Executor:
             while True:
                 if failure is None:
                     for s in plan.ready({d.id for d in done}, started):
+                        if self.max_parallel is not None and len(tasks) >= self.max_parallel:
+                            break
                         started.add(s.id)
                         task = asyncio.get_running_loop().create_task(
                             self._step(s, plan_id), name=f"step:{s}")

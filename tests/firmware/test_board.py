@@ -21,6 +21,7 @@ from protocol.constants import (
     ST_INRUSH,
     ST_OFF,
     ST_ON,
+    ST_TRIPPED,
 )
 from tests.firmware.testhal import Rig
 
@@ -83,6 +84,21 @@ class TotalLimitTest(unittest.TestCase):
         self.assertTrue(r.board.channels[2].live & F_SHED_TOTAL)
         self.assertFalse(r.board.flags & B_OVER_TOTAL)
         self.assertTrue(r.board.channel_status(2)[0])  # still wanted on
+
+    def test_a_short_trips_its_channel_and_sheds_nothing_else(self):
+        # A short far above the total limit trips its own channel; the channels that stay on
+        # are within the limit, so none of them may be shed for the short's current.
+        chans = {i: {"powerup": True, "priority": 10 * i, "rated_ma": 1000} for i in range(3)}
+        r = Rig(channels=chans, board={"total_limit_ma": 5000, "powerup_spacing_ms": 0})
+        for i in range(3):
+            r.hal.load_ma[i] = 700
+        r.run(300)
+        r.events()
+        r.hal.load_ma[1] = 40000
+        r.run(100)
+        self.assertEqual(r.state(1), ST_TRIPPED)
+        self.assertEqual([r.state(0), r.state(2)], [ST_ON, ST_ON])
+        self.assertEqual([e for e in r.events() if e[1] == EV_SHED], [])
 
 
 UV_BOARD = {"uv_warn_mv": 21000, "uv_shed_mv": 20000, "uv_off_mv": 19000, "uv_hyst_mv": 500,

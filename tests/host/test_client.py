@@ -201,3 +201,17 @@ async def test_withheld_measurements_show_as_missed() -> None:
                     break
         assert [r.seq for r in got] == [1, 2, 3, 8, 9, 10]
         assert [r.missed for r in got] == [0, 0, 0, 4, 0, 0]
+
+
+async def test_a_listening_client_keeps_its_session_alive(monkeypatch: pytest.MonkeyPatch) -> None:
+    # A client that only listens to its subscription still PINGs (the board closes sessions
+    # that sent nothing for 30 s, and PING feeds its host dead-man timer).
+    import host.board.client as client_module
+
+    monkeypatch.setattr(client_module, "KEEPALIVE_S", 0.1)
+    async with MemoryBoard(tedusar()) as mb, BoardClient(mb.url, KEY) as c:
+        board = mb.emu.board
+        before = board.host_ms
+        items = await readings(c, 50)
+        assert sum(isinstance(x, Reading) for x in items) >= 50
+        assert board.host_ms > before + 200  # pings arrived while it only listened

@@ -1,0 +1,176 @@
+"""The virtual robot and the daemon in this process, for experiments and the fault campaign.
+
+``RobotSession(system_dir, journal)`` is an async context manager: on entry it starts the
+robot's emulated board and devices as a child process (``EmulatedBoard``, exactly as ``dxboard
+run --emulate`` does) and a ``Daemon`` on a free zenoh port, without a web page, journaling to
+``journal``; on exit it stops the daemon (and the nodes it started), then the emulator. The
+daemon runs in this process so that an experiment reads its state directly (is it healthy,
+is a repair running) and its clock is the journal's; the board and the devices stay behind
+their process boundary, as on a real robot.
+
+``t0`` is the daemon's start on its monotonic clock; every time an experiment reports is
+seconds since ``t0`` (or since a mark it takes). ``switch`` acts as an operator with the
+board's key would (``dxboard board URL off CH``); ``inject`` and ``clear`` are ``dxboard
+inject`` on the control endpoint.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import time
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+from host.board import BoardClient
+from host.daemon.core import Daemon, DaemonOptions
+from host.daemon.emulated import EmulatedBoard
+from host.errors import UserError
+from host.experiment.robot import free_port
+from host.journal import Entry, JournalReader
+
+
+class RobotSession:
+    def __init__(self, system_dir: Path, journal: Path, *, max_parallel: int | None = None,
+                 debounce_s: float = 0.5) -> None:
+        self.system_dir = system_dir
+        self.journal_path = journal
+        self.max_parallel = max_parallel
+        self.debounce_s = debounce_s
+        self.emulated: EmulatedBoard | None = None
+        self._daemon: Daemon | None = None
+        self._runner: asyncio.Task[None] | None = None
+        self.t0 = 0.0
+
+    @property
+    def daemon(self) -> Daemon:
+        if self._daemon is None:
+            raise RuntimeError("the session is not running")
+        return self._daemon
+
+    async def __aenter__(self) -> RobotSession:
+        extra = ("--robot",) if (self.system_dir / "robot.yaml").is_file() else ()
+        self.emulated = await EmulatedBoard.start(self.system_dir, "127.0.0.1:0", extra)
+        try:
+            opts = DaemonOptions(
+                system_dir=self.system_dir, board_url=self.emulated.board_url,
+                key=self.emulated.key, web=None, journal=self.journal_path,
+                zenoh_listen=[f"tcp/127.0.0.1:{free_port()}"],
+                node_env={"DXBOARD_DEVICES": json.dumps(self.emulated.devices)},
+                repair_debounce_s=self.debounce_s, max_parallel_steps=self.max_parallel)
+            self._daemon = Daemon(opts)
+            self.t0 = self._daemon.clock()
+            await self._daemon.start()
+            self._runner = asyncio.ensure_future(self._daemon.wait())
+        except BaseException:
+            await self._close()
+            raise
+        return self
+
+    async def __aexit__(self, exc_type: type[BaseException] | None,
+                        exc: BaseException | None, tb: TracebackType | None) -> None:
+        await self._close()
+
+    async def _close(self) -> None:
+        try:
+            if self._daemon is not None:
+                self._daemon.stop()
+                if self._runner is not None:
+                    self._runner.cancel()
+                    with contextlib.suppress(asyncio.CancelledError):
+                        await self._runner
+                await self._daemon.close()
+        finally:
+            if self.emulated is not None:
+                await self.emulated.stop()
+                self.emulated = None
+
+    # --- state ------------------------------------------------------------------------------
+
+    def now(self) -> float:
+        """Seconds since the daemon started."""
+        return self.daemon.clock() - self.t0
+
+    def check(self) -> None:
+        """Raise what made the daemon stop, if it did."""
+        if self._runner is not None and self._runner.done():
+            self._runner.result()
+            raise UserError("the daemon stopped by itself")
+
+    def repairing(self) -> bool:
+        r = self.daemon.repairs
+        return r is not None and (r.busy or (r._pending is not None and not r._pending.done()))
+
+    def healthy(self) -> bool:
+        """The board is heard, nothing is diagnosed abnormal and no repair is running."""
+        d = self.daemon
+        return d.link_up and d.healthy() and not self.repairing()
+
+    async def wait_healthy(self, timeout_s: float, hold_s: float = 1.0) -> bool:
+        """Wait until healthy for ``hold_s`` without a break; False on timeout."""
+        end = time.monotonic() + timeout_s
+        since: float | None = None
+        while time.monotonic() < end:
+            self.check()
+            if self.healthy():
+                since = since if since is not None else time.monotonic()
+                if time.monotonic() - since >= hold_s:
+                    return True
+            else:
+                since = None
+            await asyncio.sleep(0.1)
+        return False
+
+    async def wait_unhealthy(self, timeout_s: float) -> bool:
+        """Wait until something is diagnosed abnormal (or a repair starts); False on timeout."""
+        end = time.monotonic() + timeout_s
+        while time.monotonic() < end:
+            self.check()
+            if not self.healthy():
+                return True
+            await asyncio.sleep(0.05)
+        return False
+
+    async def entries(self, after_id: int = 0) -> list[Entry]:
+        """The journal so far (everything the daemon recorded, flushed first)."""
+        if self.daemon.journal is not None:
+            await self.daemon.journal.flush()
+        with JournalReader(self.journal_path) as reader:
+            return reader.query(after_id=after_id)
+
+    async def last_id(self) -> int:
+        got = await self.entries()
+        return got[-1].id if got else 0
+
+    # --- acting on the robot ------------------------------------------------------------------
+
+    async def switch(self, channel: str, on: bool) -> None:
+        """Switch a channel as an operator with the key would."""
+        assert self.emulated is not None
+        async with BoardClient(self.emulated.board_url, self.emulated.key) as client:
+            await client.switch(channel, on)
+
+    async def inject(self, channel: str, fault: str, params: dict[str, Any] | None = None) -> None:
+        await self.control({"op": "inject", "channel": channel, "fault": fault,
+                             "params": params or {}})
+
+    async def clear(self) -> None:
+        await self.control({"op": "clear"})
+
+    async def control(self, req: dict[str, Any]) -> None:
+        from host.commands.inject import request
+
+        assert self.emulated is not None
+        await asyncio.to_thread(request, self.emulated.control_url, req)
+
+    def forgive(self) -> None:
+        """A person clears every quarantine and the attempt counts (between campaign faults)."""
+        r = self.daemon.repairs
+        if r is None:
+            return
+        for c in list(r.executor.quarantine.components):
+            r.executor.clear_quarantine(c)
+        for c in self.daemon.model.components:
+            r.executor.limiter.reset(c)

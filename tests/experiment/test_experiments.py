@@ -1,0 +1,126 @@
+"""``dxboard experiment`` end to end: both of paper 000's experiments through the real command
+(a subprocess, ``--fast`` boot times), then ``dxboard report`` on each experiment's journal.
+
+Power-up (§VI-A): the first diagnosis is the paper's 11 abnormal components, the plan powers
+each device before starting its driver (and the driver starts only after the power-up is
+verified), both runs end all-normal, and the one-at-a-time run never overlaps two steps while
+the parallel one does. Device shut-down (§VI-B): {jaguar} is diagnosed, the repair is the
+paper's power_up(jaguar), stop_node(jaguar_node), start_node(jaguar_node), and the robot ends
+all-normal. No assertion is about speed.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from host.journal import DiagnosisRecord, JournalReader
+
+ROOT = Path(__file__).resolve().parents[2]
+PAPER_11 = {"jaguar", "hokuyo", "laser_alignment", "laser_alignment_node",
+            "laser_alignment_control", "hector_mapping", "jaguar_node", "hokuyo_node",
+            "imu_node", "jaguar_teleop_node", "joy_node"}
+DRIVERS = {"jaguar": "jaguar_node", "hokuyo": "hokuyo_node",
+           "laser_alignment": "laser_alignment_node"}
+
+
+def experiment(which: str, journal: Path) -> dict[str, Any]:
+    out = subprocess.run(
+        [sys.executable, "-m", "host.cli", "experiment", which, "models/tedusar", "--fast",
+         "--json", "--journal", str(journal), "--timeout", "90"],
+        cwd=ROOT, capture_output=True, text=True, timeout=240)
+    assert out.returncode == 0, out.stderr[-3000:]
+    data: dict[str, Any] = json.loads(out.stdout)
+    return data
+
+
+def last_diagnosis_normal(journal: Path) -> bool:
+    with JournalReader(journal) as r:
+        diags = [e.payload for e in r.query(kind="diagnosis")
+                 if isinstance(e.payload, DiagnosisRecord)]
+    assert diags, f"{journal}: no diagnosis journaled"
+    return all(not d for d in diags[-1].diagnoses)
+
+
+@pytest.fixture(scope="module")
+def power_up(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Any], Path]:
+    journal = tmp_path_factory.mktemp("power-up") / "power-up.sqlite"
+    return experiment("power-up", journal), journal
+
+
+@pytest.fixture(scope="module")
+def shutdown(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Any], Path]:
+    journal = tmp_path_factory.mktemp("shutdown") / "shutdown.sqlite"
+    return experiment("device-shutdown", journal), journal
+
+
+def overlapping(actions: list[dict[str, Any]]) -> bool:
+    spans = sorted((a["start_s"], a["end_s"]) for a in actions)
+    return any(b[0] < a[1] for a, b in itertools.pairwise(spans))
+
+
+def test_power_up_diagnoses_the_papers_11_and_powers_before_drivers(
+        power_up: tuple[dict[str, Any], Path]) -> None:
+    data, journal = power_up
+    assert data["experiment"] == "power-up" and data["paper_s"] == 30.2
+    assert set(data["runs"]) == {"parallel", "sequential"}
+    for label, run in data["runs"].items():
+        assert set(run["first_diagnosis"]) == PAPER_11, label
+        plan = run["plan"]
+        for dev, node in DRIVERS.items():
+            assert plan.index(f"power_up({dev})") < plan.index(f"start_node({node})"), label
+        assert {p.split("(")[0] for p in plan} <= {"power_up", "start_node"}, label
+        acts = run["actions"]
+        assert acts and all(a["state"] == "succeeded" for a in acts), label
+        up_end = {a["args"][0]: a["end_s"] for a in acts if a["action"] == "power_up"}
+        starts = {a["args"][0]: a["start_s"] for a in acts if a["action"] == "start_node"}
+        assert set(up_end) == set(DRIVERS), label
+        for dev, node in DRIVERS.items():
+            assert starts[node] >= up_end[dev], f"{label}: {node} started before {dev} was up"
+        assert run["time_to_healthy_s"] is not None and run["repair_s"] is not None, label
+    assert overlapping(data["runs"]["parallel"]["actions"])
+    assert not overlapping(data["runs"]["sequential"]["actions"])
+    assert data["parallel_vs_sequential"] is not None
+    assert data["first_diagnosis"] == data["runs"]["parallel"]["first_diagnosis"]
+    assert last_diagnosis_normal(journal)
+    assert last_diagnosis_normal(journal.with_name("power-up-sequential.sqlite"))
+
+
+def test_device_shutdown_is_repaired_with_the_papers_plan(
+        shutdown: tuple[dict[str, Any], Path]) -> None:
+    data, journal = shutdown
+    assert data["experiment"] == "device-shutdown" and data["device"] == "jaguar"
+    assert data["first_diagnosis"] == ["jaguar"]
+    assert data["plan"] == ["power_up(jaguar)", "stop_node(jaguar_node)",
+                            "start_node(jaguar_node)"]
+    assert [(a["action"], a["args"], a["state"]) for a in data["actions"]] == [
+        ("power_up", ["jaguar"], "succeeded"), ("stop_node", ["jaguar_node"], "succeeded"),
+        ("start_node", ["jaguar_node"], "succeeded")]
+    assert data["detected_s"] is not None and data["time_to_healthy_s"] is not None
+    assert data["detected_s"] <= data["diagnosis_s"] <= data["actions"][0]["start_s"]
+    assert last_diagnosis_normal(journal)
+
+
+@pytest.mark.parametrize("which", ["power_up", "shutdown"])
+def test_report_draws_each_experiments_journal(which: str, request: pytest.FixtureRequest,
+                                               tmp_path: Path) -> None:
+    _, journal = request.getfixturevalue(which)
+    png = tmp_path / f"{which}.png"
+    out = subprocess.run(
+        [sys.executable, "-m", "host.cli", "report", str(journal), "-o", str(png),
+         "--model", "models/tedusar"], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_a_directory_without_a_robot_is_a_one_line_error(tmp_path: Path) -> None:
+    out = subprocess.run([sys.executable, "-m", "host.cli", "experiment", "power-up",
+                          str(tmp_path)], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert out.returncode == 2
+    assert out.stderr.strip().count("\n") == 0 and "no system.yaml" in out.stderr

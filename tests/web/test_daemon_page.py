@@ -1,0 +1,77 @@
+"""The page of a real ``dxboard run --emulate`` in real headless Chromium.
+
+The daemon runs as a subprocess on the virtual TEDUSAR robot (``tests.daemon.runner``,
+short device boot times); Chromium (Debian's package, ``tests/web/chromium.py``) opens the
+address it prints. The page loads, shows the board's ten channels by name, and follows the
+robot live: after the power-up it shows the PC and the devices on; when the lidar is hung
+with ``dxboard inject ... hokuyo hang`` the diagnosis panel names it (or its driver) and the
+repairs panel shows the power cycle that cures it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from tests.daemon.runner import RunningDaemon, fast_copy
+from tests.web.chromium import Chromium
+
+NAMES = ["sensor_head", "laser_alignment", "pc", "hokuyo", "kinect", "router",
+         "thermal_camera", "jaguar", "spare8", "spare9"]
+CHANNEL_STATE = "document.querySelector('[data-channel-id=\"{}\"]')?.dataset.state"
+# every chip and repair row the page ever showed, sampled every 20 ms (they come and go)
+WATCH = """
+window.seenChips = new Set(); window.seenRepairs = new Set();
+setInterval(() => {
+  document.querySelectorAll('#diagnoses .chip').forEach(c => seenChips.add(c.textContent));
+  document.querySelectorAll('#repairs .repair').forEach(r =>
+    seenRepairs.add(r.querySelector('.what').textContent + ' ' + r.dataset.state));
+}, 20); true
+"""
+
+
+@pytest.fixture(scope="module")
+def daemon(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RunningDaemon]:
+    tmp = tmp_path_factory.mktemp("page")
+    d = RunningDaemon(tmp, fast_copy(tmp))
+    try:
+        yield d
+    finally:
+        d.close()
+
+
+def healthy(s: dict[str, Any]) -> bool:
+    return bool(s["board_link_up"]) and not s["diagnoses"] and bool(s["repairs"]) and all(
+        r["state"] in ("succeeded", "failed", "timeout") for r in s["repairs"])
+
+
+async def test_the_daemon_page_shows_the_robot_and_a_fault(daemon: RunningDaemon,
+                                                           tmp_path: Path) -> None:
+    await asyncio.to_thread(daemon.wait_for, healthy, 90.0, "the robot up and healthy")
+    async with Chromium.launch(daemon.urls["web"]) as page:
+        assert await page.wait_for("document.querySelectorAll('.channel').length", 30) == 10
+        names = await page.evaluate(
+            "[...document.querySelectorAll('.channel .name')].map(e => e.textContent)")
+        assert names == NAMES
+        for ch in (2, 3, 7):  # the PC and the devices the daemon powered up
+            assert await page.wait_for(f"{CHANNEL_STATE.format(ch)} === 'on'", 30)
+        assert await page.wait_for("document.querySelector('#diagnoses .muted')"
+                                   "?.textContent === 'none'", 30)
+        assert await page.evaluate(
+            "[...document.querySelectorAll('#repairs .what')].some(e =>"
+            " e.textContent === 'power_up(hokuyo)')")
+        await page.evaluate(WATCH)
+
+        await asyncio.to_thread(daemon.inject, "hokuyo", "hang")
+        assert await page.wait_for(
+            "['hokuyo', 'hokuyo_node'].some(c => seenChips.has(c))", 30)
+        assert await page.wait_for("seenRepairs.has('power_cycle(hokuyo) succeeded')", 90)
+        await asyncio.to_thread(daemon.wait_for, healthy, 90.0, "healthy again")
+        assert await page.wait_for("document.querySelector('#diagnoses .muted')"
+                                   "?.textContent === 'none'", 30)
+        assert await page.wait_for(f"{CHANNEL_STATE.format(3)} === 'on'", 30)
+        await page.screenshot(tmp_path / "daemon-page.png")
