@@ -52,7 +52,6 @@ import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import psutil
 
@@ -70,11 +69,18 @@ from host.journal import (
 from host.observers import load_observers
 from host.observers.base import Update
 from host.observers.hardware import HardwareObserver
-from tests.daemon.runner import TEDUSAR, RunningDaemon, fast_copy, free_port
+from tests.daemon.runner import (
+    KEY,
+    TEDUSAR,
+    RunningDaemon,
+    fast_copy,
+    free_port,
+    healthy,
+    key_file,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "RESULTS.md"
-KEY = bytes(range(32))
 FAULTS = {  # kind -> (channel, inject args, components that name it, clear after diagnosis)
     "hang": ("hokuyo", ("hokuyo", "hang"), {"hokuyo", "hokuyo_node"}, False),
     "trip": ("laser_alignment", ("laser_alignment", "overcurrent", "amps=5"),
@@ -110,10 +116,6 @@ class Results:
 
 # --- part 1: the real daemon ------------------------------------------------------------
 
-
-def healthy(s: dict[str, Any]) -> bool:
-    return bool(s["board_link_up"]) and not s["diagnoses"] and bool(s["repairs"]) and all(
-        r["state"] in ("succeeded", "failed", "timeout") for r in s["repairs"])
 
 
 def cpu_of(procs: list[psutil.Process]) -> float:
@@ -169,10 +171,8 @@ def one_fault(d: RunningDaemon, kind: str) -> Sample:
 def part_one(res: Results, n_faults: int, seed: int, quiet_s: float) -> None:
     with tempfile.TemporaryDirectory() as tmpdir:
         tmp = Path(tmpdir)
-        key_file = tmp / "key"
-        key_file.write_text(KEY.hex())
-        key_file.chmod(0o600)
-        d = RunningDaemon(tmp, fast_copy(tmp), extra_args=("--key-file", str(key_file)))
+        key = key_file(tmp)
+        d = RunningDaemon(tmp, fast_copy(tmp), extra_args=("--key-file", str(key)))
         try:
             d.wait_for(healthy, 120, "the robot up")
             time.sleep(3.0)

@@ -106,7 +106,13 @@ class Repairs:
 
     @property
     def busy(self) -> bool:
+        """A repair is running."""
         return self._running is not None and not self._running.done()
+
+    @property
+    def active(self) -> bool:
+        """A repair is running or about to start (its debounce is pending)."""
+        return self.busy or (self._pending is not None and not self._pending.done())
 
     async def _after_debounce(self, result: DiagnosisResult) -> None:
         await asyncio.sleep(self.daemon.opts.repair_debounce_s)

@@ -63,6 +63,27 @@ class SearchOutcome:
 Search = Callable[[SatContext, list[int], int | None, int | None, bool], SearchOutcome]
 
 
+def _list_level(
+    ctx: SatContext, assumptions: list[int], act: int, out: SearchOutcome,
+    max_count: int | None,
+) -> bool:
+    """Add every diagnosis the solver finds under ``assumptions`` to ``out``, each blocked
+    for the rest of the run (``act``); False when a bound (count, time) cut the listing."""
+    while True:
+        if max_count is not None and len(out.bad_sets) >= max_count:
+            out.cut_by = Bound.MAX_COUNT
+            return False
+        r = ctx.solve(assumptions)
+        if r is None:
+            out.cut_by = Bound.TIME_BUDGET
+            return False
+        if not r:
+            return True
+        bad = ctx.model_bad()
+        out.bad_sets.append(bad)
+        ctx.solver.add_clause([-ctx.ab_vars[i] for i in bad] + [-act])
+
+
 def cardinality_search(
     ctx: SatContext,
     obs: list[int],
@@ -88,20 +109,8 @@ def cardinality_search(
             out.cut_by = Bound.TIME_BUDGET
             return out
         while k <= limit:
-            bound = ctx.at_most(k)
-            while True:
-                if max_count is not None and len(out.bad_sets) >= max_count:
-                    out.cut_by = Bound.MAX_COUNT
-                    return out
-                r = ctx.solve(base + bound)
-                if r is None:
-                    out.cut_by = Bound.TIME_BUDGET
-                    return out
-                if not r:
-                    break
-                bad = ctx.model_bad()
-                out.bad_sets.append(bad)
-                ctx.solver.add_clause([-ctx.ab_vars[i] for i in bad] + [-act])
+            if not _list_level(ctx, base + ctx.at_most(k), act, out, max_count):
+                return out
             k += 1
             if min_card_only and out.bad_sets:
                 return out
@@ -282,20 +291,8 @@ def top_level_search(
     base = [*obs, act]
     try:
         ctx.solver.add_clause([-ctx.ab_vars[i] for i in first] + [-act])
-        bound = ctx.at_most(k)
-        while True:  # the other diagnoses of size k, with all components
-            if max_count is not None and len(out.bad_sets) >= max_count:
-                out.cut_by = Bound.MAX_COUNT
-                return out
-            r = ctx.solve(base + bound)
-            if r is None:
-                out.cut_by = Bound.TIME_BUDGET
-                return out
-            if not r:
-                return out
-            bad = ctx.model_bad()
-            out.bad_sets.append(bad)
-            ctx.solver.add_clause([-ctx.ab_vars[i] for i in bad] + [-act])
+        _list_level(ctx, base + ctx.at_most(k), act, out, max_count)  # the others of size k
+        return out
     finally:
         ctx.end_run(act)
 

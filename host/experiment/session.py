@@ -101,7 +101,7 @@ class RobotSession:
 
     def repairing(self) -> bool:
         r = self.daemon.repairs
-        return r is not None and (r.busy or (r._pending is not None and not r._pending.done()))
+        return r is not None and r.active
 
     def healthy(self) -> bool:
         """The board is heard, nothing is diagnosed abnormal and no repair is running."""

@@ -116,8 +116,31 @@ class RunningDaemon:
             self.proc.stdout.close()
 
 
+KEY = bytes(range(32))
+
+
+def key_file(tmp: Path, key: bytes = KEY) -> Path:
+    """A key file as ``--key-file`` wants it (hex, readable by its owner only)."""
+    path = tmp / "key"
+    path.write_text(key.hex())
+    path.chmod(0o600)
+    return path
+
+
+def healthy(s: dict[str, Any]) -> bool:
+    """The robot is up: board link up, nothing diagnosed, and every repair action finished."""
+    return bool(s["board_link_up"]) and not s["diagnoses"] and bool(s["repairs"]) and all(
+        r["state"] in ("succeeded", "failed", "timeout") for r in s["repairs"])
+
+
+def last_id(d: RunningDaemon) -> int:
+    return max((e.id for e in d.journal()), default=0)
+
+
 def bad_sets(status: dict[str, Any]) -> list[set[str]]:
     return [set(d["bad"]) for d in status["diagnoses"]]
 
 
-__all__ = ["RunningDaemon", "bad_sets", "fast_copy", "free_port"]
+__all__ = [
+    "KEY", "RunningDaemon", "bad_sets", "fast_copy", "free_port", "healthy", "key_file", "last_id",
+]

@@ -38,9 +38,15 @@ from host.journal import (
     PlanRecord,
 )
 from host.repair.executor import QUARANTINE_PLAN
-from tests.daemon.runner import RunningDaemon, bad_sets, fast_copy
+from tests.daemon.runner import (
+    RunningDaemon,
+    bad_sets,
+    fast_copy,
+    healthy,
+    key_file,
+    last_id,
+)
 
-KEY = bytes(range(32))
 HEAL_S = 90.0
 QUARANTINE_S = 150.0
 
@@ -48,10 +54,8 @@ QUARANTINE_S = 150.0
 @pytest.fixture(scope="module")
 def robot(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RunningDaemon]:
     tmp = tmp_path_factory.mktemp("faults")
-    key_file = tmp / "key"
-    key_file.write_text(KEY.hex())
-    key_file.chmod(0o600)
-    d = RunningDaemon(tmp, fast_copy(tmp), extra_args=("--key-file", str(key_file)))
+    key = key_file(tmp)
+    d = RunningDaemon(tmp, fast_copy(tmp), extra_args=("--key-file", str(key)))
     try:
         d.wait_for(healthy, HEAL_S, "the robot powered up and healthy")
         yield d
@@ -62,13 +66,6 @@ def robot(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RunningDaemon]:
 # --- helpers ------------------------------------------------------------------------------
 
 
-def healthy(s: dict[str, Any]) -> bool:
-    return bool(s["board_link_up"]) and not s["diagnoses"] and bool(s["repairs"]) and all(
-        r["state"] in ("succeeded", "failed", "timeout") for r in s["repairs"])
-
-
-def last_id(d: RunningDaemon) -> int:
-    return max((e.id for e in d.journal()), default=0)
 
 
 def since(d: RunningDaemon, mark: int, kind: str) -> list[Any]:

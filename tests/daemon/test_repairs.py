@@ -13,14 +13,19 @@ from __future__ import annotations
 import time
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
 
 import pytest
 
 from host.journal import ActionRecord, DiagnosisRecord, Note, Observation, PlanRecord
-from tests.daemon.runner import RunningDaemon, bad_sets, fast_copy
+from tests.daemon.runner import (
+    RunningDaemon,
+    bad_sets,
+    fast_copy,
+    healthy,
+    key_file,
+    last_id,
+)
 
-KEY = bytes(range(32))
 ROBOT = {"jaguar", "hokuyo", "laser_alignment", "jaguar_node", "hokuyo_node",
          "laser_alignment_node", "imu_node", "joy_node", "jaguar_teleop_node", "hector_mapping",
          "laser_alignment_control"}
@@ -30,19 +35,13 @@ HEAL_S = 60.0
 @pytest.fixture(scope="module")
 def robot(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[RunningDaemon, Path]]:
     tmp = tmp_path_factory.mktemp("repairs")
-    key_file = tmp / "key"
-    key_file.write_text(KEY.hex())
-    key_file.chmod(0o600)
-    d = RunningDaemon(tmp, fast_copy(tmp), extra_args=("--key-file", str(key_file)))
+    key = key_file(tmp)
+    d = RunningDaemon(tmp, fast_copy(tmp), extra_args=("--key-file", str(key)))
     try:
-        yield d, key_file
+        yield d, key
     finally:
         d.close()
 
-
-def healthy(s: dict[str, Any]) -> bool:
-    return bool(s["board_link_up"]) and not s["diagnoses"] and bool(s["repairs"]) and all(
-        r["state"] in ("succeeded", "failed", "timeout") for r in s["repairs"])
 
 
 def actions_since(d: RunningDaemon, after: int) -> list[ActionRecord]:
@@ -53,9 +52,6 @@ def actions_since(d: RunningDaemon, after: int) -> list[ActionRecord]:
 def finished(records: list[ActionRecord]) -> list[tuple[str, tuple[str, ...], str]]:
     return [(r.action, tuple(r.args), str(r.state)) for r in records if r.finished is not None]
 
-
-def last_id(d: RunningDaemon) -> int:
-    return max((e.id for e in d.journal()), default=0)
 
 
 def test_power_up_brings_the_whole_robot_up(robot: tuple[RunningDaemon, Path]) -> None:

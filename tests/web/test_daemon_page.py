@@ -13,11 +13,10 @@ from __future__ import annotations
 import asyncio
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
 
 import pytest
 
-from tests.daemon.runner import RunningDaemon, fast_copy
+from tests.daemon.runner import RunningDaemon, fast_copy, healthy
 from tests.web.chromium import Chromium
 
 NAMES = ["sensor_head", "laser_alignment", "pc", "hokuyo", "kinect", "router",
@@ -43,10 +42,6 @@ def daemon(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RunningDaemon]:
     finally:
         d.close()
 
-
-def healthy(s: dict[str, Any]) -> bool:
-    return bool(s["board_link_up"]) and not s["diagnoses"] and bool(s["repairs"]) and all(
-        r["state"] in ("succeeded", "failed", "timeout") for r in s["repairs"])
 
 
 async def test_the_daemon_page_shows_the_robot_and_a_fault(daemon: RunningDaemon,
