@@ -166,6 +166,25 @@ def system_file(path: str | Path) -> Path:
     return p / SYSTEM_FILE if p.is_dir() else p
 
 
+def read_section(
+    path: str | Path, section: str, error: type[ModelError] = ModelError
+) -> tuple[Path, Any, yamlpos.Lines]:
+    """``system.yaml`` of ``path`` (a robot directory or the file) as ``(file, the section's
+    data or None, line lookup)``, for the loaders of its other sections (``observers:``,
+    ``processes:``); an unreadable file or bad YAML raises ``error`` naming file and line."""
+    file = system_file(path)
+    try:
+        text = file.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise error([Problem(file, 0, f"cannot read: {exc.strerror}",
+                             "give a robot directory holding system.yaml")]) from exc
+    try:
+        data, lines = yamlpos.load(text)
+    except yamlpos.YamlSyntaxError as exc:
+        raise error([Problem(file, exc.line, str(exc), "fix the YAML syntax")]) from exc
+    return file, data.get(section) if isinstance(data, dict) else None, lines
+
+
 def load_system(path: str | Path) -> SystemModel:
     """Load and validate ``path/system.yaml`` (or the file itself). Raises ``ModelError``."""
     model, problems = _load(system_file(path))

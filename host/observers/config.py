@@ -40,8 +40,7 @@ from typing import Any, TypedDict
 
 from host.diagnosis import yamlpos
 from host.diagnosis.logic import Theory, parse_literal
-from host.diagnosis.model import Kind, Problem, SystemModel, system_file
-from host.errors import UserError
+from host.diagnosis.model import Kind, ModelError, Problem, SystemModel, read_section
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
 from host.observers.hardware import (
     DEFAULT_LINK_ATOM,
@@ -73,13 +72,8 @@ class Timing(TypedDict):
     validity: float
 
 
-class ObserverConfigError(UserError):
+class ObserverConfigError(ModelError):
     """The ``observers:`` section has problems; ``problems`` lists all of them."""
-
-    def __init__(self, problems: list[Problem]) -> None:
-        more = f" (+{len(problems) - 1} more problems)" if len(problems) > 1 else ""
-        super().__init__(str(problems[0]) + more)
-        self.problems = problems
 
 
 @dataclass(frozen=True)
@@ -110,18 +104,7 @@ class ObserversConfig:
 def load_observers(path: str | Path, model: SystemModel | None = None) -> ObserversConfig:
     """Read and validate the ``observers:`` section of ``path`` (a robot directory or its
     ``system.yaml``) and build its observers. Raises ``ObserverConfigError``."""
-    file = system_file(path)
-    try:
-        text = file.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ObserverConfigError([Problem(file, 0, f"cannot read: {exc.strerror}",
-                                           "give a robot directory holding system.yaml")]) from exc
-    try:
-        data, lines = yamlpos.load(text)
-    except yamlpos.YamlSyntaxError as exc:
-        raise ObserverConfigError([Problem(file, exc.line, str(exc), "fix the YAML syntax")]
-                                  ) from exc
-    section = data.get(SECTION) if isinstance(data, dict) else None
+    file, section, lines = read_section(path, SECTION, ObserverConfigError)
     b = _Builder(file, lines, model)
     config = b.build(section)
     if b.problems:

@@ -30,7 +30,7 @@ import time
 from collections.abc import Awaitable, Callable, Iterable
 from typing import TYPE_CHECKING
 
-from host.errors import DxboardError
+from host.errors import UserError
 from host.repair.problem import protected_channel_object
 from host.repair.supervisor import ProcessError
 from protocol.constants import ST_FAULTED, ST_LATCHED, ST_TRIPPED
@@ -50,16 +50,8 @@ DEFAULT_OFF_S = 1.0
 SWITCH_OFF = frozenset({"shutdown", "power_cycle", "stop_node", "power_down"})
 
 
-class ActuationError(DxboardError):
+class ActuationError(UserError):
     """A step could not be carried out; the message says why, ``hint`` what to do."""
-
-    def __init__(self, message: str, hint: str = "") -> None:
-        super().__init__(message)
-        self.message = message
-        self.hint = hint
-
-    def __str__(self) -> str:
-        return f"{self.message} ({self.hint})" if self.hint else self.message
 
 
 class Refused(ActuationError):

@@ -38,8 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from host.diagnosis import yamlpos
-from host.diagnosis.model import Problem, SystemModel, system_file
-from host.errors import UserError
+from host.diagnosis.model import ModelError, Problem, SystemModel, read_section
 
 SECTION = "processes"
 DEFAULT_SETTLE_S = 2.0
@@ -49,13 +48,8 @@ _SYSTEMD_KEYS = {"systemd", "settle_s", "stop_timeout_s"}
 _ROOT_MARKERS = ("pyproject.toml", ".git")
 
 
-class ProcessConfigError(UserError):
+class ProcessConfigError(ModelError):
     """The ``processes:`` section has problems; ``problems`` lists all of them."""
-
-    def __init__(self, problems: list[Problem]) -> None:
-        more = f" (+{len(problems) - 1} more problems)" if len(problems) > 1 else ""
-        super().__init__(str(problems[0]) + more)
-        self.problems = problems
 
 
 @dataclass(frozen=True)
@@ -89,18 +83,7 @@ def load_processes(path: str | Path, model: SystemModel | None = None) -> dict[s
     """Read and validate ``processes:`` of ``path`` (a robot directory or its system.yaml).
 
     With ``model``, every name must be a node of it. Raises ``ProcessConfigError``."""
-    file = system_file(path)
-    try:
-        text = file.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ProcessConfigError([Problem(file, 0, f"cannot read: {exc.strerror}",
-                                          "give a robot directory holding system.yaml")]) from exc
-    try:
-        data, lines = yamlpos.load(text)
-    except yamlpos.YamlSyntaxError as exc:
-        raise ProcessConfigError([Problem(file, exc.line, str(exc), "fix the YAML syntax")]
-                                 ) from exc
-    section = data.get(SECTION) if isinstance(data, dict) else None
+    file, section, lines = read_section(path, SECTION, ProcessConfigError)
     b = _Builder(file, lines, model, project_root(file.parent))
     out = b.build(section)
     if b.problems:
