@@ -100,8 +100,7 @@ class RobotSession:
             raise UserError("the daemon stopped by itself")
 
     def repairing(self) -> bool:
-        r = self.daemon.repairs
-        return r is not None and r.active
+        return self.daemon.repairs.active
 
     def healthy(self) -> bool:
         """The board is heard, nothing is diagnosed abnormal and no repair is running."""
@@ -168,8 +167,6 @@ class RobotSession:
     def forgive(self) -> None:
         """A person clears every quarantine and the attempt counts (between campaign faults)."""
         r = self.daemon.repairs
-        if r is None:
-            return
         for c in list(r.executor.quarantine.components):
             r.executor.clear_quarantine(c)
         for c in self.daemon.model.components:

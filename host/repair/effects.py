@@ -25,6 +25,8 @@ from __future__ import annotations
 from collections.abc import Collection, Mapping
 from typing import TYPE_CHECKING
 
+import host.atoms as A
+
 if TYPE_CHECKING:
     from host.diagnosis.model import SystemModel
     from host.repair.plan import Step
@@ -46,18 +48,18 @@ def expected_effects(step: Step, model: SystemModel,
     comp = model.components.get(name)
     out: dict[str, bool] = {}
     if step.action in ("power_up", "power_cycle"):
-        out[f"on({name})"] = True
+        out[str(A.on(name))] = True
         if comp is not None and comp.current is not None:
-            out[f"in_band({name})"] = True
+            out[str(A.in_band(name))] = True
     elif step.action == "shutdown":
-        out[f"on({name})"] = False
+        out[str(A.on(name))] = False
     elif step.action == "start_node":
-        out[f"running({name})"] = True
+        out[str(A.running(name))] = True
         if comp is not None:
             for topic in comp.publishes:
-                out[f"ok({topic})"] = True
+                out[str(A.ok(topic))] = True
     elif step.action == "stop_node":
-        out[f"running({name})"] = False
+        out[str(A.running(name))] = False
     if observable is not None:
         out = {a: v for a, v in out.items() if a in observable}
     return out

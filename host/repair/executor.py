@@ -41,7 +41,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 
 from host.errors import DxboardError
-from host.journal.entries import ActionRecord, ActionState, PlanRecord, PlanStep
+from host.events import ActionRecord, ActionState, PlanRecord, PlanStep
 from host.repair.actuators import Actuators, Refused
 from host.repair.beliefs import Beliefs
 from host.repair.effects import DEFAULT_DEVICE_SETTLE_S, IMMEDIATE, expected_effects

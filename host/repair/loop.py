@@ -32,7 +32,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import TYPE_CHECKING
 
-from host.journal.entries import PlanRecord
+from host.events import PlanRecord
 from host.repair.errors import NoPlanError
 from host.repair.executor import ExecutionResult, Executor, Outcome, plan_record
 from host.repair.policy import Candidate, Choice, choose

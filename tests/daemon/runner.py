@@ -21,7 +21,7 @@ from typing import Any
 
 import yaml
 
-from host.journal import Entry, JournalReader
+from host.journal import ActionRecord, Entry, JournalReader
 
 ROOT = Path(__file__).resolve().parents[2]
 TEDUSAR = ROOT / "models" / "tedusar"
@@ -90,7 +90,7 @@ class RunningDaemon:
         subprocess.run([sys.executable, "-m", "host.cli", "inject", self.urls["control"],
                         *args], check=True, cwd=ROOT, capture_output=True, timeout=10)
 
-    def journal(self, kind: str | None = None) -> list[Entry]:
+    def journal(self, kind: str | tuple[str, ...] | None = None) -> list[Entry]:
         return JournalReader(self.journal_path).query(kind=kind, limit=100000)
 
     def board(self, *args: str, key_file: Path) -> str:
@@ -133,8 +133,18 @@ def healthy(s: dict[str, Any]) -> bool:
         r["state"] in ("succeeded", "failed", "timeout") for r in s["repairs"])
 
 
-def last_id(d: RunningDaemon) -> int:
-    return max((e.id for e in d.journal()), default=0)
+def last_id(d: RunningDaemon, timeout: float = 10.0) -> int:
+    """The journal's last id, once every action it shows started has its result journaled too
+    (the page shows a result at once; the journal's writer thread commits it a moment later)."""
+    end = time.monotonic() + timeout
+    while True:
+        entries = d.journal()
+        acts = [e.payload for e in entries if isinstance(e.payload, ActionRecord)]
+        started = {a.action_id for a in acts if a.finished is None}
+        if started <= {a.action_id for a in acts if a.finished is not None} or (
+                time.monotonic() > end):
+            return max((e.id for e in entries), default=0)
+        time.sleep(0.1)
 
 
 def bad_sets(status: dict[str, Any]) -> list[set[str]]:

@@ -29,11 +29,11 @@ from typing import Any
 
 import pytest
 
+from host.events import describe
 from host.journal import (
     ActionRecord,
     BoardEvent,
     DiagnosisRecord,
-    Note,
     Observation,
     PlanRecord,
 )
@@ -82,7 +82,9 @@ def finished(d: RunningDaemon, mark: int) -> list[tuple[str, tuple[str, ...], st
 
 
 def notes(d: RunningDaemon, mark: int) -> list[str]:
-    return [p.text for p in since(d, mark, "note") if isinstance(p, Note)]
+    """What the daemon said since ``mark``: its notes, how repairs ended, quarantines."""
+    return [describe(e.payload) for e in d.journal(("note", "repair", "quarantine"))
+            if e.id > mark]
 
 
 def observed(d: RunningDaemon, mark: int, literal: str, value: bool | None) -> bool:
@@ -114,6 +116,9 @@ def wait_journal(d: RunningDaemon, what: Any, timeout: float, label: str) -> Non
 def assert_journal_steps(d: RunningDaemon, mark: int, component: str, *,
                          repaired: bool) -> None:
     """The journal holds every step: the diagnosis, the plan, its actions and their results."""
+    # the page shows a result as soon as it happens; its journal entry is committed a moment
+    # later by the journal's writer thread
+    wait_journal(d, lambda: all_finished(d, mark), 10, "every result journaled")
     assert named(d, mark, component), f"no diagnosis naming {component} in the journal"
     plans = [p for p in since(d, mark, "plan") if isinstance(p, PlanRecord)]
     assert plans, "no plan in the journal"
@@ -126,8 +131,9 @@ def assert_journal_steps(d: RunningDaemon, mark: int, component: str, *,
     started = {a.action_id for a in acts if str(a.state) == "started"}
     results = {a.action_id for a in acts if a.finished is not None}
     assert started and started <= results, "an action started without a journaled result"
-    if repaired:
-        assert any("repair ended: healthy" in t for t in notes(d, mark)), notes(d, mark)
+    if repaired:  # the repair ends once its last round has diagnosed the robot healthy
+        wait_journal(d, lambda: any("repair ended: healthy" in t for t in notes(d, mark)), 20,
+                     "the repair's end journaled")
         healthy_after = [p for p in since(d, mark, "diagnosis")
                          if isinstance(p, DiagnosisRecord)]
         assert healthy_after and healthy_after[-1].diagnoses in ((), ((),))

@@ -16,7 +16,8 @@ from pathlib import Path
 
 import pytest
 
-from host.journal import ActionRecord, DiagnosisRecord, Note, Observation, PlanRecord
+from host.events import describe
+from host.journal import ActionRecord, DiagnosisRecord, Observation, PlanRecord
 from tests.daemon.runner import (
     RunningDaemon,
     bad_sets,
@@ -140,8 +141,7 @@ def test_link_loss_is_blamed_on_the_link_and_nothing_is_switched(
     d.inject("clear")
     d.wait_for(lambda s: s["board_link_up"] and not s["diagnoses"], 30, "the link back")
     assert not actions_since(d, mark)
-    notes = [e.payload.text for e in d.journal("note") if e.id > mark
-             and isinstance(e.payload, Note)]
+    notes = [describe(e.payload) for e in d.journal("note") if e.id > mark]
     assert any("link is down" in t for t in notes) or not any(
         isinstance(e.payload, PlanRecord) for e in d.journal("plan") if e.id > mark)
 
@@ -154,8 +154,7 @@ def test_a_permanent_hang_is_quarantined_and_the_rest_keeps_running(
     d.inject("hokuyo", "hang", "permanent=true")
     end = time.monotonic() + 120
     while time.monotonic() < end:
-        notes = [e.payload.text for e in d.journal("note") if e.id > mark
-                 and isinstance(e.payload, Note)]
+        notes = [describe(e.payload) for e in d.journal("quarantine") if e.id > mark]
         if any(t.startswith("quarantined") for t in notes):
             break
         time.sleep(0.5)
