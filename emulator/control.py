@@ -5,7 +5,7 @@ every request gets exactly one reply line, in order; the connection stays open f
 
     {"op": "hello"}
         -> {"ok": true, "board": "dxboard-emulator", "version": 1, "channels": [names],
-            "faults": [fault names]}
+            "faults": [fault names], "boot_ms": {name: ms until the device is ready}}
     {"op": "inject", "channel": "hokuyo" | 3 | "board", "fault": "hang",
      "params": {"permanent": "true"}}
         -> {"ok": true, "channel": 3, "fault": "hang", "params": {"permanent": true}}
@@ -57,7 +57,8 @@ def handle(emu: Emulator, line: bytes) -> dict[str, Any]:
     try:
         if op == "hello":
             return {"ok": True, "board": "dxboard-emulator", "version": 1,
-                    "channels": [c.name for c in emu.model.channels], "faults": list(F.FAULTS)}
+                    "channels": [c.name for c in emu.model.channels], "faults": list(F.FAULTS),
+                    "boot_ms": {c.name: c.boot_ms for c in emu.model.channels}}
         if op == "inject":
             fault, params = req.get("fault"), req.get("params", {})
             channel = req.get("channel")

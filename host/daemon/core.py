@@ -36,6 +36,8 @@ from host.board import BoardClient
 from host.board.types import BoardEvent, BoardState, LinkDown, LinkUp, Reading, Rebooted
 from host.board.view import BoardView
 from host.diagnosis import Diagnoser, generate, load_system
+from host.diagnosis.logic import Theory
+from host.diagnosis.model import SystemModel
 from host.diagnosis.observations import Observation as Seen
 from host.diagnosis.observations import ObservationSet
 from host.diagnosis.runner import DiagnosisRunner
@@ -45,7 +47,10 @@ from host.events import BoardEvent as BoardEventRecord
 from host.journal import Journal, TelemetryDownsampler
 from host.observers import ObserverHub, check_atoms, load_observers
 from host.observers.base import Update
+from host.observers.config import ObserversConfig
 from host.repair import service
+from host.repair.planner import RepairPlanner
+from host.repair.processes import ProcessConfig, load_processes
 from host.web.fold import StatusFold
 from host.web.server import WebServer
 from host.web.status import MemoryStatusSource, Status
@@ -86,24 +91,41 @@ def _name(names: tuple[str, ...], i: int) -> str | int:
     return names[i] if 0 <= i < len(names) else i
 
 
+@dataclass(frozen=True)
+class RobotFiles:
+    """Everything the daemon reads from a robot directory, loaded and checked."""
+
+    model: SystemModel
+    theory: Theory
+    observers: ObserversConfig
+    processes: Mapping[str, ProcessConfig]
+    planner: RepairPlanner
+
+
+def load_robot(system_dir: Path, zenoh_listen: list[str] | None = None) -> RobotFiles:
+    """Load and check the robot directory (``system.yaml``, ``repair.pddl``): a ``UserError``
+    naming the file, the line and the fix before anything is started."""
+    model = load_system(system_dir)
+    theory = generate(model)
+    observers = load_observers(system_dir, model)
+    unknown = check_atoms(observers, theory)
+    if unknown:
+        raise UserError(f"{observers.file}: observers report {', '.join(unknown)}, "
+                        "which no clause of the model mentions",
+                        "remove those observers or extend the model")
+    if zenoh_listen is not None:
+        observers.source = dataclasses.replace(observers.source, listen=tuple(zenoh_listen))
+    return RobotFiles(model, theory, observers, load_processes(system_dir, model),
+                      RepairPlanner.for_system(system_dir))
+
+
 class Daemon:
     def __init__(self, opts: DaemonOptions, clock: Callable[[], float] = time.monotonic,
-                 wall: Callable[[], float] = time.time) -> None:
+                 wall: Callable[[], float] = time.time, files: RobotFiles | None = None) -> None:
         self.opts = opts
         self.clock = clock
-        self.model = load_system(opts.system_dir)
-        self.theory = generate(self.model)
-        self.observers_cfg = load_observers(opts.system_dir, self.model)
-        unknown = check_atoms(self.observers_cfg, self.theory)
-        if unknown:
-            raise UserError(
-                f"{self.observers_cfg.file}: observers report {', '.join(unknown)}, "
-                "which no clause of the model mentions",
-                "remove those observers or extend the model",
-            )
-        if opts.zenoh_listen is not None:
-            self.observers_cfg.source = dataclasses.replace(
-                self.observers_cfg.source, listen=tuple(opts.zenoh_listen))
+        robot = files or load_robot(opts.system_dir, opts.zenoh_listen)
+        self.model, self.theory, self.observers_cfg = robot.model, robot.theory, robot.observers
         self.stream = EventStream(clock, wall)
         self.emit = self.stream.emit
         self.status = MemoryStatusSource(Status(robot=self.model.name))
@@ -119,11 +141,12 @@ class Daemon:
         self.view = BoardView()
         journal = opts.journal or Path("dxboard-journal.sqlite")
         self.repairs = service.build(
-            opts.system_dir, self.model, observations=self.observations,
+            robot.planner, self.model, robot.processes, observations=self.observations,
             observable={a for o in self.hub.observers for a in o.atoms()},
             diagnose=lambda: self.diagnosis.run("repair"), emit=self.emit,
             logs_dir=journal.parent / (journal.stem + "-logs"),
-            env={"DXBOARD_ZENOH": self.observers_cfg.source.listen[0], **opts.node_env},
+            env={"DXBOARD_ZENOH": self.observers_cfg.source.listen[0],
+                 "DXBOARD_ROBOT": str(opts.system_dir.resolve()), **opts.node_env},
             device_boot_s=opts.device_boot_s, on_start=self._started, dry_run=opts.dry_run,
             clock=clock, max_parallel=opts.max_parallel_steps,
             debounce_s=opts.repair_debounce_s, board=self.model.board or "board")

@@ -18,8 +18,8 @@ While the board's own protection has the channels (it sheds them for input under
 restores them itself afterwards) repairs wait for it rather than fight it. A repair is the
 ``RepairLoop``: diagnose, choose, plan, execute with verified effects, until healthy, bounded by
 the executor's attempt limiter and quarantine. With ``dry_run`` plans are made and reported but
-nothing acts. ``build`` makes a service for a robot directory: the planner (``repair.pddl``),
-the process supervisor (``processes:`` of ``system.yaml``), the actuators (board power through
+nothing acts. ``build`` makes a service for a robot: from its planner (``repair.pddl``) and its
+``processes:`` (of ``system.yaml``), the process supervisor, the actuators (board power through
 the linked ``BoardClient``, nodes through the supervisor) and the executor, whose effect checks
 wait on the same observation set the diagnoser reads.
 """
@@ -46,7 +46,7 @@ from host.repair.limits import AttemptLimiter, Quarantined
 from host.repair.loop import RepairLoop
 from host.repair.planner import RepairPlanner
 from host.repair.policy import Candidate
-from host.repair.processes import load_processes
+from host.repair.processes import ProcessConfig
 from host.repair.supervisor import ProcessSupervisor
 from protocol.constants import B_UV_OFF, B_UV_SHED, F_SHED_UV
 
@@ -185,15 +185,15 @@ class RepairService:
             await sup.close()
 
 
-def build(system_dir: Path, model: SystemModel, *, observations: ObservationSet,
-          observable: Collection[str], diagnose: FreshDiagnosis, emit: Emit,
-          logs_dir: Path, env: Mapping[str, str], device_boot_s: Mapping[str, float],
-          on_start: Callable[[str, int], None] | None = None, dry_run: bool = False,
-          clock: Callable[[], float] | None = None, max_parallel: int | None = None,
-          debounce_s: float = 0.5, board: str = "board") -> RepairService:
-    """A repair service for the robot in ``system_dir`` (see the module docstring)."""
-    planner = RepairPlanner.for_system(system_dir)
-    procs = load_processes(system_dir, model)
+def build(planner: RepairPlanner, model: SystemModel, procs: Mapping[str, ProcessConfig], *,
+          observations: ObservationSet, observable: Collection[str], diagnose: FreshDiagnosis,
+          emit: Emit, logs_dir: Path, env: Mapping[str, str],
+          device_boot_s: Mapping[str, float], on_start: Callable[[str, int], None] | None = None,
+          dry_run: bool = False, clock: Callable[[], float] | None = None,
+          max_parallel: int | None = None, debounce_s: float = 0.5,
+          board: str = "board") -> RepairService:
+    """A repair service for a robot: its planner, model and ``processes:`` (see the module
+    docstring)."""
     supervisor = ProcessSupervisor(procs, logs_dir, on_start=on_start, env=dict(env))
     actuators = Actuators(model, None, supervisor)
     kw: dict[str, Any] = {} if clock is None else {"clock": clock}

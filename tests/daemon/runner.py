@@ -8,39 +8,27 @@ reads the URLs it prints, and offers what a person would use: the JSON API (``st
 from __future__ import annotations
 
 import json
-import shutil
 import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 import urllib.request
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import yaml
-
+from host.experiment.robot import fast_model
 from host.journal import ActionRecord, Entry, JournalReader
 
 ROOT = Path(__file__).resolve().parents[2]
 TEDUSAR = ROOT / "models" / "tedusar"
 
 
-def fast_copy(tmp: Path, boot_ms: dict[str, int] | None = None) -> Path:
-    """``models/tedusar`` with short device boot times, its node commands pointing at it."""
-    d = tmp / "tedusar"
-    shutil.copytree(TEDUSAR, d)
-    emu = yaml.safe_load((d / "emulator.yaml").read_text())
-    for ch in emu["channels"]:
-        ch["boot_ms"] = (boot_ms or FAST_BOOT_MS).get(ch["name"], ch.get("boot_ms", 0))
-    (d / "emulator.yaml").write_text(yaml.safe_dump(emu))
-    system = (d / "system.yaml").read_text()
-    (d / "system.yaml").write_text(system.replace(" models/tedusar]", f" {d}]"))
-    return d
-
-
-FAST_BOOT_MS = {"hokuyo": 1500, "jaguar": 300, "laser_alignment": 300}
+def fast_copy(tmp: Path) -> Path:
+    """``models/tedusar`` with short device boot times (``host.experiment.robot.fast_model``)."""
+    return fast_model(TEDUSAR, tmp)
 
 
 def free_port() -> int:
@@ -68,6 +56,16 @@ class RunningDaemon:
                 raise AssertionError("dxboard run exited: " + self.err_path.read_text()[-2000:])
             name, _, rest = line.strip().partition(": ")
             self.urls[name] = rest
+        # what it says on its terminal after the URLs, read as it comes (a pipe nobody read
+        # would fill up)
+        self.lines: list[str] = []
+        self._reader = threading.Thread(target=self._read_terminal, daemon=True)
+        self._reader.start()
+
+    def _read_terminal(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            self.lines.append(line.rstrip("\n"))
 
     def status(self) -> dict[str, Any]:
         with urllib.request.urlopen(self.urls["web"] + "api/status", timeout=5) as r:
@@ -112,6 +110,7 @@ class RunningDaemon:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()
+        self._reader.join(5)
         if self.proc.stdout is not None:
             self.proc.stdout.close()
 
