@@ -32,7 +32,6 @@ import asyncio
 import contextlib
 import json
 import threading
-import time
 from collections.abc import Callable, Coroutine
 from concurrent.futures import Future
 from typing import Any, TypeVar
@@ -110,11 +109,13 @@ async def start_server(emu: Emulator, host: str = "127.0.0.1", port: int = 0) ->
 
 
 async def run_wallclock(emu: Emulator, stop: asyncio.Event, tick_ms: int = 10) -> None:
-    """Advance the emulator's clock with the wall clock until ``stop`` is set."""
-    t0 = time.monotonic()
+    """Advance the emulator's clock with the event loop's clock until ``stop`` is set (the
+    wall clock on a real loop; a test's simulated clock on a simulated one)."""
+    clock = asyncio.get_running_loop().time
+    t0 = clock()
     start = emu.now
     while not stop.is_set():
-        emu.advance_to(start + int((time.monotonic() - t0) * 1000))
+        emu.advance_to(start + int((clock() - t0) * 1000))
         with contextlib.suppress(TimeoutError):
             await asyncio.wait_for(stop.wait(), tick_ms / 1000)
 

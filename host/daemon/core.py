@@ -273,7 +273,8 @@ class Daemon:
         backoff = 0.2
         while True:
             try:
-                async with BoardClient(self.opts.board_url, self.opts.key) as client:
+                async with BoardClient(self.opts.board_url, self.opts.key, clock=self.clock,
+                                       wall=self.stream.wall) as client:
                     self.client = client
                     backoff = 0.2
                     await self._board_state(await client.state(), "connected")
