@@ -57,6 +57,7 @@ from host.transports.base import NAMES, Transport
 from host.transports.errors import (
     AuthRefused,
     BadChannel,
+    BadRequest,
     BoardRefused,
     BoardUnreachable,
     LinkLost,
@@ -477,7 +478,7 @@ class BoardClient(ActuateMixin, ConfigMixin):
         """Readings at ``rate_hz`` (1-100) and every event and link notice, until closed.
         Over transports without push the transport polls at that rate."""
         if not 1 <= rate_hz <= 100:
-            raise BadChannel(f"rate {rate_hz} Hz is out of range", "use 1..100 Hz")
+            raise BadRequest(f"rate {rate_hz} Hz is out of range", "use 1..100 Hz")
         sub = _Subscriber()
         self._subs.append(sub)
         try:

@@ -41,7 +41,7 @@ from host.diagnosis.model import SystemModel
 from host.diagnosis.observations import Observation as Seen
 from host.diagnosis.observations import ObservationSet
 from host.diagnosis.runner import DiagnosisRunner
-from host.errors import UserError
+from host.errors import RemoteError, UserError
 from host.events import JOURNALED, Event, LinkChange, Note, Observation, Stamped
 from host.events import BoardEvent as BoardEventRecord
 from host.journal import Journal, TelemetryDownsampler
@@ -54,7 +54,6 @@ from host.repair.processes import ProcessConfig, load_processes
 from host.web.fold import StatusFold
 from host.web.server import WebServer
 from host.web.status import MemoryStatusSource, Status
-from protocol.constants import EVENT_NAMES, FAULT_NAMES, RESET_NAMES, STATE_NAMES
 
 from .stream import EventStream
 
@@ -81,14 +80,6 @@ class DaemonOptions:
     node_env: Mapping[str, str] = field(default_factory=dict)  # for the processes it starts
     max_parallel_steps: int | None = None  # repair steps at once; None: as the plan allows
     device_boot_s: Mapping[str, float] = field(default_factory=dict)  # settle times of devices
-
-
-def flag_names(mask: int, names: tuple[str, ...]) -> list[str]:
-    return [n for i, n in enumerate(names) if mask >> i & 1]
-
-
-def _name(names: tuple[str, ...], i: int) -> str | int:
-    return names[i] if 0 <= i < len(names) else i
 
 
 @dataclass(frozen=True)
@@ -282,7 +273,7 @@ class Daemon:
                         self.hub.feed_board(item)
                         self.view.apply(item)
                         await self._board_item(client, item)
-            except UserError as exc:  # unreachable, refused, ...: keep trying, say so once
+            except RemoteError as exc:  # unreachable, lost, refused: keep trying, say so once
                 if self.link_up or backoff == 0.2:
                     self.emit(Note(f"board: {exc}", "error"))
                     log.warning("board: %s", exc)
@@ -297,7 +288,7 @@ class Daemon:
         self.view.reset(state)
         self.emit(BoardEventRecord(why, None, {
             "boot_id": f"{state.boot_id:08x}",
-            "reset_cause": _name(RESET_NAMES, state.reset_cause),
+            "reset_cause": state.reset_cause_name,
             "config_status": state.config_status,
         }))
         self._set_link(True, why)
@@ -310,13 +301,9 @@ class Daemon:
             if summary is not None:
                 self.emit(summary)
         elif isinstance(item, BoardEvent):
-            names = self.view.names()
-            name = names[item.channel] if item.channel < len(names) else "board"
-            self.emit(BoardEventRecord(
-                str(_name(EVENT_NAMES, item.kind)), None if item.channel == 255 else item.channel,
-                {"name": name, "from": _name(STATE_NAMES, item.old_state),
-                 "to": _name(STATE_NAMES, item.new_state),
-                 "faults": flag_names(item.faults, FAULT_NAMES), "value_ma": item.value_ma}))
+            self.emit(BoardEventRecord(item.kind_name,
+                                       None if item.channel == 255 else item.channel,
+                                       item.fields(self.view.names())))
         elif isinstance(item, LinkDown):
             self._set_link(False, item.reason)
         elif isinstance(item, LinkUp | Rebooted):

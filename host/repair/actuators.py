@@ -17,9 +17,9 @@ Protected components — the devices on the board's protected channels, the plan
 ``channelN`` objects for protected channels without a device, and any component listed in
 ``protected`` — are never switched off here, whatever step is asked for: defence in depth, the
 planner already drops such steps. A refused step raises ``Refused``; every other failure raises
-``ActuationError`` or lets the board client's ``TransportError`` through. ``ACTIONS`` is the
-name -> method registry; unknown actions are an ``ActuationError`` (a domain that declares an
-action the host cannot carry out).
+``ActuationError`` (a ``RemoteError``) or lets the board client's ``TransportError`` through.
+``ACTIONS`` is the name -> method registry; unknown actions are ``Refused`` (a domain that
+declares an action the host cannot carry out).
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ import time
 from collections.abc import Awaitable, Callable, Iterable
 from typing import TYPE_CHECKING
 
-from host.errors import UserError
+from host.errors import RemoteError, UserError
 from host.repair.problem import protected_channel_object
 from host.repair.supervisor import ProcessError
 from protocol.constants import ST_FAULTED, ST_LATCHED, ST_TRIPPED
@@ -50,12 +50,13 @@ DEFAULT_OFF_S = 1.0
 SWITCH_OFF = frozenset({"shutdown", "power_cycle", "stop_node", "power_down"})
 
 
-class ActuationError(UserError):
-    """A step could not be carried out; the message says why, ``hint`` what to do."""
+class ActuationError(RemoteError):
+    """A step could not be carried out on the robot; the message says why, ``hint`` what to do."""
 
 
-class Refused(ActuationError):
-    """A step was refused before anything was done (a protected component, a bad argument)."""
+class Refused(UserError):
+    """A step was refused before anything was done (a protected component, an action the host
+    cannot carry out, a bad argument): the plan asked for it, nothing was touched."""
 
 
 class Actuators:

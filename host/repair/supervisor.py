@@ -31,7 +31,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import IO
 
-from host.errors import DxboardError
+from host.errors import RemoteError
 from host.repair.processes import ProcessConfig
 
 log = logging.getLogger(__name__)
@@ -39,7 +39,7 @@ log = logging.getLogger(__name__)
 OnStart = Callable[[str, int], None]
 
 
-class ProcessError(DxboardError):
+class ProcessError(RemoteError):
     """A node could not be started or stopped (no configuration, exec failed, systemctl)."""
 
 

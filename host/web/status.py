@@ -22,10 +22,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
+from protocol.constants import STATE_NAMES
+
 log = logging.getLogger(__name__)
 
-# the firmware's channel states (protocol/constants.py STATE_NAMES), for the page's colours
-CHANNEL_STATES = ("off", "inrush", "on", "tripped", "latched", "faulted")
+# the firmware's channel states, for the page's colours and the metrics
+CHANNEL_STATES: tuple[str, ...] = tuple(STATE_NAMES)
 
 
 @dataclass(frozen=True)
