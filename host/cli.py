@@ -26,6 +26,8 @@ COMMANDS: dict[str, str] = {
     "diagnose": "host.commands.diagnose",
     "plan": "host.commands.plan",
     "inject": "host.commands.inject",
+    "quarantine": "host.commands.quarantine",
+    "hold": "host.commands.hold",
     "journal": "host.commands.journal",
     "report": "host.commands.report",
     "board": "host.commands.board",

@@ -19,9 +19,16 @@ from protocol.constants import (
     BOARD_FLAG_NAMES,
     CAPABILITY_NAMES,
     CONFIG_STATUS_NAMES,
+    EV_STATE,
     EVENT_NAMES,
+    F_DEADMAN,
+    F_SHED_TOTAL,
+    F_SHED_UV,
     FAULT_NAMES,
     RESET_NAMES,
+    ST_INRUSH,
+    ST_OFF,
+    ST_ON,
     STATE_NAMES,
 )
 
@@ -180,6 +187,17 @@ class BoardEvent:
     @property
     def kind_name(self) -> str:
         return _name(EVENT_NAMES, self.kind)
+
+    def switched(self) -> bool | None:
+        """True or False when the channel was switched on or off by a command (not by the
+        board's protection: no trip, shed or dead-man), else None."""
+        if self.kind != EV_STATE or self.faults & (F_SHED_UV | F_SHED_TOTAL | F_DEADMAN):
+            return None
+        if self.old_state in (ST_ON, ST_INRUSH) and self.new_state == ST_OFF:
+            return False
+        if self.old_state == ST_OFF and self.new_state == ST_INRUSH:
+            return True
+        return None
 
     def fields(self, channel_names: list[str]) -> dict[str, object]:
         """What the event says, by name, for the journal: the channel's name, its state

@@ -52,6 +52,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--key-file", metavar="FILE", help="the board's key (else $DXBOARD_KEY)")
     parser.add_argument("--rate", type=int, default=100, metavar="HZ",
                         help="board readings per second (1-100, default 100)")
+    parser.add_argument("--operator", metavar="PATH", type=Path,
+                        help="the operator socket for `dxboard quarantine` and `dxboard hold` "
+                             "(default: beside the journal, e.g. dxboard-journal.sock)")
     parser.add_argument("-q", "--quiet", action="store_true",
                         help="print only the URLs, not a line per diagnosis, plan, step result "
                              "and quarantine")
@@ -75,9 +78,10 @@ def run(args: argparse.Namespace) -> int:
 
 async def _main(args: argparse.Namespace, system_dir: Path, web: tuple[str, int] | None) -> int:
     from host.board.keys import load_key
+    from host.commands.terminal import TerminalLines
     from host.daemon.core import DaemonOptions
-    from host.daemon.terminal import TerminalLines
     from host.launch.robot import Launch, LaunchedRobot
+    from host.operator.client import default_socket
 
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
@@ -86,9 +90,11 @@ async def _main(args: argparse.Namespace, system_dir: Path, web: tuple[str, int]
         loop.add_signal_handler(sig, stop.set)
     try:
         key = load_key(args.key_file) if (args.key_file or not args.emulate) else None
+        journal = Path(args.journal)
         opts = DaemonOptions(system_dir=system_dir, board_url=args.board or "", web=web,
-                             journal=Path(args.journal), dry_run=args.dry_run,
-                             rate_hz=args.rate, zenoh_listen=args.zenoh)
+                             journal=journal, dry_run=args.dry_run,
+                             rate_hz=args.rate, zenoh_listen=args.zenoh,
+                             operator=args.operator or default_socket(journal))
         launch = Launch(system_dir, None if args.emulate else args.board, key,
                         control=args.control, daemon=opts)
         terminal = None if args.quiet else TerminalLines(paused=True)

@@ -11,7 +11,7 @@ Theory of operation. ``Daemon`` builds the pieces from the robot directory and o
   link, emitting plans, steps, results and quarantines;
 - one ``EventStream``: everything the daemon learns or does is emitted there once, as a typed
   event (``host.events``), and the journal, the web page's status (``host.web.fold``), the
-  terminal's lines (``host.daemon.terminal``) and any other reader are projections of it.
+  terminal's lines (``host.commands.terminal``) and any other reader are projections of it.
 
 Tasks on one asyncio loop: the board task keeps a ``BoardClient`` subscribed (reconnecting with
 backoff) and feeds every reading, event and link notice to the hub and the ``BoardView``; the
@@ -45,9 +45,11 @@ from host.errors import RemoteError, UserError
 from host.events import JOURNALED, Event, LinkChange, Note, Observation, Stamped
 from host.events import BoardEvent as BoardEventRecord
 from host.journal import Journal, TelemetryDownsampler
+from host.journal.summary import Replay
 from host.observers import ObserverHub, check_atoms, load_observers
 from host.observers.base import Update
 from host.observers.config import ObserversConfig
+from host.operator.server import OperatorServer
 from host.repair import service
 from host.repair.planner import RepairPlanner
 from host.repair.processes import ProcessConfig, load_processes
@@ -80,6 +82,7 @@ class DaemonOptions:
     node_env: Mapping[str, str] = field(default_factory=dict)  # for the processes it starts
     max_parallel_steps: int | None = None  # repair steps at once; None: as the plan allows
     device_boot_s: Mapping[str, float] = field(default_factory=dict)  # settle times of devices
+    operator: Path | None = None  # the operator socket (quarantine, hold); None: none
 
 
 @dataclass(frozen=True)
@@ -144,6 +147,7 @@ class Daemon:
         self.journal: Journal | None = None
         self.web: WebServer | None = None
         self.web_port: int | None = None
+        self.operator: OperatorServer | None = None
         self.client: BoardClient | None = None
         self.link_up = False
         self._stop = asyncio.Event()
@@ -168,9 +172,14 @@ class Daemon:
             self.attach_journal(Journal(opts.journal))
         self.emit(Note(f"dxboard run {self.model.name}: board {opts.board_url}"
                        + (" (dry run)" if opts.dry_run else "")))
+        if self.journal is not None:
+            self._restore(self.journal)
         if opts.web is not None:
             self.web = WebServer(self.status, self.journal.reader if self.journal else None)
             self.web_port = await self.web.start(*opts.web)
+        if opts.operator is not None:
+            self.operator = OperatorServer(self.repairs, opts.operator)
+            await self.operator.start()
         spec = self.observers_cfg.source
         try:
             self.source = spec.open()
@@ -182,8 +191,22 @@ class Daemon:
             ) from None
         await self.hub.start(self.source, self.observers_cfg.processes,
                              poll=self.observers_cfg.poll)
+        await self.repairs.adopt()
         self._tasks = [asyncio.ensure_future(t) for t in (
             self._board_task(), self.diagnosis.task(), self._sample_task())]
+
+    def _restore(self, journal: Journal) -> None:
+        """Quarantines and holds that earlier runs left in the journal stay in force; a repair
+        an earlier run was killed in is said (the robot is diagnosed afresh)."""
+        past = Replay.of(journal.reader.query(kind=("quarantine", "hold"), limit=None))
+        self.repairs.restore(past.quarantined, past.held)
+        cut = [a for a in Replay.of(journal.reader.tail(200, kind="action")).actions.values()
+               if a.finished is None]
+        if cut:
+            self.emit(Note("an earlier run stopped during " + ", ".join(
+                f"{a.action}({','.join(a.args)})" for a in cut)
+                + "; the robot is diagnosed afresh and repaired from what is seen now",
+                "warning"))
 
     def attach_journal(self, journal: Journal) -> None:
         """Journal every journaled event from now on (the journal is a projection too)."""
@@ -216,6 +239,9 @@ class Daemon:
             with contextlib.suppress(asyncio.CancelledError, Exception):
                 await task
         self._tasks = []
+        if self.operator is not None:
+            await self.operator.close()
+            self.operator = None
         await self.repairs.close()
         await self.hub.close()
         with contextlib.suppress(Exception):
@@ -304,6 +330,9 @@ class Daemon:
             self.emit(BoardEventRecord(item.kind_name,
                                        None if item.channel == 255 else item.channel,
                                        item.fields(self.view.names())))
+            switched = item.switched()
+            if switched is not None:
+                self.repairs.board_switched(item.channel, switched)
         elif isinstance(item, LinkDown):
             self._set_link(False, item.reason)
         elif isinstance(item, LinkUp | Rebooted):

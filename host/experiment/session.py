@@ -129,6 +129,15 @@ class RobotSession:
 
     # --- acting on the robot ------------------------------------------------------------------
 
+    async def shut_down(self, device: str) -> None:
+        """The device goes down (paper 000's device shut-down): its channel is switched off
+        under the daemon, which must find and repair it — not a person's deliberate
+        switch-off, which the daemon would hold (``switch``)."""
+        ch = self.daemon.model.components[device].channel
+        assert ch is not None, f"{device} is not on a board channel"
+        self.daemon.repairs.executor.actuators.note_command(ch, False)
+        await self.switch(device, False)
+
     async def switch(self, channel: str, on: bool) -> None:
         """Switch a channel as an operator with the key would."""
         async with BoardClient(self.emulated.board_url, self.emulated.key) as client:

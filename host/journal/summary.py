@@ -4,7 +4,7 @@
 prints and the web page shows in its journal tail. ``Replay`` folds entries, in id order,
 into what the daemon knew at that point: the value of every observed literal, the latest
 diagnoses, and every repair action with its latest state (the ``started`` entry and the one
-that finished it share an ``action_id``).
+that finished it share an ``action_id``), and what is quarantined or held.
 The timeline report and tests use it to check that a journal holds enough to rebuild a history
 like the paper's figures 5 and 6 (a row per component, normal or abnormal over time, repair
 actions along the top) without the daemon that wrote it.
@@ -19,8 +19,10 @@ from dataclasses import dataclass, field
 from host.events import (
     ActionRecord,
     DiagnosisRecord,
+    HoldChange,
     Observation,
     PlanRecord,
+    QuarantineChange,
     describe,
 )
 from host.journal.entries import Entry
@@ -39,6 +41,8 @@ class Replay:
     diagnosis: DiagnosisRecord | None = None
     actions: dict[str, ActionRecord] = field(default_factory=dict)
     plans: list[PlanRecord] = field(default_factory=list)
+    quarantined: dict[str, QuarantineChange] = field(default_factory=dict)
+    held: dict[str, HoldChange] = field(default_factory=dict)
     last_id: int = 0
     last_wall: float = 0.0
 
@@ -56,6 +60,16 @@ class Replay:
             self.actions[p.action_id] = p
         elif isinstance(p, PlanRecord):
             self.plans.append(p)
+        elif isinstance(p, QuarantineChange):
+            if p.quarantined:
+                self.quarantined[p.component] = p
+            else:
+                self.quarantined.pop(p.component, None)
+        elif isinstance(p, HoldChange):
+            if p.held:
+                self.held[p.component] = p
+            else:
+                self.held.pop(p.component, None)
 
     @classmethod
     def of(cls, entries: Iterable[Entry]) -> Replay:

@@ -52,6 +52,7 @@ def _check_free(host: str, port: int, what: str) -> None:
     if port == 0:
         return
     with socket.socket() as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as the servers bind
         try:
             s.bind((host, port))
         except OSError as exc:
@@ -146,6 +147,8 @@ class LaunchedRobot:
             out += [f"device: {n} {u}" for n, u in sorted(self.emulated.devices.items())]
         if d.web_port is not None and d.opts.web is not None:
             out.append(f"web: http://{d.opts.web[0]}:{d.web_port}/")
+        if d.operator is not None:
+            out.append(f"operator: {d.operator.path}")
         if d.opts.journal is not None:
             out.append(f"journal: {d.opts.journal}")
         return out

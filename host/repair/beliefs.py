@@ -33,9 +33,11 @@ from host.diagnosis.observations import Observation, ObservationSet
 
 class Beliefs(Protocol):
     async def wait_for(self, expected: Mapping[str, bool], newer_than: float,
-                       timeout: float) -> bool:
+                       timeout: float, abort: Mapping[str, bool] | None = None,
+                       abort_after: float | None = None) -> bool:
         """True once every atom's latest observation is newer than ``newer_than`` and has
-        the expected value; False after ``timeout`` seconds."""
+        the expected value; False after ``timeout`` seconds, or at once when an atom of
+        ``abort`` is observed with its value after ``abort_after`` (default ``newer_than``)."""
         ...
 
     def value(self, atom: str) -> bool | None:
@@ -93,11 +95,23 @@ class ObservedBeliefs:
     def holds(self, expected: Mapping[str, bool], newer_than: float) -> bool:
         return not self.missing(expected, newer_than)
 
+    def contradicted(self, abort: Mapping[str, bool], newer_than: float) -> bool:
+        """An atom of ``abort`` has been observed with its value after ``newer_than``."""
+        for atom, value in abort.items():
+            o = self.observations.get(atom)
+            if o is not None and o.literal.positive == value and o.time > newer_than:
+                return True
+        return False
+
     async def wait_for(self, expected: Mapping[str, bool], newer_than: float,
-                       timeout: float) -> bool:
+                       timeout: float, abort: Mapping[str, bool] | None = None,
+                       abort_after: float | None = None) -> bool:
+        stop = abort or {}
+        since = newer_than if abort_after is None else abort_after
         try:
             async with asyncio.timeout(max(0.0, timeout)), self._changed:
-                await self._changed.wait_for(lambda: self.holds(expected, newer_than))
+                await self._changed.wait_for(
+                    lambda: self.holds(expected, newer_than) or self.contradicted(stop, since))
         except TimeoutError:
-            return self.holds(expected, newer_than)
-        return True
+            pass
+        return self.holds(expected, newer_than) and not self.contradicted(stop, since)

@@ -12,7 +12,14 @@ stale data — knowing nothing of the daemon that feeds it.
   observations now (the daemon runs it off its loop); ``observations``: the daemon's one
   observation set, whose literals go into each repair problem;
 - ``emit``: one callback for everything it does — ``PlanRecord``, ``ActionRecord`` (each state
-  of each step), ``QuarantineChange``, ``RepairEnded`` and ``Note`` events (``host.events``).
+  of each step), ``QuarantineChange``, ``HoldChange``, ``RepairEnded`` and ``Note`` events
+  (``host.events``).
+
+A person (``host.operator``) can quarantine a component or clear its quarantine, and hold a
+component (maintenance: no repair touches it) or release it; a channel switched off on the board
+by a command this host did not send is held the same way until it is switched on again, so a
+deliberate switch-off is not undone. Quarantines and holds a previous run left in the journal
+are ``restore``d at start.
 
 While the board's own protection has the channels (it sheds them for input under-voltage and
 restores them itself afterwards) repairs wait for it rather than fight it. A repair is the
@@ -36,7 +43,7 @@ from typing import TYPE_CHECKING, Any
 from host.diagnosis.logic import Literal
 from host.diagnosis.observations import ObservationSet
 from host.diagnosis.result import DiagnosisResult
-from host.events import Event, Note, PlanRecord, QuarantineChange, RepairEnded
+from host.events import Event, HoldChange, Note, PlanRecord, QuarantineChange, RepairEnded
 from host.repair.actuators import Actuators
 from host.repair.beliefs import ObservedBeliefs
 from host.repair.effects import settle_times
@@ -57,6 +64,7 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 BOARD_POLL_S = 0.5
+FOREIGN_WINDOW_S = 5.0  # a switch command this host sent that long ago is still its own
 Emit = Callable[[Event], None]
 FreshDiagnosis = Callable[[], Awaitable[DiagnosisResult]]
 
@@ -172,7 +180,92 @@ class RepairService:
         if isinstance(event, StepReport):
             self._emit(event.to_record())
         elif isinstance(event, Quarantined):
-            self._emit(QuarantineChange(event.component, True, event.reason, event.safe_state))
+            attempts = self.executor.limiter.count(event.component, self.executor.clock())
+            self._emit(QuarantineChange(event.component, True, event.reason, event.safe_state,
+                                        event.by, attempts))
+
+    # --- what a person says (host.operator) ------------------------------------------------
+    def components(self) -> list[str]:
+        return list(self.executor.model.components)
+
+    def listing(self) -> dict[str, dict[str, str]]:
+        return {"quarantined": {q.component: q.reason
+                                for q in self.executor.quarantine.entries()},
+                "held": dict(self.executor.held)}
+
+    async def quarantine(self, component: str, reason: str, by: str = "person") -> str:
+        """Take ``component`` out of automatic repair now (its safe state applied)."""
+        entry = await self.executor.quarantine_component(component, reason, by)
+        return entry.safe_state
+
+    async def clear(self, component: str, by: str = "person") -> bool:
+        """Give ``component`` back to automatic repair, with fresh attempts; a device the board
+        latched for a short may be cleared and switched on once."""
+        if not self.executor.clear_quarantine(component):
+            return False
+        self.executor.actuators.allow_unlatch(component)
+        self._emit(QuarantineChange(component, False, by=by))
+        self._again()
+        return True
+
+    def hold(self, component: str, reason: str, by: str = "person") -> bool:
+        """Leave ``component`` alone (maintenance) until it is released."""
+        if component in self.executor.held:
+            return False
+        self.executor.held[component] = reason
+        self._emit(HoldChange(component, True, reason, by))
+        return True
+
+    def release(self, component: str, by: str = "person") -> bool:
+        if self.executor.held.pop(component, None) is None:
+            return False
+        self._emit(HoldChange(component, False, by=by))
+        self._again()
+        return True
+
+    def restore(self, quarantined: Mapping[str, QuarantineChange],
+                held: Mapping[str, HoldChange]) -> None:
+        """Take the quarantines and holds a previous run left (from its journal): they stay
+        until a person clears them, whatever restarted in between."""
+        for c, q in quarantined.items():
+            if c in self.executor.model.components and c not in self.executor.quarantine:
+                self.executor.quarantine.add(Quarantined(
+                    c, self.executor.clock(), q.reason, q.safe_state, q.by))
+                self._emit(QuarantineChange(c, True, q.reason, q.safe_state, q.by, q.attempts))
+        for c, h in held.items():
+            if c in self.executor.model.components:
+                self.hold(c, h.reason, h.by)
+
+    async def adopt(self) -> None:
+        """Take over the nodes an earlier daemon left running (and stop stale ones)."""
+        sup = self.executor.actuators.supervisor
+        if sup is None:
+            return
+        done = await sup.adopt()
+        if done:
+            self._emit(Note("nodes left by an earlier run: " + "; ".join(
+                f"{n} {what}" for n, what in sorted(done.items()))))
+
+    def board_switched(self, channel: int, on: bool) -> None:
+        """The board switched ``channel`` on or off by a command (not its protection): when this
+        host did not send it, a person did — hold the device while it is off, so that the
+        daemon does not undo a deliberate switch-off; release it when it is switched on."""
+        if self.executor.actuators.sent_recently(channel, on, FOREIGN_WINDOW_S):
+            return
+        device = next((c.name for c in self.executor.model.components.values()
+                       if c.channel == channel), None)
+        if device is None:
+            return
+        if not on:
+            self.hold(device, "switched off on the board by a command this daemon did not "
+                      "send", by="board")
+        elif self.executor.held.get(device, "").startswith("switched off on the board"):
+            self.release(device, by="board")
+
+    def _again(self) -> None:
+        """A person changed what may be repaired: look at the latest diagnosis again."""
+        if self._latest is not None and not self.active:
+            self.diagnosed(self._latest)
 
     async def close(self) -> None:
         for task in (self._pending, self._running):

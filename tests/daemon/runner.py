@@ -39,13 +39,14 @@ def free_port() -> int:
 
 class RunningDaemon:
     def __init__(self, tmp: Path, system_dir: Path = TEDUSAR,
-                 extra_args: tuple[str, ...] = ()) -> None:
+                 extra_args: tuple[str, ...] = (), zenoh_port: int | None = None) -> None:
         self.journal_path = tmp / "journal.sqlite"
+        self.zenoh_port = zenoh_port or free_port()
         argv = [sys.executable, "-m", "host.cli", "run", str(system_dir), "--emulate",
                 "--web", "127.0.0.1:0", "--journal", str(self.journal_path),
-                "--zenoh", f"tcp/127.0.0.1:{free_port()}", *extra_args]
+                "--zenoh", f"tcp/127.0.0.1:{self.zenoh_port}", *extra_args]
         self.err_path = tmp / "daemon.err"
-        with self.err_path.open("wb") as err:
+        with self.err_path.open("ab") as err:
             self.proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=err,
                                          text=True)
         self.urls: dict[str, str] = {}
@@ -97,6 +98,18 @@ class RunningDaemon:
                               *args, "--key-file", str(key_file)], check=True, cwd=ROOT,
                              capture_output=True, text=True, timeout=15)
         return out.stdout
+
+    def operator(self, command: str, *args: str) -> str:
+        """``dxboard quarantine|hold ARGS`` against this daemon, as its operator would."""
+        out = subprocess.run([sys.executable, "-m", "host.cli", command, *args, "--operator",
+                              self.urls["operator"]], check=True, cwd=ROOT,
+                             capture_output=True, text=True, timeout=60)
+        return out.stdout.strip()
+
+    def kill(self) -> None:
+        """``kill -9`` the daemon: no clean-up of any kind."""
+        self.proc.kill()
+        self.proc.wait(10)
 
     def interrupt(self, timeout: float = 20.0) -> int:
         self.proc.send_signal(signal.SIGINT)

@@ -162,7 +162,8 @@ def untouched(d: RunningDaemon, mark: int, component: str) -> None:
 # --- the tests ----------------------------------------------------------------------------
 
 
-def test_a_persistent_short_latches_and_is_repaired_once_cleared(robot: RunningDaemon) -> None:
+def test_a_persistent_short_latches_is_quarantined_unenergised_and_repaired_once_cleared(
+        robot: RunningDaemon) -> None:
     d = robot
     d.wait_for(healthy, HEAL_S, "healthy")
     mark = last_id(d)
@@ -175,7 +176,17 @@ def test_a_persistent_short_latches_and_is_repaired_once_cleared(robot: RunningD
     d.wait_for(lambda s: any("laser_alignment" in b for b in bad_sets(s)), 15,
                "laser_alignment diagnosed")
     assert observed(d, mark, "tripped(laser_alignment)", True)
-    d.inject("clear")  # the short is gone; the latch stays until someone clears it
+    # a short latched by the board is not energised again by the daemon: quarantined at once
+    st = d.wait_for(lambda s: "laser_alignment" in s["quarantined"], 30, "quarantined")
+    assert "short circuit" in st["quarantined"]["laser_alignment"]
+    energised = [s for s in board_states(d, mark, 1) if s == "inrush"]
+    assert len(energised) == 1  # the board's own retry, and nothing more
+    power = [a for a in actions(d, mark) if a.action in ("power_up", "power_cycle")
+             and a.finished is not None]
+    assert all("not energised again" in a.detail for a in power), power  # refused, unsent
+    d.inject("clear")  # the short is gone; a person checks the wiring and clears it
+    assert d.operator("quarantine", "clear", "laser_alignment") == \
+        "laser_alignment: quarantine cleared"
     d.wait_for(lambda s: healthy(s) and s["observations"].get("on(laser_alignment)") is True,
                HEAL_S, "laser_alignment powered again")
     done = finished(d, mark)
