@@ -57,10 +57,11 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # before benchmarks/, whose protocol.py would shadow protocol/
 
+from host.events import QuarantineChange, RepairEnded, describe  # noqa: E402
 from host.experiment.measure import measure, normal  # noqa: E402
 from host.experiment.robot import fast_model  # noqa: E402
 from host.experiment.session import RobotSession  # noqa: E402
-from host.journal import ActionRecord, DiagnosisRecord, Entry, Note  # noqa: E402
+from host.journal import ActionRecord, DiagnosisRecord, Entry  # noqa: E402
 
 DEVICES = ("jaguar", "hokuyo", "laser_alignment")
 DRIVER = {"jaguar": "jaguar_node", "hokuyo": "hokuyo_node",
@@ -310,8 +311,9 @@ class Campaign:
             if t.healthy_s is None and not t.detected:
                 t.healthy_s = 0.0
         if t.cls == NOT_REPAIRABLE:
-            notes = [e.payload.text for e in entries if isinstance(e.payload, Note)]
-            t.note = "; ".join(n for n in notes if n.startswith(("quarantined", "repair ended")))
+            said = [describe(e.payload) for e in entries
+                    if isinstance(e.payload, RepairEnded | QuarantineChange)]
+            t.note = "; ".join(said)
 
     async def quiet(self, seconds: float) -> dict[str, Any]:
         s = self.session

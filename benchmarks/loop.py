@@ -59,10 +59,10 @@ from host.board import BoardClient
 from host.diagnosis import Diagnoser, generate, load_system
 from host.diagnosis.diagnoser import UnknownLiteral
 from host.diagnosis.observations import Observation as DiagObservation
+from host.events import RepairEnded
 from host.journal import (
     ActionRecord,
     DiagnosisRecord,
-    Note,
     Observation,
     Telemetry,
 )
@@ -148,8 +148,8 @@ def one_fault(d: RunningDaemon, kind: str) -> Sample:
         diag = [e for e in entries if isinstance(e.payload, DiagnosisRecord)
                 and any(names & set(b) for b in e.payload.diagnoses)]
         acts = [e for e in entries if isinstance(e.payload, ActionRecord)]
-        done = [e for e in entries if isinstance(e.payload, Note)
-                and e.payload.text.startswith("repair ended: healthy")]
+        done = [e for e in entries if isinstance(e.payload, RepairEnded)
+                and e.payload.outcome == "healthy"]
         if diag and not cleared:
             d.inject("clear")
             cleared = True

@@ -5,7 +5,7 @@ every request gets exactly one reply line, in order; the connection stays open f
 
     {"op": "hello"}
         -> {"ok": true, "board": "dxboard-emulator", "version": 1, "channels": [names],
-            "faults": [fault names]}
+            "faults": [fault names], "boot_ms": {name: ms until the device is ready}}
     {"op": "inject", "channel": "hokuyo" | 3 | "board", "fault": "hang",
      "params": {"permanent": "true"}}
         -> {"ok": true, "channel": 3, "fault": "hang", "params": {"permanent": true}}
@@ -32,7 +32,6 @@ import asyncio
 import contextlib
 import json
 import threading
-import time
 from collections.abc import Callable, Coroutine
 from concurrent.futures import Future
 from typing import Any, TypeVar
@@ -57,7 +56,8 @@ def handle(emu: Emulator, line: bytes) -> dict[str, Any]:
     try:
         if op == "hello":
             return {"ok": True, "board": "dxboard-emulator", "version": 1,
-                    "channels": [c.name for c in emu.model.channels], "faults": list(F.FAULTS)}
+                    "channels": [c.name for c in emu.model.channels], "faults": list(F.FAULTS),
+                    "boot_ms": {c.name: c.boot_ms for c in emu.model.channels}}
         if op == "inject":
             fault, params = req.get("fault"), req.get("params", {})
             channel = req.get("channel")
@@ -109,11 +109,13 @@ async def start_server(emu: Emulator, host: str = "127.0.0.1", port: int = 0) ->
 
 
 async def run_wallclock(emu: Emulator, stop: asyncio.Event, tick_ms: int = 10) -> None:
-    """Advance the emulator's clock with the wall clock until ``stop`` is set."""
-    t0 = time.monotonic()
+    """Advance the emulator's clock with the event loop's clock until ``stop`` is set (the
+    wall clock on a real loop; a test's simulated clock on a simulated one)."""
+    clock = asyncio.get_running_loop().time
+    t0 = clock()
     start = emu.now
     while not stop.is_set():
-        emu.advance_to(start + int((time.monotonic() - t0) * 1000))
+        emu.advance_to(start + int((clock() - t0) * 1000))
         with contextlib.suppress(TimeoutError):
             await asyncio.wait_for(stop.wait(), tick_ms / 1000)
 

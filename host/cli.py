@@ -2,8 +2,8 @@
 
 Each entry of ``COMMANDS`` names a module with ``NAME`` (its sub-command), ``HELP`` (one line),
 ``add_arguments(parser)`` and ``run(args) -> int``. Modules import their heavy dependencies
-inside ``run`` so that ``dxboard --help`` stays fast. A ``UserError`` becomes one line on
-stderr and exit code 2; ``--verbose`` adds the traceback.
+inside ``run`` so that ``dxboard --help`` stays fast. A ``DxboardError`` (a ``UserError`` or a
+``RemoteError``) becomes one line on stderr and exit code 2; ``--verbose`` adds the traceback.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import traceback
 from collections.abc import Sequence
 from types import ModuleType
 
-from host.errors import UserError
+from host.errors import DxboardError
 
 # sub-command -> module implementing it (in the order --help lists them)
 COMMANDS: dict[str, str] = {
@@ -26,6 +26,8 @@ COMMANDS: dict[str, str] = {
     "diagnose": "host.commands.diagnose",
     "plan": "host.commands.plan",
     "inject": "host.commands.inject",
+    "quarantine": "host.commands.quarantine",
+    "hold": "host.commands.hold",
     "journal": "host.commands.journal",
     "report": "host.commands.report",
     "board": "host.commands.board",
@@ -71,7 +73,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     try:
         code: int = args._run(args)
-    except UserError as exc:
+    except DxboardError as exc:  # a person's mistake or a failing peer: one line
         if args.verbose:
             traceback.print_exc()
         print(f"dxboard {args.command}: error: {exc}", file=sys.stderr)

@@ -1,8 +1,10 @@
-"""A node of the virtual robot as an OS process: ``python -m emulator.robot.node NAME DIR``.
+"""A node of the virtual robot as an OS process: ``python -m emulator.robot.node NAME [DIR]``.
 
-``NAME`` is a node component (N, HN or SN) of ``SYSTEM_DIR/system.yaml``; what it does is in
+``NAME`` is a node component (N, HN or SN) of ``DIR/system.yaml``; what it does is in
 ``emulator.robot.behaviours``. The environment gives the rest:
 
+    DXBOARD_ROBOT    the robot directory when DIR is not given (the daemon sets it for every
+                     process it starts)
     DXBOARD_ZENOH    the zenoh endpoint to connect to (default tcp/127.0.0.1:7447: the daemon)
     DXBOARD_DEVICES  drivers only: a JSON object device name -> tcp://HOST:PORT, as
                      ``dxboard emulate SYSTEM_DIR --robot`` prints them
@@ -182,8 +184,11 @@ async def main_async(spec: NodeSpec, env: dict[str, str]) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
+    if len(args) == 1 and os.environ.get("DXBOARD_ROBOT"):
+        args.append(os.environ["DXBOARD_ROBOT"])
     if len(args) != 2 or args[0].startswith("-"):
-        print("usage: python -m emulator.robot.node NAME SYSTEM_DIR", file=sys.stderr)
+        print("usage: python -m emulator.robot.node NAME SYSTEM_DIR (or $DXBOARD_ROBOT)",
+              file=sys.stderr)
         return 2
     name, system_dir = args
     logging.basicConfig(stream=sys.stderr, level=logging.INFO,

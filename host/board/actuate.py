@@ -13,7 +13,7 @@ import logging
 from typing import Any
 
 from host.board.types import SwitchResult
-from host.transports.errors import BadChannel, ReadbackMismatch
+from host.transports.errors import BadRequest, ReadbackMismatch
 from protocol.constants import BOARD_CHANNEL, ST_INRUSH, ST_ON
 from protocol.messages import Ack, Clear, Message, PowerCycle, Switch, Switched
 
@@ -65,7 +65,7 @@ class ActuateMixin:
         n = await self.channel(ch)
         off_ms = round(off_s * 1000)
         if not 0 <= off_ms <= 60000:
-            raise BadChannel(f"off time {off_s} s is out of range", "use 0..60 s")
+            raise BadRequest(f"off time {off_s} s is out of range", "use 0..60 s")
         reply = await self._switched(PowerCycle(n, off_ms, force), n)
         if reply.physical and off_ms:
             raise ReadbackMismatch(f"{self.url}: channel {n} should be off for {off_s:g} s "

@@ -21,6 +21,11 @@ Capabilities the transport lacks (``Transport.CAPS``) raise ``NotSupported`` bef
 is sent. Channels are named by number or by name (names come from the board's configuration,
 read once per connection where the transport can read it). Actuation with its read-back
 checks is in ``host.board.actuate``, configuration in ``host.board.configure``.
+
+Time is passed in: ``clock`` (monotonic seconds: readings' ``host_mono``, uptime checks, time
+away) must be the event loop's clock, which its timeouts and backoff sleeps use
+(``time.monotonic``, the default, is what asyncio's loop uses); ``wall`` stamps the
+``host_time`` of everything it hands out. A test runs it on a simulated loop clock.
 """
 
 from __future__ import annotations
@@ -52,6 +57,7 @@ from host.transports.base import NAMES, Transport
 from host.transports.errors import (
     AuthRefused,
     BadChannel,
+    BadRequest,
     BoardRefused,
     BoardUnreachable,
     LinkLost,
@@ -111,7 +117,9 @@ class BoardClient(ActuateMixin, ConfigMixin):
                  connect_timeout_s: float = 5.0, reconnect: bool = True,
                  backoff_s: float = 0.1, max_backoff_s: float = 5.0,
                  transport_factory: Callable[[str, bytes | None], Transport] = open_transport,
-                 rng: random.Random | None = None) -> None:
+                 rng: random.Random | None = None,
+                 clock: Callable[[], float] = time.monotonic,
+                 wall: Callable[[], float] = time.time) -> None:
         self.url = url
         self.key = key
         self.timeout_s = timeout_s
@@ -121,6 +129,8 @@ class BoardClient(ActuateMixin, ConfigMixin):
         self.max_backoff_s = max_backoff_s
         self._factory = transport_factory
         self._rng = rng or random.Random()
+        self.clock = clock  # the host's monotonic clock: Reading.host_mono, uptimes, backoff
+        self.wall = wall  # the host's wall clock: the host_time of everything handed out
         self.transport: Transport = transport_factory(url, key)  # BadUrl at once
         self.info: BoardInfo | None = None
         self.latest: Reading | None = None
@@ -241,13 +251,13 @@ class BoardClient(ActuateMixin, ConfigMixin):
             if not fut.done():
                 fut.set_result(msg)
             return
-        now = time.time()
+        now = self.wall()
         boot = self.info.boot_id if self.info else 0
         if isinstance(msg, Measurement):
             self._note_uptime(msg.uptime_ms)
             missed = msg.seq - self._last_seq - 1 if self._last_seq else 0
             self._last_seq = msg.seq
-            reading = Reading(now, time.monotonic(), boot, msg.seq, msg.uptime_ms, msg.input_mv,
+            reading = Reading(now, self.clock(), boot, msg.seq, msg.uptime_ms, msg.input_mv,
                               msg.on_mask, msg.fault_mask, tuple(msg.currents_ma),
                               max(missed, 0))
             self.latest = reading
@@ -273,16 +283,16 @@ class BoardClient(ActuateMixin, ConfigMixin):
             log.debug("%s: unsolicited %r dropped", self.url, msg)
 
     def _note_uptime(self, uptime_ms: int) -> None:
-        self._seen_uptime = (uptime_ms, time.monotonic())
+        self._seen_uptime = (uptime_ms, self.clock())
 
     async def _link_lost(self, reason: str) -> bool:
         """Handle a lost link; True when it is back (the reader goes on)."""
         self._up.clear()
-        self._down_since = time.monotonic()
+        self._down_since = self.clock()
         log.warning("%s: link lost: %s", self.url, reason)
         self._fail_pending(LinkLost(f"{self.url}: link lost: {reason}",
                                     "the board may have rebooted or been unplugged"))
-        self._publish(LinkDown(time.time(), reason))
+        self._publish(LinkDown(self.wall(), reason))
         await self.transport.close()
         if not self.reconnect:
             return False
@@ -300,10 +310,10 @@ class BoardClient(ActuateMixin, ConfigMixin):
                 old = self._accept_new_hello(hello)
             except VersionMismatch as exc:
                 log.error("%s", exc)
-                self._publish(LinkDown(time.time(), str(exc)))
+                self._publish(LinkDown(self.wall(), str(exc)))
                 await self.transport.close()
                 return False
-            self._spawn(self._finish_session(old, hello, time.monotonic() - self._down_since))
+            self._spawn(self._finish_session(old, hello, self.clock() - self._down_since))
             return True
         return False
 
@@ -323,7 +333,7 @@ class BoardClient(ActuateMixin, ConfigMixin):
         """The rest of a new session (runs beside the reader): rebooted? resubscribe."""
         rebooted = None
         if old is not None and old.boot_id != hello.boot_id:
-            rebooted = Rebooted(time.time(), old.boot_id, hello.boot_id, hello.reset_cause,
+            rebooted = Rebooted(self.wall(), old.boot_id, hello.boot_id, hello.reset_cause,
                                 "boot id")
         elif old is not None:
             rebooted = await self._check_uptime(old, hello)
@@ -333,7 +343,7 @@ class BoardClient(ActuateMixin, ConfigMixin):
                         rebooted.how, rebooted.reset_cause_name)
             self._publish(rebooted)
         if self.info is not None:
-            self._publish(LinkUp(time.time(), down_s, self.info))
+            self._publish(LinkUp(self.wall(), down_s, self.info))
         if self._rate:
             await self._resubscribe()
 
@@ -347,10 +357,10 @@ class BoardClient(ActuateMixin, ConfigMixin):
             return None
         if not isinstance(state, State):
             return None
-        away_ms = (time.monotonic() - seen_at) * 1000
+        away_ms = (self.clock() - seen_at) * 1000
         self._note_uptime(state.uptime_ms)
         if state.uptime_ms + UPTIME_SLACK_MS + away_ms * 0.05 < seen_ms + away_ms:
-            return Rebooted(time.time(), old.boot_id, hello.boot_id, hello.reset_cause, "uptime")
+            return Rebooted(self.wall(), old.boot_id, hello.boot_id, hello.reset_cause, "uptime")
         return None
 
     async def _resubscribe(self) -> None:
@@ -433,7 +443,7 @@ class BoardClient(ActuateMixin, ConfigMixin):
                          c.sticky_faults, c.trips, c.retries)
             for c in st.channels)
         boot = self.info.boot_id if self.info else 0
-        return BoardState(time.time(), boot, st.uptime_ms, st.input_mv, st.total_ma,
+        return BoardState(self.wall(), boot, st.uptime_ms, st.input_mv, st.total_ma,
                           st.reset_cause, st.config_status, st.board_flags, chans)
 
     async def channel_names(self) -> list[str]:
@@ -461,13 +471,14 @@ class BoardClient(ActuateMixin, ConfigMixin):
 
     def is_stale(self, max_age_s: float) -> bool:
         """True when there is no reading newer than ``max_age_s`` seconds (or the link is down)."""
-        return self.latest is None or not self.connected or self.latest.stale(max_age_s)
+        return self.latest is None or not self.connected or self.latest.stale(
+            max_age_s, self.clock())
 
     async def subscribe(self, rate_hz: int = 10) -> AsyncIterator[StreamItem]:
         """Readings at ``rate_hz`` (1-100) and every event and link notice, until closed.
         Over transports without push the transport polls at that rate."""
         if not 1 <= rate_hz <= 100:
-            raise BadChannel(f"rate {rate_hz} Hz is out of range", "use 1..100 Hz")
+            raise BadRequest(f"rate {rate_hz} Hz is out of range", "use 1..100 Hz")
         sub = _Subscriber()
         self._subs.append(sub)
         try:

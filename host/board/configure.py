@@ -14,7 +14,7 @@ import logging
 from typing import Any
 
 from host.transports.base import CONFIG, SAVE, Transport
-from host.transports.errors import BadChannel, ReadbackMismatch
+from host.transports.errors import BadRequest, ReadbackMismatch
 from protocol.constants import BOARD_CHANNEL
 from protocol.messages import (
     BOARD_CONFIG_KEYS,
@@ -60,7 +60,7 @@ class ConfigMixin:
         current = await self.get_channel_config(ch)
         unknown = sorted(set(fields) - set(CHANNEL_CONFIG_KEYS) - {"channel"})
         if unknown:
-            raise BadChannel(f"unknown channel setting(s) {', '.join(unknown)}",
+            raise BadRequest(f"unknown channel setting(s) {', '.join(unknown)}",
                              "settings: " + ", ".join(CHANNEL_CONFIG_KEYS[1:]))
         current.update(fields)
         reply: ChannelConfig = await self._expect(SetChannelConfig(**current), ChannelConfig)
@@ -79,7 +79,7 @@ class ConfigMixin:
         self._need(CONFIG, "changing configuration")
         unknown = sorted(set(fields) - set(BOARD_CONFIG_KEYS))
         if unknown:
-            raise BadChannel(f"unknown board setting(s) {', '.join(unknown)}",
+            raise BadRequest(f"unknown board setting(s) {', '.join(unknown)}",
                              "settings: " + ", ".join(BOARD_CONFIG_KEYS))
         current = await self.get_board_config()
         current.update(fields)

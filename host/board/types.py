@@ -19,9 +19,16 @@ from protocol.constants import (
     BOARD_FLAG_NAMES,
     CAPABILITY_NAMES,
     CONFIG_STATUS_NAMES,
+    EV_STATE,
     EVENT_NAMES,
+    F_DEADMAN,
+    F_SHED_TOTAL,
+    F_SHED_UV,
     FAULT_NAMES,
     RESET_NAMES,
+    ST_INRUSH,
+    ST_OFF,
+    ST_ON,
     STATE_NAMES,
 )
 
@@ -100,11 +107,15 @@ class BoardState:
     board_flags: int
     channels: tuple[ChannelState, ...]
 
+    @property
+    def reset_cause_name(self) -> str:
+        return _name(RESET_NAMES, self.reset_cause)
+
     def to_dict(self) -> dict[str, object]:
         return {
             "host_time": self.host_time, "boot_id": self.boot_id, "uptime_ms": self.uptime_ms,
             "input_mv": self.input_mv, "total_ma": self.total_ma,
-            "reset_cause": _name(RESET_NAMES, self.reset_cause),
+            "reset_cause": self.reset_cause_name,
             "config_status": _name(CONFIG_STATUS_NAMES, self.config_status),
             "board_flags": flag_names(self.board_flags, BOARD_FLAG_NAMES),
             "channels": [c.to_dict() for c in self.channels],
@@ -176,6 +187,25 @@ class BoardEvent:
     @property
     def kind_name(self) -> str:
         return _name(EVENT_NAMES, self.kind)
+
+    def switched(self) -> bool | None:
+        """True or False when the channel was switched on or off by a command (not by the
+        board's protection: no trip, shed or dead-man), else None."""
+        if self.kind != EV_STATE or self.faults & (F_SHED_UV | F_SHED_TOTAL | F_DEADMAN):
+            return None
+        if self.old_state in (ST_ON, ST_INRUSH) and self.new_state == ST_OFF:
+            return False
+        if self.old_state == ST_OFF and self.new_state == ST_INRUSH:
+            return True
+        return None
+
+    def fields(self, channel_names: list[str]) -> dict[str, object]:
+        """What the event says, by name, for the journal: the channel's name, its state
+        change, its faults and the value that triggered it."""
+        name = channel_names[self.channel] if self.channel < len(channel_names) else "board"
+        return {"name": name, "from": _name(STATE_NAMES, self.old_state),
+                "to": _name(STATE_NAMES, self.new_state),
+                "faults": flag_names(self.faults, FAULT_NAMES), "value_ma": self.value_ma}
 
     def to_dict(self) -> dict[str, object]:
         return {"host_time": self.host_time, "event": self.kind_name, "seq": self.seq,

@@ -15,15 +15,12 @@ protocol (see ``emulator/control.py``) and imports nothing of the emulator.
 from __future__ import annotations
 
 import argparse
-import json
-import socket
-from typing import Any
 
 from host.errors import UserError
+from host.launch.control import request
 
 NAME = "inject"
 HELP = "inject a fault into an emulated board (or clear all faults)"
-TIMEOUT_S = 5.0
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -32,42 +29,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="'board', a channel number or name; or 'clear' to clear all")
     parser.add_argument("fault", metavar="FAULT", nargs="?", help="fault name")
     parser.add_argument("params", metavar="key=value", nargs="*", help="fault parameters")
-
-
-def parse_url(url: str) -> tuple[str, int]:
-    rest = url.removeprefix("control://").rstrip("/")
-    host, sep, port = rest.rpartition(":")
-    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
-        raise UserError(f"bad control URL {url!r}",
-                        "give control://HOST:PORT as printed by `dxboard emulate`, or HOST:PORT")
-    return host.strip("[]"), int(port)
-
-
-def request(url: str, req: dict[str, Any]) -> dict[str, Any]:
-    """Send one request line and return the reply; ``UserError`` if the endpoint fails."""
-    host, port = parse_url(url)
-    try:
-        with socket.create_connection((host, port), timeout=TIMEOUT_S) as sock:
-            sock.sendall(json.dumps(req).encode() + b"\n")
-            buf = b""
-            while not buf.endswith(b"\n"):
-                chunk = sock.recv(65536)
-                if not chunk:
-                    break
-                buf += chunk
-    except OSError as exc:
-        raise UserError(f"cannot reach the control endpoint {host}:{port}: {exc}",
-                        "is `dxboard emulate` running? use the control URL it printed") from exc
-    try:
-        reply = json.loads(buf)
-    except ValueError as exc:
-        raise UserError(f"{host}:{port} is not a dxboard control endpoint",
-                        "use the control URL, not the board URL") from exc
-    if not isinstance(reply, dict):
-        raise UserError(f"{host}:{port} is not a dxboard control endpoint")
-    if not reply.get("ok"):
-        raise UserError(str(reply.get("error", "refused")))
-    return reply
 
 
 def run(args: argparse.Namespace) -> int:

@@ -18,7 +18,7 @@ HELP = "show the last entries of a journal file"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from host.journal.entries import Kind
+    from host.events import Kind
 
     parser.add_argument("file", metavar="FILE", help="journal file (SQLite)")
     parser.add_argument("--tail", type=int, default=20, metavar="N",

@@ -6,8 +6,10 @@
 what the observers see and repairs what it finds (power-cycles, driver restarts), verifying each
 step. ``--emulate`` also starts the robot's emulated board (``dxboard emulate``, with its
 virtual devices when the robot has them) and prints its board and fault-injection (control)
-URLs. It prints one URL a line (``board:``, ``control:``, ``web:``, ``journal:``) and runs until
-Ctrl-C, which stops everything cleanly.
+URLs. It prints one URL a line (``board:``, ``control:``, ``device:``, ``web:``, ``journal:``),
+then one line per change of diagnosis, plan, step result, quarantine and hold, and the board
+link going down or up (``-q``: only the URLs), and runs until Ctrl-C, which stops everything
+cleanly. The robot directory and the addresses are checked before anything starts.
 
 The key for switching comes from ``$DXBOARD_KEY`` or ``--key-file``; with ``--emulate`` the
 emulated board gets the ``--key-file`` key, or a fresh one. ``--dry-run`` diagnoses and plans
@@ -21,9 +23,9 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
-import json
 import logging
 import signal
+import sys
 from pathlib import Path
 
 from host.errors import UserError
@@ -50,6 +52,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--key-file", metavar="FILE", help="the board's key (else $DXBOARD_KEY)")
     parser.add_argument("--rate", type=int, default=100, metavar="HZ",
                         help="board readings per second (1-100, default 100)")
+    parser.add_argument("--operator", metavar="PATH", type=Path,
+                        help="the operator socket for `dxboard quarantine` and `dxboard hold` "
+                             "(default: beside the journal, e.g. dxboard-journal.sock)")
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="print only the URLs, not a line per diagnosis, plan, step result "
+                             "and quarantine")
     parser.add_argument("--zenoh", metavar="ENDPOINT", action="append",
                         help="zenoh endpoint the daemon listens on for topics "
                              "(default: the model's, tcp/127.0.0.1:7447)")
@@ -70,61 +78,46 @@ def run(args: argparse.Namespace) -> int:
 
 async def _main(args: argparse.Namespace, system_dir: Path, web: tuple[str, int] | None) -> int:
     from host.board.keys import load_key
-    from host.daemon.core import Daemon, DaemonOptions
-    from host.daemon.emulated import EmulatedBoard
+    from host.commands.terminal import TerminalLines
+    from host.daemon.core import DaemonOptions
+    from host.launch.robot import Launch, LaunchedRobot
+    from host.operator.client import default_socket
 
-    emulated: EmulatedBoard | None = None
-    daemon: Daemon | None = None
-    key: bytes | None
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
+    terminal: TerminalLines | None = None
     for sig in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(sig, stop.set)
     try:
-        if args.emulate:
-            emulated = await EmulatedBoard.start(
-                system_dir, args.control, ("--robot",) if _has_robot(system_dir) else (),
-                key=load_key(args.key_file) if args.key_file else None)
-            board_url, key = emulated.board_url, emulated.key
-            node_env = {"DXBOARD_DEVICES": json.dumps(emulated.devices)}
-            print(f"board: {board_url}")
-            print(f"control: {emulated.control_url}")
-            for name, url in sorted(emulated.devices.items()):
-                print(f"device: {name} {url}")
-        else:
-            board_url, key, node_env = args.board, load_key(args.key_file), {}
-            print(f"board: {board_url}")
-        opts = DaemonOptions(
-            system_dir=system_dir, board_url=board_url, key=key, web=web,
-            journal=Path(args.journal), dry_run=args.dry_run, rate_hz=args.rate,
-            zenoh_listen=args.zenoh, node_env=node_env,
-        )
-        daemon = Daemon(opts)
-        await daemon.start()
-        if daemon.web_port is not None and web is not None:
-            print(f"web: http://{web[0]}:{daemon.web_port}/")
-        print(f"journal: {args.journal}", flush=True)
-        waiter = asyncio.ensure_future(daemon.wait())
-        stopper = asyncio.ensure_future(stop.wait())
-        done, _ = await asyncio.wait([waiter, stopper], return_when=asyncio.FIRST_COMPLETED)
-        for task in (waiter, stopper):
-            if task not in done:
-                task.cancel()
-        if waiter in done:
-            waiter.result()  # a failed task: raise it
+        key = load_key(args.key_file) if (args.key_file or not args.emulate) else None
+        journal = Path(args.journal)
+        opts = DaemonOptions(system_dir=system_dir, board_url=args.board or "", web=web,
+                             journal=journal, dry_run=args.dry_run,
+                             rate_hz=args.rate, zenoh_listen=args.zenoh,
+                             operator=args.operator or default_socket(journal))
+        launch = Launch(system_dir, None if args.emulate else args.board, key,
+                        control=args.control, daemon=opts)
+        terminal = None if args.quiet else TerminalLines(paused=True)
+        if terminal is not None:
+            launch.readers = (terminal,)
+        async with LaunchedRobot(launch) as robot:
+            for line in robot.lines():
+                print(line)
+            sys.stdout.flush()
+            if terminal is not None:
+                terminal.resume()
+            waiter = asyncio.ensure_future(robot.daemon.wait())
+            stopper = asyncio.ensure_future(stop.wait())
+            done, _ = await asyncio.wait([waiter, stopper], return_when=asyncio.FIRST_COMPLETED)
+            for task in (waiter, stopper):
+                if task not in done:
+                    task.cancel()
+            if waiter in done:
+                waiter.result()  # a failed task: raise it
         return 0
     finally:
-        try:
-            if daemon is not None:
-                await daemon.close()
-        finally:
-            if emulated is not None:
-                await emulated.stop()
+        if terminal is not None:
+            terminal.close()
         for sig in (signal.SIGINT, signal.SIGTERM):
             with contextlib.suppress(Exception):
                 loop.remove_signal_handler(sig)
-
-
-def _has_robot(system_dir: Path) -> bool:
-    """True when the robot has virtual devices the emulator can serve (``--robot``)."""
-    return (system_dir / "robot.yaml").is_file()

@@ -1,7 +1,9 @@
-"""The host daemon (``dxboard run``): it wires the board client, the observers, the diagnoser,
-the repair planner and executor, the journal and the web page, and owns the clocks.
+"""The host daemon (``dxboard run``): it wires the board client, the observers, the one
+observation set, the diagnosis runner, the repair service, the operator socket, the journal and
+the web page, and owns the clocks.
 
-``core.Daemon`` is the loop; ``repairs.Repairs`` turns changed diagnoses into verified repairs;
-``view.BoardView`` folds the board stream into what the page shows; ``emulated.EmulatedBoard``
-starts the robot's emulated board for ``--emulate``.
+``core.Daemon`` wires and runs the loop; ``stream.EventStream`` is its one way out: every event
+(``host.events``) goes to every projection — the journal, the page's status
+(``host.web.fold``), the terminal (``host.commands.terminal``). Starting a robot (its emulated
+board and the daemon) is ``host.launch``.
 """

@@ -1,21 +1,22 @@
-"""The daemon: board stream → observers → observations → diagnosis → repair, journaled and shown.
+"""The daemon: board stream → observers → one observation set → diagnosis → repair service, and
+one event stream out.
 
-Theory of operation. ``Daemon.run`` builds the pieces from the robot directory — the model and
-its clauses (``host.diagnosis``), the observers of its ``observers:`` section, a ``Diagnoser``,
-the journal and the web page — and runs four tasks on one asyncio loop:
+Theory of operation. ``Daemon`` builds the pieces from the robot directory and only wires them:
 
-- the board task keeps a ``BoardClient`` subscribed (reconnecting with backoff) and feeds every
-  reading, event and link notice to the observer hub and the ``BoardView``; events and link
-  changes are journaled, readings are journaled as 1 Hz telemetry summaries;
-- the observer hub calls ``_on_updates`` with every change (and the refreshes that keep
-  literals valid); the daemon applies them to the diagnoser (S ⊕ o), journals each change of
-  a literal's value (true, false, unknown) and wakes the diagnosis task;
-- the diagnosis task diagnoses on every change of the observation set, plus a slow safety tick
-  that also expires literals whose observers fell silent; a changed diagnosis is journaled,
-  shown, and handed to the repairs (``host.daemon.repairs``), which start after a debounce;
-- the status task samples the channels for the page's sparklines a few times a second.
+- the model and its clauses (``host.diagnosis``), the observers of its ``observers:`` section
+  and their ``ObserverHub``;
+- one ``ObservationSet``: the hub's updates go into it (S ⊕ o), the ``DiagnosisRunner`` diagnoses
+  snapshots of it off the loop, and the repair executor's effect checks wait on it;
+- the ``RepairService`` (``host.repair.service``), fed every changed diagnosis and the board
+  link, emitting plans, steps, results and quarantines;
+- one ``EventStream``: everything the daemon learns or does is emitted there once, as a typed
+  event (``host.events``), and the journal, the web page's status (``host.web.fold``), the
+  terminal's lines (``host.commands.terminal``) and any other reader are projections of it.
 
-Nothing below the daemon reads the clock: the daemon owns one monotonic clock (``clock``) for
+Tasks on one asyncio loop: the board task keeps a ``BoardClient`` subscribed (reconnecting with
+backoff) and feeds every reading, event and link notice to the hub and the ``BoardView``; the
+diagnosis runner's task; the sample task that emits the channels a few times a second. Nothing
+below the daemon reads the clock: the daemon owns one monotonic clock (``clock``) for
 observations and deadlines and one wall clock (``wall``) for the journal and the page.
 """
 
@@ -29,41 +30,38 @@ import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from host.board import BoardClient
 from host.board.types import BoardEvent, BoardState, LinkDown, LinkUp, Reading, Rebooted
-from host.diagnosis import Diagnoser, DiagnosisResult, generate, load_system
-from host.diagnosis.diagnoser import UnknownLiteral
-from host.diagnosis.observations import Observation
-from host.errors import UserError
-from host.journal import (
-    BoardEvent as JournalBoardEvent,
-)
-from host.journal import (
-    DiagnosisRecord,
-    Journal,
-    Note,
-    Payload,
-    TelemetryDownsampler,
-)
-from host.journal import (
-    Observation as JournalObservation,
-)
+from host.board.view import BoardView
+from host.diagnosis import Diagnoser, generate, load_system
+from host.diagnosis.logic import Theory
+from host.diagnosis.model import SystemModel
+from host.diagnosis.observations import Observation as Seen
+from host.diagnosis.observations import ObservationSet
+from host.diagnosis.runner import DiagnosisRunner
+from host.errors import RemoteError, UserError
+from host.events import JOURNALED, Event, LinkChange, Note, Observation, Stamped
+from host.events import BoardEvent as BoardEventRecord
+from host.journal import Journal, TelemetryDownsampler
+from host.journal.summary import Replay
 from host.observers import ObserverHub, check_atoms, load_observers
 from host.observers.base import Update
+from host.observers.config import ObserversConfig
+from host.operator.server import OperatorServer
+from host.repair import service
+from host.repair.planner import RepairPlanner
+from host.repair.processes import ProcessConfig, load_processes
+from host.web.fold import StatusFold
 from host.web.server import WebServer
-from host.web.status import DiagnosisStatus, MemoryStatusSource, Status
-from protocol.constants import EVENT_NAMES, FAULT_NAMES, RESET_NAMES, STATE_NAMES
+from host.web.status import MemoryStatusSource, Status
 
-from .view import BoardView
-
-if TYPE_CHECKING:
-    from host.daemon.repairs import Repairs
+from .stream import EventStream
 
 log = logging.getLogger(__name__)
 
-SOURCE = "daemon"
+SAMPLE_S = 0.2  # the page's sparklines: a sample of every channel this often
 
 
 @dataclass
@@ -83,75 +81,105 @@ class DaemonOptions:
     time_budget_s: float = 0.5
     node_env: Mapping[str, str] = field(default_factory=dict)  # for the processes it starts
     max_parallel_steps: int | None = None  # repair steps at once; None: as the plan allows
+    device_boot_s: Mapping[str, float] = field(default_factory=dict)  # settle times of devices
+    operator: Path | None = None  # the operator socket (quarantine, hold); None: none
 
 
-def flag_names(mask: int, names: tuple[str, ...]) -> list[str]:
-    return [n for i, n in enumerate(names) if mask >> i & 1]
+@dataclass(frozen=True)
+class RobotFiles:
+    """Everything the daemon reads from a robot directory, loaded and checked."""
+
+    model: SystemModel
+    theory: Theory
+    observers: ObserversConfig
+    processes: Mapping[str, ProcessConfig]
+    planner: RepairPlanner
+
+
+def load_robot(system_dir: Path, zenoh_listen: list[str] | None = None) -> RobotFiles:
+    """Load and check the robot directory (``system.yaml``, ``repair.pddl``): a ``UserError``
+    naming the file, the line and the fix before anything is started."""
+    model = load_system(system_dir)
+    theory = generate(model)
+    observers = load_observers(system_dir, model)
+    unknown = check_atoms(observers, theory)
+    if unknown:
+        raise UserError(f"{observers.file}: observers report {', '.join(unknown)}, "
+                        "which no clause of the model mentions",
+                        "remove those observers or extend the model")
+    if zenoh_listen is not None:
+        observers.source = dataclasses.replace(observers.source, listen=tuple(zenoh_listen))
+    return RobotFiles(model, theory, observers, load_processes(system_dir, model),
+                      RepairPlanner.for_system(system_dir))
 
 
 class Daemon:
-    def __init__(
-        self,
-        opts: DaemonOptions,
-        clock: Callable[[], float] = time.monotonic,
-        wall: Callable[[], float] = time.time,
-    ) -> None:
+    def __init__(self, opts: DaemonOptions, clock: Callable[[], float] = time.monotonic,
+                 wall: Callable[[], float] = time.time, files: RobotFiles | None = None) -> None:
         self.opts = opts
         self.clock = clock
-        self.wall = wall
-        self.model = load_system(opts.system_dir)
-        self.theory = generate(self.model)
-        self.observers_cfg = load_observers(opts.system_dir, self.model)
-        unknown = check_atoms(self.observers_cfg, self.theory)
-        if unknown:
-            raise UserError(
-                f"{self.observers_cfg.file}: observers report {', '.join(unknown)}, "
-                "which no clause of the model mentions",
-                "remove those observers or extend the model",
-            )
-        if opts.zenoh_listen is not None:
-            self.observers_cfg.source = dataclasses.replace(
-                self.observers_cfg.source, listen=tuple(opts.zenoh_listen))
-        self.diagnoser = Diagnoser(self.theory)
+        robot = files or load_robot(opts.system_dir, opts.zenoh_listen)
+        self.model, self.theory, self.observers_cfg = robot.model, robot.theory, robot.observers
+        self.stream = EventStream(clock, wall)
+        self.emit = self.stream.emit
+        self.status = MemoryStatusSource(Status(robot=self.model.name))
+        self.stream.subscribe(StatusFold(self.status))
+        self.observations = ObservationSet()
+        self._known = self.theory.observable_atoms()
+        self.diagnosis = DiagnosisRunner(
+            Diagnoser(self.theory, observations=self.observations), self.observations,
+            self.emit, clock=clock, on_changed=self._diagnosis_changed,
+            safety_tick_s=opts.safety_tick_s, max_card=opts.max_card, max_count=opts.max_count,
+            time_budget_s=opts.time_budget_s)
         self.hub = ObserverHub(self.observers_cfg.observers, self._on_updates, clock=clock)
         self.view = BoardView()
-        self.status = MemoryStatusSource(Status(robot=self.model.name))
+        journal = opts.journal or Path("dxboard-journal.sqlite")
+        self.repairs = service.build(
+            robot.planner, self.model, robot.processes, observations=self.observations,
+            observable={a for o in self.hub.observers for a in o.atoms()},
+            diagnose=lambda: self.diagnosis.run("repair"), emit=self.emit,
+            logs_dir=journal.parent / (journal.stem + "-logs"),
+            env={"DXBOARD_ZENOH": self.observers_cfg.source.listen[0],
+                 "DXBOARD_ROBOT": str(opts.system_dir.resolve()), **opts.node_env},
+            device_boot_s=opts.device_boot_s, on_start=self._started, dry_run=opts.dry_run,
+            clock=clock, max_parallel=opts.max_parallel_steps,
+            debounce_s=opts.repair_debounce_s, board=self.model.board or "board")
         self.journal: Journal | None = None
         self.web: WebServer | None = None
         self.web_port: int | None = None
+        self.operator: OperatorServer | None = None
         self.client: BoardClient | None = None
         self.link_up = False
-        self.result: DiagnosisResult | None = None
-        self._values: dict[str, bool | None] = {}
-        self._changed = asyncio.Event()
         self._stop = asyncio.Event()
         self._tasks: list[asyncio.Task[Any]] = []
         self._telemetry = TelemetryDownsampler(period_s=1.0)
-        self._counters = {"observation_changes": 0, "diagnosis_runs": 0}
-        self._latency_sum = 0.0
-        self.repairs: Repairs | None = None  # built in start()
 
-    # --- the journal ------------------------------------------------------------------
+    @property
+    def result(self) -> Any:
+        """The latest diagnosis (None before the first)."""
+        return self.diagnosis.result
 
-    def record(self, payload: Payload) -> None:
-        if self.journal is not None:
-            self.journal.record(payload, wall=self.wall(), mono=self.clock())
+    def healthy(self) -> bool:
+        """True when the current diagnosis is 'nothing is broken'."""
+        return service.is_healthy(self.diagnosis.result)
 
     # --- running ----------------------------------------------------------------------
 
     async def start(self) -> None:
         """Open the journal, the web page and the observers, and start the tasks."""
-        from host.daemon.repairs import Repairs
-
         opts = self.opts
         if opts.journal is not None:
-            self.journal = Journal(opts.journal)
-        self.record(Note(f"dxboard run {self.model.name}: board {opts.board_url}"
-                         + (" (dry run)" if opts.dry_run else "")))
+            self.attach_journal(Journal(opts.journal))
+        self.emit(Note(f"dxboard run {self.model.name}: board {opts.board_url}"
+                       + (" (dry run)" if opts.dry_run else "")))
+        if self.journal is not None:
+            self._restore(self.journal)
         if opts.web is not None:
             self.web = WebServer(self.status, self.journal.reader if self.journal else None)
             self.web_port = await self.web.start(*opts.web)
-        self.repairs = Repairs(self)
+        if opts.operator is not None:
+            self.operator = OperatorServer(self.repairs, opts.operator)
+            await self.operator.start()
         spec = self.observers_cfg.source
         try:
             self.source = spec.open()
@@ -163,11 +191,32 @@ class Daemon:
             ) from None
         await self.hub.start(self.source, self.observers_cfg.processes,
                              poll=self.observers_cfg.poll)
-        self._tasks = [
-            asyncio.ensure_future(self._board_task()),
-            asyncio.ensure_future(self._diagnosis_task()),
-            asyncio.ensure_future(self._status_task()),
-        ]
+        await self.repairs.adopt()
+        self._tasks = [asyncio.ensure_future(t) for t in (
+            self._board_task(), self.diagnosis.task(), self._sample_task())]
+
+    def _restore(self, journal: Journal) -> None:
+        """Quarantines and holds that earlier runs left in the journal stay in force; a repair
+        an earlier run was killed in is said (the robot is diagnosed afresh)."""
+        past = Replay.of(journal.reader.query(kind=("quarantine", "hold"), limit=None))
+        self.repairs.restore(past.quarantined, past.held)
+        cut = [a for a in Replay.of(journal.reader.tail(200, kind="action")).actions.values()
+               if a.finished is None]
+        if cut:
+            self.emit(Note("an earlier run stopped during " + ", ".join(
+                f"{a.action}({','.join(a.args)})" for a in cut)
+                + "; the robot is diagnosed afresh and repaired from what is seen now",
+                "warning"))
+
+    def attach_journal(self, journal: Journal) -> None:
+        """Journal every journaled event from now on (the journal is a projection too)."""
+        self.journal = journal
+
+        def record(s: Stamped) -> None:
+            if s.event.kind in JOURNALED:
+                journal.record(s.event, wall=s.wall, mono=s.mono)
+
+        self.stream.subscribe(record)
 
     async def wait(self) -> None:
         """Run until ``stop()`` is called or a task fails (its exception is raised here)."""
@@ -190,8 +239,10 @@ class Daemon:
             with contextlib.suppress(asyncio.CancelledError, Exception):
                 await task
         self._tasks = []
-        if self.repairs is not None:
-            await self.repairs.close()
+        if self.operator is not None:
+            await self.operator.close()
+            self.operator = None
+        await self.repairs.close()
         await self.hub.close()
         with contextlib.suppress(Exception):
             self.source.close()
@@ -200,90 +251,38 @@ class Daemon:
             self.web = None
         telemetry = self._telemetry.flush()
         if telemetry is not None:
-            self.record(telemetry)
-        self.record(Note("dxboard run stopped"))
+            self.emit(telemetry)
+        self.emit(Note("dxboard run stopped"))
         if self.journal is not None:
             await self.journal.flush()
             self.journal.close()
             self.journal = None
-        self.diagnoser.close()
+        self.diagnosis.close()
 
-    # --- observations -----------------------------------------------------------------
+    # --- observations and diagnoses -----------------------------------------------------
 
     def _on_updates(self, updates: list[Update]) -> None:
         changed = False
         for u in updates:
-            if isinstance(u, Observation):
-                atom, value, source = u.literal.atom, u.literal.positive, u.source
-                try:
-                    self.diagnoser.observe(u)
-                except UnknownLiteral:
+            if isinstance(u, Seen):
+                if u.literal.atom not in self._known:
                     log.warning("observation %s is not in the model; ignored", u.literal)
                     continue
-            else:
-                atom, value, source = u.atom, None, u.source
-                self.diagnoser.retract(atom)
-            if self._values.get(atom, "absent") != value:
-                self._values[atom] = value
-                self.record(JournalObservation(atom, value, source))
-                self._counters["observation_changes"] += 1
+                if self.observations.add(u):
+                    self.emit(Observation(u.literal.atom, u.literal.positive, u.source))
+                    changed = True
+            elif self.observations.retract(u.atom):
+                self.emit(Observation(u.atom, None, u.source))
                 changed = True
-        if self.repairs is not None:
-            self.repairs.observed(updates)
         if changed:
-            self.status.update(observations=dict(self._values),
-                               observation_changes=self._counters["observation_changes"],
-                               updated=self.wall())
-            self._changed.set()
+            self.diagnosis.poke()
 
-    # --- diagnosis --------------------------------------------------------------------
+    def _diagnosis_changed(self, result: Any) -> None:
+        self.repairs.diagnosed(result)
 
-    async def _diagnosis_task(self) -> None:
-        while True:
-            trigger = "observation"
-            try:
-                await asyncio.wait_for(self._changed.wait(), self.opts.safety_tick_s)
-            except TimeoutError:
-                trigger = "safety tick"
-            self._changed.clear()
-            self.diagnose(trigger)
-
-    def diagnose(self, trigger: str) -> DiagnosisResult:
-        """One diagnosis now; journaled and shown when it differs from the last one."""
-        for gone in self.diagnoser.expire(self.clock()):
-            if self._values.get(gone.literal.atom) is not None:
-                self._values[gone.literal.atom] = None
-                self.record(JournalObservation(gone.literal.atom, None, "expired"))
-        t0 = time.perf_counter()
-        result = self.diagnoser.diagnose(max_card=self.opts.max_card,
-                                         max_count=self.opts.max_count,
-                                         time_budget_s=self.opts.time_budget_s)
-        elapsed = time.perf_counter() - t0
-        self._counters["diagnosis_runs"] += 1
-        self._latency_sum += elapsed
-        old = self.result
-        self.result = result
-        changed = old is None or old.bad_sets() != result.bad_sets()
-        if changed:
-            self.record(DiagnosisRecord.of(
-                result.bad_sets(), complete=result.complete, trigger=trigger,
-                elapsed_s=elapsed, probabilities=[d.probability for d in result.diagnoses]))
-        self.status.update(
-            diagnoses=tuple(DiagnosisStatus(tuple(sorted(d.bad)), d.probability)
-                            for d in result.diagnoses if d.bad),
-            diagnosis_complete=result.complete,
-            diagnosis_runs=self._counters["diagnosis_runs"],
-            diagnosis_latency_sum_s=self._latency_sum,
-            diagnosis_last_latency_s=elapsed,
-            updated=self.wall(),
-        )
-        if changed and self.repairs is not None:
-            self.repairs.diagnosis_changed(result)
-        return result
-
-    def healthy(self) -> bool:
-        """True when the current diagnosis is 'nothing is broken'."""
-        return self.result is not None and self.result.bad_sets() in ([], [frozenset()])
+    def _started(self, node: str, pid: int) -> None:
+        if self.hub.watcher is not None:
+            self.hub.watcher.track(node, pid)
 
     # --- the board ----------------------------------------------------------------------
 
@@ -291,7 +290,8 @@ class Daemon:
         backoff = 0.2
         while True:
             try:
-                async with BoardClient(self.opts.board_url, self.opts.key) as client:
+                async with BoardClient(self.opts.board_url, self.opts.key, clock=self.clock,
+                                       wall=self.stream.wall) as client:
                     self.client = client
                     backoff = 0.2
                     await self._board_state(await client.state(), "connected")
@@ -299,11 +299,11 @@ class Daemon:
                         self.hub.feed_board(item)
                         self.view.apply(item)
                         await self._board_item(client, item)
-            except UserError as exc:  # unreachable, refused, ...: keep trying, say so once
+            except RemoteError as exc:  # unreachable, lost, refused: keep trying, say so once
                 if self.link_up or backoff == 0.2:
-                    self.record(Note(f"board: {exc}", "error"))
+                    self.emit(Note(f"board: {exc}", "error"))
                     log.warning("board: %s", exc)
-                self._set_link(False)
+                self._set_link(False, str(exc))
             finally:
                 self.client = None
             await asyncio.sleep(backoff)
@@ -312,51 +312,53 @@ class Daemon:
     async def _board_state(self, state: BoardState, why: str) -> None:
         self.hub.feed_board(state)
         self.view.reset(state)
-        self._set_link(True)
-        self.status.update(channels=self.view.channels(), updated=self.wall())
-        self.record(JournalBoardEvent(why, None, {
+        self.emit(BoardEventRecord(why, None, {
             "boot_id": f"{state.boot_id:08x}",
-            "reset_cause": RESET_NAMES[state.reset_cause]
-            if state.reset_cause < len(RESET_NAMES) else state.reset_cause,
+            "reset_cause": state.reset_cause_name,
             "config_status": state.config_status,
         }))
+        self._set_link(True, why)
+        self.emit(self.view.sample())
 
     async def _board_item(self, client: BoardClient, item: object) -> None:
         if isinstance(item, Reading):
             summary = self._telemetry.add(
                 item.host_mono, dict(enumerate(float(c) for c in item.currents_ma)))
             if summary is not None:
-                self.record(summary)
+                self.emit(summary)
         elif isinstance(item, BoardEvent):
-            kind = EVENT_NAMES[item.kind] if item.kind < len(EVENT_NAMES) else str(item.kind)
-            name = self.view.names()[item.channel] if item.channel < len(self.view.names()) \
-                else "board"
-            self.record(JournalBoardEvent(kind, None if item.channel == 255 else item.channel, {
-                "name": name,
-                "from": STATE_NAMES[item.old_state] if item.old_state < 6 else item.old_state,
-                "to": STATE_NAMES[item.new_state] if item.new_state < 6 else item.new_state,
-                "faults": flag_names(item.faults, FAULT_NAMES),
-                "value_ma": item.value_ma,
-            }))
+            self.emit(BoardEventRecord(item.kind_name,
+                                       None if item.channel == 255 else item.channel,
+                                       item.fields(self.view.names())))
+            switched = item.switched()
+            if switched is not None:
+                self.repairs.board_switched(item.channel, switched)
         elif isinstance(item, LinkDown):
-            self._set_link(False)
-            self.record(JournalBoardEvent("link_down", None, {"reason": item.reason}))
+            self._set_link(False, item.reason)
         elif isinstance(item, LinkUp | Rebooted):
             if isinstance(item, Rebooted):
-                self.record(JournalBoardEvent("rebooted", None, {
+                self.emit(BoardEventRecord("rebooted", None, {
                     "old_boot_id": f"{item.old_boot_id:08x}",
                     "new_boot_id": f"{item.new_boot_id:08x}", "how": item.how}))
             await self._board_state(await client.state(),
                                     "link_up" if isinstance(item, LinkUp) else "state")
 
-    def _set_link(self, up: bool) -> None:
+    def _set_link(self, up: bool, reason: str) -> None:
         if up != self.link_up:
             self.link_up = up
-            self.status.update(board_link_up=up, updated=self.wall())
+            self.repairs.link(self.client if up else None)
+            self.emit(LinkChange(up, reason))
 
-    async def _status_task(self) -> None:
+    async def _sample_task(self) -> None:
         while True:
-            await asyncio.sleep(0.2)
+            await asyncio.sleep(SAMPLE_S)
             if self.link_up:
-                self.view.sample()
-                self.status.update(channels=self.view.channels(), updated=self.wall())
+                self.emit(self.view.sample())
+
+    def subscribe(self, reader: Callable[[Stamped], None]) -> Callable[[], None]:
+        """Add a reader of the event stream (a projection)."""
+        return self.stream.subscribe(reader)
+
+    def record(self, event: Event) -> None:
+        """Emit an event from outside (an experiment's mark, a person's command)."""
+        self.emit(event)

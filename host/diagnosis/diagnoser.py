@@ -16,12 +16,18 @@ observation costs a few solver calls. An observation about an atom the theory do
 raises ``UnknownLiteral``. ``diagnose`` with unchanged observations and bounds returns the
 previous result. ``close()`` (or ``with Diagnoser(...) as d``) frees the solver and stops the
 budget watchdog thread.
+
+The daemon shares one ``ObservationSet`` (``observations=``) between the diagnoser and the repair
+executor and diagnoses in a worker thread: it passes ``diagnose(literals=...)`` a snapshot of
+the set taken on its own thread, and the diagnoser brings its solver assumptions to exactly
+those literals (``assume``) before it searches; it never touches the set itself then.
 """
 
 from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Iterable
 
 from host.diagnosis.logic import Literal, Theory, parse_literal
 from host.diagnosis.observations import Observation, ObservationSet
@@ -38,7 +44,8 @@ class UnknownLiteral(ValueError):
 
 class Diagnoser:
     def __init__(
-        self, theory: Theory, algorithm: str = DEFAULT_ALGORITHM, solver: str = "g4"
+        self, theory: Theory, algorithm: str = DEFAULT_ALGORITHM, solver: str = "g4",
+        observations: ObservationSet | None = None,
     ) -> None:
         if algorithm not in ALGORITHMS:
             raise ValueError(f"unknown algorithm {algorithm!r}; use one of {sorted(ALGORITHMS)}")
@@ -51,7 +58,7 @@ class Diagnoser:
         self._universe = frozenset(theory.components)
         self._weights = prior_weights(self._priors)
         self._assumed: dict[str, int] = {}  # atom -> solver literal of the current observation
-        self.observations = ObservationSet()
+        self.observations = observations if observations is not None else ObservationSet()
         self._version = 0
         self._cache: tuple[tuple[object, ...], DiagnosisResult] | None = None
 
@@ -91,6 +98,27 @@ class Diagnoser:
     def drop_source(self, source: str) -> list[Observation]:
         return self._forget(self.observations.drop_source(source))
 
+    def assume(self, literals: Iterable[Literal]) -> bool:
+        """Make ``literals`` the observations the next diagnosis assumes, replacing the ones
+        assumed now (a snapshot of a set kept elsewhere); True when that changed anything.
+        ``UnknownLiteral`` if one names an atom no clause mentions (nothing changed then)."""
+        want = {lit.atom: lit for lit in literals}
+        for lit in want.values():
+            if lit.atom not in self._observable:
+                raise UnknownLiteral(
+                    f"observation {lit} names {lit.atom}, which no clause mentions")
+        changed = False
+        for atom in [a for a in self._assumed if a not in want]:
+            del self._assumed[atom]
+            changed = True
+        for atom, lit in want.items():
+            solver_lit = self._ctx.lit(lit)
+            if self._assumed.get(atom) != solver_lit:
+                self._assumed[atom] = solver_lit
+                changed = True
+        self._version += changed
+        return changed
+
     def _forget(self, gone: list[Observation]) -> list[Observation]:
         for o in gone:
             del self._assumed[o.literal.atom]
@@ -104,12 +132,16 @@ class Diagnoser:
         max_count: int | None = None,
         time_budget_s: float | None = None,
         min_card_only: bool = False,
+        literals: Iterable[Literal] | None = None,
     ) -> DiagnosisResult:
         """The subset-minimal diagnoses by cardinality, then probability, within the bounds.
 
         ``min_card_only`` stops after the smallest cardinality that has diagnoses (the
-        minimal-cardinality diagnoses); ``complete`` then refers to that level.
+        minimal-cardinality diagnoses); ``complete`` then refers to that level. ``literals``:
+        diagnose these observations (``assume``) instead of the diagnoser's own set.
         """
+        if literals is not None:
+            self.assume(literals)
         key = (self._version, max_card, max_count, time_budget_s, min_card_only)
         if self._cache is not None and self._cache[0] == key:
             return self._cache[1]

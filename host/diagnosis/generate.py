@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from itertools import combinations
 
+import host.atoms as A
 from host.diagnosis.logic import Clause, Literal, Theory, horn, nab
 from host.diagnosis.model import Kind, SystemModel
 
@@ -39,36 +40,36 @@ ORIGINS = {
 }
 
 
-def _pos(atom: str) -> Literal:
-    return Literal(atom, True)
+def _pos(atom: A.Atom | str) -> Literal:
+    return Literal(str(atom), True)
 
 
 def generate(model: SystemModel) -> Theory:
     """The system description of ``model`` (components in the file's order)."""
     out: list[Clause] = []
     for h in model.by_kind(Kind.SH):
-        out.append(horn([nab(h.name)], [_pos(f"on({h.name})")], ORIGINS[1]))
+        out.append(horn([nab(h.name)], [_pos(A.on(h.name))], ORIGINS[1]))
     for rule, kind in ((2, Kind.SN), (3, Kind.HN), (4, Kind.N)):
         for n in model.by_kind(kind):
             hw = [] if kind is Kind.N else [nab(h) for h in n.hardware]
             for topic, inputs in n.publishes.items():
-                body = [nab(n.name), *hw, *(_pos(f"ok({i})") for i in inputs)]
-                out.append(horn(body, [_pos(f"ok({topic})")], ORIGINS[rule]))
+                body = [nab(n.name), *hw, *(_pos(A.ok(i)) for i in inputs)]
+                out.append(horn(body, [_pos(A.ok(topic))], ORIGINS[rule]))
     for n in model.by_kind(Kind.N, Kind.HN, Kind.SN):
-        out.append(horn([nab(n.name)], [_pos(f"running({n.name})")], ORIGINS[5]))
+        out.append(horn([nab(n.name)], [_pos(A.running(n.name))], ORIGINS[5]))
     out.extend(_related(model))
     for h in model.by_kind(Kind.SH):
         if h.current is not None:
-            body = [nab(h.name), _pos(f"on({h.name})")]
-            out.append(horn(body, [_pos(f"in_band({h.name})")], ORIGINS[7]))
+            body = [nab(h.name), _pos(A.on(h.name))]
+            out.append(horn(body, [_pos(A.in_band(h.name))], ORIGINS[7]))
     for h in model.by_kind(Kind.SH):
-        out.append(horn([nab(h.name), _pos(f"tripped({h.name})")], [], ORIGINS[8]))
+        out.append(horn([nab(h.name), _pos(A.tripped(h.name))], [], ORIGINS[8]))
     values = dict.fromkeys(v for vs in model.values.values() for v in vs)
     for v in values:
-        for a, b in combinations(("inc", "dec", "const"), 2):
-            out.append(horn([_pos(f"{a}({v})"), _pos(f"{b}({v})")], [], ORIGINS[9]))
+        for a, b in combinations(A.TRENDS, 2):
+            out.append(horn([_pos(A.trend(a, v)), _pos(A.trend(b, v))], [], ORIGINS[9]))
     if model.board is not None:
-        out.append(horn([nab(model.board)], [_pos(f"link({model.board})")], ORIGINS[10]))
+        out.append(horn([nab(model.board)], [_pos(A.link(model.board))], ORIGINS[10]))
     priors = {c.name: c.prior for c in model.components.values() if c.prior is not None}
     return Theory(tuple(model.components), tuple(out), priors)
 
@@ -88,5 +89,5 @@ def _related(model: SystemModel) -> list[Clause]:
                             continue
                         seen.add(key)
                         body = list(dict.fromkeys([nab(n1.name), nab(n2.name)]))
-                        out.append(horn(body, [_pos(f"matched({v1},{v2})")], ORIGINS[6]))
+                        out.append(horn(body, [_pos(A.matched(v1, v2))], ORIGINS[6]))
     return out

@@ -6,11 +6,14 @@ literal ``L`` replaces ``¬L`` (and an older ``L``). On top of that each ``Obser
 silent for longer than the validity lets its literal *expire* — the atom becomes unknown (it is
 dropped, not negated: unknown is not false). ``validity=None`` means valid until replaced.
 Time is passed in (``now``, seconds on any monotonic clock the caller chooses); this module
-never reads a clock.
+never reads a clock. The daemon keeps exactly one ``ObservationSet``: the diagnoser diagnoses
+snapshots of it (``literals()``), the repair executor waits on it (``host.repair.beliefs``
+listens through ``listen``: every add, refresh, retraction and expiry calls the listeners).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from host.diagnosis.logic import Literal, parse_literal
@@ -38,6 +41,15 @@ class ObservationSet:
 
     def __init__(self) -> None:
         self._by_atom: dict[str, Observation] = {}
+        self._listeners: list[Callable[[], None]] = []
+
+    def listen(self, listener: Callable[[], None]) -> None:
+        """Call ``listener()`` after every change of the set, refreshes included."""
+        self._listeners.append(listener)
+
+    def _changed(self) -> None:
+        for listener in self._listeners:
+            listener()
 
     def add(self, obs: Observation) -> bool:
         """``S := S ⊕ o``. True when the set of literals changed (a refresh is no change)."""
@@ -45,11 +57,15 @@ class ObservationSet:
         if old is not None and old.time > obs.time:
             return False  # a late, older report never overrides a newer one
         self._by_atom[obs.literal.atom] = obs
+        self._changed()
         return old is None or old.literal != obs.literal
 
     def retract(self, atom: str) -> bool:
         """Forget what is known about ``atom`` (it becomes unknown). True if it was known."""
-        return self._by_atom.pop(atom, None) is not None
+        known = self._by_atom.pop(atom, None) is not None
+        if known:
+            self._changed()
+        return known
 
     def expire(self, now: float) -> list[Observation]:
         """Drop and return the observations whose validity ran out at ``now``."""
@@ -57,6 +73,8 @@ class ObservationSet:
                 if o.expires_at is not None and o.expires_at <= now]
         for o in gone:
             del self._by_atom[o.literal.atom]
+        if gone:
+            self._changed()
         return gone
 
     def drop_source(self, source: str) -> list[Observation]:
@@ -64,7 +82,14 @@ class ObservationSet:
         gone = [o for o in self._by_atom.values() if o.source == source]
         for o in gone:
             del self._by_atom[o.literal.atom]
+        if gone:
+            self._changed()
         return gone
+
+    def next_expiry(self) -> float | None:
+        """When the first observation runs out of validity (None: none will)."""
+        times = [o.expires_at for o in self._by_atom.values() if o.expires_at is not None]
+        return min(times) if times else None
 
     def get(self, atom: str) -> Observation | None:
         return self._by_atom.get(atom)

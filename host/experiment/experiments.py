@@ -42,14 +42,15 @@ async def power_up(system_dir: Path, journal: Path, *, sequential: bool = False,
 
 async def device_shutdown(system_dir: Path, journal: Path, *, device: str = SHUTDOWN_DEVICE,
                           timeout_s: float = 180.0) -> RunResult:
-    """Bring the robot up, switch ``device`` off as an operator, measure its repair."""
+    """Bring the robot up, let ``device`` go down (its channel switched off under the daemon,
+    as in paper 000), measure its repair."""
     async with RobotSession(system_dir, journal) as s:
         if not await s.wait_healthy(timeout_s, hold_s=3.0):
             raise UserError(f"device shut-down: the robot did not come up within {timeout_s:g} s",
                             f"see the journal: dxboard journal {journal}")
         mark = await s.last_id()
         t_off = s.daemon.clock()
-        await s.switch(device, False)
+        await s.shut_down(device)
         if not await s.wait_unhealthy(30.0):
             raise UserError(f"device shut-down: switching {device} off was not noticed in 30 s",
                             f"see the journal: dxboard journal {journal}")

@@ -1,8 +1,10 @@
 """A robot model with short device boot times, for tests and the fault campaign (``--fast``).
 
-``fast_model(system_dir, dest)`` copies the robot directory to ``dest``, sets each channel's
-``boot_ms`` in ``emulator.yaml`` from ``FAST_BOOT_MS`` (the real devices' figures are the
-default everywhere else) and points the node commands of ``system.yaml`` at the copy.
+``fast_model(system_dir, dest)`` copies the robot directory to ``dest`` and sets each channel's
+``boot_ms`` in the copy's ``emulator.yaml`` from ``FAST_BOOT_MS`` (the real devices' figures are
+the default everywhere else). Nothing else needs changing: the daemon tells the nodes it starts
+which robot directory they belong to (``$DXBOARD_ROBOT``), and asks the emulated robot for its
+boot times.
 """
 
 from __future__ import annotations
@@ -32,10 +34,6 @@ def fast_model(system_dir: Path, dest: Path) -> Path:
         if ch.get("name") in FAST_BOOT_MS:
             ch["boot_ms"] = FAST_BOOT_MS[ch["name"]]
     emu_file.write_text(yaml.safe_dump(emu))
-    system = (d / "system.yaml").read_text()
-    name = str(system_dir).rstrip("/")
-    (d / "system.yaml").write_text(system.replace(f" {name}]", f" {d}]").replace(
-        f" models/{d.name}]", f" {d}]"))
     return d
 
 

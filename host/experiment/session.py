@@ -1,9 +1,10 @@
 """The virtual robot and the daemon in this process, for experiments and the fault campaign.
 
 ``RobotSession(system_dir, journal)`` is an async context manager: on entry it starts the
-robot's emulated board and devices as a child process (``EmulatedBoard``, exactly as ``dxboard
-run --emulate`` does) and a ``Daemon`` on a free zenoh port, without a web page, journaling to
-``journal``; on exit it stops the daemon (and the nodes it started), then the emulator. The
+robot's emulated board and devices as a child process and a ``Daemon`` on a free zenoh port,
+without a web page, journaling to ``journal`` — through ``host.launch``, exactly as ``dxboard
+run --emulate`` does; on exit it stops the daemon (and the nodes it started), then the
+emulator. The
 daemon runs in this process so that an experiment reads its state directly (is it healthy,
 is a repair running) and its clock is the journal's; the board and the devices stay behind
 their process boundary, as on a real robot.
@@ -18,7 +19,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import time
 from pathlib import Path
 from types import TracebackType
@@ -26,10 +26,12 @@ from typing import Any
 
 from host.board import BoardClient
 from host.daemon.core import Daemon, DaemonOptions
-from host.daemon.emulated import EmulatedBoard
 from host.errors import UserError
 from host.experiment.robot import free_port
 from host.journal import Entry, JournalReader
+from host.launch.control import arequest
+from host.launch.emulated import EmulatedBoard
+from host.launch.robot import Launch, LaunchedRobot
 
 
 class RobotSession:
@@ -37,55 +39,37 @@ class RobotSession:
                  debounce_s: float = 0.5) -> None:
         self.system_dir = system_dir
         self.journal_path = journal
-        self.max_parallel = max_parallel
-        self.debounce_s = debounce_s
-        self.emulated: EmulatedBoard | None = None
-        self._daemon: Daemon | None = None
+        opts = DaemonOptions(
+            system_dir=system_dir, board_url="", web=None, journal=journal,
+            zenoh_listen=[f"tcp/127.0.0.1:{free_port()}"], repair_debounce_s=debounce_s,
+            max_parallel_steps=max_parallel)
+        self.robot = LaunchedRobot(Launch(system_dir, daemon=opts))
         self._runner: asyncio.Task[None] | None = None
         self.t0 = 0.0
 
     @property
     def daemon(self) -> Daemon:
-        if self._daemon is None:
+        return self.robot.daemon
+
+    @property
+    def emulated(self) -> EmulatedBoard:
+        if self.robot.emulated is None:
             raise RuntimeError("the session is not running")
-        return self._daemon
+        return self.robot.emulated
 
     async def __aenter__(self) -> RobotSession:
-        extra = ("--robot",) if (self.system_dir / "robot.yaml").is_file() else ()
-        self.emulated = await EmulatedBoard.start(self.system_dir, "127.0.0.1:0", extra)
-        try:
-            opts = DaemonOptions(
-                system_dir=self.system_dir, board_url=self.emulated.board_url,
-                key=self.emulated.key, web=None, journal=self.journal_path,
-                zenoh_listen=[f"tcp/127.0.0.1:{free_port()}"],
-                node_env={"DXBOARD_DEVICES": json.dumps(self.emulated.devices)},
-                repair_debounce_s=self.debounce_s, max_parallel_steps=self.max_parallel)
-            self._daemon = Daemon(opts)
-            self.t0 = self._daemon.clock()
-            await self._daemon.start()
-            self._runner = asyncio.ensure_future(self._daemon.wait())
-        except BaseException:
-            await self._close()
-            raise
+        await self.robot.__aenter__()
+        self.t0 = self.daemon.clock()
+        self._runner = asyncio.ensure_future(self.daemon.wait())
         return self
 
     async def __aexit__(self, exc_type: type[BaseException] | None,
                         exc: BaseException | None, tb: TracebackType | None) -> None:
-        await self._close()
-
-    async def _close(self) -> None:
-        try:
-            if self._daemon is not None:
-                self._daemon.stop()
-                if self._runner is not None:
-                    self._runner.cancel()
-                    with contextlib.suppress(asyncio.CancelledError):
-                        await self._runner
-                await self._daemon.close()
-        finally:
-            if self.emulated is not None:
-                await self.emulated.stop()
-                self.emulated = None
+        if self._runner is not None:
+            self._runner.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._runner
+        await self.robot.close()
 
     # --- state ------------------------------------------------------------------------------
 
@@ -100,8 +84,7 @@ class RobotSession:
             raise UserError("the daemon stopped by itself")
 
     def repairing(self) -> bool:
-        r = self.daemon.repairs
-        return r is not None and r.active
+        return self.daemon.repairs.active
 
     def healthy(self) -> bool:
         """The board is heard, nothing is diagnosed abnormal and no repair is running."""
@@ -146,9 +129,17 @@ class RobotSession:
 
     # --- acting on the robot ------------------------------------------------------------------
 
+    async def shut_down(self, device: str) -> None:
+        """The device goes down (paper 000's device shut-down): its channel is switched off
+        under the daemon, which must find and repair it — not a person's deliberate
+        switch-off, which the daemon would hold (``switch``)."""
+        ch = self.daemon.model.components[device].channel
+        assert ch is not None, f"{device} is not on a board channel"
+        self.daemon.repairs.executor.actuators.note_command(ch, False)
+        await self.switch(device, False)
+
     async def switch(self, channel: str, on: bool) -> None:
         """Switch a channel as an operator with the key would."""
-        assert self.emulated is not None
         async with BoardClient(self.emulated.board_url, self.emulated.key) as client:
             await client.switch(channel, on)
 
@@ -160,16 +151,11 @@ class RobotSession:
         await self.control({"op": "clear"})
 
     async def control(self, req: dict[str, Any]) -> None:
-        from host.commands.inject import request
-
-        assert self.emulated is not None
-        await asyncio.to_thread(request, self.emulated.control_url, req)
+        await arequest(self.emulated.control_url, req)
 
     def forgive(self) -> None:
         """A person clears every quarantine and the attempt counts (between campaign faults)."""
         r = self.daemon.repairs
-        if r is None:
-            return
         for c in list(r.executor.quarantine.components):
             r.executor.clear_quarantine(c)
         for c in self.daemon.model.components:

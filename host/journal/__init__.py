@@ -9,21 +9,26 @@ time-range queries for the web page, ``dxboard journal`` and the timeline report
 journaled (``telemetry``).
 """
 
-from host.journal.entries import (
+from host.events import (
     ActionRecord,
     ActionState,
     BoardEvent,
     ChannelSummary,
     DiagnosisRecord,
-    Entry,
+    HoldChange,
     Kind,
+    LinkChange,
     Note,
     Observation,
     Payload,
     PlanRecord,
     PlanStep,
+    QuarantineChange,
+    RepairEnded,
+    RunStarted,
     Telemetry,
 )
+from host.journal.entries import Entry
 from host.journal.store import JournalReader
 from host.journal.telemetry import TelemetryDownsampler
 from host.journal.writer import Journal, Retention
@@ -35,15 +40,20 @@ __all__ = [
     "ChannelSummary",
     "DiagnosisRecord",
     "Entry",
+    "HoldChange",
     "Journal",
     "JournalReader",
     "Kind",
+    "LinkChange",
     "Note",
     "Observation",
     "Payload",
     "PlanRecord",
     "PlanStep",
+    "QuarantineChange",
+    "RepairEnded",
     "Retention",
+    "RunStarted",
     "Telemetry",
     "TelemetryDownsampler",
 ]

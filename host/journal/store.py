@@ -26,7 +26,8 @@ from pathlib import Path
 from typing import Any
 
 from host.errors import UserError
-from host.journal.entries import Entry, Kind, Note, payload_from_json
+from host.events import Kind, Note, payload_from_json
+from host.journal.entries import Entry
 
 log = logging.getLogger(__name__)
 

@@ -1,9 +1,10 @@
 """Reading a journal back: one-line summaries of entries, and replaying a history into state.
 
-``summarize`` gives the short human line that ``dxboard journal`` prints and the web page shows
-in its journal tail. ``Replay`` folds entries, in id order, into what the daemon knew at that
-point: the value of every observed literal, the latest diagnoses, and every repair action with
-its latest state (the ``started`` entry and the one that finished it share an ``action_id``).
+``summarize`` (``host.events.describe``) gives the short human line that ``dxboard journal``
+prints and the web page shows in its journal tail. ``Replay`` folds entries, in id order,
+into what the daemon knew at that point: the value of every observed literal, the latest
+diagnoses, and every repair action with its latest state (the ``started`` entry and the one
+that finished it share an ``action_id``), and what is quarantined or held.
 The timeline report and tests use it to check that a journal holds enough to rebuild a history
 like the paper's figures 5 and 6 (a row per component, normal or abnormal over time, repair
 actions along the top) without the daemon that wrote it.
@@ -15,60 +16,21 @@ import logging
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
-from host.journal.entries import (
+from host.events import (
     ActionRecord,
-    BoardEvent,
     DiagnosisRecord,
-    Entry,
-    Note,
+    HoldChange,
     Observation,
-    Payload,
     PlanRecord,
-    Telemetry,
+    QuarantineChange,
+    describe,
 )
+from host.journal.entries import Entry
 
 log = logging.getLogger(__name__)
 
 
-def _value(v: bool | None) -> str:
-    return "unknown" if v is None else ("true" if v else "false")
-
-
-def summarize(payload: Payload) -> str:
-    """One short line describing a payload, for people."""
-    if isinstance(payload, Observation):
-        src = f"  [{payload.source}]" if payload.source else ""
-        return f"{payload.literal} = {_value(payload.value)}{src}"
-    if isinstance(payload, DiagnosisRecord):
-        if not payload.diagnoses:
-            text = "no diagnosis (observations contradict the model)"
-        else:
-            text = " | ".join("{" + ", ".join(b) + "}" if b else "{} (all healthy)"
-                              for b in payload.diagnoses[:4])
-            if len(payload.diagnoses) > 4:
-                text += f" | ... ({len(payload.diagnoses)} in all)"
-        extra = "" if payload.complete else " (incomplete)"
-        trig = f"  [{payload.trigger}]" if payload.trigger else ""
-        return f"{text}{extra}{trig}"
-    if isinstance(payload, PlanRecord):
-        steps = "; ".join(f"{s.action}({', '.join(s.args)})" for s in payload.steps)
-        return f"plan {payload.plan_id}: {steps or '(nothing to do)'}"
-    if isinstance(payload, ActionRecord):
-        took = ("" if payload.finished is None
-                else f" after {payload.finished - payload.started:.2f} s")
-        detail = f": {payload.detail}" if payload.detail else ""
-        return (f"{payload.action}({', '.join(payload.args)}) {payload.state.value}"
-                f"{took}{detail}")
-    if isinstance(payload, BoardEvent):
-        ch = "" if payload.channel is None else f" channel {payload.channel}"
-        detail = " ".join(f"{k}={v}" for k, v in payload.detail.items())
-        return f"{payload.event}{ch}{'  ' + detail if detail else ''}"
-    if isinstance(payload, Telemetry):
-        parts = [f"ch{c.channel} {c.mean_ma:.0f} mA" for c in payload.channels]
-        return f"{payload.period_s:g} s: " + (", ".join(parts) or "(no readings)")
-    if isinstance(payload, Note):
-        return payload.text if payload.level == "info" else f"{payload.level}: {payload.text}"
-    raise TypeError(f"not a journal payload: {payload!r}")
+summarize = describe  # the journal's name for it
 
 
 @dataclass
@@ -79,6 +41,8 @@ class Replay:
     diagnosis: DiagnosisRecord | None = None
     actions: dict[str, ActionRecord] = field(default_factory=dict)
     plans: list[PlanRecord] = field(default_factory=list)
+    quarantined: dict[str, QuarantineChange] = field(default_factory=dict)
+    held: dict[str, HoldChange] = field(default_factory=dict)
     last_id: int = 0
     last_wall: float = 0.0
 
@@ -96,6 +60,16 @@ class Replay:
             self.actions[p.action_id] = p
         elif isinstance(p, PlanRecord):
             self.plans.append(p)
+        elif isinstance(p, QuarantineChange):
+            if p.quarantined:
+                self.quarantined[p.component] = p
+            else:
+                self.quarantined.pop(p.component, None)
+        elif isinstance(p, HoldChange):
+            if p.held:
+                self.held[p.component] = p
+            else:
+                self.held.pop(p.component, None)
 
     @classmethod
     def of(cls, entries: Iterable[Entry]) -> Replay:

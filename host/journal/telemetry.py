@@ -17,7 +17,7 @@ import logging
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from host.journal.entries import ChannelSummary, Telemetry
+from host.events import ChannelSummary, Telemetry
 
 log = logging.getLogger(__name__)
 

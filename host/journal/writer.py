@@ -29,7 +29,7 @@ from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
 
-from host.journal.entries import Kind, Note, Payload
+from host.events import Kind, Note, Payload
 from host.journal.store import JournalReader, connect
 
 log = logging.getLogger(__name__)

@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypedDict
 
+import host.atoms as A
 from host.diagnosis import yamlpos
 from host.diagnosis.logic import Theory, parse_literal
 from host.diagnosis.model import Kind, ModelError, Problem, SystemModel, read_section
@@ -423,7 +424,7 @@ class _Builder:
             self.err(p, "rule has no key", "give the payload key: key: temp_cpu1")
             return None
         try:
-            literal = parse_literal(str(lit if lit is not None else f"ok({key})"))
+            literal = parse_literal(str(lit if lit is not None else A.ok(key)))
         except ValueError as exc:
             self.err((*p, "literal"), str(exc), "write literal: ok(temp_cpu1)")
             return None

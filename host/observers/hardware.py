@@ -32,6 +32,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+import host.atoms as A
 from host.board.types import (
     BoardEvent,
     BoardState,
@@ -50,7 +51,7 @@ from protocol.constants import (
 )
 
 BoardInput = StreamItem | BoardState
-DEFAULT_LINK_ATOM = "link(board)"
+DEFAULT_LINK_ATOM = str(A.link("board"))
 DEFAULT_LINK_TIMEOUT = 0.25
 DEFAULT_SETTLE = 3
 _BAD_STATES = (ST_TRIPPED, ST_LATCHED, ST_FAULTED)
@@ -94,9 +95,9 @@ class HardwareObserver(Observer[BoardInput]):
     def atoms(self) -> list[str]:
         out = [self.link_atom] if self.link_atom else []
         for d in self.devices.values():
-            out += [f"on({d.name})", f"tripped({d.name})"]
+            out += [str(A.on(d.name)), str(A.tripped(d.name))]
             if d.band is not None:
-                out.append(f"in_band({d.name})")
+                out.append(str(A.in_band(d.name)))
         return out
 
     # -- inputs ----------------------------------------------------------------------------
@@ -113,7 +114,7 @@ class HardwareObserver(Observer[BoardInput]):
             self._link_up(now)
         elif isinstance(item, Rebooted):
             for d in self.devices.values():
-                self._forget(f"tripped({d.name})", now)
+                self._forget(str(A.tripped(d.name)), now)
 
     def _link_up(self, now: float) -> None:
         self._up = True
@@ -133,13 +134,13 @@ class HardwareObserver(Observer[BoardInput]):
             d = self.by_channel.get(ch.channel)
             if d is not None:
                 self._device(d, ch.physical, ch.current_ma, now)
-                self._say(f"tripped({d.name})", ch.state in _BAD_STATES, now)
+                self._say(str(A.tripped(d.name)), ch.state in _BAD_STATES, now)
 
     def _device(self, d: Device, on: bool, current_ma: int, now: float) -> None:
-        self._say(f"on({d.name})", on, now)
+        self._say(str(A.on(d.name)), on, now)
         if d.band is None:
             return
-        atom = f"in_band({d.name})"
+        atom = str(A.in_band(d.name))
         if not on:
             self._forget(atom, now)
             self.bands.pop(d.name, None)
@@ -163,9 +164,9 @@ class HardwareObserver(Observer[BoardInput]):
         if d is None:
             return
         if e.kind == EV_TRIP or e.new_state in _BAD_STATES:
-            self._say(f"tripped({d.name})", True, now)
+            self._say(str(A.tripped(d.name)), True, now)
         elif e.new_state != e.old_state:  # a state change to off, inrush or on
-            self._say(f"tripped({d.name})", False, now)
+            self._say(str(A.tripped(d.name)), False, now)
 
     # -- the link rule ---------------------------------------------------------------------
     def _link_lost(self, now: float) -> None:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import host.atoms as A
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
 
 
@@ -44,7 +45,7 @@ class NodeObserver(ProcessObserver):
                  validity: float = DEFAULT_VALIDITY, refresh: float = DEFAULT_REFRESH) -> None:
         super().__init__(name or f"node:{node}", validity, refresh)
         self.node = node
-        self.atom = f"running({node})"
+        self.atom = str(A.running(node))
 
     def atoms(self) -> list[str]:
         return [self.atom]
@@ -65,8 +66,8 @@ class PropertyObserver(ProcessObserver):
         self.node = node
         self.cpu_percent = cpu_percent
         self.memory_mb = memory_mb
-        self.cpu_atom = f"ok({node}/cpu)"
-        self.memory_atom = f"ok({node}/memory)"
+        self.cpu_atom = str(A.ok(f"{node}/cpu"))
+        self.memory_atom = str(A.ok(f"{node}/memory"))
 
     def atoms(self) -> list[str]:
         return ([self.cpu_atom] if self.cpu_percent is not None else []) + (

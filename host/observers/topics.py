@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from collections import deque
 
+import host.atoms as A
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
 from host.observers.payload import Message
 
@@ -49,7 +50,7 @@ class FrequencyObserver(TopicObserver):
             raise ValueError(f"{self.name}: need rate > 0, tolerance > 0, silence > 0 and "
                              "a window holding at least 2 messages (window * rate >= 2)")
         self.topics = (topic,)
-        self.atom = atom or f"ok({topic})"
+        self.atom = atom or str(A.ok(topic))
         self.rate = rate
         self.tolerance = tolerance
         self.window = window
@@ -108,7 +109,7 @@ class ResponseObserver(TopicObserver):
         self.input = input
         self.output = output
         self.within = within
-        self.atom = atom or f"ok({output})"
+        self.atom = atom or str(A.ok(output))
         self._pending: float | None = None  # time of the oldest unanswered input
 
     def atoms(self) -> list[str]:

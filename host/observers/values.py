@@ -29,11 +29,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+import host.atoms as A
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY
 from host.observers.payload import Message, pick
 from host.observers.topics import TopicObserver
 
-TRENDS = ("inc", "dec", "const")
+TRENDS = A.TRENDS
 
 
 class Trend:
@@ -101,7 +102,7 @@ class TrendObserver(TopicObserver):
         self.trend = Trend(window, slope, min_samples)
 
     def atoms(self) -> list[str]:
-        return [f"{t}({self.value.name})" for t in TRENDS]
+        return [str(A.trend(t, self.value.name)) for t in TRENDS]
 
     def _feed(self, item: Message, now: float) -> None:
         v = item.number(self.value.key)
@@ -136,7 +137,7 @@ class MatchObserver(TopicObserver):
         self.refs = (v1, v2)
         self.topics = tuple(dict.fromkeys((v1.topic, v2.topic)))
         self.trends = (Trend(window, slope, min_samples), Trend(window, slope, min_samples))
-        self.atom = f"matched({v1.name},{v2.name})"
+        self.atom = str(A.matched(v1.name, v2.name))
 
     def atoms(self) -> list[str]:
         return [self.atom]

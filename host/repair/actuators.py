@@ -17,9 +17,9 @@ Protected components — the devices on the board's protected channels, the plan
 ``channelN`` objects for protected channels without a device, and any component listed in
 ``protected`` — are never switched off here, whatever step is asked for: defence in depth, the
 planner already drops such steps. A refused step raises ``Refused``; every other failure raises
-``ActuationError`` or lets the board client's ``TransportError`` through. ``ACTIONS`` is the
-name -> method registry; unknown actions are an ``ActuationError`` (a domain that declares an
-action the host cannot carry out).
+``ActuationError`` (a ``RemoteError``) or lets the board client's ``TransportError`` through.
+``ACTIONS`` is the name -> method registry; unknown actions are ``Refused`` (a domain that
+declares an action the host cannot carry out).
 """
 
 from __future__ import annotations
@@ -30,10 +30,10 @@ import time
 from collections.abc import Awaitable, Callable, Iterable
 from typing import TYPE_CHECKING
 
-from host.errors import UserError
+from host.errors import RemoteError, UserError
 from host.repair.problem import protected_channel_object
 from host.repair.supervisor import ProcessError
-from protocol.constants import ST_FAULTED, ST_LATCHED, ST_TRIPPED
+from protocol.constants import F_SHORT, ST_FAULTED, ST_LATCHED, ST_TRIPPED
 
 BOARD_RETRY_WAIT_S = 6.0  # longer than the board's longest default retry delay (5 s)
 
@@ -50,12 +50,22 @@ DEFAULT_OFF_S = 1.0
 SWITCH_OFF = frozenset({"shutdown", "power_cycle", "stop_node", "power_down"})
 
 
-class ActuationError(UserError):
-    """A step could not be carried out; the message says why, ``hint`` what to do."""
+class ActuationError(RemoteError):
+    """A step could not be carried out on the robot; the message says why, ``hint`` what to do."""
 
 
-class Refused(ActuationError):
-    """A step was refused before anything was done (a protected component, a bad argument)."""
+class Unsafe(ActuationError):
+    """Acting would be unsafe by the board's own judgement (a channel it latched for a short
+    circuit): the device goes to quarantine at once, for a person to look at."""
+
+    def __init__(self, device: str, message: str, hint: str = "") -> None:
+        super().__init__(message, hint)
+        self.device = device
+
+
+class Refused(UserError):
+    """A step was refused before anything was done (a protected component, an action the host
+    cannot carry out, a bad argument): the plan asked for it, nothing was touched."""
 
 
 class Actuators:
@@ -77,6 +87,10 @@ class Actuators:
         self.protected = frozenset(prot | set(protected))
         #: (clock time, channel) of every switch-on sent, for journals and tests
         self.switch_ons: list[tuple[float, int]] = []
+        #: (clock time, channel, on) of every switch command sent, so that the daemon can tell
+        #: its own commands from a person's
+        self.commands: list[tuple[float, int, bool]] = []
+        self._may_unlatch_short: set[str] = set()
         self._on_lock = asyncio.Lock()
         self._next_on = 0.0
         self._actions: dict[str, Callable[[str], Awaitable[str]]] = {
@@ -130,29 +144,55 @@ class Actuators:
             self._next_on = on_at + self.spacing_s
             return out
 
+    def allow_unlatch(self, device: str) -> None:
+        """A person looked at ``device``: its channel may be cleared once even if the board
+        latched it for a short circuit."""
+        self._may_unlatch_short.add(device)
+
+    def _sent(self, ch: int, on: bool) -> None:
+        self.commands.append((self.clock(), ch, on))
+        del self.commands[:-100]
+
+    def note_command(self, ch: int, on: bool) -> None:
+        """A switch command sent on this host's behalf by something else in its process (an
+        experiment standing in for a device that fails): not a person's deliberate switch."""
+        self._sent(ch, on)
+
+    def sent_recently(self, ch: int, on: bool, within_s: float) -> bool:
+        """True when this host sent ``ch`` that command within the last ``within_s``."""
+        now = self.clock()
+        return any(c == ch and o == on and now - t <= within_s for t, c, o in self.commands)
+
     async def power_up(self, device: str) -> str:
         ch, board = self._channel(device)
 
         async def send() -> str:
-            cleared = await self._unlatch(board, ch)
+            cleared = await self._unlatch(board, ch, device)
+            self._sent(ch, True)
             res = await board.switch(ch, True)
             self.switch_ons.append((self.clock(), ch))
             return f"channel {ch} {cleared}on ({res.state_name})"
 
         return await self._spaced(0.0, send)
 
-    async def _unlatch(self, board: BoardClient, ch: int) -> str:
+    async def _unlatch(self, board: BoardClient, ch: int, device: str) -> str:
         """Make the channel switchable. The board's own protection comes first: a channel it
-        tripped has a retry pending, so wait for that retry (up to ``BOARD_RETRY_WAIT_S``)
-        rather than fight it. A channel it latched (or marked faulted) refuses to switch on
-        until cleared: clear it. The executor's attempt limit keeps a real short from being
-        cleared again and again: after N attempts the device is quarantined."""
+        tripped has a retry pending, so wait for that retry (up to ``BOARD_RETRY_WAIT_S``, and
+        no longer than the board takes to retry or latch) rather than fight it. A channel it
+        latched (or marked faulted) refuses to switch on until cleared: clear it — unless the
+        board latched it for a short circuit: energising a short again is the board's call
+        (its retries), not ours; that raises ``Unsafe`` until a person allows one try."""
         end = self.clock() + BOARD_RETRY_WAIT_S
-        state = (await board.state()).channels[ch].state
-        while state == ST_TRIPPED and self.clock() < end:
+        chan = (await board.state()).channels[ch]
+        while chan.state == ST_TRIPPED and self.clock() < end:
             await asyncio.sleep(0.1)
-            state = (await board.state()).channels[ch].state
-        if state in (ST_LATCHED, ST_FAULTED):
+            chan = (await board.state()).channels[ch]
+        if chan.state in (ST_LATCHED, ST_FAULTED):
+            if chan.sticky_faults & F_SHORT and device not in self._may_unlatch_short:
+                raise Unsafe(device, f"channel {ch} ({device}) was latched by the board for a "
+                             "short circuit: not energised again",
+                             f"check {device} and its wiring, then clear its quarantine")
+            self._may_unlatch_short.discard(device)
             await board.clear(ch)
             return "cleared and "
         return ""
@@ -162,6 +202,7 @@ class Actuators:
         ch, board = self._channel(device)
         if ch in self.protected_channels:
             raise Refused(f"shutdown({device}) refused: channel {ch} is protected")
+        self._sent(ch, False)
         res = await board.switch(ch, False)  # never force: the board refuses too
         return f"channel {ch} off ({res.state_name})"
 
@@ -172,7 +213,9 @@ class Actuators:
             raise Refused(f"power_cycle({device}) refused: channel {ch} is protected")
 
         async def send() -> str:
-            await self._unlatch(board, ch)
+            await self._unlatch(board, ch, device)
+            self._sent(ch, False)
+            self._sent(ch, True)
             res = await board.power_cycle(ch, self.off_s)
             self.switch_ons.append((self.clock() + self.off_s, ch))
             return f"channel {ch} off for {self.off_s:g} s, then on ({res.state_name})"

@@ -12,30 +12,32 @@ made after ``newer_than`` (an observation from before the step proves nothing, n
 refresh of the old value); False when ``timeout`` seconds pass first. Unknown (retracted or
 never observed) is not the wanted value.
 
-``ObservedBeliefs`` implements it over the observer stream: the daemon passes every list of
-``Update`` values the observer hub emits to ``update`` (next to the diagnoser), and waiters
-are woken on every change. Observation times are the hub's clock: ``newer_than`` must come
-from the same monotonic clock (the executor's ``clock``). Observers repeat unchanged literals
-every ``refresh`` seconds with a new time, so a steady state is seen as fresh within one
-refresh period.
+``ObservedBeliefs`` implements it as a waiter on the daemon's one observation set
+(``host.diagnosis.observations.ObservationSet``, which the diagnoser diagnoses too): it keeps no
+copy; the set calls it on every add, refresh, retraction and expiry, and the waiters are woken.
+Observation times are the observers' clock: ``newer_than`` must come from the same monotonic
+clock (the executor's ``clock``). Observers repeat unchanged literals every ``refresh`` seconds
+with a new time, so a steady state is seen as fresh within one refresh period; an observation
+that expired is unknown here as it is to the diagnoser.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from typing import Protocol
 
-from host.diagnosis.observations import Observation
-from host.observers.base import Retraction, Update
+from host.diagnosis.observations import Observation, ObservationSet
 
 
 class Beliefs(Protocol):
     async def wait_for(self, expected: Mapping[str, bool], newer_than: float,
-                       timeout: float) -> bool:
+                       timeout: float, abort: Mapping[str, bool] | None = None,
+                       abort_after: float | None = None) -> bool:
         """True once every atom's latest observation is newer than ``newer_than`` and has
-        the expected value; False after ``timeout`` seconds."""
+        the expected value; False after ``timeout`` seconds, or at once when an atom of
+        ``abort`` is observed with its value after ``abort_after`` (default ``newer_than``)."""
         ...
 
     def value(self, atom: str) -> bool | None:
@@ -48,24 +50,13 @@ class Beliefs(Protocol):
 
 
 class ObservedBeliefs:
-    """``Beliefs`` over the observer hub's updates (see the module docstring)."""
+    """``Beliefs`` over an ``ObservationSet`` (see the module docstring)."""
 
-    def __init__(self) -> None:
-        self._latest: dict[str, Observation] = {}
+    def __init__(self, observations: ObservationSet) -> None:
+        self.observations = observations
         self._changed = asyncio.Condition()
         self._pending = False
-
-    # -- input -----------------------------------------------------------------------------
-    def update(self, updates: Iterable[Update]) -> None:
-        """Take the hub's updates (call from the event loop's thread)."""
-        for u in updates:
-            if isinstance(u, Retraction):
-                self._latest.pop(u.atom, None)
-            else:
-                old = self._latest.get(u.literal.atom)
-                if old is None or old.time <= u.time:
-                    self._latest[u.literal.atom] = u
-        self._wake()
+        observations.listen(self._wake)
 
     def _wake(self) -> None:
         if self._pending:
@@ -82,17 +73,17 @@ class ObservedBeliefs:
 
     # -- queries ---------------------------------------------------------------------------
     def value(self, atom: str) -> bool | None:
-        o = self._latest.get(atom)
+        o = self.observations.get(atom)
         return None if o is None else o.literal.positive
 
     def observation(self, atom: str) -> Observation | None:
-        return self._latest.get(atom)
+        return self.observations.get(atom)
 
     def missing(self, expected: Mapping[str, bool], newer_than: float) -> dict[str, str]:
         """The atoms not (yet) as expected, each with what is known of it instead."""
         out: dict[str, str] = {}
         for atom, want in expected.items():
-            o = self._latest.get(atom)
+            o = self.observations.get(atom)
             if o is None:
                 out[atom] = "unknown"
             elif o.literal.positive != want:
@@ -104,11 +95,23 @@ class ObservedBeliefs:
     def holds(self, expected: Mapping[str, bool], newer_than: float) -> bool:
         return not self.missing(expected, newer_than)
 
+    def contradicted(self, abort: Mapping[str, bool], newer_than: float) -> bool:
+        """An atom of ``abort`` has been observed with its value after ``newer_than``."""
+        for atom, value in abort.items():
+            o = self.observations.get(atom)
+            if o is not None and o.literal.positive == value and o.time > newer_than:
+                return True
+        return False
+
     async def wait_for(self, expected: Mapping[str, bool], newer_than: float,
-                       timeout: float) -> bool:
+                       timeout: float, abort: Mapping[str, bool] | None = None,
+                       abort_after: float | None = None) -> bool:
+        stop = abort or {}
+        since = newer_than if abort_after is None else abort_after
         try:
             async with asyncio.timeout(max(0.0, timeout)), self._changed:
-                await self._changed.wait_for(lambda: self.holds(expected, newer_than))
+                await self._changed.wait_for(
+                    lambda: self.holds(expected, newer_than) or self.contradicted(stop, since))
         except TimeoutError:
-            return self.holds(expected, newer_than)
-        return True
+            pass
+        return self.holds(expected, newer_than) and not self.contradicted(stop, since)

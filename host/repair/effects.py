@@ -16,7 +16,9 @@ Only atoms some observer actually reports are expected (``observable``; None: al
 observer watches cannot be verified, and waiting for it would fail every repair. The effect is
 checked in observations made at least ``settle`` seconds after the step ended — the device's
 boot time or the node's ``settle_s`` — so a node that starts and dies at once, or a device
-that comes on and trips, does not pass. Nothing here is specific to one robot: all comes from
+that comes on and trips, does not pass. ``contradictions(step)`` are the literals that end the
+wait at once as a failure (the board tripped the channel the step switched on: no use waiting
+out the boot time). Nothing here is specific to one robot: all comes from
 the ``SystemModel`` and the ``processes:`` section.
 """
 
@@ -24,6 +26,8 @@ from __future__ import annotations
 
 from collections.abc import Collection, Mapping
 from typing import TYPE_CHECKING
+
+import host.atoms as A
 
 if TYPE_CHECKING:
     from host.diagnosis.model import SystemModel
@@ -46,21 +50,30 @@ def expected_effects(step: Step, model: SystemModel,
     comp = model.components.get(name)
     out: dict[str, bool] = {}
     if step.action in ("power_up", "power_cycle"):
-        out[f"on({name})"] = True
+        out[str(A.on(name))] = True
         if comp is not None and comp.current is not None:
-            out[f"in_band({name})"] = True
+            out[str(A.in_band(name))] = True
     elif step.action == "shutdown":
-        out[f"on({name})"] = False
+        out[str(A.on(name))] = False
     elif step.action == "start_node":
-        out[f"running({name})"] = True
+        out[str(A.running(name))] = True
         if comp is not None:
             for topic in comp.publishes:
-                out[f"ok({topic})"] = True
+                out[str(A.ok(topic))] = True
     elif step.action == "stop_node":
-        out[f"running({name})"] = False
+        out[str(A.running(name))] = False
     if observable is not None:
         out = {a: v for a, v in out.items() if a in observable}
     return out
+
+
+def contradictions(step: Step, observable: Collection[str] | None = None) -> dict[str, bool]:
+    """Literals that, once observed after ``step``, mean it failed and waiting is pointless:
+    the board tripped or latched the channel it switched on."""
+    if step.action not in ("power_up", "power_cycle") or not step.args:
+        return {}
+    atom = str(A.tripped(step.args[0]))
+    return {atom: True} if observable is None or atom in observable else {}
 
 
 def settle_times(model: SystemModel, processes: Mapping[str, ProcessConfig] | None = None,

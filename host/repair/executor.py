@@ -12,7 +12,8 @@ plan's order (``dxboard experiment`` compares the two). Each step:
 3. waits for its intended effect (``host.repair.effects``): fresh observations, made at least
    the component's settle time after the actuator returned, showing the expected literals,
    within settle + ``verify_s`` seconds (``Beliefs.wait_for``) — else ``failed`` with what was
-   seen instead; then ``succeeded``.
+   seen instead, and at once when the board trips the channel the step switched on; then
+   ``succeeded``.
 
 On the first failed step nothing new starts; steps already running finish, and ``execute``
 returns ``ExecutionResult(outcome=FAILED, failed=step, reason=...)`` so the caller
@@ -20,12 +21,16 @@ re-diagnoses and replans (``host.repair.loop.RepairLoop``). Every step's states 
 through ``report`` as ``StepReport`` values (``to_record()`` gives the journal's
 ``ActionRecord``), and every quarantine as a ``Quarantined``.
 
-Limits (``host.repair.limits``): each execution counts one attempt for every component its
-steps touch or it repairs. A component that has used ``max_attempts`` in the window is
-quarantined — after its failed step, or before a plan touching it would run — put in its safe
-state (a device switched off, a node stopped; never a protected component; the safe-state
-actions are reported like steps, under the plan id ``quarantine:<component>``) and no step
-touching it runs again (``BLOCKED``) until ``clear_quarantine(component)``. Two executions
+Limits (``host.repair.limits``): each execution counts one attempt for every component it
+repairs (the diagnosis it was given; without one, every component its steps touch), marked
+verified when every effect was observed (a verified attempt stops counting once the repair has
+held). A component that has used ``max_attempts`` in the window is quarantined — after a failed
+step of its repair, or before a repair of it would run — and so is, at once, a device whose
+step the board judged unsafe to repeat (``Unsafe``: a channel latched for a short circuit); a
+quarantined component is put in its safe state (a device switched off, a node stopped; never a
+protected component; the safe-state actions are reported like steps, under the plan id
+``quarantine:<component>``) and no step touching it runs again (``BLOCKED``) until
+``clear_quarantine(component)``; nor does one touching a component a person ``held``. Two executions
 touching the same component never overlap (``BUSY``). With ``dry_run=True`` the executor
 checks and reports every step and acts on nothing: no actuator, no wait, no attempt counted.
 """
@@ -41,10 +46,15 @@ from dataclasses import dataclass
 from enum import StrEnum
 
 from host.errors import DxboardError
-from host.journal.entries import ActionRecord, ActionState, PlanRecord, PlanStep
-from host.repair.actuators import Actuators, Refused
+from host.events import ActionRecord, ActionState, PlanRecord, PlanStep
+from host.repair.actuators import Actuators, Refused, Unsafe
 from host.repair.beliefs import Beliefs
-from host.repair.effects import DEFAULT_DEVICE_SETTLE_S, IMMEDIATE, expected_effects
+from host.repair.effects import (
+    DEFAULT_DEVICE_SETTLE_S,
+    IMMEDIATE,
+    contradictions,
+    expected_effects,
+)
 from host.repair.limits import AttemptLimiter, Quarantine, Quarantined
 from host.repair.plan import Plan, Step
 
@@ -133,7 +143,9 @@ class Executor:
         self.observable = observable
         self.clock = clock
         self.max_parallel = max_parallel  # steps running at once; None: as the order allows
+        self.held: dict[str, str] = {}  # component -> why a person holds it (left alone)
         self._busy: set[str] = set()
+        self._unsafe: set[str] = set()  # devices whose last step was unsafe to repeat
         self._ids = itertools.count(1)
 
     # -- public ----------------------------------------------------------------------------
@@ -146,6 +158,10 @@ class Executor:
         if blocked:
             return ExecutionResult(Outcome.BLOCKED, plan_id, reason=f"{', '.join(blocked)} "
                                    "quarantined: cleared only by a person", dry_run=self.dry_run)
+        held = sorted(c for c in comps if c in self.held)
+        if held:
+            return ExecutionResult(Outcome.BLOCKED, plan_id, reason=f"{', '.join(held)} held "
+                                   "by a person: left alone", dry_run=self.dry_run)
         busy = sorted(comps & self._busy)
         if busy:
             return ExecutionResult(Outcome.BUSY, plan_id, reason=f"{', '.join(busy)} already "
@@ -153,28 +169,34 @@ class Executor:
         if self.dry_run:
             return await self._dry_run(plan, plan_id)
         now = self.clock()
-        spent = sorted(c for c in comps if self.limiter.exhausted(c, now))
+        targets = frozenset(repairs) or comps
+        spent = sorted(c for c in targets if self.limiter.exhausted(c, now))
         if spent:
             q = [await self.quarantine_component(
                 c, f"{self.limiter.count(c, now)} repair attempts in "
                 f"{self.limiter.window_s:g} s") for c in spent]
             return ExecutionResult(Outcome.QUARANTINED, plan_id, quarantined=tuple(q),
                                    reason=f"{', '.join(spent)} used their repair attempts")
-        for c in comps:
+        for c in targets:
             self.limiter.record(c, now)
         self._busy |= comps
         try:
-            return await self._run(plan, plan_id)
+            result = await self._run(plan, plan_id, targets)
         finally:
             self._busy -= comps
+        if result.ok:
+            for c in targets:
+                self.limiter.verified(c, self.clock())
+        return result
 
-    async def quarantine_component(self, component: str, reason: str) -> Quarantined:
+    async def quarantine_component(self, component: str, reason: str,
+                                   by: str = "daemon") -> Quarantined:
         """Take ``component`` out of automatic repair and leave it in a safe state."""
         old = self.quarantine.get(component)
         if old is not None:
             return old
         safe = "left as is (dry run)" if self.dry_run else await self._safe_state(component)
-        entry = Quarantined(component, self.clock(), reason, safe)
+        entry = Quarantined(component, self.clock(), reason, safe, by)
         self.quarantine.add(entry)
         log.warning("quarantined %s: %s; %s", component, reason, safe)
         self._emit(entry)
@@ -186,7 +208,7 @@ class Executor:
         return self.quarantine.clear(component)
 
     # -- running a plan --------------------------------------------------------------------
-    async def _run(self, plan: Plan, plan_id: str) -> ExecutionResult:
+    async def _run(self, plan: Plan, plan_id: str, targets: frozenset[str]) -> ExecutionResult:
         done: list[Step] = []
         started: set[int] = set()
         failure: tuple[Step, str] | None = None
@@ -219,11 +241,17 @@ class Executor:
         step, why = failure
         q: list[Quarantined] = []
         now = self.clock()
-        for c in step.args[:1]:
-            if self.limiter.exhausted(c, now):
-                q.append(await self.quarantine_component(
-                    c, f"{step} failed ({why}) after {self.limiter.count(c, now)} repair "
-                    f"attempts in {self.limiter.window_s:g} s"))
+        if step.args and step.args[0] in self._unsafe:  # the board's judgement: stop now
+            self._unsafe.discard(step.args[0])
+            q.append(await self.quarantine_component(step.args[0], f"{step} failed: {why}"))
+        else:
+            # a repair that does not work quarantines what it repairs, not the driver it
+            # restarts on the way (a hung lidar, not its node)
+            for c in sorted(targets):
+                if self.limiter.exhausted(c, now) and c not in self.quarantine:
+                    q.append(await self.quarantine_component(
+                        c, f"{step} failed ({why}) after {self.limiter.count(c, now)} repair "
+                        f"attempts in {self.limiter.window_s:g} s"))
         return ExecutionResult(Outcome.FAILED, plan_id, tuple(done), step, why, tuple(q))
 
     def _timeout(self, step: Step) -> float:
@@ -260,6 +288,10 @@ class Executor:
         except Refused as exc:
             finish(ActionState.FAILED, f"refused: {exc}")
             return f"refused: {exc}"
+        except Unsafe as exc:
+            self._unsafe.add(exc.device)
+            finish(ActionState.FAILED, str(exc))
+            return str(exc)
         except DxboardError as exc:
             finish(ActionState.FAILED, str(exc))
             return str(exc)
@@ -267,10 +299,16 @@ class Executor:
         expected = expected_effects(step, self.model, self.observable)
         if expected:
             settle = self.settle_of(step)
-            if not await self.beliefs.wait_for(expected, end + settle, settle + self.verify_s):
+            abort = contradictions(step, self.observable)
+            if not await self.beliefs.wait_for(expected, end + settle, settle + self.verify_s,
+                                               abort=abort, abort_after=end):
                 seen = self.beliefs.missing(expected, end + settle)
+                waited = self.clock() - end
                 why = "effect not observed within {:g} s: {}".format(
                     settle + self.verify_s, "; ".join(f"{a} {v}" for a, v in seen.items()))
+                if waited < settle + self.verify_s:
+                    why = "the board tripped it {:.1f} s after the step: {}".format(
+                        waited, "; ".join(f"{a} {v}" for a, v in seen.items()))
                 finish(ActionState.FAILED, f"{detail}; {why}")
                 return why
             detail += "; observed " + ", ".join(

@@ -1,12 +1,24 @@
 """Bounds on repairing: at most N attempts per component in a window, then quarantine.
 
 A repair that does not hold (a device with a permanent fault, a driver that crashes on
-start) must not become a loop of repairs. ``AttemptLimiter`` counts the repair attempts of
-each component in a sliding window (default 3 in 600 s; times passed in, from the executor's
-monotonic clock). When a component has used its attempts, the executor *quarantines* it:
-``Quarantine`` records when and why, the executor leaves it in a safe state (switched off or
-stopped where that is allowed; never a protected component), and no step touching it runs
-again until a person calls ``clear(component)`` (``Executor.clear_quarantine``).
+start, a device that drops out again and again) must not become a loop of repairs.
+``AttemptLimiter`` counts the repair attempts of each component in a sliding window (default 3
+in 600 s; times passed in, from the executor's monotonic clock), as a person would count them:
+
+- every execution that touches a component records one attempt (``record``);
+- an execution whose effects were all observed marks its attempts *verified* (``verified``);
+- the first verified attempt on a component is its bring-up (the robot's power-up, or the
+  first repair since the daemon started): it never counts;
+- a verified attempt that *held* — no new attempt on that component for ``stable_s`` (60 s)
+  after it was verified — no longer counts: the power-up of a robot, or three successful
+  repairs of the base on three separate days, never add up to a quarantine;
+- a verified attempt followed by a new one within ``stable_s`` *flapped*: the repair did not
+  hold (a dropout, a device that hangs again at once), and it counts until the window ends.
+
+When a component has used its attempts, the executor *quarantines* it: ``Quarantine`` records
+when and why, the executor leaves it in a safe state (switched off or stopped where that is
+allowed; never a protected component), and no step touching it runs again until a person
+clears it (``Executor.clear_quarantine``).
 """
 
 from __future__ import annotations
@@ -16,38 +28,67 @@ from dataclasses import dataclass
 
 DEFAULT_MAX_ATTEMPTS = 3
 DEFAULT_WINDOW_S = 600.0
+DEFAULT_STABLE_S = 60.0
+
+
+@dataclass
+class _Attempt:
+    at: float
+    verified_at: float | None = None
+    flapped: bool = False
 
 
 class AttemptLimiter:
     def __init__(self, max_attempts: int = DEFAULT_MAX_ATTEMPTS,
-                 window_s: float = DEFAULT_WINDOW_S) -> None:
-        if max_attempts < 1 or window_s <= 0:
-            raise ValueError("need max_attempts >= 1 and window_s > 0")
+                 window_s: float = DEFAULT_WINDOW_S, stable_s: float = DEFAULT_STABLE_S) -> None:
+        if max_attempts < 1 or window_s <= 0 or stable_s < 0:
+            raise ValueError("need max_attempts >= 1, window_s > 0 and stable_s >= 0")
         self.max_attempts = max_attempts
         self.window_s = window_s
-        self._times: dict[str, deque[float]] = {}
+        self.stable_s = stable_s
+        self._attempts: dict[str, deque[_Attempt]] = {}
+        self._up: set[str] = set()  # components verified at least once (brought up)
 
-    def _prune(self, component: str, now: float) -> deque[float]:
-        q = self._times.setdefault(component, deque())
-        while q and q[0] <= now - self.window_s:
-            q.popleft()
-        return q
+    def _prune(self, component: str, now: float) -> deque[_Attempt]:
+        q = self._attempts.setdefault(component, deque())
+        kept = deque(a for a in q if a.at > now - self.window_s and not self._held(a, now))
+        self._attempts[component] = kept
+        return kept
+
+    def _held(self, a: _Attempt, now: float) -> bool:
+        return (a.verified_at is not None and not a.flapped
+                and now >= a.verified_at + self.stable_s)
 
     def count(self, component: str, now: float) -> int:
-        """Attempts on ``component`` in the window ending at ``now``."""
+        """Attempts on ``component`` that count at ``now``."""
         return len(self._prune(component, now))
 
     def exhausted(self, component: str, now: float) -> bool:
         return self.count(component, now) >= self.max_attempts
 
     def record(self, component: str, now: float) -> int:
-        """Count one attempt; the attempts in the window, this one included."""
+        """Count one attempt; the attempts that count, this one included."""
         q = self._prune(component, now)
-        q.append(now)
+        for a in q:
+            if a.verified_at is not None:
+                a.flapped = True  # a new attempt before the last repair held: it did not
+        q.append(_Attempt(now))
         return len(q)
 
+    def verified(self, component: str, now: float) -> None:
+        """The latest attempt's effects were all observed: it no longer counts once it held
+        (at once, if it was the component's bring-up)."""
+        q = self._attempts.get(component)
+        if not q or q[-1].verified_at is not None:
+            return
+        if component not in self._up:
+            self._up.add(component)
+            q.pop()
+        else:
+            q[-1].verified_at = now
+
     def reset(self, component: str) -> None:
-        self._times.pop(component, None)
+        self._attempts.pop(component, None)
 
 
 @dataclass(frozen=True)
@@ -58,6 +99,7 @@ class Quarantined:
     since: float
     reason: str
     safe_state: str = ""
+    by: str = "daemon"  # or "person" (``dxboard quarantine add``)
 
 
 class Quarantine:

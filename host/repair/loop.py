@@ -5,8 +5,9 @@ abnormal components. ``diagnose`` is the daemon's: an async callable returning t
 diagnoses as ``Candidate`` values (bad set, probability) and the observed literals, from the
 diagnoser the observer hub feeds. One round (``repair_once``):
 
-1. diagnose; drop the quarantined components from every candidate (a person must clear
-   them; their failure is known and reported) — nothing left: the round ends;
+1. diagnose; drop the quarantined and held components from every candidate (a person must
+   clear them; their failure is known and reported, or a person is working on them) — nothing
+   left: the round ends;
 2. ``choose`` the diagnosis to repair and its plan (``host.repair.policy``), reported through
    ``on_plan`` (a ``PlanRecord`` for the journal);
 3. ``executor.execute`` it: steps verified by fresh observations, attempts counted.
@@ -32,7 +33,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import TYPE_CHECKING
 
-from host.journal.entries import PlanRecord
+from host.events import PlanRecord
 from host.repair.errors import NoPlanError
 from host.repair.executor import ExecutionResult, Executor, Outcome, plan_record
 from host.repair.policy import Candidate, Choice, choose
@@ -94,7 +95,7 @@ class RepairLoop:
     async def repair_once(self) -> Round:
         """Diagnose, choose, plan and execute once."""
         candidates, observations = await self.diagnose()
-        quarantined = self.executor.quarantine.components
+        quarantined = self.executor.quarantine.components | frozenset(self.executor.held)
         kept: list[Candidate] = []
         dropped: set[str] = set()
         for c in candidates:

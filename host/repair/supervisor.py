@@ -17,12 +17,22 @@
 
 ``start`` of a node that runs already returns its pid without starting a second copy; ``stop``
 of a node that does not run is a no-op. ``close()`` stops every process it started.
+
+Nodes outlive a daemon that is killed (they run in their own sessions, so a robot does not lose
+its drivers when its watchdog restarts), but never unnoticed: the supervisor keeps a record of
+what it runs (``log_dir/nodes.json``: pid, start time, command line and a digest of the
+environment it gave), and ``adopt()``, called by the next daemon before it repairs anything,
+takes over every recorded node that still runs the same command with the same environment
+(``start`` then returns its pid instead of starting a second copy; ``stop`` stops it) and stops
+the ones that do not match (a node wired to a board or devices that are gone).
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import hashlib
+import json
 import logging
 import os
 import signal
@@ -31,7 +41,9 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import IO
 
-from host.errors import DxboardError
+import psutil
+
+from host.errors import RemoteError
 from host.repair.processes import ProcessConfig
 
 log = logging.getLogger(__name__)
@@ -39,16 +51,38 @@ log = logging.getLogger(__name__)
 OnStart = Callable[[str, int], None]
 
 
-class ProcessError(DxboardError):
+class ProcessError(RemoteError):
     """A node could not be started or stopped (no configuration, exec failed, systemctl)."""
 
 
+RECORD = "nodes.json"
+ADOPT_POLL_S = 0.2
+
+
 class _Running:
-    def __init__(self, proc: asyncio.subprocess.Process, logf: IO[bytes]) -> None:
+    """A node's process: one this supervisor started (``proc``) or one it adopted (``pid``)."""
+
+    def __init__(self, pid: int, logf: IO[bytes],
+                 proc: asyncio.subprocess.Process | None = None) -> None:
+        self.pid = pid
         self.proc = proc
         self.logf = logf
         self.stopping = False
+        self.code: int | None = None  # exit status once it exited (adopted: -1, unknown)
+        self.exited = asyncio.Event()
         self.reaper: asyncio.Task[None] | None = None
+
+    async def wait(self) -> int:
+        """Until it exits: its status (an adopted process's is unknown: -1)."""
+        if self.proc is not None:
+            return await self.proc.wait()
+        try:
+            p = psutil.Process(self.pid)
+            while p.is_running() and p.status() != psutil.STATUS_ZOMBIE:
+                await asyncio.sleep(ADOPT_POLL_S)
+        except psutil.Error:
+            pass
+        return -1
 
 
 class ProcessSupervisor:
@@ -73,8 +107,8 @@ class ProcessSupervisor:
 
     def pid(self, node: str) -> int | None:
         r = self._running.get(node)
-        if r is not None and r.proc.returncode is None:
-            return r.proc.pid
+        if r is not None and r.code is None:
+            return r.pid
         return self._units.get(node)
 
     def log_file(self, node: str) -> Path:
@@ -102,21 +136,21 @@ class ProcessSupervisor:
             self._units[node] = None
             return None
         r = self._running.get(node)
-        if r is None or r.proc.returncode is not None:
+        if r is None or r.code is not None:
             return None
         r.stopping = True
-        self._signal(r.proc.pid, signal.SIGTERM)
+        self._signal(r.pid, signal.SIGTERM)
         try:
-            await asyncio.wait_for(asyncio.shield(r.proc.wait()), cfg.stop_timeout_s)
+            await asyncio.wait_for(r.exited.wait(), cfg.stop_timeout_s)
         except TimeoutError:
             log.warning("%s did not stop within %g s of SIGTERM: SIGKILL", node,
                         cfg.stop_timeout_s)
-            self._signal(r.proc.pid, signal.SIGKILL)
-            await r.proc.wait()
-        self._signal(r.proc.pid, signal.SIGKILL)  # children that outlived the leader
+            self._signal(r.pid, signal.SIGKILL)
+            await r.exited.wait()
+        self._signal(r.pid, signal.SIGKILL)  # children that outlived the leader
         if r.reaper is not None:
             await r.reaper
-        return r.proc.returncode
+        return r.code
 
     async def close(self) -> None:
         """Stop every process this supervisor started (units are left to systemd)."""
@@ -127,8 +161,8 @@ class ProcessSupervisor:
     async def _spawn(self, cfg: ProcessConfig) -> int:
         node = cfg.node
         r = self._running.get(node)
-        if r is not None and r.proc.returncode is None:
-            return r.proc.pid
+        if r is not None and r.code is None:
+            return r.pid
         self.log_dir.mkdir(parents=True, exist_ok=True)
         logf = self.log_file(node).open("ab")
         stamp = time.strftime("%Y-%m-%d %H:%M:%S")
@@ -144,22 +178,82 @@ class ProcessSupervisor:
             logf.close()
             raise ProcessError(f"cannot start {node}: {exc.strerror or exc} ({cfg.argv[0]})"
                                ) from exc
-        r = self._running[node] = _Running(proc, logf)
-        r.reaper = asyncio.get_running_loop().create_task(self._reap(node, r),
-                                                           name=f"reap:{node}")
+        self._watch(node, _Running(proc.pid, logf, proc))
+        self._record_write()
         log.info("started %s as pid %d", node, proc.pid)
         return proc.pid
 
+    def _watch(self, node: str, r: _Running) -> None:
+        self._running[node] = r
+        r.reaper = asyncio.get_running_loop().create_task(self._reap(node, r),
+                                                           name=f"reap:{node}")
+
     async def _reap(self, node: str, r: _Running) -> None:
-        code = await r.proc.wait()
+        code = r.code = await r.wait()
+        r.exited.set()
         self.exits[node] = code
-        how = f"signal {-code}" if code < 0 else f"status {code}"
+        how = ("an unknown status" if r.proc is None else
+               f"signal {-code}" if code < 0 else f"status {code}")
         r.logf.write(f"--- exited with {how}{' (stopped)' if r.stopping else ''}\n".encode())
         r.logf.close()
         if not r.stopping:
-            log.warning("%s (pid %d) exited by itself with %s", node, r.proc.pid, how)
+            log.warning("%s (pid %d) exited by itself with %s", node, r.pid, how)
         if self._running.get(node) is r:
             del self._running[node]
+            self._record_write()
+
+    # -- the record of running nodes, and adopting them -----------------------------------
+    def _digest(self, cfg: ProcessConfig) -> str:
+        env = json.dumps({**self.env, **cfg.env}, sort_keys=True)
+        return hashlib.sha256(env.encode()).hexdigest()[:16]
+
+    def _record_write(self) -> None:
+        """Write what runs now (pid, start time, argv, environment digest) atomically."""
+        rec: dict[str, dict[str, object]] = {}
+        for node, r in self._running.items():
+            with contextlib.suppress(psutil.Error):
+                rec[node] = {"pid": r.pid, "started": psutil.Process(r.pid).create_time(),
+                             "argv": list(self.configs[node].argv),
+                             "env": self._digest(self.configs[node])}
+        self.log_dir.mkdir(parents=True, exist_ok=True)
+        tmp = self.log_dir / (RECORD + ".tmp")
+        tmp.write_text(json.dumps(rec, indent=1))
+        os.replace(tmp, self.log_dir / RECORD)
+
+    async def adopt(self) -> dict[str, str]:
+        """Take over the nodes an earlier daemon left running (see the module docstring);
+        returns what was done with each recorded node (``adopted`` or why it was stopped)."""
+        try:
+            rec = json.loads((self.log_dir / RECORD).read_text())
+        except (OSError, ValueError):
+            return {}
+        done: dict[str, str] = {}
+        for node, info in rec.items() if isinstance(rec, dict) else ():
+            try:
+                pid = int(info["pid"])
+                p = psutil.Process(pid)
+                same = (abs(p.create_time() - float(info["started"])) < 0.01
+                        and p.status() != psutil.STATUS_ZOMBIE)
+            except (psutil.Error, KeyError, TypeError, ValueError):
+                continue  # gone: nothing to do
+            if not same:
+                continue  # the pid was reused by something else: not ours
+            cfg = self.configs.get(node)
+            if (cfg is None or cfg.unit is not None or list(cfg.argv) != info.get("argv")
+                    or self._digest(cfg) != info.get("env") or node in self._running):
+                self._signal(pid, signal.SIGTERM)
+                done[node] = "stopped: it ran another command or environment"
+                continue
+            logf = self.log_file(node).open("ab")
+            logf.write(f"--- {time.strftime('%Y-%m-%d %H:%M:%S')} adopted pid {pid} "
+                       "(left running by an earlier daemon)\n".encode())
+            logf.flush()
+            self._watch(node, _Running(pid, logf))
+            done[node] = "adopted"
+            if self.on_start is not None:
+                self.on_start(node, pid)
+        self._record_write()
+        return done
 
     @staticmethod
     def _signal(pid: int, sig: signal.Signals) -> None:

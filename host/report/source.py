@@ -16,7 +16,7 @@ import os
 from pathlib import Path
 
 from host.errors import UserError
-from host.journal.entries import DiagnosisRecord, Kind
+from host.events import DiagnosisRecord, Kind
 from host.journal.store import JournalReader
 from host.report.timeline import Bound, EmptyWindow, Group, Timeline, build_timeline
 

@@ -40,14 +40,14 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 
-from host.journal.entries import (
+from host.events import (
     ActionRecord,
     ActionState,
     DiagnosisRecord,
-    Entry,
     Observation,
     PlanRecord,
 )
+from host.journal.entries import Entry
 
 log = logging.getLogger(__name__)
 

@@ -1,26 +1,50 @@
-"""Errors of the transports and the board client, split by who must act (STYLE.md 4).
+"""Errors of the transports and the board client, split by who is at fault (STYLE.md 4).
 
-Everything here is a ``UserError``: a person can fix it (a mistyped URL, a board that is off
-or unplugged, a wrong key, a firmware too old or too new), so the CLI prints it on one line
-with what to do next. ``BoardUnreachable`` covers every way a link fails (refused, vanished,
-silent); ``RequestTimeout`` is also a ``TimeoutError``, as python-can's ``CanTimeoutError``
-is, so ``except TimeoutError`` catches it. ``BoardRefused`` carries the board's E_* code.
+``TransportError`` is the family. Local ones (``UserError``: the person fixes the input) are a
+board URL that cannot be used (``BadUrl``), a request the transport cannot carry
+(``NotSupported``), a channel or a value out of range (``BadChannel``, ``BadRequest``). Remote
+ones (``RemoteError``: the board or the link) are every way a link fails (``BoardUnreachable``;
+``LinkLost`` while in use; ``RequestTimeout``, also a ``TimeoutError`` as python-can's
+``CanTimeoutError`` is, so ``except TimeoutError`` catches it), a board speaking another
+protocol version (``VersionMismatch``), a board that refused a request (``BoardRefused``, with
+the board's E_* code; ``AuthRefused`` for a bad or missing key), and a switch that did not move
+(``ReadbackMismatch``). Garbage from the wire is never raised as a local error.
 """
 
 from __future__ import annotations
 
-from host.errors import UserError
+from host.errors import DxboardError, RemoteError, UserError
 
 
-class TransportError(UserError):
+class TransportError(DxboardError):
     """Base of every error raised by a transport or the board client."""
 
 
-class BadUrl(TransportError):
+class LocalTransportError(TransportError, UserError):
+    """The request or the URL is wrong: nothing was sent."""
+
+
+class RemoteTransportError(TransportError, RemoteError):
+    """The board or the link failed, or the board refused."""
+
+
+class BadUrl(LocalTransportError):
     """The board URL cannot be used: unknown scheme, missing port, bad query value."""
 
 
-class BoardUnreachable(TransportError):
+class NotSupported(LocalTransportError):
+    """The transport cannot do this (for instance: configuration over CAN)."""
+
+
+class BadChannel(LocalTransportError):
+    """A channel number or name the board does not have."""
+
+
+class BadRequest(LocalTransportError):
+    """A value out of range (a rate, an off time) or a setting the board does not have."""
+
+
+class BoardUnreachable(RemoteTransportError):
     """The board cannot be reached, or the link to it was lost."""
 
 
@@ -32,15 +56,11 @@ class RequestTimeout(BoardUnreachable, TimeoutError):
     """The board did not answer a request in time."""
 
 
-class NotSupported(TransportError):
-    """The transport cannot do this (for instance: configuration over CAN)."""
-
-
-class VersionMismatch(TransportError):
+class VersionMismatch(RemoteTransportError):
     """The board speaks another protocol version than this host."""
 
 
-class BoardRefused(TransportError):
+class BoardRefused(RemoteTransportError):
     """The board answered a request with ERROR; ``code`` is the E_* code."""
 
     def __init__(self, message: str, hint: str = "", code: int = 0) -> None:
@@ -52,9 +72,5 @@ class AuthRefused(BoardRefused):
     """The board refused the authentication tag: the key is wrong, or missing."""
 
 
-class BadChannel(TransportError):
-    """A channel number or name the board does not have."""
-
-
-class ReadbackMismatch(TransportError):
+class ReadbackMismatch(RemoteTransportError):
     """The board acknowledged a command but its read-back disagrees with what was asked."""

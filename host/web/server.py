@@ -32,7 +32,8 @@ from typing import Any, Protocol
 from aiohttp import WSMsgType, web
 
 from host.errors import UserError
-from host.journal.entries import Entry, Kind
+from host.events import Kind
+from host.journal.entries import Entry
 from host.journal.summary import summarize
 from host.web import metrics
 from host.web.status import Status, StatusSource

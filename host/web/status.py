@@ -22,10 +22,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
+from protocol.constants import STATE_NAMES
+
 log = logging.getLogger(__name__)
 
-# the firmware's channel states (protocol/constants.py STATE_NAMES), for the page's colours
-CHANNEL_STATES = ("off", "inrush", "on", "tripped", "latched", "faulted")
+# the firmware's channel states, for the page's colours and the metrics
+CHANNEL_STATES: tuple[str, ...] = tuple(STATE_NAMES)
 
 
 @dataclass(frozen=True)
@@ -82,6 +84,10 @@ class Status:
     diagnosis_latency_sum_s: float = 0.0
     diagnosis_last_latency_s: float | None = None
     repairs_by_outcome: Mapping[str, int] = field(default_factory=dict)
+    # components out of automatic repair: name -> why (quarantined by the daemon or a person;
+    # held by a person for maintenance)
+    quarantined: Mapping[str, str] = field(default_factory=dict)
+    held: Mapping[str, str] = field(default_factory=dict)
     version: int = 0
 
     def to_json(self) -> dict[str, Any]:
@@ -95,6 +101,8 @@ class Status:
             "diagnoses": [d.to_json() for d in self.diagnoses],
             "diagnosis_complete": self.diagnosis_complete,
             "repairs": [r.to_json() for r in self.repairs],
+            "quarantined": dict(sorted(self.quarantined.items())),
+            "held": dict(sorted(self.held.items())),
             "counters": {
                 "observation_changes": self.observation_changes,
                 "diagnosis_runs": self.diagnosis_runs,

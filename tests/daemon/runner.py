@@ -8,39 +8,27 @@ reads the URLs it prints, and offers what a person would use: the JSON API (``st
 from __future__ import annotations
 
 import json
-import shutil
 import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 import urllib.request
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import yaml
-
-from host.journal import Entry, JournalReader
+from host.experiment.robot import fast_model
+from host.journal import ActionRecord, Entry, JournalReader
 
 ROOT = Path(__file__).resolve().parents[2]
 TEDUSAR = ROOT / "models" / "tedusar"
 
 
-def fast_copy(tmp: Path, boot_ms: dict[str, int] | None = None) -> Path:
-    """``models/tedusar`` with short device boot times, its node commands pointing at it."""
-    d = tmp / "tedusar"
-    shutil.copytree(TEDUSAR, d)
-    emu = yaml.safe_load((d / "emulator.yaml").read_text())
-    for ch in emu["channels"]:
-        ch["boot_ms"] = (boot_ms or FAST_BOOT_MS).get(ch["name"], ch.get("boot_ms", 0))
-    (d / "emulator.yaml").write_text(yaml.safe_dump(emu))
-    system = (d / "system.yaml").read_text()
-    (d / "system.yaml").write_text(system.replace(" models/tedusar]", f" {d}]"))
-    return d
-
-
-FAST_BOOT_MS = {"hokuyo": 1500, "jaguar": 300, "laser_alignment": 300}
+def fast_copy(tmp: Path) -> Path:
+    """``models/tedusar`` with short device boot times (``host.experiment.robot.fast_model``)."""
+    return fast_model(TEDUSAR, tmp)
 
 
 def free_port() -> int:
@@ -51,13 +39,14 @@ def free_port() -> int:
 
 class RunningDaemon:
     def __init__(self, tmp: Path, system_dir: Path = TEDUSAR,
-                 extra_args: tuple[str, ...] = ()) -> None:
+                 extra_args: tuple[str, ...] = (), zenoh_port: int | None = None) -> None:
         self.journal_path = tmp / "journal.sqlite"
+        self.zenoh_port = zenoh_port or free_port()
         argv = [sys.executable, "-m", "host.cli", "run", str(system_dir), "--emulate",
                 "--web", "127.0.0.1:0", "--journal", str(self.journal_path),
-                "--zenoh", f"tcp/127.0.0.1:{free_port()}", *extra_args]
+                "--zenoh", f"tcp/127.0.0.1:{self.zenoh_port}", *extra_args]
         self.err_path = tmp / "daemon.err"
-        with self.err_path.open("wb") as err:
+        with self.err_path.open("ab") as err:
             self.proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=err,
                                          text=True)
         self.urls: dict[str, str] = {}
@@ -68,6 +57,16 @@ class RunningDaemon:
                 raise AssertionError("dxboard run exited: " + self.err_path.read_text()[-2000:])
             name, _, rest = line.strip().partition(": ")
             self.urls[name] = rest
+        # what it says on its terminal after the URLs, read as it comes (a pipe nobody read
+        # would fill up)
+        self.lines: list[str] = []
+        self._reader = threading.Thread(target=self._read_terminal, daemon=True)
+        self._reader.start()
+
+    def _read_terminal(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            self.lines.append(line.rstrip("\n"))
 
     def status(self) -> dict[str, Any]:
         with urllib.request.urlopen(self.urls["web"] + "api/status", timeout=5) as r:
@@ -90,7 +89,7 @@ class RunningDaemon:
         subprocess.run([sys.executable, "-m", "host.cli", "inject", self.urls["control"],
                         *args], check=True, cwd=ROOT, capture_output=True, timeout=10)
 
-    def journal(self, kind: str | None = None) -> list[Entry]:
+    def journal(self, kind: str | tuple[str, ...] | None = None) -> list[Entry]:
         return JournalReader(self.journal_path).query(kind=kind, limit=100000)
 
     def board(self, *args: str, key_file: Path) -> str:
@@ -99,6 +98,18 @@ class RunningDaemon:
                               *args, "--key-file", str(key_file)], check=True, cwd=ROOT,
                              capture_output=True, text=True, timeout=15)
         return out.stdout
+
+    def operator(self, command: str, *args: str) -> str:
+        """``dxboard quarantine|hold ARGS`` against this daemon, as its operator would."""
+        out = subprocess.run([sys.executable, "-m", "host.cli", command, *args, "--operator",
+                              self.urls["operator"]], check=True, cwd=ROOT,
+                             capture_output=True, text=True, timeout=60)
+        return out.stdout.strip()
+
+    def kill(self) -> None:
+        """``kill -9`` the daemon: no clean-up of any kind."""
+        self.proc.kill()
+        self.proc.wait(10)
 
     def interrupt(self, timeout: float = 20.0) -> int:
         self.proc.send_signal(signal.SIGINT)
@@ -112,6 +123,7 @@ class RunningDaemon:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()
+        self._reader.join(5)
         if self.proc.stdout is not None:
             self.proc.stdout.close()
 
@@ -133,8 +145,18 @@ def healthy(s: dict[str, Any]) -> bool:
         r["state"] in ("succeeded", "failed", "timeout") for r in s["repairs"])
 
 
-def last_id(d: RunningDaemon) -> int:
-    return max((e.id for e in d.journal()), default=0)
+def last_id(d: RunningDaemon, timeout: float = 10.0) -> int:
+    """The journal's last id, once every action it shows started has its result journaled too
+    (the page shows a result at once; the journal's writer thread commits it a moment later)."""
+    end = time.monotonic() + timeout
+    while True:
+        entries = d.journal()
+        acts = [e.payload for e in entries if isinstance(e.payload, ActionRecord)]
+        started = {a.action_id for a in acts if a.finished is None}
+        if started <= {a.action_id for a in acts if a.finished is not None} or (
+                time.monotonic() > end):
+            return max((e.id for e in entries), default=0)
+        time.sleep(0.1)
 
 
 def bad_sets(status: dict[str, Any]) -> list[set[str]]:

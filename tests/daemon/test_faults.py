@@ -29,11 +29,11 @@ from typing import Any
 
 import pytest
 
+from host.events import describe
 from host.journal import (
     ActionRecord,
     BoardEvent,
     DiagnosisRecord,
-    Note,
     Observation,
     PlanRecord,
 )
@@ -82,7 +82,9 @@ def finished(d: RunningDaemon, mark: int) -> list[tuple[str, tuple[str, ...], st
 
 
 def notes(d: RunningDaemon, mark: int) -> list[str]:
-    return [p.text for p in since(d, mark, "note") if isinstance(p, Note)]
+    """What the daemon said since ``mark``: its notes, how repairs ended, quarantines."""
+    return [describe(e.payload) for e in d.journal(("note", "repair", "quarantine"))
+            if e.id > mark]
 
 
 def observed(d: RunningDaemon, mark: int, literal: str, value: bool | None) -> bool:
@@ -114,6 +116,9 @@ def wait_journal(d: RunningDaemon, what: Any, timeout: float, label: str) -> Non
 def assert_journal_steps(d: RunningDaemon, mark: int, component: str, *,
                          repaired: bool) -> None:
     """The journal holds every step: the diagnosis, the plan, its actions and their results."""
+    # the page shows a result as soon as it happens; its journal entry is committed a moment
+    # later by the journal's writer thread
+    wait_journal(d, lambda: all_finished(d, mark), 10, "every result journaled")
     assert named(d, mark, component), f"no diagnosis naming {component} in the journal"
     plans = [p for p in since(d, mark, "plan") if isinstance(p, PlanRecord)]
     assert plans, "no plan in the journal"
@@ -126,8 +131,9 @@ def assert_journal_steps(d: RunningDaemon, mark: int, component: str, *,
     started = {a.action_id for a in acts if str(a.state) == "started"}
     results = {a.action_id for a in acts if a.finished is not None}
     assert started and started <= results, "an action started without a journaled result"
-    if repaired:
-        assert any("repair ended: healthy" in t for t in notes(d, mark)), notes(d, mark)
+    if repaired:  # the repair ends once its last round has diagnosed the robot healthy
+        wait_journal(d, lambda: any("repair ended: healthy" in t for t in notes(d, mark)), 20,
+                     "the repair's end journaled")
         healthy_after = [p for p in since(d, mark, "diagnosis")
                          if isinstance(p, DiagnosisRecord)]
         assert healthy_after and healthy_after[-1].diagnoses in ((), ((),))
@@ -156,7 +162,8 @@ def untouched(d: RunningDaemon, mark: int, component: str) -> None:
 # --- the tests ----------------------------------------------------------------------------
 
 
-def test_a_persistent_short_latches_and_is_repaired_once_cleared(robot: RunningDaemon) -> None:
+def test_a_persistent_short_latches_is_quarantined_unenergised_and_repaired_once_cleared(
+        robot: RunningDaemon) -> None:
     d = robot
     d.wait_for(healthy, HEAL_S, "healthy")
     mark = last_id(d)
@@ -169,7 +176,17 @@ def test_a_persistent_short_latches_and_is_repaired_once_cleared(robot: RunningD
     d.wait_for(lambda s: any("laser_alignment" in b for b in bad_sets(s)), 15,
                "laser_alignment diagnosed")
     assert observed(d, mark, "tripped(laser_alignment)", True)
-    d.inject("clear")  # the short is gone; the latch stays until someone clears it
+    # a short latched by the board is not energised again by the daemon: quarantined at once
+    st = d.wait_for(lambda s: "laser_alignment" in s["quarantined"], 30, "quarantined")
+    assert "short circuit" in st["quarantined"]["laser_alignment"]
+    energised = [s for s in board_states(d, mark, 1) if s == "inrush"]
+    assert len(energised) == 1  # the board's own retry, and nothing more
+    power = [a for a in actions(d, mark) if a.action in ("power_up", "power_cycle")
+             and a.finished is not None]
+    assert all("not energised again" in a.detail for a in power), power  # refused, unsent
+    d.inject("clear")  # the short is gone; a person checks the wiring and clears it
+    assert d.operator("quarantine", "clear", "laser_alignment") == \
+        "laser_alignment: quarantine cleared"
     d.wait_for(lambda s: healthy(s) and s["observations"].get("on(laser_alignment)") is True,
                HEAL_S, "laser_alignment powered again")
     done = finished(d, mark)

@@ -10,12 +10,12 @@ Instead this test runs the daemon's own pieces on one simulated clock, as fast a
   sends it (physical switch states, live faults, every channel's current) — 100 Hz;
 - the host: a real ``Daemon`` (``host.daemon.core``) built from ``models/tedusar`` with its
   monotonic and wall clocks set to the simulated clock, its journal in a temporary file, the
-  real ``Repairs`` trigger (``host.daemon.repairs``) and an ``ObserverHub`` holding the real
+  real repair service (``host.repair.service``) and an ``ObserverHub`` holding the real
   hardware observer of ``system.yaml`` (settle 3, link timeout 0.25 s) with the daemon's sink.
   Deadlines (link timeout, literal refreshes) are fired when the simulated clock reaches
   them, as the hub's timers would; the daemon diagnoses after every change of the
   observations and on its safety tick (every ``safety_tick_s`` of simulated time), as its
-  diagnosis task does, expiring stale literals each time.
+  diagnosis runner's task does, expiring stale literals each time.
 
 The devices (jaguar, hokuyo, laser_alignment) are switched on as the power-up repair does,
 then the robot is up once the diagnosis is healthy; from then on, over 60 000 readings with
@@ -38,7 +38,6 @@ from emulator.model import load as load_emulator
 from emulator.sim import Emulator
 from host.board.types import Reading
 from host.daemon.core import Daemon, DaemonOptions
-from host.daemon.repairs import Repairs
 from host.diagnosis import DiagnosisResult
 from host.journal import ActionRecord, DiagnosisRecord, Journal, JournalReader, PlanRecord
 from host.observers import ObserverHub
@@ -88,7 +87,7 @@ async def test_ten_fault_free_simulated_minutes_perform_no_repair(tmp_path: Path
     journal_path = tmp_path / "journal.sqlite"
     daemon = Daemon(DaemonOptions(system_dir=TEDUSAR, board_url="sim://", journal=journal_path),
                     clock=clock.mono, wall=clock.wall)
-    daemon.journal = Journal(journal_path)
+    daemon.attach_journal(Journal(journal_path))
     hardware = [o for o in daemon.observers_cfg.observers if isinstance(o, HardwareObserver)]
     assert len(hardware) == 1
     changed = False
@@ -100,22 +99,22 @@ async def test_ten_fault_free_simulated_minutes_perform_no_repair(tmp_path: Path
 
     daemon_sink = daemon.hub.sink
     daemon.hub = ObserverHub(hardware, sink, clock=clock.mono)
-    daemon.repairs = Repairs(daemon)
     triggers: list[tuple[float, list[frozenset[str]]]] = []
-    real_trigger = daemon.repairs.diagnosis_changed
+    real_trigger = daemon.diagnosis.on_changed
+    assert real_trigger is not None
 
     def trigger(result: DiagnosisResult) -> None:
-        if not daemon.healthy():  # the case in which Repairs schedules a repair
+        if not daemon.healthy():  # the case in which the service schedules a repair
             triggers.append((clock.mono(), result.bad_sets()))
         real_trigger(result)
 
-    daemon.repairs.diagnosis_changed = trigger  # type: ignore[method-assign]
+    daemon.diagnosis.on_changed = trigger
     (hw,) = hardware
     cursor = emu.board.events.read(0, 1000)[1]
     seq = 0
     next_safety = 0.0
 
-    def step() -> None:
+    async def step() -> None:
         nonlocal seq, changed, next_safety
         emu.advance(TICK_MS)
         now = clock.mono()
@@ -128,23 +127,23 @@ async def test_ten_fault_free_simulated_minutes_perform_no_repair(tmp_path: Path
             if updates:
                 sink(updates)
         if changed:
-            daemon.diagnose("observation")
+            await daemon.diagnosis.run("observation")
         if now >= next_safety:
             next_safety = now + daemon.opts.safety_tick_s
-            daemon.diagnose("safety tick")
+            await daemon.diagnosis.run("safety tick")
 
     # the pipeline sees: with the devices still off, the diagnosis names them
     for _ in range(50):
-        step()
+        await step()
     assert daemon.result is not None
     assert set(DEVICES) <= set().union(*daemon.result.bad_sets()), daemon.result
     # power-up, as the repair does it: each device on, 0.2 s apart; then until healthy
     for ch in DEVICES.values():
         assert emu.board.switch(ch, True)[0] == 0
         for _ in range(20):
-            step()
+            await step()
     for _ in range(1000):
-        step()
+        await step()
         if daemon.healthy() and all(hw.bands.get(d) == "nominal" for d in DEVICES):
             break
     assert daemon.healthy(), daemon.result
@@ -154,7 +153,7 @@ async def test_ten_fault_free_simulated_minutes_perform_no_repair(tmp_path: Path
     runs_before = daemon.status.snapshot().diagnosis_runs
 
     for _ in range(MINUTES * 60 * 1000 // TICK_MS):
-        step()
+        await step()
         assert daemon.healthy(), f"at {clock.mono() - up_at:.2f} s: {daemon.result}"
 
     assert clock.mono() - up_at >= MINUTES * 60
@@ -167,9 +166,10 @@ async def test_ten_fault_free_simulated_minutes_perform_no_repair(tmp_path: Path
     await asyncio.sleep(daemon.opts.repair_debounce_s + 0.2)  # a pending repair would start
     assert not daemon.repairs.busy
     await daemon.repairs.close()
+    assert daemon.journal is not None
     await daemon.journal.flush()
     daemon.journal.close()
-    daemon.diagnoser.close()
+    daemon.diagnosis.close()
 
     entries = JournalReader(journal_path).query(limit=1_000_000)
     assert not [e for e in entries if isinstance(e.payload, PlanRecord | ActionRecord)]

@@ -16,7 +16,8 @@ from pathlib import Path
 
 import pytest
 
-from host.journal import ActionRecord, DiagnosisRecord, Note, Observation, PlanRecord
+from host.events import describe
+from host.journal import ActionRecord, DiagnosisRecord, Observation, PlanRecord
 from tests.daemon.runner import (
     RunningDaemon,
     bad_sets,
@@ -78,20 +79,28 @@ def test_power_up_brings_the_whole_robot_up(robot: tuple[RunningDaemon, Path]) -
         assert up_end[dev] is not None and node_start[node] >= up_end[dev]
 
 
-def test_device_shut_down_is_repaired_as_in_the_paper(robot: tuple[RunningDaemon, Path]) -> None:
+def test_device_shut_down_by_a_person_is_held_then_repaired_as_in_the_paper(
+        robot: tuple[RunningDaemon, Path]) -> None:
     d, key = robot
     d.wait_for(healthy, HEAL_S, "healthy")
     mark = last_id(d)
-    d.board("off", "jaguar", key_file=key)
-    d.wait_for(lambda s: {"jaguar"} in bad_sets(s) or any("jaguar" in b for b in bad_sets(s)),
-               15, "jaguar diagnosed")
+    d.board("off", "jaguar", key_file=key)  # a person switches the base off on purpose
+    st = d.wait_for(lambda s: "jaguar" in s["held"], 15, "the base held")
+    assert "switched off on the board" in st["held"]["jaguar"]
+    assert d.operator("hold", "list") == f"jaguar: {st['held']['jaguar']}"
+    d.wait_for(lambda s: any("jaguar" in b for b in bad_sets(s)), 15, "jaguar diagnosed")
+    time.sleep(3.0)  # a repair would have started by now (debounce 0.5 s): none may
+    assert not actions_since(d, mark)
+    assert d.status()["observations"].get("on(jaguar)") is False  # still off
+    # released, the daemon repairs it as in paper 000 §VI-B
+    assert d.operator("hold", "release", "jaguar") == "jaguar released"
     d.wait_for(lambda s: healthy(s) and len(actions_since(d, mark)) >= 6, HEAL_S,
                "jaguar repaired")
     done = finished(actions_since(d, mark))
-    # paper 000 §VI-B: power_up(jaguar), stop_node(jaguar_node), start_node(jaguar_node)
     assert done == [("power_up", ("jaguar",), "succeeded"),
                     ("stop_node", ("jaguar_node",), "succeeded"),
                     ("start_node", ("jaguar_node",), "succeeded")]
+    assert not d.status()["held"]
 
 
 def test_a_hung_lidar_is_power_cycled_and_its_driver_restarted(
@@ -140,8 +149,7 @@ def test_link_loss_is_blamed_on_the_link_and_nothing_is_switched(
     d.inject("clear")
     d.wait_for(lambda s: s["board_link_up"] and not s["diagnoses"], 30, "the link back")
     assert not actions_since(d, mark)
-    notes = [e.payload.text for e in d.journal("note") if e.id > mark
-             and isinstance(e.payload, Note)]
+    notes = [describe(e.payload) for e in d.journal("note") if e.id > mark]
     assert any("link is down" in t for t in notes) or not any(
         isinstance(e.payload, PlanRecord) for e in d.journal("plan") if e.id > mark)
 
@@ -154,8 +162,7 @@ def test_a_permanent_hang_is_quarantined_and_the_rest_keeps_running(
     d.inject("hokuyo", "hang", "permanent=true")
     end = time.monotonic() + 120
     while time.monotonic() < end:
-        notes = [e.payload.text for e in d.journal("note") if e.id > mark
-                 and isinstance(e.payload, Note)]
+        notes = [describe(e.payload) for e in d.journal("quarantine") if e.id > mark]
         if any(t.startswith("quarantined") for t in notes):
             break
         time.sleep(0.5)
@@ -171,3 +178,7 @@ def test_a_permanent_hang_is_quarantined_and_the_rest_keeps_running(
     st = d.status()
     assert st["observations"]["ok(/odom)"] is True  # the base still works
     assert st["observations"]["ok(/imu_data)"] is True
+    # the hung lidar is what is quarantined (not the driver that was restarted on the way),
+    # and it is switched off
+    assert "hokuyo" in st["quarantined"], st["quarantined"]
+    assert st["observations"].get("on(hokuyo)") is False

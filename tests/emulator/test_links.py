@@ -18,7 +18,7 @@ from emulator.control import Background
 from emulator.frontends import FrontEnds
 from emulator.sim import Emulator
 from firmware.can import OP_ON, command_frame, command_tag
-from host.commands.inject import request as control
+from host.launch.control import request as control
 from protocol.connection import HOST, Connection
 from protocol.messages import GetState, Hello, HelloRequest, State, Switch, Switched
 from tests.emulator.conftest import TEDUSAR

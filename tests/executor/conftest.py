@@ -5,8 +5,8 @@ in-memory transport, ``tests/host/memboard.py``) read by a ``BoardClient`` whose
 the hardware observer; a ``ProcessSupervisor`` running small Python scripts as nodes, their
 pids handed to the observer hub's process watcher (node observers); optionally a Zenoh peer
 source for topic observers, the nodes publishing with ``TopicPublisher``. Every observer update
-goes to ``ObservedBeliefs`` and to a real ``Diagnoser``. Observers refresh every 0.1 s and
-settle times are short, so each test takes a few seconds.
+goes to a real ``Diagnoser``'s observation set, on which ``ObservedBeliefs`` waits. Observers
+refresh every 0.1 s and settle times are short, so each test takes a few seconds.
 """
 
 from __future__ import annotations
@@ -102,8 +102,8 @@ class Rig:
         self.endpoint = endpoint
         self.max_attempts = max_attempts
         self.dry_run = dry_run
-        self.beliefs = ObservedBeliefs()
         self.diagnoser = Diagnoser(generate(self.model))
+        self.beliefs = ObservedBeliefs(self.diagnoser.observations)
         self.events: list[Event] = []
         self.updates: list[Update] = []
         self._tasks: list[asyncio.Task[Any]] = []
@@ -111,8 +111,7 @@ class Rig:
 
     def sink(self, updates: list[Update]) -> None:
         self.updates.extend(updates)
-        self.beliefs.update(updates)
-        apply_updates(updates, self.diagnoser)
+        apply_updates(updates, self.diagnoser)  # the one set the beliefs wait on
 
     async def __aenter__(self) -> Rig:
         s = self._stack

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from host.diagnosis.logic import parse_literal
-from host.journal.entries import ActionState
+from host.events import ActionState
 from host.repair.actuators import Refused
 from host.repair.errors import NoPlanError
 from host.repair.executor import Outcome, StepReport

@@ -124,3 +124,64 @@ esac
     assert calls.read_text().splitlines() == [
         "--user start good.service", "--user show -p MainPID --value good.service",
         "--user stop good.service", "--user start bad.service"]
+
+
+SLEEPER = "import time\nwhile True:\n    time.sleep(0.1)\n"
+
+
+def _sleeper(tmp: Path, name: str) -> ProcessConfig:
+    script = tmp / f"{name}.py"
+    script.write_text(SLEEPER)
+    return ProcessConfig(name, argv=(sys.executable, str(script)), stop_timeout_s=2.0)
+
+
+async def _gone(pid: int, timeout: float = 20.0) -> bool:
+    end = asyncio.get_running_loop().time() + timeout
+    while asyncio.get_running_loop().time() < end:
+        if not psutil.pid_exists(pid) or psutil.Process(pid).status() == psutil.STATUS_ZOMBIE:
+            return True
+        await asyncio.sleep(0.05)
+    return False
+
+
+async def test_a_new_supervisor_adopts_the_nodes_an_old_one_left(tmp_path: Path) -> None:
+    # a daemon killed with kill -9 leaves its nodes running; the next one takes them over
+    # instead of starting second copies, and can stop them
+    configs = {"a": _sleeper(tmp_path, "a"), "b": _sleeper(tmp_path, "b")}
+    old = ProcessSupervisor(configs, tmp_path / "logs", env={"DEVICES": "x"})
+    pids = {n: await old.start(n) for n in configs}
+    assert all(pids.values())
+    # the old supervisor is gone without stopping anything (as after kill -9)
+    started: list[tuple[str, int]] = []
+    new = ProcessSupervisor(configs, tmp_path / "logs", env={"DEVICES": "x"},
+                            on_start=lambda n, p: started.append((n, p)))
+    assert await new.adopt() == {"a": "adopted", "b": "adopted"}
+    assert sorted(started) == sorted(pids.items())  # handed to the observers
+    assert await new.start("a") == pids["a"]  # no second copy
+    assert new.pid("b") == pids["b"]
+    await new.stop("a")
+    assert await _gone(pids["a"])
+    assert psutil.pid_exists(pids["b"])
+    await new.close()
+    assert await _gone(pids["b"])
+    assert await ProcessSupervisor(configs, tmp_path / "logs").adopt() == {}  # nothing left
+    log = new.log_file("a").read_text()
+    assert "adopted pid" in log and "exited with an unknown status (stopped)" in log
+
+
+async def test_nodes_wired_to_another_environment_are_stopped_not_adopted(
+        tmp_path: Path) -> None:
+    # after kill -9 with an emulated robot, the emulator died too: the nodes left behind talk
+    # to devices that are gone, so the next daemon stops them and starts its own
+    configs = {"a": _sleeper(tmp_path, "a")}
+    old = ProcessSupervisor(configs, tmp_path / "logs", env={"DEVICES": "old ports"})
+    pid = await old.start("a")
+    assert pid is not None
+    new = ProcessSupervisor(configs, tmp_path / "logs", env={"DEVICES": "new ports"})
+    done = await new.adopt()
+    assert done["a"].startswith("stopped")
+    assert await _gone(pid)
+    fresh = await new.start("a")
+    assert fresh is not None and fresh != pid
+    await new.close()
+    assert await _gone(fresh)

@@ -3,6 +3,10 @@
 Covers HELLO checks, state, names, subscriptions with sequence numbers, actuation with
 read-back, a wrong key refused without a change, configuration, timeouts, a lost link with
 reconnect and a reboot detected by the boot id, and the URL registry's errors.
+
+Every test runs on a simulated clock (``looptime``): the event loop's time only moves when
+everything waits, the emulated board advances with it (``MemoryBoard``) and the client is given
+the same clock, so "0.3 s later" is exactly 0.3 s of the board's time however busy the machine.
 """
 
 from __future__ import annotations
@@ -26,6 +30,13 @@ from protocol.framing import encode_frame
 from protocol.messages import Hello
 from tests.host.memboard import KEY, MemoryBoard, tedusar
 
+pytestmark = pytest.mark.looptime
+
+
+def client(url: str, key: bytes | None = KEY, **kw: object) -> BoardClient:
+    """A client on the loop's (simulated) clock."""
+    return BoardClient(url, key, clock=asyncio.get_running_loop().time, **kw)  # type: ignore[arg-type]
+
 
 async def readings(client: BoardClient, n: int, rate: int = 100) -> list[object]:
     out: list[object] = []
@@ -37,7 +48,7 @@ async def readings(client: BoardClient, n: int, rate: int = 100) -> list[object]
 
 
 async def test_hello_state_and_names() -> None:
-    async with MemoryBoard(tedusar()) as mb, BoardClient(mb.url, KEY) as c:
+    async with MemoryBoard(tedusar()) as mb, client(mb.url, KEY) as c:
         assert c.info is not None and c.info.board_id == "tedusar" and c.info.channels == 10
         assert c.info.boot_id == mb.emu.board.boot_id
         st = await c.state()
@@ -49,7 +60,7 @@ async def test_hello_state_and_names() -> None:
 
 
 async def test_switch_and_read_back() -> None:
-    async with MemoryBoard(tedusar()) as mb, BoardClient(mb.url, KEY) as c:
+    async with MemoryBoard(tedusar()) as mb, client(mb.url, KEY) as c:
         res = await c.switch("hokuyo", True)
         assert res.physical and res.commanded and res.name == "hokuyo"
         assert mb.emu.board.channels[3].commanded
@@ -65,7 +76,7 @@ async def test_switch_and_read_back() -> None:
 
 
 async def test_wrong_key_is_refused_and_nothing_changes() -> None:
-    async with MemoryBoard(tedusar()) as mb, BoardClient(mb.url, b"wrong key") as c:
+    async with MemoryBoard(tedusar()) as mb, client(mb.url, b"wrong key") as c:
         with pytest.raises(AuthRefused, match="bad authentication tag"):
             await c.switch("hokuyo", True)
         assert not mb.emu.board.channels[3].commanded
@@ -75,14 +86,14 @@ async def test_wrong_key_is_refused_and_nothing_changes() -> None:
 
 
 async def test_no_key_is_refused() -> None:
-    async with MemoryBoard(tedusar()) as mb, BoardClient(mb.url, None) as c:
+    async with MemoryBoard(tedusar()) as mb, client(mb.url, None) as c:
         with pytest.raises(Exception, match="needs a key"):
             await c.switch(3, True)
         assert not mb.emu.board.channels[3].commanded
 
 
 async def test_subscription_numbers_readings_without_gaps() -> None:
-    async with MemoryBoard(tedusar()) as mb, BoardClient(mb.url, KEY) as c:
+    async with MemoryBoard(tedusar()) as mb, client(mb.url, KEY) as c:
         items = await readings(c, 30)
         got = [x for x in items if isinstance(x, Reading)]
         seqs = [r.seq for r in got]
@@ -90,11 +101,13 @@ async def test_subscription_numbers_readings_without_gaps() -> None:
         assert all(r.missed == 0 and r.boot_id == mb.emu.board.boot_id for r in got)
         assert got[-1].uptime_ms > got[0].uptime_ms
         assert len(got[0].currents_ma) == 10
-        assert not c.is_stale(5.0) and c.is_stale(0.0)
+        assert not c.is_stale(5.0)
+        await asyncio.sleep(0.5)  # simulated: the last reading is now exactly 0.5 s old
+        assert c.is_stale(0.4) and not c.is_stale(0.6)
 
 
 async def test_config_set_is_read_back_and_bad_values_refused() -> None:
-    async with MemoryBoard(tedusar()) as mb, BoardClient(mb.url, KEY) as c:
+    async with MemoryBoard(tedusar()) as mb, client(mb.url, KEY) as c:
         got = await c.set_channel_config("kinect", rated_ma=1200, name="kinect2")
         assert got["rated_ma"] == 1200 and mb.emu.board.channels[4].cfg["rated_ma"] == 1200
         assert await c.channel("kinect2") == 4
@@ -109,7 +122,7 @@ async def test_config_set_is_read_back_and_bad_values_refused() -> None:
 
 async def test_board_that_stops_answering_times_out() -> None:
     async with MemoryBoard(tedusar()) as mb:
-        c = BoardClient(mb.url, KEY, timeout_s=0.3, reconnect=False)
+        c = client(mb.url, KEY, timeout_s=0.3, reconnect=False)
         await c.connect()
         mb.emu.inject("board", "wdt_reset", {})  # the firmware hangs; the link stays up
         for end in mb.links:
@@ -121,7 +134,7 @@ async def test_board_that_stops_answering_times_out() -> None:
 
 async def test_link_lost_reconnects_and_reports_reboot() -> None:
     async with MemoryBoard(tedusar()) as mb:
-        c = BoardClient(mb.url, KEY, backoff_s=0.05)
+        c = client(mb.url, KEY, backoff_s=0.05)
         await c.connect()
         first_boot = c.info.boot_id if c.info else 0
         items: list[object] = []
@@ -157,7 +170,7 @@ async def test_link_lost_reconnects_and_reports_reboot() -> None:
 
 
 async def test_unreachable_and_bad_urls() -> None:
-    c = BoardClient("memory://nobody", KEY, reconnect=False)
+    c = client("memory://nobody", KEY, reconnect=False)
     with pytest.raises(BoardUnreachable, match="nothing listens on memory://nobody"):
         await c.connect()
     with pytest.raises(BadUrl, match="unknown board URL scheme 'http'"):
@@ -182,7 +195,7 @@ async def test_version_mismatch_names_both_versions() -> None:
 
     stop = memory.listen("future-board", accept)
     try:
-        c = BoardClient("memory://future-board", KEY, reconnect=False, connect_timeout_s=2)
+        c = client("memory://future-board", KEY, reconnect=False, connect_timeout_s=2)
         with pytest.raises(VersionMismatch, match="protocol version 2, this host version 1"):
             await c.connect()
     finally:
@@ -190,7 +203,7 @@ async def test_version_mismatch_names_both_versions() -> None:
 
 
 async def test_withheld_measurements_show_as_missed() -> None:
-    async with MemoryBoard(tedusar()) as mb, BoardClient(mb.url, KEY) as c:
+    async with MemoryBoard(tedusar()) as mb, client(mb.url, KEY) as c:
         got: list[Reading] = []
         async for item in c.subscribe(50):
             if isinstance(item, Reading):
@@ -209,7 +222,7 @@ async def test_a_listening_client_keeps_its_session_alive(monkeypatch: pytest.Mo
     import host.board.client as client_module
 
     monkeypatch.setattr(client_module, "KEEPALIVE_S", 0.1)
-    async with MemoryBoard(tedusar()) as mb, BoardClient(mb.url, KEY) as c:
+    async with MemoryBoard(tedusar()) as mb, client(mb.url, KEY) as c:
         board = mb.emu.board
         before = board.host_ms
         items = await readings(c, 50)

@@ -1,4 +1,4 @@
-"""``dxboard run --emulate``: start the robot's emulated board as a child process, as a user would.
+"""The robot's emulated board as a child process, started as a user would (``--emulate``).
 
 ``EmulatedBoard.start(system_dir, control=...)`` runs ``dxboard emulate SYSTEM_DIR`` (this
 interpreter, ``-m host.cli``) with the given key, or a fresh random one, in its environment,

@@ -1,0 +1,89 @@
+"""Diagnosis as the daemon runs it: on every change of the observation set, off the event loop.
+
+``DiagnosisRunner(diagnoser, observations, emit)`` owns the diagnoser of the daemon's one
+``ObservationSet``. ``poke()`` says the set changed; ``task()`` (the daemon runs it) diagnoses
+after each poke, and at least every ``safety_tick_s`` (which also expires the literals whose
+observers fell silent: each becomes unknown, emitted as an ``Observation`` with value None and
+source ``expired``). ``run(trigger)`` diagnoses now and returns the result (the repair service's
+"fresh diagnosis"). Runs are serialised; each takes a snapshot of the set's literals on the
+loop's thread and searches in a worker thread, so a long diagnosis (a large model, a hard
+observation set) never stalls the loop that reads the board link — the diagnoser's own time
+budget bounds it as before. Every run emits ``DiagnosisRun`` (its cost); a run whose bad sets
+differ from the last one's emits ``DiagnosisRecord`` and calls ``on_changed(result)``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import functools
+import logging
+import time
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+
+from host.diagnosis.diagnoser import Diagnoser
+from host.diagnosis.observations import ObservationSet
+from host.diagnosis.result import DiagnosisResult
+from host.events import DiagnosisRecord, DiagnosisRun, Event, Observation
+
+log = logging.getLogger(__name__)
+
+
+class DiagnosisRunner:
+    def __init__(self, diagnoser: Diagnoser, observations: ObservationSet,
+                 emit: Callable[[Event], None], *, clock: Callable[[], float] = time.monotonic,
+                 on_changed: Callable[[DiagnosisResult], None] | None = None,
+                 safety_tick_s: float = 2.0, max_card: int | None = None,
+                 max_count: int | None = 20, time_budget_s: float | None = 0.5) -> None:
+        self.diagnoser = diagnoser
+        self.observations = observations
+        self.emit = emit
+        self.clock = clock
+        self.on_changed = on_changed
+        self.safety_tick_s = safety_tick_s
+        self.bounds = {"max_card": max_card, "max_count": max_count,
+                       "time_budget_s": time_budget_s}
+        self.result: DiagnosisResult | None = None
+        self._poked = asyncio.Event()
+        self._lock = asyncio.Lock()
+        self._worker = ThreadPoolExecutor(1, thread_name_prefix="diagnosis")
+
+    def poke(self) -> None:
+        """The observation set changed: diagnose soon."""
+        self._poked.set()
+
+    async def task(self) -> None:
+        """Diagnose on every poke, and at least every ``safety_tick_s``; runs until cancelled."""
+        while True:
+            trigger = "observation"
+            try:
+                await asyncio.wait_for(self._poked.wait(), self.safety_tick_s)
+            except TimeoutError:
+                trigger = "safety tick"
+            self._poked.clear()
+            await self.run(trigger)
+
+    async def run(self, trigger: str) -> DiagnosisResult:
+        """One diagnosis of the set as it is now (after expiring what ran out)."""
+        async with self._lock:
+            for gone in self.observations.expire(self.clock()):
+                self.emit(Observation(gone.literal.atom, None, "expired"))
+            literals = self.observations.literals()  # the snapshot, on the loop's thread
+            t0 = time.perf_counter()
+            result = await asyncio.get_running_loop().run_in_executor(
+                self._worker, functools.partial(self.diagnoser.diagnose, literals=literals,
+                                                **self.bounds))  # type: ignore[arg-type]
+            elapsed = time.perf_counter() - t0
+            self.emit(DiagnosisRun(elapsed, trigger))
+            old, self.result = self.result, result
+            if old is None or old.bad_sets() != result.bad_sets():
+                self.emit(DiagnosisRecord.of(
+                    result.bad_sets(), complete=result.complete, trigger=trigger,
+                    elapsed_s=elapsed, probabilities=[d.probability for d in result.diagnoses]))
+                if self.on_changed is not None:
+                    self.on_changed(result)
+            return result
+
+    def close(self) -> None:
+        self._worker.shutdown(wait=True)
+        self.diagnoser.close()

@@ -1,0 +1,447 @@
+"""The daemon's events: one typed value per thing it saw, thought or did.
+
+Everything the daemon learns or does is one of these frozen dataclasses, emitted once on its
+event stream (``host.daemon.stream``); the journal, the web page's status, the terminal's
+lines and any other reader are projections of that stream, each folding it its own way.
+``Observation`` is a change of one observed literal (``value`` True, False, or None when it
+became unknown or expired); ``DiagnosisRecord`` the minimal diagnoses (their bad sets) of one
+diagnoser run that changed them, with what triggered it; ``DiagnosisRun`` the cost of every run
+(for the metrics; not journaled); ``PlanRecord`` a repair plan's steps; ``ActionRecord`` one
+state of one repair action (``started`` first, then ``succeeded``, ``failed`` or ``timeout``
+under the same ``action_id``); ``RepairEnded`` how a repair ended; ``QuarantineChange`` and
+``HoldChange`` a component taken out of (or given back to) automatic repair, by the daemon or a
+person; ``BoardEvent`` what the board said (a trip, a state change, a fresh state after
+connecting); ``LinkChange`` the board link going up or down; ``ChannelSample`` the channels'
+states and currents a few times a second (for the page; not journaled); ``Telemetry`` a
+downsampled summary of the channel currents over one period (never raw samples; stored as
+compact ``[channel, samples, mean, min, max, last]`` rows in mA); ``RunStarted`` the start of
+one daemon run (its id numbers the journal's runs); ``Note`` free text. Every event has a
+``kind`` and serialises to plain JSON (``to_json``) and back (``event_from_json``), so the
+journal file can be read by anything that reads SQLite + JSON and a history can be replayed
+entry by entry; ``describe()`` is its one line for a person.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from enum import StrEnum
+from typing import Any, ClassVar
+
+JSON = dict[str, Any]
+
+
+class Kind(StrEnum):
+    OBSERVATION = "observation"
+    DIAGNOSIS = "diagnosis"
+    PLAN = "plan"
+    ACTION = "action"
+    BOARD_EVENT = "board_event"
+    TELEMETRY = "telemetry"
+    NOTE = "note"
+    LINK = "link"
+    REPAIR = "repair"
+    QUARANTINE = "quarantine"
+    HOLD = "hold"
+    RUN = "run"
+    # not journaled (for live readers only)
+    DIAGNOSIS_RUN = "diagnosis_run"
+    CHANNELS = "channels"
+
+
+class ActionState(StrEnum):
+    STARTED = "started"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+    TIMEOUT = "timeout"
+
+
+@dataclass(frozen=True)
+class Observation:
+    """One observed literal changed: ``value`` True/False, None when unknown or expired."""
+
+    literal: str
+    value: bool | None
+    source: str = ""
+    kind: ClassVar[Kind] = Kind.OBSERVATION
+
+    def to_json(self) -> JSON:
+        return {"literal": self.literal, "value": self.value, "source": self.source}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> Observation:
+        value = data["value"]
+        return cls(str(data["literal"]), None if value is None else bool(value),
+                   str(data.get("source", "")))
+
+
+@dataclass(frozen=True)
+class DiagnosisRecord:
+    """One diagnoser run: the minimal diagnoses as sorted bad sets, best first."""
+
+    diagnoses: tuple[tuple[str, ...], ...]
+    complete: bool = True
+    trigger: str = ""
+    elapsed_s: float = 0.0
+    probabilities: tuple[float, ...] = ()
+    kind: ClassVar[Kind] = Kind.DIAGNOSIS
+
+    @classmethod
+    def of(cls, bad_sets: Sequence[Sequence[str] | frozenset[str]], *, complete: bool = True,
+           trigger: str = "", elapsed_s: float = 0.0,
+           probabilities: Sequence[float] = ()) -> DiagnosisRecord:
+        """Build from any bad sets (frozensets, lists): each is sorted, their order kept."""
+        return cls(tuple(tuple(sorted(b)) for b in bad_sets), complete, trigger, elapsed_s,
+                   tuple(probabilities))
+
+    def to_json(self) -> JSON:
+        return {"diagnoses": [list(b) for b in self.diagnoses], "complete": self.complete,
+                "trigger": self.trigger, "elapsed_s": self.elapsed_s,
+                "probabilities": list(self.probabilities)}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> DiagnosisRecord:
+        return cls(tuple(tuple(str(c) for c in b) for b in data["diagnoses"]),
+                   bool(data.get("complete", True)), str(data.get("trigger", "")),
+                   float(data.get("elapsed_s", 0.0)),
+                   tuple(float(p) for p in data.get("probabilities", ())))
+
+
+@dataclass(frozen=True)
+class PlanStep:
+    action: str
+    args: tuple[str, ...] = ()
+
+    def to_json(self) -> JSON:
+        return {"action": self.action, "args": list(self.args)}
+
+
+@dataclass(frozen=True)
+class PlanRecord:
+    """A repair plan: its steps in order, which diagnosis (bad set) it repairs."""
+
+    plan_id: str
+    steps: tuple[PlanStep, ...]
+    repairs: tuple[str, ...] = ()
+    kind: ClassVar[Kind] = Kind.PLAN
+
+    def to_json(self) -> JSON:
+        return {"plan_id": self.plan_id, "steps": [s.to_json() for s in self.steps],
+                "repairs": list(self.repairs)}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> PlanRecord:
+        steps = tuple(PlanStep(str(s["action"]), tuple(str(a) for a in s.get("args", ())))
+                      for s in data["steps"])
+        return cls(str(data["plan_id"]), steps, tuple(str(c) for c in data.get("repairs", ())))
+
+
+@dataclass(frozen=True)
+class ActionRecord:
+    """One state of one repair action; ``finished`` is None while it runs."""
+
+    action_id: str
+    action: str
+    args: tuple[str, ...]
+    state: ActionState
+    started: float
+    finished: float | None = None
+    plan_id: str = ""
+    detail: str = ""
+    kind: ClassVar[Kind] = Kind.ACTION
+
+    def to_json(self) -> JSON:
+        return {"action_id": self.action_id, "action": self.action, "args": list(self.args),
+                "state": self.state.value, "started": self.started, "finished": self.finished,
+                "plan_id": self.plan_id, "detail": self.detail}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> ActionRecord:
+        finished = data.get("finished")
+        return cls(str(data["action_id"]), str(data["action"]),
+                   tuple(str(a) for a in data.get("args", ())), ActionState(data["state"]),
+                   float(data["started"]), None if finished is None else float(finished),
+                   str(data.get("plan_id", "")), str(data.get("detail", "")))
+
+
+@dataclass(frozen=True)
+class BoardEvent:
+    """Something the board (or the link to it) did: ``event`` names it, e.g. ``trip``."""
+
+    event: str
+    channel: int | None = None
+    detail: Mapping[str, Any] = field(default_factory=dict)
+    kind: ClassVar[Kind] = Kind.BOARD_EVENT
+
+    def to_json(self) -> JSON:
+        return {"event": self.event, "channel": self.channel, "detail": dict(self.detail)}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> BoardEvent:
+        channel = data.get("channel")
+        return cls(str(data["event"]), None if channel is None else int(channel),
+                   dict(data.get("detail", {})))
+
+
+@dataclass(frozen=True)
+class ChannelSummary:
+    """One channel's current over one telemetry period, in milliamperes."""
+
+    channel: int
+    samples: int
+    mean_ma: float
+    min_ma: float
+    max_ma: float
+    last_ma: float
+
+
+@dataclass(frozen=True)
+class Telemetry:
+    """Downsampled currents: one summary per channel over ``period_s`` seconds."""
+
+    period_s: float
+    channels: tuple[ChannelSummary, ...]
+    kind: ClassVar[Kind] = Kind.TELEMETRY
+
+    def to_json(self) -> JSON:
+        # compact: a row per channel, currents to 0.1 mA (the stored form is most of the file)
+        return {"period_s": self.period_s, "channels": [
+            [c.channel, c.samples, round(c.mean_ma, 1), round(c.min_ma, 1), round(c.max_ma, 1),
+             round(c.last_ma, 1)] for c in self.channels]}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> Telemetry:
+        return cls(float(data["period_s"]), tuple(
+            ChannelSummary(int(c[0]), int(c[1]), float(c[2]), float(c[3]), float(c[4]),
+                           float(c[5]))
+            for c in data["channels"]))
+
+
+@dataclass(frozen=True)
+class Note:
+    text: str
+    level: str = "info"
+    kind: ClassVar[Kind] = Kind.NOTE
+
+    def to_json(self) -> JSON:
+        return {"text": self.text, "level": self.level}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> Note:
+        return cls(str(data["text"]), str(data.get("level", "info")))
+
+
+class _Plain:
+    """``to_json``/``from_json`` for events whose fields are plain JSON values."""
+
+    def to_json(self) -> JSON:
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}  # type: ignore[arg-type]
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> Any:
+        names = {f.name for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
+        return cls(**{k: v for k, v in data.items() if k in names})
+
+
+@dataclass(frozen=True)
+class LinkChange(_Plain):
+    """The board link went up or down (``reason``: why, as the client or the daemon saw it)."""
+
+    up: bool
+    reason: str = ""
+    kind: ClassVar[Kind] = Kind.LINK
+
+
+@dataclass(frozen=True)
+class RepairEnded(_Plain):
+    """A repair (rounds of diagnose, plan, execute) ended: ``outcome`` as the loop says."""
+
+    outcome: str
+    rounds: int
+    reason: str = ""
+    kind: ClassVar[Kind] = Kind.REPAIR
+
+
+@dataclass(frozen=True)
+class QuarantineChange(_Plain):
+    """A component taken out of automatic repair (``quarantined``) or given back.
+
+    ``by`` is ``daemon`` (its attempts ran out) or ``person`` (``dxboard quarantine``);
+    ``safe_state`` what was done to leave it safe; ``attempts`` the attempts it had used."""
+
+    component: str
+    quarantined: bool
+    reason: str = ""
+    safe_state: str = ""
+    by: str = "daemon"
+    attempts: int = 0
+    kind: ClassVar[Kind] = Kind.QUARANTINE
+
+
+@dataclass(frozen=True)
+class HoldChange(_Plain):
+    """A person told the daemon to leave a component alone (``held``), or released it."""
+
+    component: str
+    held: bool
+    reason: str = ""
+    by: str = "person"
+    kind: ClassVar[Kind] = Kind.HOLD
+
+
+@dataclass(frozen=True)
+class RunStarted(_Plain):
+    """A daemon run began: every entry after it (until the next) belongs to ``run_id``."""
+
+    run_id: str
+    robot: str
+    board: str = ""
+    dry_run: bool = False
+    kind: ClassVar[Kind] = Kind.RUN
+
+
+@dataclass(frozen=True)
+class DiagnosisRun(_Plain):
+    """One diagnoser run, changed or not: its cost (for the metrics; not journaled)."""
+
+    elapsed_s: float
+    trigger: str = ""
+    kind: ClassVar[Kind] = Kind.DIAGNOSIS_RUN
+
+
+@dataclass(frozen=True)
+class ChannelReading:
+    id: int
+    name: str
+    on: bool
+    state: str
+    current_ma: float
+
+
+@dataclass(frozen=True)
+class ChannelSample:
+    """Every channel's state and current now (a few times a second; not journaled)."""
+
+    channels: tuple[ChannelReading, ...]
+    kind: ClassVar[Kind] = Kind.CHANNELS
+
+    def to_json(self) -> JSON:
+        return {"channels": [dataclasses.asdict(c) for c in self.channels]}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> ChannelSample:
+        return cls(tuple(ChannelReading(**c) for c in data["channels"]))
+
+
+Event = (Observation | DiagnosisRecord | PlanRecord | ActionRecord | BoardEvent | Telemetry
+         | Note | LinkChange | RepairEnded | QuarantineChange | HoldChange | RunStarted
+         | DiagnosisRun | ChannelSample)
+Payload = Event  # what the journal stores: the journaled events
+
+
+@dataclass(frozen=True)
+class Stamped:
+    """One event with the daemon's times: ``wall`` (epoch seconds), ``mono`` (its clock)."""
+
+    wall: float
+    mono: float
+    event: Event
+
+#: the kinds a journal keeps (the rest are for live readers only)
+JOURNALED = frozenset(Kind) - {Kind.DIAGNOSIS_RUN, Kind.CHANNELS}
+
+_DECODERS: dict[Kind, Any] = {
+    Kind.OBSERVATION: Observation.from_json,
+    Kind.DIAGNOSIS: DiagnosisRecord.from_json,
+    Kind.PLAN: PlanRecord.from_json,
+    Kind.ACTION: ActionRecord.from_json,
+    Kind.BOARD_EVENT: BoardEvent.from_json,
+    Kind.TELEMETRY: Telemetry.from_json,
+    Kind.NOTE: Note.from_json,
+    Kind.LINK: LinkChange.from_json,
+    Kind.REPAIR: RepairEnded.from_json,
+    Kind.QUARANTINE: QuarantineChange.from_json,
+    Kind.HOLD: HoldChange.from_json,
+    Kind.RUN: RunStarted.from_json,
+    Kind.DIAGNOSIS_RUN: DiagnosisRun.from_json,
+    Kind.CHANNELS: ChannelSample.from_json,
+}
+
+
+def event_from_json(kind: Kind | str, data: Mapping[str, Any]) -> Event:
+    """Decode a stored event; raises ``ValueError`` for an unknown kind or bad data."""
+    try:
+        decoded: Event = _DECODERS[Kind(kind)](data)
+    except (KeyError, TypeError) as exc:
+        raise ValueError(f"bad {kind} entry: {exc!r}") from exc
+    return decoded
+
+
+payload_from_json = event_from_json
+
+
+def _value(v: bool | None) -> str:
+    return "unknown" if v is None else ("true" if v else "false")
+
+
+def describe(event: Event) -> str:
+    """One short line for people: the terminal, ``dxboard journal``, the page's journal tail."""
+    match event:
+        case Observation():
+            src = f"  [{event.source}]" if event.source else ""
+            return f"{event.literal} = {_value(event.value)}{src}"
+        case DiagnosisRecord():
+            if not event.diagnoses:
+                text = "no diagnosis (observations contradict the model)"
+            else:
+                text = " | ".join("{" + ", ".join(b) + "}" if b else "{} (all healthy)"
+                                  for b in event.diagnoses[:4])
+                if len(event.diagnoses) > 4:
+                    text += f" | ... ({len(event.diagnoses)} in all)"
+            extra = "" if event.complete else " (incomplete)"
+            trig = f"  [{event.trigger}]" if event.trigger else ""
+            return f"{text}{extra}{trig}"
+        case PlanRecord():
+            steps = "; ".join(f"{s.action}({', '.join(s.args)})" for s in event.steps)
+            return f"plan {event.plan_id}: {steps or '(nothing to do)'}"
+        case ActionRecord():
+            took = ("" if event.finished is None
+                    else f" after {event.finished - event.started:.2f} s")
+            detail = f": {event.detail}" if event.detail else ""
+            return f"{event.action}({', '.join(event.args)}) {event.state.value}{took}{detail}"
+        case BoardEvent():
+            ch = "" if event.channel is None else f" channel {event.channel}"
+            detail = " ".join(f"{k}={v}" for k, v in event.detail.items())
+            return f"{event.event}{ch}{'  ' + detail if detail else ''}"
+        case Telemetry():
+            parts = [f"ch{c.channel} {c.mean_ma:.0f} mA" for c in event.channels]
+            return f"{event.period_s:g} s: " + (", ".join(parts) or "(no readings)")
+        case Note():
+            return event.text if event.level == "info" else f"{event.level}: {event.text}"
+        case LinkChange():
+            return "board link up" if event.up else f"board link down: {event.reason}"
+        case RepairEnded():
+            why = f" ({event.reason})" if event.reason else ""
+            return f"repair ended: {event.outcome} after {event.rounds} round(s){why}"
+        case QuarantineChange(quarantined=True):
+            how = ("clear it with `dxboard quarantine clear` to repair it again"
+                   if event.by == "daemon" else f"set by {event.by}")
+            return (f"quarantined {event.component}: {event.reason}; safe state "
+                    f"{event.safe_state or 'as it was'}; {how}")
+        case QuarantineChange():
+            return f"quarantine of {event.component} cleared by {event.by}"
+        case HoldChange(held=True):
+            why = f": {event.reason}" if event.reason else ""
+            return f"hold on {event.component} by {event.by}{why}: no repair touches it"
+        case HoldChange():
+            return f"hold on {event.component} released by {event.by}"
+        case RunStarted():
+            return (f"run {event.run_id}: dxboard run {event.robot}"
+                    + (f", board {event.board}" if event.board else "")
+                    + (" (dry run)" if event.dry_run else ""))
+        case DiagnosisRun():
+            return f"diagnosed in {event.elapsed_s * 1000:.1f} ms [{event.trigger}]"
+        case ChannelSample():
+            return ", ".join(f"{c.name} {c.state} {c.current_ma:.0f} mA" for c in event.channels)
+    raise TypeError(f"not an event: {event!r}")

@@ -1,0 +1,4 @@
+"""Starting a robot: the emulated board as a child process (``emulated``), its control endpoint
+(``control``), and the one launcher that starts the emulated robot and the daemon for
+``dxboard run``, the experiments and the tests (``robot``).
+"""

@@ -1,0 +1,299 @@
+"""The repair service: from a changed diagnosis to verified repairs, one at a time, never on
+stale data — knowing nothing of the daemon that feeds it.
+
+``RepairService`` is fed, and emits; it reads nothing of its owner:
+
+- ``diagnosed(result)``: a diagnosis changed. When it names broken components a repair starts
+  after ``debounce_s`` — unless a newer diagnosis superseded it, the board link is down (then
+  every board literal is unknown: nothing to act on), or a repair is already running (the
+  running loop re-diagnoses after each plan, so it sees the change);
+- ``link(client)``: the board link it acts through (``None``: the link is down);
+- ``diagnose``: given at construction, an async callable returning a fresh diagnosis of the
+  observations now (the daemon runs it off its loop); ``observations``: the daemon's one
+  observation set, whose literals go into each repair problem;
+- ``emit``: one callback for everything it does — ``PlanRecord``, ``ActionRecord`` (each state
+  of each step), ``QuarantineChange``, ``HoldChange``, ``RepairEnded`` and ``Note`` events
+  (``host.events``).
+
+A person (``host.operator``) can quarantine a component or clear its quarantine, and hold a
+component (maintenance: no repair touches it) or release it; a channel switched off on the board
+by a command this host did not send is held the same way until it is switched on again, so a
+deliberate switch-off is not undone. Quarantines and holds a previous run left in the journal
+are ``restore``d at start.
+
+While the board's own protection has the channels (it sheds them for input under-voltage and
+restores them itself afterwards) repairs wait for it rather than fight it. A repair is the
+``RepairLoop``: diagnose, choose, plan, execute with verified effects, until healthy, bounded by
+the executor's attempt limiter and quarantine. With ``dry_run`` plans are made and reported but
+nothing acts. ``build`` makes a service for a robot: from its planner (``repair.pddl``) and its
+``processes:`` (of ``system.yaml``), the process supervisor, the actuators (board power through
+the linked ``BoardClient``, nodes through the supervisor) and the executor, whose effect checks
+wait on the same observation set the diagnoser reads.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from collections.abc import Awaitable, Callable, Collection, Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from host.diagnosis.logic import Literal
+from host.diagnosis.observations import ObservationSet
+from host.diagnosis.result import DiagnosisResult
+from host.events import Event, HoldChange, Note, PlanRecord, QuarantineChange, RepairEnded
+from host.repair.actuators import Actuators
+from host.repair.beliefs import ObservedBeliefs
+from host.repair.effects import settle_times
+from host.repair.executor import Event as ExecutorEvent
+from host.repair.executor import Executor, StepReport
+from host.repair.limits import AttemptLimiter, Quarantined
+from host.repair.loop import RepairLoop
+from host.repair.planner import RepairPlanner
+from host.repair.policy import Candidate
+from host.repair.processes import ProcessConfig
+from host.repair.supervisor import ProcessSupervisor
+from protocol.constants import B_UV_OFF, B_UV_SHED, F_SHED_UV
+
+if TYPE_CHECKING:
+    from host.board.client import BoardClient
+    from host.diagnosis.model import SystemModel
+
+log = logging.getLogger(__name__)
+
+BOARD_POLL_S = 0.5
+FOREIGN_WINDOW_S = 5.0  # a switch command this host sent that long ago is still its own
+Emit = Callable[[Event], None]
+FreshDiagnosis = Callable[[], Awaitable[DiagnosisResult]]
+
+
+def is_healthy(result: DiagnosisResult | None) -> bool:
+    """True when ``result`` says nothing is broken."""
+    return result is not None and result.bad_sets() in ([], [frozenset()])
+
+
+class RepairService:
+    def __init__(self, planner: RepairPlanner, executor: Executor, *, diagnose: FreshDiagnosis,
+                 observations: ObservationSet, emit: Emit, board: str = "board",
+                 debounce_s: float = 0.5) -> None:
+        self.planner = planner
+        self.executor = executor
+        self.observations = observations
+        self.board_component = board
+        self.debounce_s = debounce_s
+        self._fresh = diagnose
+        self._emit = emit
+        executor.report = self._report
+        self.loop = RepairLoop(planner, executor, self._diagnose, on_plan=self._plan)
+        self._client: BoardClient | None = None
+        self._latest: DiagnosisResult | None = None
+        self._pending: asyncio.Task[Any] | None = None
+        self._running: asyncio.Task[Any] | None = None
+
+    # --- inputs -------------------------------------------------------------------------
+    def link(self, client: BoardClient | None) -> None:
+        """The board link repairs act through; None while it is down."""
+        self._client = client
+        self.executor.actuators.board = client
+
+    def diagnosed(self, result: DiagnosisResult) -> None:
+        """A diagnosis changed: start a repair after the debounce if it names anything."""
+        self._latest = result
+        if self._pending is not None:
+            self._pending.cancel()
+            self._pending = None
+        if is_healthy(result) or self.busy:
+            return  # nothing to do, or the running loop re-diagnoses by itself
+        self._pending = asyncio.ensure_future(self._after_debounce(result))
+
+    @property
+    def busy(self) -> bool:
+        """A repair is running."""
+        return self._running is not None and not self._running.done()
+
+    @property
+    def active(self) -> bool:
+        """A repair is running or about to start (its debounce is pending)."""
+        return self.busy or (self._pending is not None and not self._pending.done())
+
+    # --- repairing ----------------------------------------------------------------------
+    async def _after_debounce(self, result: DiagnosisResult) -> None:
+        await asyncio.sleep(self.debounce_s)
+        now = self._latest
+        if now is None or now.bad_sets() != result.bad_sets() or self.busy:
+            return  # superseded
+        if self._client is None:
+            self._emit(Note("no repair while the board link is down"))
+            return
+        self._running = asyncio.ensure_future(self._repair())
+
+    async def _board_busy(self) -> str:
+        """Why the board's own protection has the channels now (empty: it has not).
+
+        Under input under-voltage the board sheds channels, refuses to switch them on and
+        restores them itself, spaced, once the voltage is back: a repair would fight it and
+        spend the devices' attempts on refusals. So repairs wait until the board is done."""
+        client = self._client
+        if client is None:
+            return "the board link is down"
+        state = await client.state()
+        if state.board_flags & (B_UV_SHED | B_UV_OFF):
+            return "the board sheds channels for input under-voltage"
+        shed = [c.name for c in state.channels if c.live_faults & F_SHED_UV]
+        if shed:
+            return f"the board is restoring {', '.join(shed)} after an under-voltage"
+        return ""
+
+    async def _wait_for_board(self) -> None:
+        """Wait (noting why, once) while the board's own protection has the channels."""
+        said = ""
+        while reason := await self._board_busy():
+            if reason != said:
+                self._emit(Note(f"repairs wait: {reason}"))
+                said = reason
+            await asyncio.sleep(BOARD_POLL_S)
+
+    async def _repair(self) -> None:
+        await self._wait_for_board()
+        res = await self.loop.run()
+        self._emit(RepairEnded(str(res.outcome), len(res.rounds), res.reason))
+
+    async def _diagnose(self) -> tuple[Sequence[Candidate], Sequence[Literal]]:
+        """The loop's view: a fresh diagnosis of what is observed now."""
+        if self._client is None:  # board literals are unknown: only the link is to blame
+            link = Candidate(frozenset({self.board_component}), 1.0)
+            return [link], self.observations.literals()
+        await self._wait_for_board()
+        result = await self._fresh()
+        cands = [Candidate(frozenset(d.bad), d.probability) for d in result.diagnoses]
+        return cands, self.observations.literals()
+
+    # --- reporting ----------------------------------------------------------------------
+    def _plan(self, record: PlanRecord) -> None:
+        self._emit(record)
+        if self.executor.dry_run:
+            self._emit(Note(f"dry run: plan {record.plan_id} not carried out"))
+
+    def _report(self, event: ExecutorEvent) -> None:
+        if isinstance(event, StepReport):
+            self._emit(event.to_record())
+        elif isinstance(event, Quarantined):
+            attempts = self.executor.limiter.count(event.component, self.executor.clock())
+            self._emit(QuarantineChange(event.component, True, event.reason, event.safe_state,
+                                        event.by, attempts))
+
+    # --- what a person says (host.operator) ------------------------------------------------
+    def components(self) -> list[str]:
+        return list(self.executor.model.components)
+
+    def listing(self) -> dict[str, dict[str, str]]:
+        return {"quarantined": {q.component: q.reason
+                                for q in self.executor.quarantine.entries()},
+                "held": dict(self.executor.held)}
+
+    async def quarantine(self, component: str, reason: str, by: str = "person") -> str:
+        """Take ``component`` out of automatic repair now (its safe state applied)."""
+        entry = await self.executor.quarantine_component(component, reason, by)
+        return entry.safe_state
+
+    async def clear(self, component: str, by: str = "person") -> bool:
+        """Give ``component`` back to automatic repair, with fresh attempts; a device the board
+        latched for a short may be cleared and switched on once."""
+        if not self.executor.clear_quarantine(component):
+            return False
+        self.executor.actuators.allow_unlatch(component)
+        self._emit(QuarantineChange(component, False, by=by))
+        self._again()
+        return True
+
+    def hold(self, component: str, reason: str, by: str = "person") -> bool:
+        """Leave ``component`` alone (maintenance) until it is released."""
+        if component in self.executor.held:
+            return False
+        self.executor.held[component] = reason
+        self._emit(HoldChange(component, True, reason, by))
+        return True
+
+    def release(self, component: str, by: str = "person") -> bool:
+        if self.executor.held.pop(component, None) is None:
+            return False
+        self._emit(HoldChange(component, False, by=by))
+        self._again()
+        return True
+
+    def restore(self, quarantined: Mapping[str, QuarantineChange],
+                held: Mapping[str, HoldChange]) -> None:
+        """Take the quarantines and holds a previous run left (from its journal): they stay
+        until a person clears them, whatever restarted in between."""
+        for c, q in quarantined.items():
+            if c in self.executor.model.components and c not in self.executor.quarantine:
+                self.executor.quarantine.add(Quarantined(
+                    c, self.executor.clock(), q.reason, q.safe_state, q.by))
+                self._emit(QuarantineChange(c, True, q.reason, q.safe_state, q.by, q.attempts))
+        for c, h in held.items():
+            if c in self.executor.model.components:
+                self.hold(c, h.reason, h.by)
+
+    async def adopt(self) -> None:
+        """Take over the nodes an earlier daemon left running (and stop stale ones)."""
+        sup = self.executor.actuators.supervisor
+        if sup is None:
+            return
+        done = await sup.adopt()
+        if done:
+            self._emit(Note("nodes left by an earlier run: " + "; ".join(
+                f"{n} {what}" for n, what in sorted(done.items()))))
+
+    def board_switched(self, channel: int, on: bool) -> None:
+        """The board switched ``channel`` on or off by a command (not its protection): when this
+        host did not send it, a person did — hold the device while it is off, so that the
+        daemon does not undo a deliberate switch-off; release it when it is switched on."""
+        if self.executor.actuators.sent_recently(channel, on, FOREIGN_WINDOW_S):
+            return
+        device = next((c.name for c in self.executor.model.components.values()
+                       if c.channel == channel), None)
+        if device is None:
+            return
+        if not on:
+            self.hold(device, "switched off on the board by a command this daemon did not "
+                      "send", by="board")
+        elif self.executor.held.get(device, "").startswith("switched off on the board"):
+            self.release(device, by="board")
+
+    def _again(self) -> None:
+        """A person changed what may be repaired: look at the latest diagnosis again."""
+        if self._latest is not None and not self.active:
+            self.diagnosed(self._latest)
+
+    async def close(self) -> None:
+        for task in (self._pending, self._running):
+            if task is not None:
+                task.cancel()
+                with contextlib.suppress(asyncio.CancelledError, Exception):
+                    await task
+        sup = self.executor.actuators.supervisor
+        if sup is not None:
+            await sup.close()
+
+
+def build(planner: RepairPlanner, model: SystemModel, procs: Mapping[str, ProcessConfig], *,
+          observations: ObservationSet, observable: Collection[str], diagnose: FreshDiagnosis,
+          emit: Emit, logs_dir: Path, env: Mapping[str, str],
+          device_boot_s: Mapping[str, float], on_start: Callable[[str, int], None] | None = None,
+          dry_run: bool = False, clock: Callable[[], float] | None = None,
+          max_parallel: int | None = None, debounce_s: float = 0.5,
+          board: str = "board") -> RepairService:
+    """A repair service for a robot: its planner, model and ``processes:`` (see the module
+    docstring)."""
+    supervisor = ProcessSupervisor(procs, logs_dir, on_start=on_start, env=dict(env))
+    actuators = Actuators(model, None, supervisor)
+    kw: dict[str, Any] = {} if clock is None else {"clock": clock}
+    executor = Executor(
+        actuators, ObservedBeliefs(observations),
+        settle=settle_times(model, procs, devices=device_boot_s),
+        limiter=AttemptLimiter(3, 600.0), dry_run=dry_run, observable=observable,
+        max_parallel=max_parallel, **kw)
+    return RepairService(planner, executor, diagnose=diagnose, observations=observations,
+                         emit=emit, board=board, debounce_s=debounce_s)

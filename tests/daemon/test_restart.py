@@ -1,0 +1,130 @@
+"""The daemon dies and comes back: quarantines and holds survive, nodes are never doubled.
+
+Issue findings reproduced here: killed with ``kill -9`` during a repair, the daemon left its 8
+node processes running, and the restarted daemon started a second copy of 4 of them, saw their
+topics fail and quarantined 4 healthy components; a quarantine was lost with the daemon.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import psutil
+import pytest
+
+from host.journal import QuarantineChange
+from tests.daemon.runner import RunningDaemon, fast_copy, healthy, key_file
+
+HEAL_S = 120.0
+NODES = ("jaguar_node", "hokuyo_node", "laser_alignment_node", "imu_node", "joy_node",
+         "jaguar_teleop_node", "hector_mapping", "laser_alignment_control")
+
+
+def node_processes(robot: Path) -> dict[str, list[int]]:
+    """The virtual robot's node processes of this test's robot directory, by node."""
+    out: dict[str, list[int]] = {}
+    for p in psutil.process_iter(["pid", "cmdline"]):
+        try:
+            cmd = p.info["cmdline"] or []
+            if "emulator.robot.node" not in cmd or p.status() == psutil.STATUS_ZOMBIE:
+                continue
+            if p.environ().get("DXBOARD_ROBOT") != str(robot.resolve()):
+                continue
+        except psutil.Error:
+            continue
+        out.setdefault(cmd[cmd.index("emulator.robot.node") + 1], []).append(p.info["pid"])
+    return out
+
+
+def wait_until(what, timeout: float, label: str):  # type: ignore[no-untyped-def]
+    end = time.monotonic() + timeout
+    while not (got := what()):
+        if time.monotonic() > end:
+            raise AssertionError(f"timed out waiting for {label}")
+        time.sleep(0.2)
+    return got
+
+
+@pytest.fixture
+def robot(tmp_path: Path) -> Iterator[tuple[Path, Path]]:
+    yield fast_copy(tmp_path), key_file(tmp_path)
+    for pids in node_processes(tmp_path / "tedusar").values():  # never leave any behind
+        for pid in pids:
+            with __import__("contextlib").suppress(psutil.Error):
+                psutil.Process(pid).kill()
+
+
+def test_killed_during_a_repair_the_next_daemon_resumes_without_doubles(
+        tmp_path: Path, robot: tuple[Path, Path]) -> None:
+    system, key = robot
+    first = RunningDaemon(tmp_path, system, ("--key-file", str(key)))
+    try:
+        first.wait_for(healthy, HEAL_S, "the robot up")
+        first.inject("hokuyo", "hang")
+        first.wait_for(lambda s: any(r["state"] == "started" for r in s["repairs"]
+                                     if r["action"] == "power_cycle"), 30, "a repair running")
+        first.kill()  # kill -9 in the middle of the repair
+    finally:
+        first.close()
+    left = node_processes(system)
+    assert left, "the nodes outlive a killed daemon (they are the robot's drivers)"
+    second = RunningDaemon(tmp_path, system, ("--key-file", str(key)),
+                           zenoh_port=first.zenoh_port)
+    try:
+        st = second.wait_for(healthy, HEAL_S, "the robot healthy again")
+        procs = node_processes(system)
+        assert sorted(procs) == sorted(NODES)
+        assert all(len(pids) == 1 for pids in procs.values()), procs  # no second copies
+        assert not st["quarantined"], st["quarantined"]
+        assert not [e for e in second.journal("quarantine")
+                    if isinstance(e.payload, QuarantineChange) and e.payload.quarantined]
+        notes = [e.payload.text for e in second.journal("note")]  # type: ignore[union-attr]
+        assert any("an earlier run stopped during" in t for t in notes), notes
+        assert any("nodes left by an earlier run" in t for t in notes), notes
+    finally:
+        assert second.interrupt() == 0
+    assert not node_processes(system)  # a clean stop stops them all
+
+
+def test_a_quarantine_set_by_a_person_survives_a_restart(
+        tmp_path: Path, robot: tuple[Path, Path]) -> None:
+    system, key = robot
+    first = RunningDaemon(tmp_path, system, ("--key-file", str(key)))
+    try:
+        first.wait_for(healthy, HEAL_S, "the robot up")
+        said = first.operator("quarantine", "add", "laser_alignment", "--reason",
+                              "servo rattles")
+        assert said.startswith("laser_alignment quarantined; safe state: shutdown")
+        st = first.wait_for(lambda s: "laser_alignment" in s["quarantined"]
+                            and s["observations"].get("on(laser_alignment)") is False, 30,
+                            "quarantined and off")
+        assert st["quarantined"]["laser_alignment"] == "servo rattles"
+        assert first.operator("quarantine", "list") == "laser_alignment: servo rattles"
+        with pytest.raises(subprocess.CalledProcessError) as err:
+            first.operator("quarantine", "add", "lidar")
+        assert err.value.returncode == 2
+        assert err.value.stderr.count("\n") == 1 and "no component 'lidar'" in err.value.stderr
+    finally:
+        assert first.interrupt() == 0
+    second = RunningDaemon(tmp_path, system, ("--key-file", str(key)))
+    try:
+        # a fresh emulated board starts with everything off: the robot is brought up again,
+        # all but the quarantined device
+        st = second.wait_for(lambda s: s["board_link_up"] and s["observations"].get(
+            "ok(/scan)") is True and not any(r["state"] == "started" for r in s["repairs"]),
+            HEAL_S, "the rest of the robot up")
+        assert st["quarantined"] == {"laser_alignment": "servo rattles"}
+        time.sleep(2.0)  # any repair of it would have started by now
+        st = second.status()
+        assert st["observations"].get("on(laser_alignment)") is False
+        assert not any(r["args"] == ["laser_alignment"] and r["action"] != "shutdown"
+                       for r in st["repairs"])
+        assert second.operator("quarantine", "clear", "laser_alignment") == \
+            "laser_alignment: quarantine cleared"
+        second.wait_for(lambda s: s["observations"].get("on(laser_alignment)") is True
+                        and not s["quarantined"], HEAL_S, "repaired once cleared")
+    finally:
+        assert second.interrupt() == 0
