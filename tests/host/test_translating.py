@@ -1,7 +1,6 @@
 """The translating transports against ``dxboard emulate`` (a subprocess): Modbus TCP (pymodbus
-against the firmware's Modbus server), the original TEDUSAR format (``--tug``), CAN over
-python-can's udp_multicast bus (a reboot seen as a new nonce), plus the tug codec's frames fed
-whole, byte by byte and after garbage."""
+against the firmware's Modbus server), CAN over python-can's udp_multicast bus (a reboot seen
+as a new nonce), plus the old tug codec's frames fed whole, byte by byte and after garbage."""
 
 from __future__ import annotations
 
@@ -28,7 +27,7 @@ KEY = bytes.fromhex(KEY_HEX)
 
 @pytest.fixture(scope="module")
 def emu() -> Iterator[Emulate]:
-    e = Emulate("--modbus", "127.0.0.1:0", "--tug", "127.0.0.1:0")
+    e = Emulate("--modbus", "127.0.0.1:0")
     yield e
     e.stop()
 
@@ -87,27 +86,6 @@ def test_modbus_map_file(tmp_path: Path) -> None:
         ModbusTransport(parse(f"modbus+tcp://127.0.0.1:502?map={bad}"))
     with pytest.raises(BadUrl, match="unknown parameter 'baud'"):
         ModbusTransport(parse("modbus+tcp://127.0.0.1:502?baud=9600"))
-
-
-async def test_tug_format(emu: Emulate) -> None:
-    async with BoardClient(emu.urls["board"], KEY) as native, \
-            BoardClient(emu.urls["tug"]) as tug:
-        assert tug.info is not None and tug.info.channels == 10
-        assert tug.info.board_id.startswith("tug@")
-        res = await tug.switch(6, True)
-        assert res.physical
-        await asyncio.sleep(0.2)
-        st = await native.state()
-        assert st.channels[6].commanded and st.channels[6].physical
-        tst = await tug.state()
-        assert tst.channels[6].physical and tst.channels[6].current_ma > 0
-        got = await first_readings(tug, 4, 20)
-        assert [r.seq for r in got] == [1, 2, 3, 4] and got[0].input_mv == 22200
-        assert all(r.on_mask & (1 << 6) for r in got)
-        await tug.switch(6, False)
-        assert not (await native.state()).channels[6].commanded
-        with pytest.raises(NotSupported):
-            await tug.get_channel_config(6)
 
 
 FRAMES = [tc.specs([(1.5, 24.0), (5.0, 24.0)]), tc.set_frequency(10),
