@@ -1,6 +1,6 @@
 """The translating transports against ``dxboard emulate`` (a subprocess): Modbus TCP (pymodbus
-against the firmware's Modbus server), CAN over python-can's udp_multicast bus (a reboot seen
-as a new nonce), plus the old tug codec's frames fed whole, byte by byte and after garbage."""
+against the firmware's Modbus server) and CAN over python-can's udp_multicast bus (a reboot
+seen as a new nonce). The tug transport's tests are ``test_tug_*.py``."""
 
 from __future__ import annotations
 
@@ -15,7 +15,6 @@ import pytest
 from host.board import BoardClient, Reading, Rebooted
 from host.commands.inject import request
 from host.transports import open_transport
-from host.transports import tug_codec as tc
 from host.transports.errors import AuthRefused, BadUrl, BoardRefused, NotSupported
 from host.transports.modbus import ModbusTransport
 from host.transports.url import parse
@@ -86,39 +85,6 @@ def test_modbus_map_file(tmp_path: Path) -> None:
         ModbusTransport(parse(f"modbus+tcp://127.0.0.1:502?map={bad}"))
     with pytest.raises(BadUrl, match="unknown parameter 'baud'"):
         ModbusTransport(parse("modbus+tcp://127.0.0.1:502?baud=9600"))
-
-
-FRAMES = [tc.specs([(1.5, 24.0), (5.0, 24.0)]), tc.set_frequency(10),
-          tc.measurements([(1, 0.25, 24.0), (2, 0.0, 0.0)]), tc.request(2),
-          tc.channel(3, True), tc.ack(4, 0)]
-
-
-@pytest.mark.parametrize("how", ["whole", "bytewise", "garbage"])
-def test_tug_codec(how: str) -> None:
-    data = b"".join(FRAMES)
-    if how == "garbage":
-        data = b"\x00\x07noise" + data
-    d = tc.Decoder()
-    out: list[tc.TugFrame | tc.TugBad] = []
-    chunks = [data[i:i + 1] for i in range(len(data))] if how == "bytewise" else [data]
-    for chunk in chunks:
-        d.feed(chunk)
-        out += d.frames()
-    frames = [f for f in out if isinstance(f, tc.TugFrame)]
-    assert [tc.encode(f.command, f.payload) for f in frames] == FRAMES
-    assert all(isinstance(f, tc.TugBad) for f in out[: len(out) - len(frames)])
-    assert tc.parse_measurements(frames[2].payload) == [(1, 0.25, 24.0), (2, 0.0, 0.0)]
-    # golden bytes: little-endian header and floats
-    assert tc.channel(3, True) == bytes([0x02, 0x04, 0x02, 0x00, 0x03, 0x01])
-    assert tc.specs([(1.5, 24.0)]) == bytes.fromhex("02000900" "01" "0000c03f" "0000c041")
-
-
-def test_tug_codec_rejects_bad_lengths() -> None:
-    d = tc.Decoder()
-    d.feed(tc.encode(tc.CHANNEL, b"\x01") + tc.ack(1, 0))  # CHANNEL with one byte: bad
-    out = d.frames()
-    assert isinstance(out[0], tc.TugBad)
-    assert out[-1] == tc.TugFrame(tc.ACK, b"\x01\x00")
 
 
 @pytest.fixture
