@@ -71,7 +71,7 @@ from protocol.messages import (
 log = logging.getLogger(__name__)
 
 SCHEME = "tug"
-SETTLE_S = 0.3  # how long the status may take to follow a CHANNEL command
+SETTLE_S = 1.0  # how long the status may take to follow a CHANNEL command (a busy host)
 SPECS_WAIT_S = 1.0  # how long to wait for the SPECIFICATIONS a board sends on connect
 AFTER_FREQ_S = 1.5  # longest wait for the board's next frame after SET FREQUENCY
 

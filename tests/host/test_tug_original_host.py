@@ -98,6 +98,8 @@ def test_request_with_a_stray_byte_is_answered(emu: Emulate, host: OriginalHost)
     host.power_up("kinect")
     assert host.wait_until(lambda: len(host.ecodes) == 2)
     assert host.ecodes == [0, 0]
+    assert host.wait_until(  # the switch follows at the board's next protection step
+        lambda: any(p.channel and p.channel[4].status == 1 for p in host.published))
     assert native_state(emu, 4) == (True, True)
     host.call_message_channel_on_off(4, 0)
     assert host.wait_until(lambda: len(host.ecodes) == 3)
