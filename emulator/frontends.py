@@ -8,10 +8,12 @@ step (``emu.step_listeners``) the front ends ``pump`` their pushes, and after a 
 never reach the firmware's servers directly: a ``LinkProxy`` (``emulator/link.py``) in front of
 each applies the injected link faults, and its address is the one printed. The serial front end
 sits on the master side of a pseudo-terminal pair; clients open the slave (``serial_path``).
-The CAN front end (``emulator/canbus.py``) puts ``firmware/can.py`` on a python-can bus.
+The CAN front end (``emulator/canbus.py``) puts ``firmware/can.py`` on a python-can bus; the
+original TEDUSAR format (``firmware/tug.py``) is served by the firmware like Modbus.
 
-``start(listen, modbus=None, serial=False, can=None)`` must run on the emulator's loop (see
-``control.Background.run``); the ``urls`` it returns are the ones ``dxboard emulate`` prints.
+``start(listen, modbus=None, serial=False, can=None, tug_at=None, tug_switch=False)`` must run
+on the emulator's loop (see ``control.Background.run``); the ``urls`` it returns are the ones
+``dxboard emulate`` prints.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from typing import Any
 
 from emulator.link import LinkProxy
 from emulator.sim import Emulator
-from firmware import modbus
+from firmware import modbus, tug
 from firmware.net import MAX_CLIENTS, READ_TIMEOUT_MS, Net
 from firmware.session import FIRMWARE_VERSION
 from protocol.constants import (
@@ -66,7 +68,8 @@ class FrontEnds:
 
     async def start(self, listen: tuple[str, int] = ("127.0.0.1", 0),
                     modbus_at: tuple[str, int] | None = None, serial: bool = False,
-                    can: str | None = None) -> dict[str, str]:
+                    can: str | None = None, tug_at: tuple[str, int] | None = None,
+                    tug_switch: bool = False) -> dict[str, str]:
         emu = self.emu
         net = Net(emu.firmware, FIRMWARE_VERSION,
                   capabilities(modbus_at is not None, can is not None),
@@ -83,6 +86,11 @@ class FrontEnds:
             self.servers.append(mserver)
             host, port = await self._proxy(mserver, modbus_at)
             self.urls["modbus"] = f"modbus+tcp://{host}:{port}"
+        if tug_at is not None:
+            tserver: Any = await tug.serve(net, "127.0.0.1", 0, tug_switch)
+            self.servers.append(tserver)
+            host, port = await self._proxy(tserver, tug_at)
+            self.urls["tug"] = f"tug://{host}:{port}"
         if serial:
             self.urls["serial"] = "serial://" + await self._start_serial()
         if can is not None:

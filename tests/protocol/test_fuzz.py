@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 from protocol import messages as m
 from protocol.connection import BOARD, HOST, Connection
 from protocol.framing import BadFrame
+from tests.protocol.mutations import mutated
 from tests.protocol.samples import samples
 from tests.protocol.util import KEY, hello
 
@@ -25,24 +26,8 @@ VALID = [(_board if s.DIR == "B" else _host).send(s) for s in samples()]
 TRAILER = _board.send(m.Pong(0xABCD, 1, req_id=1))
 
 
-@st.composite
-def mutated_frame(draw: st.DrawFn) -> bytes:
-    kind = draw(st.sampled_from(["valid", "flip", "cut", "insert", "random", "splice"]))
-    frame = bytearray(draw(st.sampled_from(VALID)))
-    if kind == "flip":
-        for _ in range(draw(st.integers(1, 4))):
-            frame[draw(st.integers(0, len(frame) - 1))] ^= 1 << draw(st.integers(0, 7))
-    elif kind == "cut":
-        frame = frame[: draw(st.integers(0, len(frame) - 1))]
-    elif kind == "insert":
-        at = draw(st.integers(0, len(frame)))
-        frame[at:at] = draw(st.binary(min_size=1, max_size=8))
-    elif kind == "random":
-        frame = bytearray(b"\xdb\x58" + draw(st.binary(max_size=40)))
-    elif kind == "splice":
-        other = draw(st.sampled_from(VALID))
-        frame = frame[: len(frame) // 2] + other[len(other) // 2 :]
-    return bytes(frame)
+def mutated_frame() -> st.SearchStrategy[bytes]:
+    return mutated(VALID, b"\xdb\x58")
 
 
 def _decode(role: str, data: bytes, cuts: "list[int]") -> "list[object]":

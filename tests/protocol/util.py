@@ -1,8 +1,9 @@
 """Helpers for the protocol tests on both interpreters: feeding bytes in every way.
 
 ``FEEDS`` names the three ways every codec test feeds its input: all at once, one byte at
-a time, and with garbage in front. ``decode`` returns the events a connection yields for
-``data`` fed in one of those ways, with the garbage report of the prefix left out.
+a time, and with garbage in front (``chunks`` splits the input so). ``feed`` returns the
+events a connection yields for ``data`` fed in one of those ways, with the garbage report of
+the prefix left out.
 """
 
 from protocol.connection import BOARD, HOST, Connection
@@ -30,16 +31,19 @@ def pair(key: bytes = KEY) -> "tuple[Connection, Connection]":
     return board, host
 
 
-def feed(conn: Connection, data: bytes, how: str) -> list:  # type: ignore[type-arg]
-    events = []
+def chunks(data: bytes, how: str) -> "list[bytes]":
+    """``data`` as the feed ``how`` delivers it: whole, one byte at a time, or after garbage."""
     if how == "garbage":
         data = GARBAGE + data
     if how == "bytewise":
-        for i in range(len(data)):
-            conn.receive_data(data[i : i + 1])
-            events.extend(conn.events())
-    else:
-        conn.receive_data(data)
+        return [data[i : i + 1] for i in range(len(data))]
+    return [data]
+
+
+def feed(conn: Connection, data: bytes, how: str) -> list:  # type: ignore[type-arg]
+    events = []
+    for chunk in chunks(data, how):
+        conn.receive_data(chunk)
         events.extend(conn.events())
     if how == "garbage":
         if not (events and isinstance(events[0], BadFrame) and events[0].code == E_GARBAGE):
