@@ -87,7 +87,7 @@ class Wire:
         wire.hello = got
         return wire
 
-    async def next(self, pred: Any, timeout: float = 5.0) -> Message | BadFrame:
+    async def next(self, pred: Any, timeout: float = 30.0) -> Message | BadFrame:
         """The next event matching ``pred``; others stay in ``backlog``."""
         loop = asyncio.get_running_loop()
         end = loop.time() + timeout
@@ -98,13 +98,16 @@ class Wire:
             left = end - loop.time()
             if left <= 0:
                 raise AssertionError(f"nothing matching within {timeout} s: {self.backlog!r}")
-            data = await asyncio.wait_for(self.reader.read(65536), left)
+            try:
+                data = await asyncio.wait_for(self.reader.read(65536), left)
+            except TimeoutError:
+                continue  # the deadline: said above, with what arrived
             if not data:
                 raise AssertionError("connection closed")
             self.conn.receive_data(data)
             self.backlog.extend(self.conn.events())
 
-    async def request(self, msg: Message, timeout: float = 5.0) -> Message | BadFrame:
+    async def request(self, msg: Message, timeout: float = 30.0) -> Message | BadFrame:
         msg.req_id = self.conn.next_request_id()
         self.writer.write(self.conn.send(msg))
         await self.writer.drain()
