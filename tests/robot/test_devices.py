@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import socket
 import subprocess
 from pathlib import Path
 from typing import Any
@@ -61,6 +62,25 @@ def test_hang_keeps_connection_and_current_power_off_drops_it(robot: Robot) -> N
         Conn(robot.port("hokuyo"))
     robot.board("on", "hokuyo")  # a power cycle cures a non-permanent hang
     serving(robot, "hokuyo")
+
+
+def test_an_unpowered_device_keeps_its_port(robot: Robot) -> None:
+    """Refused while off, but nobody else on the machine is given the port meanwhile (a
+    second test suite, a browser): the device comes back on the URL it printed."""
+    robot.board("on", "jaguar")
+    serving(robot, "jaguar").close()  # the client closes first: no TIME_WAIT on the port
+    robot.board("off", "jaguar")
+
+    def refused() -> bool:
+        try:
+            Conn(robot.port("jaguar")).close()
+        except ConnectionRefusedError:
+            return True
+        return False
+
+    wait_until(refused, what="jaguar refusing connections")
+    with socket.socket() as other, pytest.raises(OSError, match="in use"):
+        other.bind(("127.0.0.1", robot.port("jaguar")))
 
 
 def test_base_follows_velocity_commands_and_rejects_bad_ones(robot: Robot) -> None:
