@@ -6,8 +6,9 @@ restarted on the address its client keeps dialling, a UDP multicast bus). ``free
 picks a random port *below* the kernel's ephemeral range (``ip_local_port_range``), free at
 the moment of asking: the kernel never hands such a port to anybody's ``bind(0)`` or
 ``connect()``, so only another explicit chooser can take it between our check and our bind.
-For that rare case, ``CLASH`` is the text every listener here reports (zenoh, asyncio, the
-daemon's one-line error) and ``clashed(text)`` lets a starter retry on a fresh port.
+For that rare case (and for products that pick a port so themselves: the micropython runtime
+of the emulator, the experiments' zenoh port), ``CLASH`` is the text every listener here
+reports and ``clashed(text)`` lets a starter retry on a fresh port.
 
 ``reserved_udp_port()`` holds a UDP port for the duration of a test (a socket bound with
 SO_REUSEADDR, which the python-can multicast bus also sets): Linux delivers multicast to every
@@ -22,7 +23,7 @@ import socket
 from collections.abc import Iterator
 from pathlib import Path
 
-CLASH = "Address already in use"
+CLASH = ("Address already in use", "EADDRINUSE")  # CPython and Rust; MicroPython
 LOWEST = 20000
 
 
@@ -58,7 +59,7 @@ def zenoh_endpoint() -> str:
 
 def clashed(text: str) -> bool:
     """True when a listener failed because another process took its port first."""
-    return CLASH in text
+    return any(c in text for c in CLASH)
 
 
 @contextlib.contextmanager

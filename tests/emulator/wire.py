@@ -19,6 +19,7 @@ from typing import Any
 from protocol.connection import HOST, Connection
 from protocol.framing import BadFrame
 from protocol.messages import Hello, Message
+from tests.ports import clashed
 
 ROOT = Path(__file__).resolve().parents[2]
 TEDUSAR = ROOT / "models" / "tedusar"
@@ -32,19 +33,28 @@ class Emulate:
         env.pop("DXBOARD_KEY", None)
         if key is not None:
             env["DXBOARD_KEY"] = key.hex()
-        self.proc = subprocess.Popen([DXBOARD, "emulate", str(TEDUSAR), *options],
-                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
-                                     text=True, cwd=ROOT)
-        self.urls: dict[str, str] = {}
-        assert self.proc.stdout is not None
         want = 2 + sum(o in ("--modbus", "--serial", "--can") for o in options)
+        for _ in range(3):  # a port the runtime picked was taken meanwhile: start again
+            err = self._start([DXBOARD, "emulate", str(TEDUSAR), *options], env, want)
+            if not clashed(err):
+                break
+        if err:
+            raise AssertionError("dxboard emulate ended: " + err)
+
+    def _start(self, argv: list[str], env: dict[str, str], want: int) -> str:
+        """Start it and read ``want`` URLs; "" when it is up, else what it said on exiting."""
+        self.proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                     env=env, text=True, cwd=ROOT)
+        self.urls: dict[str, str] = {}
+        assert self.proc.stdout is not None and self.proc.stderr is not None
         while len(self.urls) < want:
             line = self.proc.stdout.readline()
             if not line:
-                raise AssertionError("dxboard emulate ended: " + self.proc.stderr.read()
-                                     if self.proc.stderr else "")
+                self.proc.wait()
+                return self.proc.stderr.read() or f"exit {self.proc.returncode}"
             name, _, url = line.strip().partition(": ")
             self.urls[name] = url
+        return ""
 
     def address(self, name: str = "board") -> tuple[str, int]:
         rest = self.urls[name].split("://", 1)[1]
