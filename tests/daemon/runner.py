@@ -10,7 +10,6 @@ from __future__ import annotations
 import json
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -22,9 +21,12 @@ from typing import Any
 import yaml
 
 from host.journal import Entry, JournalReader
+from tests.ports import clashed, zenoh_endpoint
+from tests.wait import wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
 TEDUSAR = ROOT / "models" / "tedusar"
+MIN_WAIT_S = 60.0  # the shortest deadline of a wait on the daemon, on a busy machine
 
 
 def fast_copy(tmp: Path, boot_ms: dict[str, int] | None = None) -> Path:
@@ -43,20 +45,22 @@ def fast_copy(tmp: Path, boot_ms: dict[str, int] | None = None) -> Path:
 FAST_BOOT_MS = {"hokuyo": 1500, "jaguar": 300, "laser_alignment": 300}
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 class RunningDaemon:
     def __init__(self, tmp: Path, system_dir: Path = TEDUSAR,
                  extra_args: tuple[str, ...] = ()) -> None:
         self.journal_path = tmp / "journal.sqlite"
-        argv = [sys.executable, "-m", "host.cli", "run", str(system_dir), "--emulate",
-                "--web", "127.0.0.1:0", "--journal", str(self.journal_path),
-                "--zenoh", f"tcp/127.0.0.1:{free_port()}", *extra_args]
         self.err_path = tmp / "daemon.err"
+        for _ in range(5):  # its zenoh port taken by another process meanwhile: a fresh one
+            argv = [sys.executable, "-m", "host.cli", "run", str(system_dir), "--emulate",
+                    "--web", "127.0.0.1:0", "--journal", str(self.journal_path),
+                    "--zenoh", zenoh_endpoint(), *extra_args]
+            if self._start(argv) or not clashed(self.err_path.read_text()):
+                break
+        if "journal" not in self.urls:
+            raise AssertionError("dxboard run exited: " + self.err_path.read_text()[-2000:])
+
+    def _start(self, argv: list[str]) -> bool:
+        """Start ``dxboard run``; True once it printed every URL, False if it exited."""
         with self.err_path.open("wb") as err:
             self.proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=err,
                                          text=True)
@@ -65,9 +69,12 @@ class RunningDaemon:
         while "journal" not in self.urls:
             line = self.proc.stdout.readline()
             if not line:
-                raise AssertionError("dxboard run exited: " + self.err_path.read_text()[-2000:])
+                self.proc.wait()
+                self.proc.stdout.close()
+                return False
             name, _, rest = line.strip().partition(": ")
             self.urls[name] = rest
+        return True
 
     def status(self) -> dict[str, Any]:
         with urllib.request.urlopen(self.urls["web"] + "api/status", timeout=5) as r:
@@ -76,15 +83,44 @@ class RunningDaemon:
 
     def wait_for(self, what: Callable[[dict[str, Any]], bool], timeout: float = 20.0,
                  label: str = "") -> dict[str, Any]:
-        end = time.monotonic() + timeout
-        st = self.status()
-        while not what(st):
-            if time.monotonic() > end:
-                raise AssertionError(f"timed out waiting for {label}; last status: "
-                                     f"diagnoses={st['diagnoses']} repairs={st['repairs']}")
-            time.sleep(0.1)
-            st = self.status()
-        return st
+        """The status once ``what(status)`` holds (polled, up to ``timeout`` s, at least
+        MIN_WAIT_S: a deadline only bounds how long a broken test takes to fail)."""
+        last: list[dict[str, Any]] = []
+
+        def probe() -> dict[str, Any] | None:
+            last[:] = [self.status()]
+            return last[0] if what(last[0]) else None
+
+        return wait_until(probe, max(timeout, MIN_WAIT_S), label or "the daemon's status",
+                          interval=0.1,
+                          show=lambda: {k: last[0][k] for k in ("diagnoses", "repairs")})
+
+    def wait_journal(self, what: Callable[[], object], timeout: float, label: str) -> None:
+        """Wait until ``what()`` (a question about the journal) holds (at least MIN_WAIT_S)."""
+        wait_until(what, max(timeout, MIN_WAIT_S), label, interval=0.3,
+                   show=lambda: {k: self.status()[k] for k in ("diagnoses", "repairs")})
+
+    def caught_up(self) -> None:
+        """Wait until the journal holds everything the daemon recorded until now: its writer
+        commits in the background, so the status can be ahead of it. The daemon stamps entries
+        with the machine's CLOCK_MONOTONIC (a current summary every second), so an entry
+        stamped after now proves that every earlier one is committed."""
+        now = time.monotonic()
+        wait_until(lambda: max((e.mono for e in self.journal()), default=0.0) >= now,
+                   MIN_WAIT_S, "the journal to catch up", interval=0.3)
+
+    def settled(self, seconds: float, runs: int = 2) -> None:
+        """Let the daemon have its chance: wait until it ran ``runs`` more diagnoses (a safety
+        tick comes at least every 2 s) and ``seconds`` passed, however slow the machine. For
+        tests that then assert that something did *not* happen."""
+        end = time.monotonic() + seconds
+        start = self.diagnosis_runs()
+        wait_until(lambda: time.monotonic() >= end and self.diagnosis_runs() >= start + runs,
+                   seconds + MIN_WAIT_S, f"{runs} more diagnoses and {seconds} s",
+                   interval=0.2, show=self.diagnosis_runs)
+
+    def diagnosis_runs(self) -> int:
+        return int(self.status()["counters"]["diagnosis_runs"])
 
     def inject(self, *args: str) -> None:
         subprocess.run([sys.executable, "-m", "host.cli", "inject", self.urls["control"],
@@ -134,6 +170,8 @@ def healthy(s: dict[str, Any]) -> bool:
 
 
 def last_id(d: RunningDaemon) -> int:
+    """The journal's last entry once it holds everything recorded until now (a mark)."""
+    d.caught_up()
     return max((e.id for e in d.journal()), default=0)
 
 
@@ -142,5 +180,5 @@ def bad_sets(status: dict[str, Any]) -> list[set[str]]:
 
 
 __all__ = [
-    "KEY", "RunningDaemon", "bad_sets", "fast_copy", "free_port", "healthy", "key_file", "last_id",
+    "KEY", "RunningDaemon", "bad_sets", "fast_copy", "healthy", "key_file", "last_id",
 ]

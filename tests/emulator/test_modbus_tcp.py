@@ -111,9 +111,9 @@ async def test_bad_mbap_closes_connection(board: Emulate) -> None:
     r, wr = await asyncio.open_connection(*board.address("modbus"))
     wr.write(struct.pack(">HHHBBHH", 1, 0, 6, 1, 4, 100, 1))  # a good request first
     await wr.drain()
-    good = await asyncio.wait_for(r.readexactly(11), 5)
+    good = await asyncio.wait_for(r.readexactly(11), 30)
     assert good[7] == 4 and struct.unpack(">H", good[9:11])[0] > 0
     wr.write(struct.pack(">HHHBBHH", 2, 7, 6, 1, 4, 100, 1))  # protocol id 7
     await wr.drain()
-    assert await asyncio.wait_for(r.read(100), 5) == b""
+    assert await asyncio.wait_for(r.read(100), 30) == b""
     wr.close()
