@@ -9,7 +9,7 @@ import asyncio
 import json
 import random
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
@@ -44,6 +44,18 @@ async def on_and_drawing(client: BoardClient, channel: int) -> bool:
     """The channel is on (inrush over) and draws current."""
     ch = (await client.state()).channels[channel]
     return ch.state == ST_ON and ch.current_ma > 0
+
+
+async def readings_until(client: BoardClient, rate: int,
+                         done: Callable[[Reading], bool]) -> list[Reading]:
+    """Readings from a new subscription, up to the first for which ``done`` holds."""
+    out: list[Reading] = []
+    async for item in client.subscribe(rate):
+        if isinstance(item, Reading):
+            out.append(item)
+            if done(item):
+                break
+    return out
 
 
 async def first_readings(client: BoardClient, n: int, rate: int) -> list[Reading]:
@@ -183,9 +195,10 @@ async def test_can_over_udp_multicast(can_emu: Emulate) -> None:
         assert c.info is not None and c.info.channels == 10
         res = await c.switch(4, True)
         assert res.physical and res.commanded
-        got = await first_readings(c, 3, 10)
-        assert [r.seq for r in got] == [1, 2, 3] and all(r.on_mask & (1 << 4) for r in got)
-        assert got[-1].currents_ma[4] > 0
+        # the readings follow the switch: the channel frames it reads come once a second
+        got = await asyncio.wait_for(readings_until(
+            c, 10, lambda r: bool(r.on_mask & (1 << 4)) and r.currents_ma[4] > 0), 60)
+        assert [r.seq for r in got] == list(range(1, len(got) + 1))  # numbered by the host
         cyc = await c.power_cycle(4, 0.3)  # timed by the board
         assert not cyc.physical
         items: list[object] = []
