@@ -29,6 +29,7 @@ import contextlib
 import json
 import logging
 import random
+import socket
 import time
 from typing import Any
 
@@ -63,6 +64,7 @@ class DeviceServer:
         self.host = host
         self.port = 0
         self.server: asyncio.Server | None = None
+        self._held: socket.socket | None = None  # the port, bound while off
         self.clients: set[asyncio.StreamWriter] = set()
         self.state = OFF
         self.on_since = -1
@@ -78,8 +80,13 @@ class DeviceServer:
 
     async def bind(self) -> None:
         """Take a port (not yet listening: connections are refused until ``open``)."""
-        self.server = await asyncio.start_server(self._client, self.host, self.port,
-                                                 limit=MAX_LINE, start_serving=False)
+        held, self._held = self._held, None
+        if held is not None:  # the port kept while off
+            self.server = await asyncio.start_server(self._client, sock=held, limit=MAX_LINE,
+                                                     start_serving=False)
+        else:
+            self.server = await asyncio.start_server(self._client, self.host, self.port,
+                                                     limit=MAX_LINE, start_serving=False)
         self.port = self.server.sockets[0].getsockname()[1]
 
     async def open(self) -> None:
@@ -88,13 +95,33 @@ class DeviceServer:
         assert self.server is not None
         await self.server.start_serving()
 
-    def close(self) -> None:
+    def close(self, keep_port: bool = True) -> None:
+        """Stop serving (powered off). The port stays bound, not listening: connections are
+        refused, and no other program is given the port meanwhile (its ``bind(0)`` or
+        ``connect()``), so the device comes back on its printed URL."""
         if self.server is not None:
+            family = self.server.sockets[0].family
             self.server.close()
             self.server = None
+            if keep_port:
+                self._held = self._hold(family)
+        if not keep_port and self._held is not None:
+            self._held.close()
+            self._held = None
         for w in list(self.clients):
             w.transport.abort()
         self.clients.clear()
+
+    def _hold(self, family: int) -> socket.socket | None:
+        held = socket.socket(family, socket.SOCK_STREAM)
+        held.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            held.bind((self.host, self.port))
+        except OSError as exc:  # taken in between: open() binds afresh (and retries)
+            log.warning("%s: cannot keep port %d while off: %s", self.name, self.port, exc)
+            held.close()
+            return None
+        return held
 
     async def update(self, wall: float) -> None:
         """Follow the electronics; send a frame if one is due."""
@@ -210,4 +237,4 @@ class Robot:
                 await self._task
             self._task = None
         for s in self.servers:
-            s.close()
+            s.close(keep_port=False)

@@ -97,6 +97,16 @@ def run(args: argparse.Namespace) -> int:
     from emulator.sim import Emulator, make_config
     from host.board.keys import load_key
 
+    # SIGINT/SIGTERM end the board cleanly from here on: a signal that arrives while it
+    # starts (or the instant its URLs are out) stops it once started, never kills it midway.
+    done = threading.Event()
+
+    def stop(signum: int, frame: object) -> None:
+        done.set()
+
+    signal.signal(signal.SIGINT, stop)
+    signal.signal(signal.SIGTERM, stop)
+
     listen = parse_address(args.listen, "--listen")
     control = parse_address(args.control, "--control")
     modbus_at = parse_address(args.modbus, "--modbus") if args.modbus else None
@@ -199,13 +209,6 @@ def run(args: argparse.Namespace) -> int:
             print(f"device: {name} {url}")
     sys.stdout.flush()
 
-    done = threading.Event()
-
-    def stop(signum: int, frame: object) -> None:
-        done.set()
-
-    signal.signal(signal.SIGINT, stop)
-    signal.signal(signal.SIGTERM, stop)
     while not done.wait(0.5):
         pass
     try:

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -20,10 +19,13 @@ from pathlib import Path
 from typing import Any
 
 from host.experiment.robot import fast_model
-from host.journal import ActionRecord, Entry, JournalReader
+from host.journal import Entry, JournalReader
+from tests.ports import clashed, zenoh_endpoint
+from tests.wait import wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
 TEDUSAR = ROOT / "models" / "tedusar"
+MIN_WAIT_S = 60.0  # the shortest deadline of a wait on the daemon, on a busy machine
 
 
 def fast_copy(tmp: Path) -> Path:
@@ -31,34 +33,24 @@ def fast_copy(tmp: Path) -> Path:
     return fast_model(TEDUSAR, tmp)
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 class RunningDaemon:
     def __init__(self, tmp: Path, system_dir: Path = TEDUSAR,
-                 extra_args: tuple[str, ...] = (), zenoh_port: int | None = None) -> None:
+                 extra_args: tuple[str, ...] = (), zenoh: str | None = None) -> None:
+        """``zenoh``: the topic endpoint to use (a restarted daemon takes its predecessor's,
+        where the nodes it left behind reconnect); default: a fresh one."""
         self.journal_path = tmp / "journal.sqlite"
-        self.zenoh_port = zenoh_port or free_port()
-        argv = [sys.executable, "-m", "host.cli", "run", str(system_dir), "--emulate",
-                "--web", "127.0.0.1:0", "--journal", str(self.journal_path),
-                "--zenoh", f"tcp/127.0.0.1:{self.zenoh_port}", *extra_args]
         self.err_path = tmp / "daemon.err"
-        with self.err_path.open("ab") as err:
-            self.proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=err,
-                                         text=True)
-        self.urls: dict[str, str] = {}
-        assert self.proc.stdout is not None
-        while "journal" not in self.urls:
-            line = self.proc.stdout.readline()
-            if not line:
-                raise AssertionError("dxboard run exited: " + self.err_path.read_text()[-2000:])
-            name, _, rest = line.strip().partition(": ")
-            self.urls[name] = rest
+        for _ in range(5):  # its zenoh port taken by another process meanwhile: a fresh one
+            self.zenoh = zenoh or zenoh_endpoint()
+            argv = [sys.executable, "-m", "host.cli", "run", str(system_dir), "--emulate",
+                    "--web", "127.0.0.1:0", "--journal", str(self.journal_path),
+                    "--zenoh", self.zenoh, *extra_args]
+            if self._start(argv) or zenoh or not clashed(self.err_path.read_text()):
+                break
+        if "journal" not in self.urls:
+            raise AssertionError("dxboard run exited: " + self.err_path.read_text()[-2000:])
         # what it says on its terminal after the URLs, read as it comes (a pipe nobody read
-        # would fill up)
+        # would fill up and stall it)
         self.lines: list[str] = []
         self._reader = threading.Thread(target=self._read_terminal, daemon=True)
         self._reader.start()
@@ -68,6 +60,23 @@ class RunningDaemon:
         for line in self.proc.stdout:
             self.lines.append(line.rstrip("\n"))
 
+    def _start(self, argv: list[str]) -> bool:
+        """Start ``dxboard run``; True once it printed every URL, False if it exited."""
+        with self.err_path.open("ab") as err:
+            self.proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=err,
+                                         text=True)
+        self.urls: dict[str, str] = {}
+        assert self.proc.stdout is not None
+        while "journal" not in self.urls:
+            line = self.proc.stdout.readline()
+            if not line:
+                self.proc.wait()
+                self.proc.stdout.close()
+                return False
+            name, _, rest = line.strip().partition(": ")
+            self.urls[name] = rest
+        return True
+
     def status(self) -> dict[str, Any]:
         with urllib.request.urlopen(self.urls["web"] + "api/status", timeout=5) as r:
             data: dict[str, Any] = json.load(r)
@@ -75,15 +84,44 @@ class RunningDaemon:
 
     def wait_for(self, what: Callable[[dict[str, Any]], bool], timeout: float = 20.0,
                  label: str = "") -> dict[str, Any]:
-        end = time.monotonic() + timeout
-        st = self.status()
-        while not what(st):
-            if time.monotonic() > end:
-                raise AssertionError(f"timed out waiting for {label}; last status: "
-                                     f"diagnoses={st['diagnoses']} repairs={st['repairs']}")
-            time.sleep(0.1)
-            st = self.status()
-        return st
+        """The status once ``what(status)`` holds (polled, up to ``timeout`` s, at least
+        MIN_WAIT_S: a deadline only bounds how long a broken test takes to fail)."""
+        last: list[dict[str, Any]] = []
+
+        def probe() -> dict[str, Any] | None:
+            last[:] = [self.status()]
+            return last[0] if what(last[0]) else None
+
+        return wait_until(probe, max(timeout, MIN_WAIT_S), label or "the daemon's status",
+                          interval=0.1,
+                          show=lambda: {k: last[0][k] for k in ("diagnoses", "repairs")})
+
+    def wait_journal(self, what: Callable[[], object], timeout: float, label: str) -> None:
+        """Wait until ``what()`` (a question about the journal) holds (at least MIN_WAIT_S)."""
+        wait_until(what, max(timeout, MIN_WAIT_S), label, interval=0.3,
+                   show=lambda: {k: self.status()[k] for k in ("diagnoses", "repairs")})
+
+    def caught_up(self) -> None:
+        """Wait until the journal holds everything the daemon recorded until now: its writer
+        commits in the background, so the status can be ahead of it. The daemon stamps entries
+        with the machine's CLOCK_MONOTONIC (a current summary every second), so an entry
+        stamped after now proves that every earlier one is committed."""
+        now = time.monotonic()
+        wait_until(lambda: max((e.mono for e in self.journal()), default=0.0) >= now,
+                   MIN_WAIT_S, "the journal to catch up", interval=0.3)
+
+    def settled(self, seconds: float, runs: int = 2) -> None:
+        """Let the daemon have its chance: wait until it ran ``runs`` more diagnoses (a safety
+        tick comes at least every 2 s) and ``seconds`` passed, however slow the machine. For
+        tests that then assert that something did *not* happen."""
+        end = time.monotonic() + seconds
+        start = self.diagnosis_runs()
+        wait_until(lambda: time.monotonic() >= end and self.diagnosis_runs() >= start + runs,
+                   seconds + MIN_WAIT_S, f"{runs} more diagnoses and {seconds} s",
+                   interval=0.2, show=self.diagnosis_runs)
+
+    def diagnosis_runs(self) -> int:
+        return int(self.status()["counters"]["diagnosis_runs"])
 
     def inject(self, *args: str) -> None:
         subprocess.run([sys.executable, "-m", "host.cli", "inject", self.urls["control"],
@@ -145,18 +183,10 @@ def healthy(s: dict[str, Any]) -> bool:
         r["state"] in ("succeeded", "failed", "timeout") for r in s["repairs"])
 
 
-def last_id(d: RunningDaemon, timeout: float = 10.0) -> int:
-    """The journal's last id, once every action it shows started has its result journaled too
-    (the page shows a result at once; the journal's writer thread commits it a moment later)."""
-    end = time.monotonic() + timeout
-    while True:
-        entries = d.journal()
-        acts = [e.payload for e in entries if isinstance(e.payload, ActionRecord)]
-        started = {a.action_id for a in acts if a.finished is None}
-        if started <= {a.action_id for a in acts if a.finished is not None} or (
-                time.monotonic() > end):
-            return max((e.id for e in entries), default=0)
-        time.sleep(0.1)
+def last_id(d: RunningDaemon) -> int:
+    """The journal's last entry once it holds everything recorded until now (a mark)."""
+    d.caught_up()
+    return max((e.id for e in d.journal()), default=0)
 
 
 def bad_sets(status: dict[str, Any]) -> list[set[str]]:
@@ -164,5 +194,5 @@ def bad_sets(status: dict[str, Any]) -> list[set[str]]:
 
 
 __all__ = [
-    "KEY", "RunningDaemon", "bad_sets", "fast_copy", "free_port", "healthy", "key_file", "last_id",
+    "KEY", "RunningDaemon", "bad_sets", "fast_copy", "healthy", "key_file", "last_id",
 ]

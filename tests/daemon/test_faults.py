@@ -23,7 +23,6 @@ use different devices (quarantine is sticky) and run last.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Iterator
 from typing import Any
 
@@ -103,22 +102,14 @@ def named(d: RunningDaemon, mark: int, component: str) -> bool:
                for p in since(d, mark, "diagnosis"))
 
 
-def wait_journal(d: RunningDaemon, what: Any, timeout: float, label: str) -> None:
-    end = time.monotonic() + timeout
-    while not what():
-        if time.monotonic() > end:
-            st = d.status()
-            raise AssertionError(f"timed out waiting for {label}; diagnoses={st['diagnoses']} "
-                                 f"repairs={st['repairs']}")
-        time.sleep(0.3)
-
-
 def assert_journal_steps(d: RunningDaemon, mark: int, component: str, *,
                          repaired: bool) -> None:
     """The journal holds every step: the diagnosis, the plan, its actions and their results."""
-    # the page shows a result as soon as it happens; its journal entry is committed a moment
-    # later by the journal's writer thread
-    wait_journal(d, lambda: all_finished(d, mark), 10, "every result journaled")
+    # the status can show a result before the journal's writer has committed it
+    d.wait_journal(lambda: all_finished(d, mark), 30, "every started action's result")
+    if repaired:
+        d.wait_journal(lambda: any("repair ended: healthy" in t for t in notes(d, mark)), 30,
+                       "the repair's end")
     assert named(d, mark, component), f"no diagnosis naming {component} in the journal"
     plans = [p for p in since(d, mark, "plan") if isinstance(p, PlanRecord)]
     assert plans, "no plan in the journal"
@@ -131,9 +122,7 @@ def assert_journal_steps(d: RunningDaemon, mark: int, component: str, *,
     started = {a.action_id for a in acts if str(a.state) == "started"}
     results = {a.action_id for a in acts if a.finished is not None}
     assert started and started <= results, "an action started without a journaled result"
-    if repaired:  # the repair ends once its last round has diagnosed the robot healthy
-        wait_journal(d, lambda: any("repair ended: healthy" in t for t in notes(d, mark)), 20,
-                     "the repair's end journaled")
+    if repaired:
         healthy_after = [p for p in since(d, mark, "diagnosis")
                          if isinstance(p, DiagnosisRecord)]
         assert healthy_after and healthy_after[-1].diagnoses in ((), ((),))
@@ -169,7 +158,7 @@ def test_a_persistent_short_latches_is_quarantined_unenergised_and_repaired_once
     mark = last_id(d)
     d.inject("laser_alignment", "short")
     # the board trips, retries once after 1 s, trips again and latches the channel
-    wait_journal(d, lambda: "latched" in board_states(d, mark, 1), 20, "the channel latched")
+    d.wait_journal(lambda: "latched" in board_states(d, mark, 1), 20, "the channel latched")
     states = board_states(d, mark, 1)
     assert states.index("tripped") < states.index("latched")
     assert "inrush" in states[states.index("tripped"):states.index("latched")]  # the retry
@@ -189,6 +178,7 @@ def test_a_persistent_short_latches_is_quarantined_unenergised_and_repaired_once
         "laser_alignment: quarantine cleared"
     d.wait_for(lambda s: healthy(s) and s["observations"].get("on(laser_alignment)") is True,
                HEAL_S, "laser_alignment powered again")
+    d.caught_up()
     done = finished(d, mark)
     assert any(a in ("power_up", "power_cycle") and args == ("laser_alignment",)
                and state == "succeeded" for a, args, state in done), done
@@ -208,13 +198,14 @@ def test_a_brown_out_sheds_the_devices_and_the_robot_comes_back(robot: RunningDa
     mark = last_id(d)
     # 20.0 V: below uv_shed_mv (20.4 V), above uv_off_mv (19.8 V) and reset_mv
     d.inject("board", "brownout", "volts=20.0", "seconds=3")
-    wait_journal(d, lambda: "off" in board_states(d, mark, 7) and "off" in
-                 board_states(d, mark, 3), 15, "jaguar and hokuyo shed")
+    d.wait_journal(lambda: "off" in board_states(d, mark, 7) and "off" in
+                   board_states(d, mark, 3), 15, "jaguar and hokuyo shed")
     d.wait_for(lambda s: any({"jaguar", "hokuyo"} & b for b in bad_sets(s)), 15,
                "the shed devices diagnosed")
     d.wait_for(lambda s: healthy(s) and all(s["observations"].get(f"on({x})") is True
                                             for x in ("jaguar", "hokuyo", "laser_alignment")),
                HEAL_S, "healthy again after the voltage returned")
+    d.caught_up()
     # the board never switched off its protected channel, the PC
     assert "off" not in board_states(d, mark, 2)
     assert not any(r.args and r.args[0] == "pc" for r in actions(d, mark))
@@ -238,15 +229,15 @@ def test_an_open_load_is_diagnosed_and_quarantined(robot: RunningDaemon) -> None
     assert st["observations"].get("on(hokuyo)") is True
     d.wait_for(lambda s: any("hokuyo" in b for b in bad_sets(s)), 15, "hokuyo diagnosed")
     # a power cycle does not reconnect a cut cable: after the limit, quarantine
-    wait_journal(d, lambda: any(t.startswith("quarantined hokuyo") for t in notes(d, mark)),
-                 QUARANTINE_S, "hokuyo quarantined")
+    d.wait_journal(lambda: any(t.startswith("quarantined hokuyo") for t in notes(d, mark)),
+                   QUARANTINE_S, "hokuyo quarantined")
     cycles = [r for r in actions(d, mark) if r.action in ("power_cycle", "power_up")
               and r.args == ("hokuyo",) and r.finished is not None]
     assert 1 <= len(cycles) <= 3
     assert_journal_steps(d, mark, "hokuyo", repaired=False)
     untouched(d, mark, "hokuyo")
     count = len(actions(d, mark))
-    time.sleep(4.0)
+    d.settled(4.0)
     assert len(actions(d, mark)) == count  # no loop of repairs
     st = d.status()
     assert st["observations"]["ok(/odom)"] is True  # the rest keeps running
@@ -260,19 +251,19 @@ def test_a_switch_stuck_off_is_quarantined_and_nothing_else_touched(
     d.wait_for(lambda s: s["observations"].get("ok(/odom)") is True, HEAL_S, "the base up")
     mark = last_id(d)
     d.inject("laser_alignment", "stuck_off")
-    wait_journal(d, lambda: "faulted" in board_states(d, mark, 1), 15, "the channel faulted")
+    d.wait_journal(lambda: "faulted" in board_states(d, mark, 1), 15, "the channel faulted")
     d.wait_for(lambda s: any("laser_alignment" in b for b in bad_sets(s)), 15,
                "laser_alignment diagnosed")
     assert observed(d, mark, "tripped(laser_alignment)", True)
-    wait_journal(d, lambda: any(t.startswith("quarantined laser_alignment")
-                                for t in notes(d, mark)), QUARANTINE_S,
-                 "laser_alignment quarantined")
+    d.wait_journal(lambda: any(t.startswith("quarantined laser_alignment")
+                                  for t in notes(d, mark)), QUARANTINE_S,
+                   "laser_alignment quarantined")
     # the safe-state steps (the device off, its driver stopped) take a moment to finish
-    wait_journal(d, lambda: all_finished(d, mark), 30, "the safe-state steps finished")
+    d.wait_journal(lambda: all_finished(d, mark), 30, "the safe-state steps finished")
     assert_journal_steps(d, mark, "laser_alignment", repaired=False)
     untouched(d, mark, "laser_alignment")
     count = len(actions(d, mark))
-    time.sleep(4.0)
+    d.settled(4.0)
     assert len(actions(d, mark)) == count
     st = d.status()
     assert st["observations"]["ok(/odom)"] is True

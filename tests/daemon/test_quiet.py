@@ -30,7 +30,6 @@ never crosses a current band or the link rule and so never starts a repair.
 
 from __future__ import annotations
 
-import asyncio
 import json
 from pathlib import Path
 
@@ -44,6 +43,7 @@ from host.observers import ObserverHub
 from host.observers.base import Update
 from host.observers.hardware import HardwareObserver
 from tests.daemon.runner import TEDUSAR
+from tests.wait import wait_until_async
 
 MINUTES = 10
 TICK_MS = 10
@@ -163,7 +163,9 @@ async def test_ten_fault_free_simulated_minutes_perform_no_repair(tmp_path: Path
     assert len(triggers) == triggers_before  # no repair asked for after the robot is up
     assert daemon.status.snapshot().diagnosis_runs - runs_before >= MINUTES * 60 / 2  # it did run
     assert set(hw.bands.values()) == {"nominal"}
-    await asyncio.sleep(daemon.opts.repair_debounce_s + 0.2)  # a pending repair would start
+    # a repair whose debounce is pending would start: wait until none is pending
+    await wait_until_async(lambda: daemon.repairs.busy or not daemon.repairs.active,
+                           what="no repair pending")
     assert not daemon.repairs.busy
     await daemon.repairs.close()
     assert daemon.journal is not None

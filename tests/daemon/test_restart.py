@@ -7,8 +7,8 @@ topics fail and quarantined 4 healthy components; a quarantine was lost with the
 
 from __future__ import annotations
 
+import contextlib
 import subprocess
-import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -39,21 +39,12 @@ def node_processes(robot: Path) -> dict[str, list[int]]:
     return out
 
 
-def wait_until(what, timeout: float, label: str):  # type: ignore[no-untyped-def]
-    end = time.monotonic() + timeout
-    while not (got := what()):
-        if time.monotonic() > end:
-            raise AssertionError(f"timed out waiting for {label}")
-        time.sleep(0.2)
-    return got
-
-
 @pytest.fixture
 def robot(tmp_path: Path) -> Iterator[tuple[Path, Path]]:
     yield fast_copy(tmp_path), key_file(tmp_path)
     for pids in node_processes(tmp_path / "tedusar").values():  # never leave any behind
         for pid in pids:
-            with __import__("contextlib").suppress(psutil.Error):
+            with contextlib.suppress(psutil.Error):
                 psutil.Process(pid).kill()
 
 
@@ -71,8 +62,7 @@ def test_killed_during_a_repair_the_next_daemon_resumes_without_doubles(
         first.close()
     left = node_processes(system)
     assert left, "the nodes outlive a killed daemon (they are the robot's drivers)"
-    second = RunningDaemon(tmp_path, system, ("--key-file", str(key)),
-                           zenoh_port=first.zenoh_port)
+    second = RunningDaemon(tmp_path, system, ("--key-file", str(key)), zenoh=first.zenoh)
     try:
         st = second.wait_for(healthy, HEAL_S, "the robot healthy again")
         procs = node_processes(system)
@@ -117,7 +107,7 @@ def test_a_quarantine_set_by_a_person_survives_a_restart(
             "ok(/scan)") is True and not any(r["state"] == "started" for r in s["repairs"]),
             HEAL_S, "the rest of the robot up")
         assert st["quarantined"] == {"laser_alignment": "servo rattles"}
-        time.sleep(2.0)  # any repair of it would have started by now
+        second.settled(2.0)  # any repair of it would have started by now
         st = second.status()
         assert st["observations"].get("on(laser_alignment)") is False
         assert not any(r["args"] == ["laser_alignment"] and r["action"] != "shutdown"

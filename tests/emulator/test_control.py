@@ -6,7 +6,6 @@ import json
 import socket
 import subprocess
 import sys
-import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -14,6 +13,7 @@ import pytest
 
 from emulator.control import Background
 from tests.emulator.conftest import tedusar
+from tests.wait import wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
 _SCRIPT = Path(sys.executable).parent / "dxboard"
@@ -37,13 +37,8 @@ def inject(*args: str) -> subprocess.CompletedProcess[str]:
                           timeout=30, cwd=ROOT)
 
 
-def wait_for(pred, seconds: float = 5.0) -> bool:  # type: ignore[no-untyped-def]
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
-        if pred():
-            return True
-        time.sleep(0.02)
-    return False
+def wait_for(pred, seconds: float = 30.0) -> bool:  # type: ignore[no-untyped-def]
+    return bool(wait_until(pred, seconds, "the emulator's state"))
 
 
 def test_inject_short_trips_the_channel_and_clear_removes_it(bg: Background) -> None:

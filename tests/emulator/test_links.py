@@ -33,7 +33,7 @@ def test_serial_pty() -> None:
         port = serial.Serial(path, 115200, timeout=0.2)
         conn = Connection(HOST, KEY)
 
-        def until(pred: object, seconds: float = 5.0) -> object:
+        def until(pred: object, seconds: float = 30.0) -> object:
             end = time.monotonic() + seconds
             while time.monotonic() < end:
                 conn.receive_data(port.read(4096))
@@ -72,7 +72,7 @@ def test_can_virtual_bus() -> None:
         try:
             seen: dict[str, dict[str, object]] = {}
             nonce = b""
-            end = time.monotonic() + 5
+            end = time.monotonic() + 30  # a deadline, not a duration
             while time.monotonic() < end and not (
                     nonce and seen.get("DXB_Channel_2", {}).get("State") == "on"):
                 msg = bus.recv(0.5)
@@ -89,7 +89,7 @@ def test_can_virtual_bus() -> None:
             for can_id, data in ((0x180, cmd), (0x181, tag[:8]), (0x182, tag[8:])):
                 bus.send(can.Message(arbitration_id=can_id, data=data, is_extended_id=False))
             result = None
-            end = time.monotonic() + 3
+            end = time.monotonic() + 30
             while time.monotonic() < end and result is None:
                 msg = bus.recv(0.5)
                 if msg is not None and msg.arbitration_id == 0x188:
@@ -100,7 +100,7 @@ def test_can_virtual_bus() -> None:
             replay = [(0x180, cmd), (0x181, tag[:8]), (0x182, tag[8:])]
             for can_id, data in replay:
                 bus.send(can.Message(arbitration_id=can_id, data=data, is_extended_id=False))
-            end = time.monotonic() + 3
+            end = time.monotonic() + 30
             result = None
             while time.monotonic() < end and result is None:
                 msg = bus.recv(0.5)

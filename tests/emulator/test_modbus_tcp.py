@@ -9,8 +9,10 @@ from collections.abc import Iterator
 import pytest
 from pymodbus.client import AsyncModbusTcpClient
 
+from protocol.constants import ST_ON
 from protocol.messages import Ack, GetState, Measurement, State, Subscribe, Switch, Switched
 from tests.emulator.wire import Emulate, Wire
+from tests.wait import wait_until_async
 
 
 @pytest.fixture(scope="module", params=["cpython", "micropython"])
@@ -27,10 +29,15 @@ async def test_modbus_matches_native(board: Emulate) -> None:
     w = await Wire.open(board.address())
     for ch in (0, 3, 6):
         assert isinstance(await w.request(Switch(ch, True)), Switched)
-    await asyncio.sleep(0.6)
+
+    async def all_on() -> bool:  # their inrush over
+        st = await w.request(GetState())
+        return isinstance(st, State) and all(st.channels[ch].state == ST_ON for ch in (0, 3, 6))
+
+    await wait_until_async(all_on, what="channels 0, 3 and 6 on")
     assert isinstance(await w.request(Subscribe(100)), Ack)
     host, port = board.address("modbus")
-    client = AsyncModbusTcpClient(host, port=port, timeout=3, retries=0)
+    client = AsyncModbusTcpClient(host, port=port, timeout=30, retries=0)
     assert await client.connect()
     try:
         snaps = []
@@ -45,14 +52,11 @@ async def test_modbus_matches_native(board: Emulate) -> None:
         st = await w.request(GetState())
         assert isinstance(st, State)
         # measurements pushed by the native protocol, by uptime: find each Modbus snapshot's
+        # every push up to a tick after the last snapshot's (they come in order)
         meas: dict[int, Measurement] = {}
-        loop = asyncio.get_running_loop()
-        end = loop.time() + 1.0
-        while loop.time() < end:
-            try:
-                m = await w.next(lambda e: isinstance(e, Measurement), timeout=0.2)
-            except AssertionError:
-                continue
+        last_up = u32(snaps[-1][1][3], snaps[-1][1][4])
+        while not meas or max(meas) <= last_up:
+            m = await w.next(lambda e: isinstance(e, Measurement))
             assert isinstance(m, Measurement)
             meas[m.uptime_ms] = m
         matched = 0
@@ -107,9 +111,9 @@ async def test_bad_mbap_closes_connection(board: Emulate) -> None:
     r, wr = await asyncio.open_connection(*board.address("modbus"))
     wr.write(struct.pack(">HHHBBHH", 1, 0, 6, 1, 4, 100, 1))  # a good request first
     await wr.drain()
-    good = await asyncio.wait_for(r.readexactly(11), 5)
+    good = await asyncio.wait_for(r.readexactly(11), 30)
     assert good[7] == 4 and struct.unpack(">H", good[9:11])[0] > 0
     wr.write(struct.pack(">HHHBBHH", 2, 7, 6, 1, 4, 100, 1))  # protocol id 7
     await wr.drain()
-    assert await asyncio.wait_for(r.read(100), 5) == b""
+    assert await asyncio.wait_for(r.read(100), 30) == b""
     wr.close()

@@ -19,6 +19,7 @@ from typing import Any
 from protocol.connection import HOST, Connection
 from protocol.framing import BadFrame
 from protocol.messages import Hello, Message
+from tests.ports import clashed
 
 ROOT = Path(__file__).resolve().parents[2]
 TEDUSAR = ROOT / "models" / "tedusar"
@@ -32,19 +33,28 @@ class Emulate:
         env.pop("DXBOARD_KEY", None)
         if key is not None:
             env["DXBOARD_KEY"] = key.hex()
-        self.proc = subprocess.Popen([DXBOARD, "emulate", str(TEDUSAR), *options],
-                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
-                                     text=True, cwd=ROOT)
-        self.urls: dict[str, str] = {}
-        assert self.proc.stdout is not None
         want = 2 + sum(o in ("--modbus", "--serial", "--can") for o in options)
+        for _ in range(3):  # a port the runtime picked was taken meanwhile: start again
+            err = self._start([DXBOARD, "emulate", str(TEDUSAR), *options], env, want)
+            if not clashed(err):
+                break
+        if err:
+            raise AssertionError("dxboard emulate ended: " + err)
+
+    def _start(self, argv: list[str], env: dict[str, str], want: int) -> str:
+        """Start it and read ``want`` URLs; "" when it is up, else what it said on exiting."""
+        self.proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                     env=env, text=True, cwd=ROOT)
+        self.urls: dict[str, str] = {}
+        assert self.proc.stdout is not None and self.proc.stderr is not None
         while len(self.urls) < want:
             line = self.proc.stdout.readline()
             if not line:
-                raise AssertionError("dxboard emulate ended: " + self.proc.stderr.read()
-                                     if self.proc.stderr else "")
+                self.proc.wait()
+                return self.proc.stderr.read() or f"exit {self.proc.returncode}"
             name, _, url = line.strip().partition(": ")
             self.urls[name] = url
+        return ""
 
     def address(self, name: str = "board") -> tuple[str, int]:
         rest = self.urls[name].split("://", 1)[1]
@@ -87,7 +97,7 @@ class Wire:
         wire.hello = got
         return wire
 
-    async def next(self, pred: Any, timeout: float = 5.0) -> Message | BadFrame:
+    async def next(self, pred: Any, timeout: float = 30.0) -> Message | BadFrame:
         """The next event matching ``pred``; others stay in ``backlog``."""
         loop = asyncio.get_running_loop()
         end = loop.time() + timeout
@@ -98,13 +108,16 @@ class Wire:
             left = end - loop.time()
             if left <= 0:
                 raise AssertionError(f"nothing matching within {timeout} s: {self.backlog!r}")
-            data = await asyncio.wait_for(self.reader.read(65536), left)
+            try:
+                data = await asyncio.wait_for(self.reader.read(65536), left)
+            except TimeoutError:
+                continue  # the deadline: said above, with what arrived
             if not data:
                 raise AssertionError("connection closed")
             self.conn.receive_data(data)
             self.backlog.extend(self.conn.events())
 
-    async def request(self, msg: Message, timeout: float = 5.0) -> Message | BadFrame:
+    async def request(self, msg: Message, timeout: float = 30.0) -> Message | BadFrame:
         msg.req_id = self.conn.next_request_id()
         self.writer.write(self.conn.send(msg))
         await self.writer.drain()

@@ -15,7 +15,6 @@ import asyncio
 import contextlib
 import re
 import shutil
-import socket
 import textwrap
 from collections.abc import Sequence
 from pathlib import Path
@@ -50,6 +49,7 @@ from host.repair.policy import Candidate
 from host.repair.processes import load_processes
 from host.repair.supervisor import ProcessSupervisor
 from tests.host.memboard import KEY, MemoryBoard, tedusar
+from tests.ports import zenoh_endpoint
 
 ROOT = Path(__file__).resolve().parents[2]
 TEDUSAR = ROOT / "models" / "tedusar"
@@ -66,12 +66,6 @@ with TopicPublisher([os.environ["ENDPOINT"]]) as pub:
         n += 1
         time.sleep(0.05)
 """
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def robot_dir(tmp: Path, processes: str, domain: str | None = None) -> Path:
@@ -167,7 +161,7 @@ class Rig:
         return ([Candidate(d.bad, d.probability) for d in res.diagnoses],
                 self.diagnoser.observations.literals())
 
-    async def until(self, expected: dict[str, bool], timeout: float = 10.0) -> None:
+    async def until(self, expected: dict[str, bool], timeout: float = 30.0) -> None:
         ok = await self.beliefs.wait_for(expected, -1.0, timeout)
         assert ok, self.beliefs.missing(expected, -1.0)
 
@@ -178,4 +172,4 @@ class Rig:
 
 @pytest.fixture
 def endpoint() -> str:
-    return f"tcp/127.0.0.1:{free_port()}"
+    return zenoh_endpoint()

@@ -8,7 +8,6 @@ touches nothing.
 
 from __future__ import annotations
 
-import asyncio
 from pathlib import Path
 
 import pytest
@@ -22,6 +21,7 @@ from host.repair.limits import Quarantined
 from host.repair.loop import LoopOutcome, RepairLoop
 from host.repair.plan import Plan, Step
 from tests.executor.conftest import ODOM_NODE, TEDUSAR, Rig, robot_dir
+from tests.wait import wait_until_async
 
 JAGUAR = 7
 PC = 2
@@ -137,11 +137,11 @@ async def test_protected_channel_stays_on_whatever_the_plan(tmp_path: Path) -> N
     assert "protected ?h" not in UNGUARDED.split("(:action shutdown")[1].split("(:action")[0]
     robot = robot_dir(tmp_path, "{}\n", domain=UNGUARDED)
     async with Rig(robot, ["hokuyo"], []) as rig:
-        for _ in range(100):  # the board's power-up queue switches pc on after boot
-            if (await rig.client.state()).channels[PC].physical:
-                break
-            await asyncio.sleep(0.05)
-        assert (await rig.client.state()).channels[PC].physical
+        async def pc_on() -> bool:
+            return (await rig.client.state()).channels[PC].physical
+
+        # the board's power-up queue switches pc on after boot
+        await wait_until_async(pc_on, what="pc on")
         # a hand-written domain without the guard: the planner still will not switch pc off
         with pytest.raises(NoPlanError, match="protected"):
             rig.planner.plan({"channel2"}, [parse_literal("on(channel2)")])

@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import asyncio
 import os
 import sys
 from pathlib import Path
@@ -15,6 +14,7 @@ from host.diagnosis.model import load_system
 from host.repair.processes import ProcessConfig, ProcessConfigError, load_processes
 from host.repair.supervisor import ProcessError, ProcessSupervisor
 from tests.executor.conftest import robot_dir
+from tests.wait import wait_until_async
 
 STUBBORN = """\
 import signal, subprocess, sys, time
@@ -77,18 +77,22 @@ async def test_stop_escalates_to_sigkill_and_takes_the_children(tmp_path: Path) 
     assert started == [("n", pid)] and sup.pid("n") == pid
     assert await sup.start("n") == pid  # already running: no second copy
     log = sup.log_file("n")
-    for _ in range(200):
-        if "to stderr" in log.read_text():
-            break
-        await asyncio.sleep(0.02)
+    await wait_until_async(lambda: "to stderr" in log.read_text(), what="the child's output",
+                           show=log.read_text)
     child = int(next(ln for ln in log.read_text().splitlines() if ln.startswith("child"))
                 .split()[1])
     code = await sup.stop("n")
     assert code == -9  # SIGTERM was ignored
     assert sup.pid("n") is None
     assert not psutil.pid_exists(pid)
-    await asyncio.sleep(0.1)
-    assert not psutil.pid_exists(child) or psutil.Process(child).status() == psutil.STATUS_ZOMBIE
+
+    def child_gone() -> bool:
+        try:
+            return psutil.Process(child).status() == psutil.STATUS_ZOMBIE
+        except psutil.NoSuchProcess:
+            return True
+
+    await wait_until_async(child_gone, what="the child gone too")
     text = log.read_text()
     assert "start:" in text and "to stderr" in text and "exited with signal 9 (stopped)" in text
     assert await sup.stop("n") is None  # not running: nothing to do

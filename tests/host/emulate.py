@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -15,21 +14,14 @@ KEY_HEX = "000102030405060708090a0b0c0d0e0f"
 ENV = {**os.environ, "DXBOARD_KEY": KEY_HEX, "PYTHONPATH": str(ROOT)}
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port: int = s.getsockname()[1]
-        return port
-
-
 class Emulate:
     """One ``dxboard emulate models/tedusar ...`` process and the URLs it printed."""
 
-    def __init__(self, *options: str) -> None:
+    def __init__(self, *options: str, env: dict[str, str] | None = None) -> None:
         cmd = [sys.executable, "-m", "host.cli", "emulate", str(ROOT / "models" / "tedusar"),
                *options]
         self.proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                     text=True, env=ENV, cwd=ROOT)
+                                     text=True, env={**ENV, **(env or {})}, cwd=ROOT)
         self.urls: dict[str, str] = {}
         deadline = time.monotonic() + 30
         assert self.proc.stdout is not None

@@ -13,12 +13,17 @@ from collections.abc import Iterator
 import pytest
 
 from host.board import BoardClient, LinkDown, LinkUp, Reading, Rebooted
-from tests.host.emulate import ENV, KEY_HEX, ROOT, Emulate, free_port
+from tests.host.emulate import ENV, KEY_HEX, ROOT, Emulate
+from tests.ports import free_port
+from tests.wait import wait_until, wait_until_async
 
 
 @pytest.fixture(scope="module")
 def emu() -> Iterator[Emulate]:
     e = Emulate("--serial")
+    # the board's power-up queue switches pc on after boot: these tests start from there
+    wait_until(lambda: json.loads(board(e.urls["board"], "status", "--json").stdout)
+               ["state"]["channels"][2]["state"] == "on", what="pc on")
     yield e
     e.stop()
 
@@ -107,15 +112,17 @@ async def test_emulator_killed_and_restarted_under_a_subscriber() -> None:
                 items.append(item)
 
         task = asyncio.create_task(consume())
-        await asyncio.sleep(1.0)
+        await wait_until_async(lambda: sum(isinstance(x, Reading) for x in items) > 5,
+                               what="readings from the first emulator")
         first.kill()
-        await asyncio.sleep(0.5)
+        await wait_until_async(lambda: any(isinstance(x, LinkDown) for x in items),
+                               what="the link down")
+        # the same port again: below the ephemeral range, nobody else is handed it meanwhile
         second = Emulate("--listen", f"127.0.0.1:{port}", "--seed", "2")
-        for _ in range(200):
-            await asyncio.sleep(0.05)
-            if any(isinstance(x, LinkUp) for x in items) and isinstance(items[-1], Reading) \
-                    and items[-1].seq >= 5:
-                break
+        await wait_until_async(lambda: any(isinstance(x, LinkUp) for x in items)
+                               and isinstance(items[-1], Reading) and items[-1].seq >= 5,
+                               what="readings from the restarted emulator",
+                               show=lambda: items[-3:])
         task.cancel()
     finally:
         await client.close()

@@ -27,8 +27,22 @@ from host.transports.errors import (
 )
 from protocol.constants import ST_OFF, ST_ON
 from protocol.framing import encode_frame
-from protocol.messages import Hello
+from protocol.messages import Hello, State
 from tests.host.memboard import KEY, MemoryBoard, tedusar
+from tests.wait import wait_until_async
+
+
+async def on_state(client: BoardClient, channel: int) -> State | None:
+    """The board's state once ``channel`` is on (inrush over) and draws current."""
+    st = await client.state()
+    ch = st.channels[channel]
+    return st if ch.state == ST_ON and ch.current_ma > 0 else None
+
+
+def reconnected(items: list[object]) -> bool:
+    """A LinkUp after the first LinkDown."""
+    kinds = [type(x) for x in items]
+    return LinkDown in kinds and LinkUp in kinds[kinds.index(LinkDown):]
 
 pytestmark = pytest.mark.looptime
 
@@ -64,15 +78,14 @@ async def test_switch_and_read_back() -> None:
         res = await c.switch("hokuyo", True)
         assert res.physical and res.commanded and res.name == "hokuyo"
         assert mb.emu.board.channels[3].commanded
-        await asyncio.sleep(0.3)
-        st = await c.state()
+        st = await wait_until_async(lambda: on_state(c, 3), what="hokuyo on")
         assert st.channels[3].state == ST_ON and st.channels[3].current_ma > 0
         res = await c.switch(3, False)
         assert not res.physical and res.state == ST_OFF
         cyc = await c.power_cycle("hokuyo", 0.1)
         assert not cyc.physical and cyc.commanded
-        await asyncio.sleep(0.4)
-        assert mb.emu.board.channels[3].physical
+        await wait_until_async(lambda: mb.emu.board.channels[3].physical,
+                               what="on again after the cycle")
 
 
 async def test_wrong_key_is_refused_and_nothing_changes() -> None:
@@ -144,15 +157,15 @@ async def test_link_lost_reconnects_and_reports_reboot() -> None:
                 items.append(item)
 
         task = asyncio.create_task(consume())
-        await asyncio.sleep(0.3)
+        await wait_until_async(lambda: any(isinstance(x, Reading) for x in items),
+                               what="readings")
         mb.drop_links()  # a pulled cable: same boot
-        await asyncio.sleep(0.5)
+        await wait_until_async(lambda: reconnected(items), what="the link up again",
+                               show=lambda: items[-3:])
         mb.emu.inject("board", "wdt_reset", {})  # the board hangs; its watchdog resets it
-        for _ in range(100):
-            await asyncio.sleep(0.05)
-            if any(isinstance(x, Rebooted) for x in items) and \
-                    isinstance(items[-1], Reading) and items[-1].seq > 5:
-                break
+        await wait_until_async(lambda: any(isinstance(x, Rebooted) for x in items)
+                               and isinstance(items[-1], Reading) and items[-1].seq > 5,
+                               what="readings after the reboot", show=lambda: items[-3:])
         task.cancel()
         await c.close()
     kinds = [type(x).__name__ for x in items if not isinstance(x, Reading)]

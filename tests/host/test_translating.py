@@ -7,7 +7,8 @@ from __future__ import annotations
 import asyncio
 import json
 import random
-from collections.abc import Iterator
+import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
@@ -18,8 +19,10 @@ from host.transports import open_transport
 from host.transports.errors import AuthRefused, BadUrl, BoardRefused, NotSupported
 from host.transports.modbus import ModbusTransport
 from host.transports.url import parse
-from protocol.constants import ST_OFF
+from protocol.constants import ST_OFF, ST_ON
 from tests.host.emulate import KEY_HEX, Emulate
+from tests.ports import reserved_udp_port
+from tests.wait import wait_until_async
 
 KEY = bytes.fromhex(KEY_HEX)
 
@@ -29,6 +32,28 @@ def emu() -> Iterator[Emulate]:
     e = Emulate("--modbus", "127.0.0.1:0")
     yield e
     e.stop()
+
+
+async def physical(client: BoardClient, channel: int) -> bool:
+    return (await client.state()).channels[channel].physical
+
+
+async def on_and_drawing(client: BoardClient, channel: int) -> bool:
+    """The channel is on (inrush over) and draws current."""
+    ch = (await client.state()).channels[channel]
+    return ch.state == ST_ON and ch.current_ma > 0
+
+
+async def readings_until(client: BoardClient, rate: int,
+                         done: Callable[[Reading], bool]) -> list[Reading]:
+    """Readings from a new subscription, up to the first for which ``done`` holds."""
+    out: list[Reading] = []
+    async for item in client.subscribe(rate):
+        if isinstance(item, Reading):
+            out.append(item)
+            if done(item):
+                break
+    return out
 
 
 async def first_readings(client: BoardClient, n: int, rate: int) -> list[Reading]:
@@ -46,11 +71,13 @@ async def test_modbus_reads_the_same_board(emu: Emulate) -> None:
             BoardClient(emu.urls["modbus"]) as mb:
         assert mb.info is not None and mb.info.channels == 10 and mb.info.version == 1
         await native.switch("router", True)
-        await asyncio.sleep(0.3)
+        await wait_until_async(lambda: on_and_drawing(native, 5), what="router on")
+        t0 = time.monotonic()
         a, b = await native.state(), await mb.state()
+        apart_ms = (time.monotonic() - t0) * 1000  # a busy machine may take long between
         assert [c.state for c in a.channels] == [c.state for c in b.channels]
         assert b.channels[5].physical and b.channels[5].current_ma > 0
-        assert abs(a.uptime_ms - b.uptime_ms) < 1000
+        assert abs(a.uptime_ms - b.uptime_ms) < 1000 + apart_ms
         got = await first_readings(mb, 5, 20)
         assert [r.seq for r in got] == [1, 2, 3, 4, 5]  # polled, numbered by the host
         assert all(r.on_mask & (1 << 5) for r in got)
@@ -64,8 +91,7 @@ async def test_modbus_reads_the_same_board(emu: Emulate) -> None:
         assert not (await native.state()).channels[5].commanded
         cyc = await mb.power_cycle(5, 0.2)  # off, wait, on by the host
         assert not cyc.physical
-        await asyncio.sleep(0.5)
-        assert (await native.state()).channels[5].physical
+        await wait_until_async(lambda: physical(native, 5), what="router on again")
         with pytest.raises(NotSupported, match="not possible over modbus"):
             await mb.get_board_config()
         await native.set_board_config(modbus_write=False, modbus_allow=[])
@@ -88,11 +114,17 @@ def test_modbus_map_file(tmp_path: Path) -> None:
 
 
 @pytest.fixture
-def can_emu() -> Iterator[Emulate]:
+def can_emu(monkeypatch: pytest.MonkeyPatch) -> Iterator[Emulate]:
+    # Linux hands a multicast datagram to every socket bound to its port, whatever group it
+    # joined: a port of its own (python-can takes it from $CAN_CONFIG) keeps a second copy
+    # of the suite off this bus; the group is random too.
     group = f"239.74.{random.randrange(1, 250)}.{random.randrange(1, 250)}"
-    e = Emulate("--can", f"udp_multicast:{group}")
-    yield e
-    e.stop()
+    with reserved_udp_port() as port:
+        config = json.dumps({"port": port})
+        monkeypatch.setenv("CAN_CONFIG", config)  # this process's end, the host's transport
+        e = Emulate("--can", f"udp_multicast:{group}", env={"CAN_CONFIG": config})
+        yield e
+        e.stop()
 
 
 async def test_can_over_udp_multicast(can_emu: Emulate) -> None:
@@ -107,9 +139,10 @@ async def test_can_over_udp_multicast(can_emu: Emulate) -> None:
         assert c.info is not None and c.info.channels == 10
         res = await c.switch(4, True)
         assert res.physical and res.commanded
-        got = await first_readings(c, 3, 10)
-        assert [r.seq for r in got] == [1, 2, 3] and all(r.on_mask & (1 << 4) for r in got)
-        assert got[-1].currents_ma[4] > 0
+        # the readings follow the switch: the channel frames it reads come once a second
+        got = await asyncio.wait_for(readings_until(
+            c, 10, lambda r: bool(r.on_mask & (1 << 4)) and r.currents_ma[4] > 0), 60)
+        assert [r.seq for r in got] == list(range(1, len(got) + 1))  # numbered by the host
         cyc = await c.power_cycle(4, 0.3)  # timed by the board
         assert not cyc.physical
         items: list[object] = []
@@ -121,10 +154,8 @@ async def test_can_over_udp_multicast(can_emu: Emulate) -> None:
         task = asyncio.create_task(consume())
         request(can_emu.urls["control"], {"op": "inject", "channel": "board",
                                           "fault": "wdt_reset", "params": {}})
-        for _ in range(100):
-            await asyncio.sleep(0.05)
-            if any(isinstance(x, Rebooted) for x in items):
-                break
+        await wait_until_async(lambda: any(isinstance(x, Rebooted) for x in items),
+                               what="the reboot seen over CAN")
         task.cancel()
         reboot = next(x for x in items if isinstance(x, Rebooted))
         assert reboot.how == "boot id" and reboot.reset_cause_name == "watchdog"

@@ -1,8 +1,7 @@
-"""Shared helpers for the observer tests: a free loopback port, a simulated observation set."""
+"""Shared helpers for the observer tests: a zenoh endpoint, a simulated observation set."""
 
 from __future__ import annotations
 
-import socket
 import sys
 from pathlib import Path
 
@@ -10,21 +9,16 @@ import pytest
 
 from host.diagnosis.observations import ObservationSet
 from host.observers import Update, apply_updates
+from tests.ports import zenoh_endpoint
 
 ROOT = Path(__file__).resolve().parents[2]
 TEDUSAR = ROOT / "models" / "tedusar"
 PYTHON = sys.executable
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 @pytest.fixture
 def endpoint() -> str:
-    return f"tcp/127.0.0.1:{free_port()}"
+    return zenoh_endpoint()
 
 
 class Recorder:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import asyncio
 import subprocess
 import time
 import uuid
@@ -10,6 +9,7 @@ from collections.abc import Callable
 
 from host.observers import NodeObserver, ObserverHub, ProcessSpec, PropertyObserver
 from tests.observers.conftest import PYTHON, Recorder
+from tests.wait import wait_until_async
 
 
 def sleeper(tag: str) -> subprocess.Popen[bytes]:
@@ -17,11 +17,8 @@ def sleeper(tag: str) -> subprocess.Popen[bytes]:
     return subprocess.Popen([PYTHON, "-c", "import time; time.sleep(60)", tag])
 
 
-async def wait_for(cond: Callable[[], bool], timeout: float = 10.0) -> None:
-    end = time.monotonic() + timeout
-    while not cond():
-        assert time.monotonic() < end, "condition not met in time"
-        await asyncio.sleep(0.01)
+async def wait_for(cond: Callable[[], bool], timeout: float = 30.0) -> None:
+    await wait_until_async(cond, timeout, "the observation", interval=0.01)
 
 
 async def test_node_by_command_line_match_start_kill_restart() -> None:
@@ -62,7 +59,7 @@ async def test_supervised_node_is_tracked_by_pid() -> None:
         hub.watcher.track("driver", proc.pid)  # what the daemon's supervisor does
         await wait_for(lambda: rec.value("running(driver)") is True)
         proc.terminate()  # not reaped yet: a zombie is not running either
-        await wait_for(lambda: rec.value("running(driver)") is False, timeout=3.0)
+        await wait_for(lambda: rec.value("running(driver)") is False, timeout=30.0)
     finally:
         proc.kill()
         proc.wait()

@@ -2,9 +2,11 @@
 
 ``robot_dir`` is a copy of ``models/tedusar`` with short boot times (the board's devices boot in
 0.2-1.5 s instead of 1-5 s) so the tests stay quick; everything else is the real model.
-``Robot`` is the emulator subprocess with its URLs; ``Topics`` is the test's own zenoh peer,
-listening where the nodes connect (``DXBOARD_ZENOH``), recording every message it sees;
-``Nodes`` starts ``python -m emulator.robot.node NAME DIR`` processes and stops them.
+``Robot`` is the emulator subprocess with its URLs; ``Conn`` a client of one of its devices;
+``Topics`` is the test's own zenoh peer, listening where the nodes connect (``DXBOARD_ZENOH``),
+recording every message it sees; ``Nodes`` starts ``python -m emulator.robot.node NAME DIR``
+processes and stops them. Every wait is on a condition with a generous deadline
+(``tests.wait``); windows of fixed length are used only to show that nothing arrives.
 """
 
 from __future__ import annotations
@@ -26,18 +28,15 @@ import pytest
 import yaml
 import zenoh
 
+from host.commands.inject import request
+from tests.ports import clashed, zenoh_endpoint
+from tests.wait import wait_until
+
 ROOT = Path(__file__).resolve().parents[2]
 TEDUSAR = ROOT / "models" / "tedusar"
 DXBOARD = str(Path(sys.executable).parent / "dxboard")
 KEY_HEX = "000102030405060708090a0b0c0d0e0f"
 BOOT_MS = {"hokuyo": 1500, "jaguar": 300, "laser_alignment": 300}
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port: int = s.getsockname()[1]
-        return port
 
 
 @pytest.fixture
@@ -89,6 +88,12 @@ class Robot:
                            capture_output=True, text=True, timeout=20)
         assert p.returncode == 0, p.stderr
 
+    def now_ms(self) -> int:
+        """The emulator's clock, the one every device frame's ``t_ms`` is stamped with."""
+        rep = request(self.urls["control"], {"op": "status"})
+        assert rep["ok"], rep
+        return int(rep["status"]["now_ms"])
+
     def channel(self, name: str) -> dict[str, Any]:
         status = json.loads(self.board("status", "--json"))
         found: dict[str, Any] = next(c for c in status["state"]["channels"]
@@ -106,17 +111,108 @@ class Robot:
         return self.proc.returncode
 
 
+class Conn:
+    """A client of one device: JSON lines in, lines out."""
+
+    def __init__(self, port: int) -> None:
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=5)
+        self.buf = b""
+        self.closed = False
+
+    def read(self, seconds: float) -> list[dict[str, Any]]:
+        """Every frame received during ``seconds``."""
+        end = time.monotonic() + seconds
+        out: list[dict[str, Any]] = []
+        while time.monotonic() < end and not self.closed:
+            out += self._recv(end - time.monotonic())
+        return out
+
+    def _recv(self, timeout: float) -> list[dict[str, Any]]:
+        self.sock.settimeout(max(0.01, timeout))
+        try:
+            data = self.sock.recv(65536)
+        except TimeoutError:
+            return []
+        except ConnectionError:
+            data = b""
+        if not data:
+            self.closed = True
+        self.buf += data
+        *lines, self.buf = self.buf.split(b"\n")
+        return [json.loads(line) for line in lines]
+
+    def frames(self, n: int, timeout: float = 30.0) -> list[dict[str, Any]]:
+        """The next ``n`` frames (at least), however long a busy machine takes for them."""
+        got: list[dict[str, Any]] = []
+        wait_until(lambda: len(got) >= n or self.closed or got.extend(self._recv(0.2)),
+                   timeout, f"{n} frames", interval=0, show=lambda: f"{len(got)} frames")
+        assert len(got) >= n, f"the device closed the connection after {len(got)} frames"
+        return got
+
+    def wait_quiet(self, quiet_s: float, timeout: float = 30.0) -> list[dict[str, Any]]:
+        """Read until nothing has arrived for ``quiet_s``; the frames read until then."""
+        got: list[dict[str, Any]] = []
+
+        def quiet() -> bool:
+            frames = self.read(quiet_s)
+            got.extend(frames)
+            return not frames
+
+        wait_until(quiet, timeout, f"{quiet_s} s without a frame", interval=0,
+                   show=lambda: f"{len(got)} frames, last {got[-1:]}")
+        return got
+
+    def wait_closed(self, timeout: float = 30.0) -> None:
+        def closed() -> bool:
+            if not self.closed:
+                self._recv(0.2)
+            return self.closed
+
+        wait_until(closed, timeout, "the device to close the connection", interval=0)
+
+    def send(self, obj: object) -> None:
+        self.sock.sendall(json.dumps(obj).encode() + b"\n")
+
+    def close(self) -> None:
+        self.sock.close()
+
+
+def serving(robot: Robot, device: str, timeout: float = 30.0) -> Conn:
+    """A connection to ``device`` once it is powered, booted and sending frames."""
+    conn: list[Conn] = []
+
+    def up() -> bool:
+        try:
+            c = Conn(robot.port(device))
+        except ConnectionRefusedError:
+            return False
+        if c.read(1.0):
+            conn.append(c)
+            return True
+        c.close()
+        return False
+
+    wait_until(up, timeout, f"{device} serving frames")
+    return conn[0]
+
+
 class Topics:
     """The test's zenoh peer: listens on ``endpoint``, records (time, topic, values) of all."""
 
     def __init__(self) -> None:
-        self.endpoint = f"tcp/127.0.0.1:{free_port()}"
-        cfg = zenoh.Config()
-        cfg.insert_json5("mode", '"peer"')
-        cfg.insert_json5("scouting/multicast/enabled", "false")
-        cfg.insert_json5("listen/endpoints", json.dumps([self.endpoint]))
-        cfg.insert_json5("connect/endpoints", "[]")
-        self.session = zenoh.open(cfg)
+        for _ in range(5):  # another process took the port meanwhile: take a fresh one
+            self.endpoint = zenoh_endpoint()
+            cfg = zenoh.Config()
+            cfg.insert_json5("mode", '"peer"')
+            cfg.insert_json5("scouting/multicast/enabled", "false")
+            cfg.insert_json5("listen/endpoints", json.dumps([self.endpoint]))
+            cfg.insert_json5("connect/endpoints", "[]")
+            try:
+                self.session = zenoh.open(cfg)
+                break
+            except zenoh.ZError as exc:
+                if not clashed(str(exc)):
+                    raise
         self.lock = threading.Lock()
         self.seen: list[tuple[float, str, dict[str, Any]]] = []
         self.sub = self.session.declare_subscriber("**", self._on)
@@ -132,19 +228,43 @@ class Topics:
             return [v for t, k, v in self.seen if k == topic and since <= t < until]
 
     def count_over(self, topic: str, seconds: float) -> int:
-        """Messages on ``topic`` during the next ``seconds``."""
+        """Messages on ``topic`` during the next ``seconds`` (to show that none arrive)."""
         t0 = time.monotonic()
         time.sleep(seconds)
         return len(self.messages(topic, t0, time.monotonic()))
 
-    def wait_for(self, topic: str, timeout: float = 10.0) -> float:
-        """Wait for a new message on ``topic``; returns how long that took."""
+    def collect(self, topic: str, n: int, timeout: float = 30.0) -> list[dict[str, Any]]:
+        """The next ``n`` messages on ``topic``, however long a busy machine takes."""
         t0 = time.monotonic()
-        while time.monotonic() - t0 < timeout:
-            if self.messages(topic, t0):
-                return time.monotonic() - t0
-            time.sleep(0.05)
-        raise AssertionError(f"no {topic} within {timeout} s")
+        got = wait_until(lambda: self.messages(topic, t0)[:n] if len(self.messages(topic, t0))
+                         >= n else [], timeout, f"{n} messages on {topic}",
+                         show=lambda: f"{len(self.messages(topic, t0))} messages")
+        return got
+
+    def arrivals(self, topic: str, since: float = 0.0) -> list[float]:
+        """When each message on ``topic`` arrived here (monotonic seconds)."""
+        with self.lock:
+            return [t for t, k, _ in self.seen if k == topic and t >= since]
+
+    def wait_for(self, topic: str, timeout: float = 30.0) -> None:
+        """Wait for a new message on ``topic``."""
+        self.collect(topic, 1, timeout)
+
+    def wait_silent(self, topic: str, quiet_s: float, timeout: float = 30.0) -> None:
+        """Wait until ``topic`` has been silent for ``quiet_s`` (it stopped, or never began)."""
+        t0 = time.monotonic()
+
+        def silent() -> bool:
+            last = max([t0, *self.arrivals(topic, t0)])
+            return time.monotonic() - last >= quiet_s
+
+        wait_until(silent, timeout, f"{topic} silent for {quiet_s} s",
+                   show=lambda: f"{len(self.messages(topic, t0))} messages since")
+
+    def wait_peers(self, n: int, timeout: float = 30.0) -> None:
+        """Wait until ``n`` node processes are connected to this peer (they are up)."""
+        wait_until(lambda: len(self.session.info.peers_zid()) >= n, timeout,
+                   f"{n} zenoh peers", show=lambda: len(self.session.info.peers_zid()))
 
     def close(self) -> None:
         self.sub.undeclare()  # type: ignore[no-untyped-call]  # zenoh stub

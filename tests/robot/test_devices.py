@@ -2,48 +2,16 @@
 
 from __future__ import annotations
 
-import json
 import socket
 import subprocess
-import time
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from tests.robot.conftest import DXBOARD, ROOT, Robot
-
-
-class Conn:
-    """A client of one device: lines in, lines out."""
-
-    def __init__(self, port: int) -> None:
-        self.sock = socket.create_connection(("127.0.0.1", port), timeout=2)
-        self.buf = b""
-        self.closed = False
-
-    def read(self, seconds: float) -> list[dict[str, Any]]:
-        """Every frame received during ``seconds``."""
-        end = time.monotonic() + seconds
-        while time.monotonic() < end and not self.closed:
-            self.sock.settimeout(max(0.01, end - time.monotonic()))
-            try:
-                data = self.sock.recv(65536)
-            except TimeoutError:
-                continue
-            except ConnectionError:
-                data = b""
-            if not data:
-                self.closed = True
-            self.buf += data
-        *lines, self.buf = self.buf.split(b"\n")
-        return [json.loads(line) for line in lines]
-
-    def send(self, obj: object) -> None:
-        self.sock.sendall(json.dumps(obj).encode() + b"\n")
-
-    def close(self) -> None:
-        self.sock.close()
+from tests.rates import assert_no_gaps, assert_rate
+from tests.robot.conftest import DXBOARD, ROOT, Conn, Robot, serving
+from tests.wait import wait_until
 
 
 def test_prints_a_url_per_device(robot: Robot) -> None:
@@ -56,70 +24,92 @@ def test_prints_a_url_per_device(robot: Robot) -> None:
 def test_unpowered_device_refuses_booting_sends_nothing_then_scans(robot: Robot) -> None:
     with pytest.raises(ConnectionRefusedError):
         Conn(robot.port("hokuyo"))
+    before_ms = robot.now_ms()  # the emulator's clock, before the channel goes on
     robot.board("on", "hokuyo")
     booting = Conn(robot.port("hokuyo"))  # boot_ms 1500 in these tests: still booting
-    assert booting.read(0.5) == []
+    first = booting.frames(1)  # booted: frames on the same connection
     assert not booting.closed
-    first = booting.read(3.0)  # booted: frames on the same connection
-    assert first, "no scan after boot"
-    frames = booting.read(2.0)
-    assert 60 <= len(frames) <= 100, len(frames)  # 40 Hz over 2 s, generous
+    assert first[0]["seq"] == 0 and first[0]["t_ms"] >= before_ms + 1500, first[0]["t_ms"]
+    frames = booting.frames(80)  # 2 s at 40 Hz
+    assert_rate([f["t_ms"] for f in frames], 40, "hokuyo")
+    assert_no_gaps([f["seq"] for f in first + frames], "hokuyo")
     scan = frames[-1]
     assert len(scan["ranges_mm"]) == 1081 and scan["angle_increment"] > 0
     assert all(100 <= r <= 30000 for r in scan["ranges_mm"])
-    assert [f["seq"] for f in frames] == list(range(frames[0]["seq"], frames[-1]["seq"] + 1))
     booting.close()
 
 
 def test_always_powered_devices_serve_at_their_rates(robot: Robot) -> None:
-    imu = Conn(robot.port("imu"))
-    imu.read(0.3)
-    n_imu = len(imu.read(2.0))
-    joy = Conn(robot.port("joystick"))
-    joy.read(0.3)
-    n_joy = len(joy.read(2.0))
-    assert 150 <= n_imu <= 250, n_imu  # 100 Hz
-    assert 12 <= n_joy <= 28, n_joy  # 10 Hz
+    imu = Conn(robot.port("imu")).frames(200)
+    joy = Conn(robot.port("joystick")).frames(20)
+    assert_rate([f["t_ms"] for f in imu], 100, "imu")
+    assert_rate([f["t_ms"] for f in joy], 10, "joystick")
+    assert_no_gaps([f["seq"] for f in imu], "imu")
+    assert_no_gaps([f["seq"] for f in joy], "joystick")
 
 
 def test_hang_keeps_connection_and_current_power_off_drops_it(robot: Robot) -> None:
     robot.board("on", "hokuyo")
-    time.sleep(2.0)
-    conn = Conn(robot.port("hokuyo"))
-    assert conn.read(0.5), "no scans from a booted hokuyo"
+    conn = serving(robot, "hokuyo")
     robot.inject("hokuyo", "hang")
-    conn.read(0.2)  # what was on the way
-    assert conn.read(1.0) == []
+    conn.wait_quiet(1.0)  # what was on the way arrives; then nothing
     assert not conn.closed
     ch = robot.channel("hokuyo")
     assert 200 <= ch["current_ma"] <= 1200, ch  # system.yaml's band: a hang looks healthy
     robot.board("off", "hokuyo")
-    conn.read(1.0)
-    assert conn.closed, "powering off did not drop the connection"
+    conn.wait_closed()  # powering off drops the connection
     with pytest.raises(ConnectionRefusedError):
         Conn(robot.port("hokuyo"))
     robot.board("on", "hokuyo")  # a power cycle cures a non-permanent hang
-    time.sleep(2.0)
-    assert Conn(robot.port("hokuyo")).read(0.5)
+    serving(robot, "hokuyo")
+
+
+def test_an_unpowered_device_keeps_its_port(robot: Robot) -> None:
+    """Refused while off, but nobody else on the machine is given the port meanwhile (a
+    second test suite, a browser): the device comes back on the URL it printed."""
+    robot.board("on", "jaguar")
+    serving(robot, "jaguar").close()  # the client closes first: no TIME_WAIT on the port
+    robot.board("off", "jaguar")
+
+    def refused() -> bool:
+        try:
+            Conn(robot.port("jaguar")).close()
+        except ConnectionRefusedError:
+            return True
+        return False
+
+    wait_until(refused, what="jaguar refusing connections")
+    with socket.socket() as other, pytest.raises(OSError, match="in use"):
+        other.bind(("127.0.0.1", robot.port("jaguar")))
 
 
 def test_base_follows_velocity_commands_and_rejects_bad_ones(robot: Robot) -> None:
     robot.board("on", "jaguar")
-    time.sleep(0.8)
-    base = Conn(robot.port("jaguar"))
+    base = serving(robot, "jaguar")
     base.send({"cmd": "fly"})
     base.send({"cmd": "velocity", "linear": "fast", "angular": 0})
-    lines = base.read(0.5)
+    lines: list[dict[str, Any]] = []
+    wait_until(lambda: len([f for f in lines if "error" in f]) >= 2 or lines.extend(
+        base.read(0.2)), what="two error replies", show=lambda: lines[-3:])
     errors = [f["error"] for f in lines if "error" in f]
     assert len(errors) == 2 and "velocity" in errors[0] and "linear" in errors[1], errors
     assert all(abs(f["yaw_rate"]) < 0.05 for f in lines if "yaw_rate" in f)
-    for _ in range(10):  # hold the command (the base stops 0.5 s after the last one)
+    sent: list[float] = []
+
+    def turning() -> dict[str, Any] | None:
+        # hold the command (the base stops 0.5 s after the last one) until it turns
         base.send({"cmd": "velocity", "linear": 0.3, "angular": 0.8})
         frames = base.read(0.1)
-    assert 0.7 <= frames[-1]["yaw_rate"] <= 0.9, frames[-1]
-    assert frames[-1]["speed"] > 0.2
-    time.sleep(1.0)  # no more commands: it stops
-    assert abs(base.read(0.3)[-1]["yaw_rate"]) < 0.05
+        sent.append(1)
+        return next((f for f in reversed(frames) if 0.7 <= f["yaw_rate"] <= 0.9), None)
+
+    frame = wait_until(turning, what="the base turning at 0.8 rad/s")
+    assert frame["speed"] > 0.2
+    last_ms = frame["t_ms"]
+    # no more commands: it stops (0.5 s after the last command, by the emulator's clock)
+    stopped = wait_until(lambda: next((f for f in base.read(0.2) if abs(f["yaw_rate"]) < 0.05),
+                                      None), what="the base to stop")
+    assert stopped["t_ms"] - last_ms >= 300, (last_ms, stopped)  # held, then stopped
 
 
 def test_bad_robot_file_is_one_line_exit_2(robot_dir: Path) -> None:

@@ -91,18 +91,18 @@ class Chromium:
     @staticmethod
     async def _devtools_port(proc: asyncio.subprocess.Process, profile: Path) -> int:
         marker = profile / "DevToolsActivePort"
-        for _ in range(300):  # up to 30 s for a cold start
+        for _ in range(600):  # up to 60 s for a cold start on a busy machine
             if proc.returncode is not None:
                 err = await proc.stderr.read() if proc.stderr else b""
                 raise RuntimeError(f"chromium exited ({proc.returncode}): {err[-2000:]!r}")
             with contextlib.suppress(FileNotFoundError, ValueError, IndexError):
                 return int(marker.read_text().splitlines()[0])
             await asyncio.sleep(0.1)
-        raise RuntimeError("chromium did not open its DevTools port within 30 s")
+        raise RuntimeError("chromium did not open its DevTools port within 60 s")
 
     @staticmethod
     async def _page_target(session: aiohttp.ClientSession, port: int) -> str:
-        for _ in range(100):
+        for _ in range(300):  # up to 30 s
             async with session.get(f"http://127.0.0.1:{port}/json/list") as resp:
                 targets = await resp.json()
             pages = [t for t in targets if t.get("type") == "page"]
@@ -149,7 +149,7 @@ class Chromium:
             raise RuntimeError(f"{expression!r} threw: {result['exceptionDetails']}")
         return result["result"].get("value")
 
-    async def wait_for(self, expression: str, timeout: float = 15.0) -> Any:
+    async def wait_for(self, expression: str, timeout: float = 30.0) -> Any:
         """Poll ``expression`` until it is truthy; its value, or an error saying what it was."""
         loop = asyncio.get_running_loop()
         deadline = loop.time() + timeout

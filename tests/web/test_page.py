@@ -12,6 +12,7 @@ from pathlib import Path
 
 from host.journal import Journal, Note
 from host.web import DiagnosisStatus, MemoryStatusSource, WebServer
+from tests.ports import free_port
 from tests.web.chromium import Chromium
 
 CHANNEL_STATE = "document.querySelector('[data-channel-id=\"{}\"]')?.dataset.state"
@@ -57,7 +58,8 @@ async def test_page_shows_stale_data_and_a_lost_link(
         source: MemoryStatusSource, journal: Journal) -> None:
     web = WebServer(source, journal.reader, push_interval_s=0.05, heartbeat_s=0.5,
                     stale_after_s=5.0)
-    port = await web.start("127.0.0.1", 0)
+    # restarted on the same port below: one the kernel never hands to others meanwhile
+    port = await web.start("127.0.0.1", free_port())
     async with Chromium.launch(f"http://127.0.0.1:{port}/") as page:
         try:
             assert await page.wait_for(f"{PILL} === 'live'")
@@ -79,7 +81,7 @@ async def test_page_shows_stale_data_and_a_lost_link(
         web = WebServer(source, journal.reader, push_interval_s=0.05, heartbeat_s=0.5)
         await web.start("127.0.0.1", port)
         try:
-            assert await page.wait_for(f"{PILL} === 'live'", timeout=20)
+            assert await page.wait_for(f"{PILL} === 'live'", timeout=60)
         finally:
             await web.close()
 

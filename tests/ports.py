@@ -1,0 +1,72 @@
+"""Ports for tests that must name one in advance, safe with a second copy of the suite beside.
+
+Most servers in the tests listen on port 0 and print the port they got; that is always safe.
+A few must be told a port first (a zenoh endpoint that other processes connect to, an emulator
+restarted on the address its client keeps dialling, a UDP multicast bus). ``free_port()``
+picks a random port *below* the kernel's ephemeral range (``ip_local_port_range``), free at
+the moment of asking: the kernel never hands such a port to anybody's ``bind(0)`` or
+``connect()``, so only another explicit chooser can take it between our check and our bind.
+For that rare case (and for products that pick a port so themselves: the micropython runtime
+of the emulator, the experiments' zenoh port), ``CLASH`` is the text every listener here
+reports and ``clashed(text)`` lets a starter retry on a fresh port.
+
+``reserved_udp_port()`` holds a UDP port for the duration of a test (a socket bound with
+SO_REUSEADDR, which the python-can multicast bus also sets): Linux delivers multicast to every
+socket bound to the port whatever group it joined, so two suites must never share one.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import random
+import socket
+from collections.abc import Iterator
+from pathlib import Path
+
+CLASH = ("Address already in use", "EADDRINUSE")  # CPython and Rust; MicroPython
+LOWEST = 20000
+
+
+def _ephemeral_low() -> int:
+    try:
+        return int(Path("/proc/sys/net/ipv4/ip_local_port_range").read_text().split()[0])
+    except (OSError, ValueError, IndexError):
+        return 32768
+
+
+def _free(port: int, kind: socket.SocketKind) -> bool:
+    with socket.socket(socket.AF_INET, kind) as s:
+        try:
+            s.bind(("", port))  # any address: taken if bound on any of them
+        except OSError:
+            return False
+        return True
+
+
+def free_port(kind: socket.SocketKind = socket.SOCK_STREAM) -> int:
+    """A random port below the ephemeral range that nothing is bound to right now."""
+    high = _ephemeral_low()
+    for _ in range(1000):
+        port = random.randrange(LOWEST, high)
+        if _free(port, kind):
+            return port
+    raise RuntimeError(f"no free port between {LOWEST} and {high}")
+
+
+def zenoh_endpoint() -> str:
+    return f"tcp/127.0.0.1:{free_port()}"
+
+
+def clashed(text: str) -> bool:
+    """True when a listener failed because another process took its port first."""
+    return any(c in text for c in CLASH)
+
+
+@contextlib.contextmanager
+def reserved_udp_port() -> Iterator[int]:
+    """A UDP port nobody else on this machine binds while the block runs (see the module)."""
+    port = free_port(socket.SOCK_DGRAM)  # checked without SO_REUSEADDR: nobody has it
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as held:
+        held.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        held.bind(("127.0.0.1", port))  # others' checks now fail; the bus's reusing binds not
+        yield port
