@@ -56,8 +56,9 @@ class DiagnosisRunner:
         """Diagnose on every poke, and at least every ``safety_tick_s``; runs until cancelled."""
         while True:
             trigger = "observation"
-            try:
-                await asyncio.wait_for(self._poked.wait(), self.safety_tick_s)
+            try:  # asyncio.timeout, not wait_for: 3.11's wait_for can swallow a cancel
+                async with asyncio.timeout(self.safety_tick_s):
+                    await self._poked.wait()
             except TimeoutError:
                 trigger = "safety tick"
             self._poked.clear()

@@ -100,8 +100,9 @@ class ProcessWatcher:
         while True:
             self.sample()
             self._wake.clear()
-            with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(self._wake.wait(), self.poll)
+            with contextlib.suppress(TimeoutError):  # not wait_for: it can swallow a cancel
+                async with asyncio.timeout(self.poll):
+                    await self._wake.wait()
 
     def sample(self) -> None:
         """One round: find missing processes, then sample every node once."""

@@ -139,13 +139,15 @@ def _sleeper(tmp: Path, name: str) -> ProcessConfig:
     return ProcessConfig(name, argv=(sys.executable, str(script)), stop_timeout_s=2.0)
 
 
-async def _gone(pid: int, timeout: float = 20.0) -> bool:
-    end = asyncio.get_running_loop().time() + timeout
-    while asyncio.get_running_loop().time() < end:
-        if not psutil.pid_exists(pid) or psutil.Process(pid).status() == psutil.STATUS_ZOMBIE:
+async def _gone(pid: int) -> bool:
+    def gone() -> bool:
+        try:
+            return psutil.Process(pid).status() == psutil.STATUS_ZOMBIE
+        except psutil.NoSuchProcess:
             return True
-        await asyncio.sleep(0.05)
-    return False
+
+    await wait_until_async(gone, what=f"pid {pid} gone")
+    return True
 
 
 async def test_a_new_supervisor_adopts_the_nodes_an_old_one_left(tmp_path: Path) -> None:
