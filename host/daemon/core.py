@@ -61,7 +61,8 @@ from .stream import EventStream
 
 log = logging.getLogger(__name__)
 
-SAMPLE_S = 0.2  # the page's sparklines: a sample of every channel this often
+SAMPLE_S = 0.2
+CLOSE_FLUSH_S = 10.0  # the page's sparklines: a sample of every channel this often
 
 
 @dataclass
@@ -168,7 +169,7 @@ class Daemon:
     async def start(self) -> None:
         """Open the journal, the web page and the observers, and start the tasks."""
         opts = self.opts
-        if opts.journal is not None:
+        if opts.journal is not None and self.journal is None:
             self.attach_journal(Journal(opts.journal))
         self.emit(Note(f"dxboard run {self.model.name}: board {opts.board_url}"
                        + (" (dry run)" if opts.dry_run else "")))
@@ -254,7 +255,11 @@ class Daemon:
             self.emit(telemetry)
         self.emit(Note("dxboard run stopped"))
         if self.journal is not None:
-            await self.journal.flush()
+            try:  # a journal whose disk failed must not keep the daemon from stopping
+                await asyncio.wait_for(self.journal.flush(), CLOSE_FLUSH_S)
+            except TimeoutError:
+                log.error("journal %s: not everything was committed within %g s",
+                          self.journal.path, CLOSE_FLUSH_S)
             self.journal.close()
             self.journal = None
         self.diagnosis.close()

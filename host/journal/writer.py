@@ -19,6 +19,7 @@ read here) or beyond ``telemetry_max_rows`` is deleted; every other kind is kept
 from __future__ import annotations
 
 import asyncio
+import fcntl
 import json
 import logging
 import os
@@ -28,13 +29,34 @@ import time
 from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
+from typing import IO
 
+from host.errors import UserError
 from host.events import Kind, Note, Payload
 from host.journal.store import JournalReader, connect
 
 log = logging.getLogger(__name__)
 
 _Row = tuple[int, str, float, float, str]
+
+
+def _writer_lock(path: Path) -> IO[str]:
+    """Hold ``<journal>.lock`` for as long as this writer lives: one writer per journal. Two
+    daemons writing one file would number their entries alike and lose them."""
+    lock = path.with_name(path.name + ".lock").open("a+")
+    try:
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        lock.seek(0)
+        holder = lock.read().strip() or "another process"
+        lock.close()
+        raise UserError(f"{path}: the journal is in use by {holder}",
+                        "stop that dxboard run, or give this one another --journal") from None
+    lock.seek(0)
+    lock.truncate()
+    lock.write(f"pid {os.getpid()}\n")
+    lock.flush()
+    return lock
 
 
 @dataclass(frozen=True)
@@ -57,6 +79,7 @@ class Journal:
         self.path = Path(path)
         self.retention = retention or Retention()
         self.max_pending = max_pending
+        self._lock = _writer_lock(self.path)
         self._conn = connect(path, create=True, sync=sync, busy_timeout_s=busy_timeout_s)
         self.reader = JournalReader(path, connect(path, create=False))
         row = self._conn.execute(
@@ -154,6 +177,7 @@ class Journal:
             self._thread.join()
             self.reader.close()
             self._conn.close()
+            self._lock.close()  # releases the lock
 
     async def __aenter__(self) -> Journal:
         return self

@@ -4,7 +4,8 @@
 As an async context manager it
 
 1. loads and checks the robot directory (``load_robot``: model, observers, processes, repair
-   domain) and checks that the addresses it will listen on are free — so that a mistake is one
+   domain), checks that the addresses it will listen on are free and opens the journal (one
+   writer per journal: a second run on the same file is refused) — so that a mistake is one
    line before anything has started or been printed;
 2. with ``board_url=None``, starts the robot's emulated board (``dxboard emulate``, with its
    devices when the robot has a ``robot.yaml``) as a child process and asks it, over its
@@ -29,6 +30,7 @@ from types import TracebackType
 from host.daemon.core import Daemon, DaemonOptions, load_robot
 from host.daemon.stream import Reader
 from host.errors import UserError
+from host.journal import Journal
 from host.launch.control import arequest
 from host.launch.emulated import EmulatedBoard
 
@@ -94,16 +96,22 @@ class LaunchedRobot:
             host, _, port = la.control.rpartition(":")
             if port.isdigit():
                 _check_free(host, int(port), "--control")
+        journal = Journal(opts.journal) if opts.journal is not None else None  # one writer
         try:
             board_url, key, env, boot = await self._board(opts)
             opts = dataclasses.replace(opts, board_url=board_url, key=key,
                                        node_env={**opts.node_env, **env},
                                        device_boot_s={**boot, **opts.device_boot_s})
             self._daemon = Daemon(opts, files=files)
+            if journal is not None:
+                self._daemon.attach_journal(journal)
+                journal = None
             for reader in la.readers:
                 self._daemon.subscribe(reader)
             await self._daemon.start()
         except BaseException:
+            if journal is not None:
+                journal.close()
             await self.close()
             raise
         return self

@@ -43,6 +43,7 @@ from typing import TYPE_CHECKING, Any
 from host.diagnosis.logic import Literal
 from host.diagnosis.observations import ObservationSet
 from host.diagnosis.result import DiagnosisResult
+from host.errors import RemoteError
 from host.events import Event, HoldChange, Note, PlanRecord, QuarantineChange, RepairEnded
 from host.repair.actuators import Actuators
 from host.repair.beliefs import ObservedBeliefs
@@ -138,7 +139,10 @@ class RepairService:
         client = self._client
         if client is None:
             return "the board link is down"
-        state = await client.state()
+        try:
+            state = await client.state()
+        except RemoteError as exc:  # the link went down under us: wait for it like the rest
+            return f"the board does not answer ({exc.message})"
         if state.board_flags & (B_UV_SHED | B_UV_OFF):
             return "the board sheds channels for input under-voltage"
         shed = [c.name for c in state.channels if c.live_faults & F_SHED_UV]
@@ -156,8 +160,12 @@ class RepairService:
             await asyncio.sleep(BOARD_POLL_S)
 
     async def _repair(self) -> None:
-        await self._wait_for_board()
-        res = await self.loop.run()
+        try:
+            await self._wait_for_board()
+            res = await self.loop.run()
+        except RemoteError as exc:  # the board or a peer failed mid-repair: end it, say why
+            self._emit(RepairEnded("interrupted", 0, str(exc)))
+            return
         self._emit(RepairEnded(str(res.outcome), len(res.rounds), res.reason))
 
     async def _diagnose(self) -> tuple[Sequence[Candidate], Sequence[Literal]]:

@@ -61,3 +61,41 @@ def test_emulate_exits_0_on_a_signal_at_its_first_url(options: tuple[str, ...],
         assert first.startswith("board: tcp://127.0.0.1:"), (first, err)
         assert code == 0, err
         assert "Traceback" not in err
+
+
+def test_run_exits_0_on_a_signal_at_its_first_url(tmp_path: Path) -> None:
+    # dxboard run used to hang for good when stopped during its start-up: its diagnosis loop
+    # swallowed the cancel (3.11's wait_for)
+    from tests.ports import zenoh_endpoint
+
+    for attempt in range(2):
+        argv = [DXBOARD, "run", str(TEDUSAR), "--emulate", "--web", "off", "--journal",
+                str(tmp_path / f"j{attempt}.sqlite"), "--zenoh", zenoh_endpoint(), "-q"]
+        proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                text=True, env=ENV, cwd=ROOT)
+        assert proc.stdout is not None
+        first = proc.stdout.readline()
+        proc.send_signal(signal.SIGTERM)
+        try:
+            _, err = proc.communicate(timeout=60)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+        assert first.startswith("board: tcp://127.0.0.1:"), (first, err)
+        assert proc.returncode == 0, err
+        assert "Traceback" not in err
+
+
+def test_a_second_run_on_the_same_journal_is_refused_before_it_starts(tmp_path: Path) -> None:
+    # two daemons writing one journal numbered their entries alike and the second hung
+    from host.journal import Journal
+
+    journal = tmp_path / "j.sqlite"
+    with Journal(journal):
+        out = subprocess.run([DXBOARD, "run", str(TEDUSAR), "--emulate", "--web", "off",
+                              "--journal", str(journal)], capture_output=True, text=True,
+                             env=ENV, cwd=ROOT, timeout=60)
+    assert out.returncode == 2 and out.stdout == ""
+    assert out.stderr.count("\n") == 1 and f"the journal is in use by pid {os.getpid()}" in \
+        out.stderr
