@@ -246,7 +246,6 @@ class BoardClient(LinkMixin, ActuateMixin, ConfigMixin):
         if isinstance(msg, BadFrame):
             log.warning("%s: bad frame from the board: %s", self.url, msg.text)
             return
-        self._heard_now(isinstance(msg, Measurement))
         fut = self._pending.pop(msg.req_id, None) if msg.req_id else None
         if fut is not None:
             if not fut.done():
@@ -260,6 +259,7 @@ class BoardClient(LinkMixin, ActuateMixin, ConfigMixin):
                 log.warning("%s: a measurement of %d channels from a board of %d: dropped",
                             self.url, len(msg.currents_ma), channels)
                 return
+            self._news(msg.uptime_ms)
             self._note_uptime(msg.uptime_ms)
             missed = msg.seq - self._last_seq - 1 if self._last_seq else 0
             self._last_seq = msg.seq
@@ -415,14 +415,12 @@ class BoardClient(LinkMixin, ActuateMixin, ConfigMixin):
         try:
             if rate_hz > self._rate:
                 await self._expect(Subscribe(rate_hz), Ack)
-                self._rate = rate_hz
-                self._rearm.set()
+                self._subscribed(rate_hz)
             while True:
                 yield await sub.queue.get()
         finally:
             self._subs.remove(sub)
             if not self._subs and self._rate and self.connected:
-                self._rate = 0
-                self._rearm.set()
+                self._subscribed(0)
                 with contextlib.suppress(BoardUnreachable, BoardRefused):
                     await self._expect(Subscribe(0), Ack)

@@ -12,16 +12,19 @@ to the board is alive and brings it back. The link is *lost* when
   request timeout: the only judge while nothing is subscribed.
 
 Silence is judged only after the host has read what already arrived: a host that stalled (a busy
-machine) is not a silent board. A lost link fails the pending requests (``LinkLost``), tells every
-subscriber (``LinkDown``) and, with ``reconnect``, reopens the transport with exponential backoff
-and jitter (``backoff_s`` doubling up to ``max_backoff_s``, each wait drawn from [½, 1] of it).
-While it is down, requests fail at once: nothing is sent to a board that is not heard.
+machine) is not a silent board. Only news counts: a measurement whose uptime repeats the one
+before (a board whose clock stands still: held in reset, its main loop hung, while something
+still answers) is no sign of life. A lost link fails the pending requests (``LinkLost``), tells
+every subscriber (``LinkDown``) and, with ``reconnect``, reopens the transport with exponential
+backoff and jitter (``backoff_s`` doubling up to ``max_backoff_s``, each wait drawn from [½, 1]
+of it). While it is down, requests fail at once: nothing is sent to a board that is not heard.
 
 A new session (after a reconnect, or an unexpected HELLO: the board rebooted under a link that
-stayed open) is finished beside the reader: a new boot id, or an uptime lower than the one last
-seen plus the time away, is a reboot (``Rebooted``, published first); the subscription is
-restored; and only once the board is heard measuring again (when subscribed) is the link up:
-``LinkUp``, requests allowed. A board that answers HELLO but never measures stays down.
+stayed open) is finished beside the reader: the subscription is restored and the session waits
+until the board is heard running (two measurements with different uptimes; the silence rule
+ends a session that never gets there). Then a new boot id, or an uptime lower than the one seen
+before plus the time away, is a reboot (``Rebooted``, published first), and the link is up:
+``LinkUp``, requests allowed. Unsubscribed, the uptime comes from a STATE instead.
 """
 
 from __future__ import annotations
@@ -52,6 +55,7 @@ KEEPALIVE_S = 10.0  # PING period while connected (the board closes silent sessi
 SILENCE_PERIODS = 10  # subscription periods without a message that make a link lost...
 SILENCE_MIN_S = 0.5  # ...but never less than this
 UPTIME_SLACK_MS = 500  # uptime may lag the host's clock by this much (+5 %) without a reboot
+SILENCE_TOLERANCE_S = 0.001  # a silence this close to its limit has reached it (float residue)
 
 
 class LinkMixin:
@@ -83,8 +87,10 @@ class LinkMixin:
     def _link_init(self) -> None:
         self._session = 0  # counts sessions (HELLOs accepted)
         self._losing = False  # the reader is handling a lost link
-        self._last_rx = 0.0  # host monotonic time of the last message from the board
-        self._heard = asyncio.Event()  # a measurement arrived in this session
+        self._last_rx = 0.0  # host monotonic time of the last news from the board
+        self._last_uptime: int | None = None  # of this session's last measurement
+        self._seen_before = (0, 0.0)  # the (uptime, time) last seen before this session
+        self._heard = asyncio.Event()  # this session's board was heard running
         self._rearm = asyncio.Event()  # the silence rule changed (a session, a subscription)
         self._down_since = 0.0
         self.down_reason = ""  # why the link is down ("" while up)
@@ -107,13 +113,25 @@ class LinkMixin:
         self._session += 1
         self._losing = False
         self._last_rx = self.clock()
-        self._heard.clear()
+        self._last_uptime = None
+        self._seen_before = self._seen_uptime
+        self._heard.set()  # wakes the last session's waiter: it sees that it is over
+        self._heard = asyncio.Event()
         self._rearm.set()
 
-    def _heard_now(self, measurement: bool) -> None:
-        self._last_rx = self.clock()
-        if measurement:
+    def _news(self, uptime_ms: int) -> None:
+        """A measurement arrived: news if the board's clock moved since the last one."""
+        last, self._last_uptime = self._last_uptime, uptime_ms
+        if last is None or uptime_ms != last:
+            self._last_rx = self.clock()
+        if last is not None and uptime_ms != last:
             self._heard.set()
+
+    def _subscribed(self, rate_hz: int) -> None:
+        """The subscription's rate changed: the silence rule starts from now."""
+        self._rate = rate_hz
+        self._last_rx = self.clock()
+        self._rearm.set()
 
     async def _keepalive(self) -> None:
         """PING every ``keepalive_s`` while up: a board closes a session that sent it nothing for
@@ -140,13 +158,13 @@ class LinkMixin:
                 await self._rearm.wait()
                 continue
             wait = self._last_rx + limit - self.clock()
-            if wait > 0:
+            if wait > SILENCE_TOLERANCE_S:
                 with contextlib.suppress(TimeoutError):
                     await asyncio.wait_for(self._rearm.wait(), wait)
                 continue
             await asyncio.sleep(0)  # read what arrived first: a stalled host is no silent board
             limit = self.silence_limit
-            if limit is not None and self._last_rx + limit <= self.clock():
+            if limit is not None and self._last_rx + limit - self.clock() <= SILENCE_TOLERANCE_S:
                 self._declare_lost(f"nothing from the board for {limit:g} s")
 
     def _declare_lost(self, reason: str) -> None:
@@ -218,48 +236,49 @@ class LinkMixin:
         return old
 
     async def _finish_session(self, old: BoardInfo | None, hello: Hello, down_s: float) -> None:
-        """The rest of a new session (beside the reader): rebooted? resubscribe, hear, up."""
-        session = self._session
+        """The rest of a new session (beside the reader): resubscribe, hear the board running,
+        tell a reboot, then up."""
+        session, heard = self._session, self._heard
+        if self.silence_limit is not None:
+            await self._resubscribe()
+            await heard.wait()  # a silent session is ended by the silence rule, which wakes us
+        if session != self._session or self._closing:
+            return
         rebooted = None
         if old is not None and old.boot_id != hello.boot_id:
             rebooted = Rebooted(self.wall(), old.boot_id, hello.boot_id, hello.reset_cause,
                                 "boot id")
         elif old is not None:
             rebooted = await self._check_uptime(old, hello)
-        if session != self._session:
+        if session != self._session or self._closing:
             return  # lost again meanwhile: the next session tells
         if rebooted is not None:
             self.reboots += 1
             log.warning("%s: board rebooted (%s changed, reset cause %s)", self.url,
                         rebooted.how, rebooted.reset_cause_name)
             self._publish(rebooted)
-        limit = self.silence_limit
-        if limit is not None:
-            await self._resubscribe()
-            with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(self._heard.wait(), limit)
-            if not self._heard.is_set():
-                return  # not measuring: the silence rule declares the link lost
-        if session != self._session or self._closing:
-            return
         self._up.set()
         self.down_reason = ""
         if self.info is not None:
             self._publish(LinkUp(self.wall(), down_s, self.info))
 
     async def _check_uptime(self, old: BoardInfo, hello: Hello) -> Rebooted | None:
-        seen_ms, seen_at = self._seen_uptime
+        """A reboot the boot id does not show (boards that report none): the uptime now is
+        lower than the one seen before plus the time in between."""
+        seen_ms, seen_at = self._seen_before
         if not seen_at:
             return None
-        try:
-            state = await self._request_now(GetState())
-        except (BoardUnreachable, BoardRefused):
-            return None
-        if not isinstance(state, State):
-            return None
-        away_ms = (self.clock() - seen_at) * 1000
-        self._seen_uptime = (state.uptime_ms, self.clock())
-        if state.uptime_ms + UPTIME_SLACK_MS + away_ms * 0.05 < seen_ms + away_ms:
+        if self._last_uptime is None:  # not subscribed: ask
+            try:
+                state = await self._request_now(GetState())
+            except (BoardUnreachable, BoardRefused):
+                return None
+            if not isinstance(state, State):
+                return None
+            self._seen_uptime = (state.uptime_ms, self.clock())
+        now_ms, now_at = self._seen_uptime
+        away_ms = (now_at - seen_at) * 1000
+        if now_ms + UPTIME_SLACK_MS + away_ms * 0.05 < seen_ms + away_ms:
             return Rebooted(self.wall(), old.boot_id, hello.boot_id, hello.reset_cause, "uptime")
         return None
 

@@ -15,7 +15,7 @@ from collections.abc import Callable
 
 import pytest
 
-from host.board import BoardClient, LinkDown, LinkUp, Reading
+from host.board import BoardClient, LinkDown, LinkUp, Reading, Rebooted
 from host.board.types import BoardEvent, StreamItem
 from host.errors import RemoteError
 from host.transports.errors import BadReply, BoardUnreachable
@@ -154,6 +154,36 @@ async def test_link_up_waits_until_the_board_measures_again() -> None:
         mb.mute = False
         await got.until(lambda: bool(got.of(LinkUp)))
         assert c.connected and (await c.state()).channels
+        await got.close()
+        await c.close()
+
+
+async def test_a_board_held_in_reset_is_down_until_it_reboots() -> None:
+    # A brown-out below the reset voltage holds the board in reset: its clock stands still, and
+    # what still answers repeats a frozen uptime. That is no sign of life: the link is down at
+    # once, stays down (nothing is sent), and the reboot shows as what it is.
+    async with MemoryBoard(tedusar()) as mb:
+        c = client(mb.url, silence_s=0.5)
+        await c.connect()
+        await c.channel_names()
+        got = Collector(c)
+        await got.until(lambda: len(got.of(Reading)) >= 3)
+        loop = asyncio.get_running_loop()
+        mb.emu.inject("board", "brownout", {"volts": 5.0, "seconds": 3.0})
+        t0 = loop.time()
+        await got.until(lambda: bool(got.of(LinkDown)))
+        assert got.of(LinkDown)[0][0] - t0 <= 0.5 + 0.05
+        while loop.time() < t0 + 2.5:  # the hold: every request refused here, none sent
+            with pytest.raises(BoardUnreachable, match="was not sent"):
+                await c.switch("hokuyo", True)
+            await asyncio.sleep(0.1)
+        assert not got.of(LinkUp)
+        await got.until(lambda: bool(got.of(LinkUp)))
+        (up_at, _), = got.of(LinkUp)
+        assert up_at >= t0 + 3.0  # up only once the board runs again
+        reboot = [x for _, x in got.items if isinstance(x, Rebooted)]
+        assert len(reboot) == 1 and reboot[0].reset_cause_name == "brownout"
+        assert not mb.emu.board.channels[3].commanded  # the switch-ons never reached it
         await got.close()
         await c.close()
 
