@@ -53,6 +53,7 @@ from host.board.types import (
     Reading,
     StreamItem,
 )
+from host.errors import RemoteError
 from host.transports import open_transport
 from host.transports.base import NAMES, Transport
 from host.transports.errors import (
@@ -235,7 +236,7 @@ class BoardClient(LinkMixin, ActuateMixin, ConfigMixin):
                 lost = None
             try:
                 msg = await self.transport.receive()
-            except BoardUnreachable as exc:
+            except RemoteError as exc:  # any failure of the link is a lost link
                 if self._closing:
                     return
                 lost = str(exc)

@@ -99,8 +99,8 @@ class LinkMixin:
 
     @property
     def silence_limit(self) -> float | None:
-        """Seconds without a message from the board after which a subscribed link is lost;
-        None while nothing is subscribed (the keepalive watches the link then)."""
+        """Seconds without news from the board (a measurement with a new uptime) after which a
+        subscribed link is lost; None while nothing is subscribed (the keepalive watches)."""
         if not self._rate:
             return None
         if self.silence_s is not None:
@@ -150,11 +150,12 @@ class LinkMixin:
                 log.debug("%s: keepalive: %s", self.url, exc)  # the reader handles the link
 
     async def _watch_silence(self) -> None:
-        """Declare the link lost when nothing arrived for ``silence_limit`` while subscribed."""
+        """Declare the link lost when no news arrived for ``silence_limit`` while subscribed."""
         while not self._closing:
             limit = self.silence_limit
             self._rearm.clear()
-            if limit is None or self._losing or self._reader is None:
+            reader = self._reader
+            if limit is None or self._losing or reader is None or reader.done():
                 await self._rearm.wait()
                 continue
             wait = self._last_rx + limit - self.clock()
