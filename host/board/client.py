@@ -284,6 +284,11 @@ class BoardClient(LinkMixin, ActuateMixin, ConfigMixin):
                                      msg.old_state, msg.new_state, msg.faults, msg.value_ma,
                                      msg.dropped))
         elif isinstance(msg, Hello):
+            if msg.req_id and self.info is not None and msg.boot_id == self.info.boot_id:
+                # the answer to the transport's HELLO_REQUEST, after the board's own greeting:
+                # the same session with a fresh nonce (the transport's codec signs with it)
+                log.debug("%s: a second HELLO of this session: fresh nonce", self.url)
+                return
             self._new_hello(msg)
         else:
             log.debug("%s: unsolicited %r dropped", self.url, msg)
