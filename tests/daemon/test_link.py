@@ -21,7 +21,7 @@ import pytest
 
 from host.events import LinkChange
 from host.journal import ActionRecord, BoardEvent, Note
-from tests.daemon.runner import RunningDaemon, fast_copy, healthy, key_file, last_id
+from tests.daemon.runner import RunningDaemon, healthy, healthy_robot, last_id
 
 HEAL_S = 90.0
 BOARD_POWER = ("power_up", "power_cycle", "shutdown")
@@ -29,14 +29,8 @@ BOARD_POWER = ("power_up", "power_cycle", "shutdown")
 
 @pytest.fixture(scope="module")
 def robot(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RunningDaemon]:
-    tmp = tmp_path_factory.mktemp("link")
-    key = key_file(tmp)
-    d = RunningDaemon(tmp, fast_copy(tmp), extra_args=("--key-file", str(key)))
-    try:
-        d.wait_for(healthy, HEAL_S, "the robot powered up and healthy")
+    with healthy_robot(tmp_path_factory.mktemp("link"), HEAL_S) as d:
         yield d
-    finally:
-        d.close()
 
 
 def since(d: RunningDaemon, mark: int) -> list[tuple[int, object]]:

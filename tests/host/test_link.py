@@ -11,7 +11,8 @@ the loop's simulated clock (``looptime``), so "within 0.5 s" is exact and immune
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Callable
+import contextlib
+from collections.abc import AsyncIterator, Callable
 
 import pytest
 
@@ -59,13 +60,26 @@ class Collector:
         await asyncio.wait([self.task])
 
 
+@contextlib.asynccontextmanager
+async def subscribed(**kw: object) -> AsyncIterator[tuple[MemoryBoard, BoardClient, Collector]]:
+    """The emulated board, a client on it (channel names known) and a 100 Hz subscription that
+    has delivered its first readings; all closed afterwards."""
+    async with MemoryBoard(tedusar()) as mb:
+        c = client(mb.url, **kw)
+        await c.connect()
+        await c.channel_names()
+        got = Collector(c)
+        try:
+            await got.until(lambda: len(got.of(Reading)) >= 3)
+            yield mb, c, got
+        finally:
+            await got.close()
+            await c.close()
+
+
 async def test_a_frozen_link_is_lost_within_the_silence_limit_and_comes_back(
         caplog: pytest.LogCaptureFixture) -> None:
-    async with MemoryBoard(tedusar()) as mb:
-        c = client(mb.url, silence_s=0.5)
-        await c.connect()
-        got = Collector(c)
-        await got.until(lambda: len(got.of(Reading)) >= 10)
+    async with subscribed(silence_s=0.5) as (mb, c, got):
         loop = asyncio.get_running_loop()
         frozen_at = loop.time()
         mb.freeze(5.0)  # the emulator's link_freeze seconds=5: nothing moves, either way
@@ -84,8 +98,6 @@ async def test_a_frozen_link_is_lost_within_the_silence_limit_and_comes_back(
         # the reconnect asked for a HELLO during the freeze (HELLO_REQUEST): its answer, after
         # the greeting, is the same session with a fresh nonce, not a new one
         assert "new session" not in caplog.text and "resubscribing failed" not in caplog.text
-        await got.close()
-        await c.close()
 
 
 async def test_the_default_silence_limit_follows_the_subscription_rate() -> None:
@@ -122,12 +134,7 @@ async def test_an_unanswered_keepalive_loses_the_link() -> None:
 
 
 async def test_requests_fail_at_once_while_the_link_is_down() -> None:
-    async with MemoryBoard(tedusar()) as mb:
-        c = client(mb.url, silence_s=0.5)
-        await c.connect()
-        await c.channel_names()  # known before: the switch below would ask for them first
-        got = Collector(c)
-        await got.until(lambda: len(got.of(Reading)) >= 3)
+    async with subscribed(silence_s=0.5) as (mb, c, got):
         mb.freeze(3.0)
         await got.until(lambda: bool(got.of(LinkDown)))
         loop = asyncio.get_running_loop()
@@ -138,18 +145,12 @@ async def test_requests_fail_at_once_while_the_link_is_down() -> None:
         assert not mb.emu.board.channels[3].commanded
         await got.until(lambda: bool(got.of(LinkUp)))
         assert (await c.switch(3, True)).physical  # back: requests go through again
-        await got.close()
-        await c.close()
 
 
 async def test_link_up_waits_until_the_board_measures_again() -> None:
     # A board that answers HELLO and requests but sends no measurement (held in reset behind a
     # network stack that still talks, or a hung main loop) is not up: nothing is sent to it.
-    async with MemoryBoard(tedusar()) as mb:
-        c = client(mb.url, silence_s=0.5)
-        await c.connect()
-        got = Collector(c)
-        await got.until(lambda: len(got.of(Reading)) >= 3)
+    async with subscribed(silence_s=0.5) as (mb, c, got):
         mb.mute = True
         await got.until(lambda: len(got.of(LinkDown)) >= 3)  # lost, reconnected, lost again...
         assert not got.of(LinkUp)
@@ -158,20 +159,13 @@ async def test_link_up_waits_until_the_board_measures_again() -> None:
         mb.mute = False
         await got.until(lambda: bool(got.of(LinkUp)))
         assert c.connected and (await c.state()).channels
-        await got.close()
-        await c.close()
 
 
 async def test_a_board_held_in_reset_is_down_until_it_reboots() -> None:
     # A brown-out below the reset voltage holds the board in reset: its clock stands still, and
     # what still answers repeats a frozen uptime. That is no sign of life: the link is down at
     # once, stays down (nothing is sent), and the reboot shows as what it is.
-    async with MemoryBoard(tedusar()) as mb:
-        c = client(mb.url, silence_s=0.5)
-        await c.connect()
-        await c.channel_names()
-        got = Collector(c)
-        await got.until(lambda: len(got.of(Reading)) >= 3)
+    async with subscribed(silence_s=0.5) as (mb, c, got):
         loop = asyncio.get_running_loop()
         mb.emu.inject("board", "brownout", {"volts": 5.0, "seconds": 3.0})
         t0 = loop.time()
@@ -188,8 +182,6 @@ async def test_a_board_held_in_reset_is_down_until_it_reboots() -> None:
         reboot = [x for _, x in got.items if isinstance(x, Rebooted)]
         assert len(reboot) == 1 and reboot[0].reset_cause_name == "brownout"
         assert not mb.emu.board.channels[3].commanded  # the switch-ons never reached it
-        await got.close()
-        await c.close()
 
 
 def rewrite_states(rewrite: Callable[[State], State]) -> Callable[[bytes], bytes]:
@@ -235,11 +227,7 @@ async def test_a_state_that_contradicts_the_hello_is_refused(lie: str) -> None:
 
 
 async def test_frames_for_channels_the_board_lacks_are_dropped() -> None:
-    async with MemoryBoard(tedusar()) as mb:
-        c = client(mb.url)
-        await c.connect()
-        got = Collector(c)
-        await got.until(lambda: len(got.of(Reading)) >= 3)
+    async with subscribed() as (mb, _, got):
         board_end = mb.links[-1]
         short = Measurement(999, 1, 12000, 0, 0, [0] * 9)  # nine currents, not ten
         board_end.write(encode_frame(Measurement.TYPE, 0, short.payload()))
@@ -249,5 +237,3 @@ async def test_frames_for_channels_the_board_lacks_are_dropped() -> None:
         await got.until(lambda: len(got.of(Reading)) >= n + 5)
         assert all(len(r.currents_ma) == 10 for _, r in got.of(Reading))  # type: ignore[union-attr]
         assert not got.of(BoardEvent)
-        await got.close()
-        await c.close()
