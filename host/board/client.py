@@ -9,13 +9,16 @@ subscriber; an unexpected HELLO starts a new session. Requests have a timeout
 missing key) and changes nothing on the board. Actuation checks the read-back: a board that
 acknowledges "on" but reads the switch back off raises ``ReadbackMismatch``.
 
-When the link is lost the reader fails pending requests with ``LinkLost``, tells subscribers
-(``LinkDown``) and, with ``reconnect=True``, reopens the transport with exponential backoff and
-jitter (``backoff_s`` doubling up to ``max_backoff_s``, each wait drawn from [½, 1] of it).
-Back up, it compares the boot: a new boot id, or (for boards that report none) an uptime lower
-than the one last seen plus the time away, is a reboot (``Rebooted``); then it subscribes again
-at the same rate and announces ``LinkUp``. Within a session the board numbers measurements
-from 1, so a gap becomes ``Reading.missed``; nothing is lost without a trace.
+Whether the link is alive is judged in ``host.board.link`` (``LinkMixin``): a link that ends, a
+subscription that falls silent for ``silence_limit`` seconds or an unanswered keepalive PING is a
+lost link (``LinkDown``, pending requests fail with ``LinkLost``); with ``reconnect=True`` the
+client reconnects with backoff, reports a reboot (``Rebooted``), subscribes again at the same
+rate and announces ``LinkUp`` once the board is heard again. While the link is down a request
+fails at once (``BoardUnreachable``): nothing is sent to a board that is not heard. Within a
+session the board numbers measurements from 1, so a gap becomes ``Reading.missed``; nothing is
+lost without a trace. What the board says is checked against its HELLO: a STATE whose channels
+are not the HELLO's ``0..n-1`` raises ``BadReply``; a measurement or event for a channel the
+board does not have is dropped with a warning.
 
 Capabilities the transport lacks (``Transport.CAPS``) raise ``NotSupported`` before anything
 is sent. Channels are named by number or by name (names come from the board's configuration,
@@ -41,22 +44,22 @@ from typing import Any
 
 from host.board.actuate import ActuateMixin
 from host.board.configure import ConfigMixin
+from host.board.link import KEEPALIVE_S, LinkMixin
 from host.board.types import (
     BoardEvent,
     BoardInfo,
     BoardState,
     ChannelState,
-    LinkDown,
-    LinkUp,
     Reading,
-    Rebooted,
     StreamItem,
 )
+from host.errors import RemoteError
 from host.transports import open_transport
 from host.transports.base import NAMES, Transport
 from host.transports.errors import (
     AuthRefused,
     BadChannel,
+    BadReply,
     BadRequest,
     BoardRefused,
     BoardUnreachable,
@@ -66,6 +69,7 @@ from host.transports.errors import (
     VersionMismatch,
 )
 from protocol.constants import (
+    BOARD_CHANNEL,
     E_AUTH_REQUIRED,
     E_BAD_TAG,
     E_NO_SESSION,
@@ -94,8 +98,6 @@ log = logging.getLogger(__name__)
 
 AUTH_CODES = (E_AUTH_REQUIRED, E_BAD_TAG, E_REPLAYED, E_NO_SESSION)
 QUEUE_LIMIT = 4096  # items a subscriber may fall behind before the oldest are dropped
-KEEPALIVE_S = 10.0  # PING period while connected (the board closes silent sessions at 30 s)
-UPTIME_SLACK_MS = 500  # uptime may lag the host's clock by this much (+5 %) without a reboot
 
 
 class _Subscriber:
@@ -110,12 +112,13 @@ class _Subscriber:
         self.queue.put_nowait(item)
 
 
-class BoardClient(ActuateMixin, ConfigMixin):
+class BoardClient(LinkMixin, ActuateMixin, ConfigMixin):
     """See the module docstring. Use as ``async with BoardClient(url, key) as board:``."""
 
     def __init__(self, url: str, key: bytes | None = None, *, timeout_s: float = 2.0,
                  connect_timeout_s: float = 5.0, reconnect: bool = True,
                  backoff_s: float = 0.1, max_backoff_s: float = 5.0,
+                 silence_s: float | None = None, keepalive_s: float = KEEPALIVE_S,
                  transport_factory: Callable[[str, bytes | None], Transport] = open_transport,
                  rng: random.Random | None = None,
                  clock: Callable[[], float] = time.monotonic,
@@ -127,6 +130,8 @@ class BoardClient(ActuateMixin, ConfigMixin):
         self.reconnect = reconnect
         self.backoff_s = backoff_s
         self.max_backoff_s = max_backoff_s
+        self.silence_s = silence_s  # None: derived from the subscription rate (LinkMixin)
+        self.keepalive_s = keepalive_s
         self._factory = transport_factory
         self._rng = rng or random.Random()
         self.clock = clock  # the host's monotonic clock: Reading.host_mono, uptimes, backoff
@@ -145,8 +150,8 @@ class BoardClient(ActuateMixin, ConfigMixin):
         self._closing = False
         self._last_seq = 0
         self._seen_uptime = (0, 0.0)  # (uptime ms, host monotonic s) last seen
-        self._down_since = 0.0
         self._tasks: set[asyncio.Task[None]] = set()
+        self._link_init()
 
     # --- connection -------------------------------------------------------------------
 
@@ -164,24 +169,11 @@ class BoardClient(ActuateMixin, ConfigMixin):
         info = self._accept_hello(hello)
         self._reader = asyncio.create_task(self._read_loop(), name=f"board-reader {self.url}")
         self._up.set()
-        if not any(t.get_name() == "keepalive" for t in self._tasks):
-            self._spawn(self._keepalive(), name="keepalive")
+        self.down_reason = ""
+        for guard, name in ((self._keepalive, "keepalive"), (self._watch_silence, "silence")):
+            if not any(t.get_name() == name for t in self._tasks):
+                self._spawn(guard(), name=name)
         return info
-
-    async def _keepalive(self) -> None:
-        """PING every ``KEEPALIVE_S`` while connected (PROTOCOL.md §3): a board closes a
-        session that sent it nothing for 30 s, and a client that only listens to its
-        subscription would otherwise lose the link twice a minute."""
-        while not self._closing:
-            await asyncio.sleep(KEEPALIVE_S)
-            if not self.connected:
-                continue
-            try:
-                await self.ping()
-            except NotSupported:
-                return
-            except (BoardUnreachable, LinkLost, RequestTimeout, BoardRefused) as exc:
-                log.debug("%s: keepalive: %s", self.url, exc)  # the reader handles the link
 
     def _accept_hello(self, hello: Hello) -> BoardInfo:
         if hello.version != PROTOCOL_VERSION:
@@ -197,6 +189,7 @@ class BoardClient(ActuateMixin, ConfigMixin):
             reset_cause=hello.reset_cause, config_status=hello.config_status,
             transport_caps=self.transport.CAPS)
         self._last_seq = 0
+        self._new_session()
         if old is not None and old.board_id != hello.board_id:
             log.warning("%s: now board %r (was %r)", self.url, hello.board_id, old.board_id)
             self._names = None
@@ -230,15 +223,23 @@ class BoardClient(ActuateMixin, ConfigMixin):
         for sub in self._subs:
             sub.put(item)
 
-    async def _read_loop(self) -> None:
+    async def _read_loop(self, lost: str | None = None,
+                         after: asyncio.Task[None] | None = None) -> None:
+        """Read and dispatch until closed; a lost link (``lost``, or the transport's word) is
+        handled first. ``after``: the reader this one replaces (it is let finish first)."""
+        if after is not None:
+            await asyncio.wait([after])
         while True:
+            if lost is not None:
+                if not await self._link_lost(lost):
+                    return
+                lost = None
             try:
                 msg = await self.transport.receive()
-            except BoardUnreachable as exc:
+            except RemoteError as exc:  # any failure of the link is a lost link
                 if self._closing:
                     return
-                if not await self._link_lost(str(exc)):
-                    return
+                lost = str(exc)
                 continue
             self._dispatch(msg)
 
@@ -253,7 +254,13 @@ class BoardClient(ActuateMixin, ConfigMixin):
             return
         now = self.wall()
         boot = self.info.boot_id if self.info else 0
+        channels = self.info.channels if self.info else 0
         if isinstance(msg, Measurement):
+            if len(msg.currents_ma) != channels:
+                log.warning("%s: a measurement of %d channels from a board of %d: dropped",
+                            self.url, len(msg.currents_ma), channels)
+                return
+            self._news(msg.uptime_ms)
             self._note_uptime(msg.uptime_ms)
             missed = msg.seq - self._last_seq - 1 if self._last_seq else 0
             self._last_seq = msg.seq
@@ -269,105 +276,30 @@ class BoardClient(ActuateMixin, ConfigMixin):
                 else:
                     sub.put(reading)
         elif isinstance(msg, Event):
+            if msg.channel >= channels and msg.channel != BOARD_CHANNEL:
+                log.warning("%s: an event for channel %d of a board of %d: dropped", self.url,
+                            msg.channel, channels)
+                return
             self._publish(BoardEvent(now, boot, msg.seq, msg.uptime_ms, msg.kind, msg.channel,
                                      msg.old_state, msg.new_state, msg.faults, msg.value_ma,
                                      msg.dropped))
         elif isinstance(msg, Hello):
-            try:
-                old = self._accept_new_hello(msg)
-            except VersionMismatch as exc:
-                log.error("%s", exc)
+            if msg.req_id and self.info is not None and msg.boot_id == self.info.boot_id:
+                # the answer to the transport's HELLO_REQUEST, after the board's own greeting:
+                # the same session with a fresh nonce (the transport's codec signs with it)
+                log.debug("%s: a second HELLO of this session: fresh nonce", self.url)
                 return
-            self._spawn(self._finish_session(old, msg, 0.0))
+            self._new_hello(msg)
         else:
             log.debug("%s: unsolicited %r dropped", self.url, msg)
 
     def _note_uptime(self, uptime_ms: int) -> None:
         self._seen_uptime = (uptime_ms, self.clock())
 
-    async def _link_lost(self, reason: str) -> bool:
-        """Handle a lost link; True when it is back (the reader goes on)."""
-        self._up.clear()
-        self._down_since = self.clock()
-        log.warning("%s: link lost: %s", self.url, reason)
-        self._fail_pending(LinkLost(f"{self.url}: link lost: {reason}",
-                                    "the board may have rebooted or been unplugged"))
-        self._publish(LinkDown(self.wall(), reason))
-        await self.transport.close()
-        if not self.reconnect:
-            return False
-        delay = self.backoff_s
-        while not self._closing:
-            await asyncio.sleep(delay * (0.5 + 0.5 * self._rng.random()))
-            delay = min(delay * 2, self.max_backoff_s)
-            self.transport = self._factory(self.url, self.key)
-            try:
-                hello = await self.transport.open(self.connect_timeout_s)
-            except BoardUnreachable as exc:
-                log.info("%s: reconnect failed: %s", self.url, exc)
-                continue
-            try:
-                old = self._accept_new_hello(hello)
-            except VersionMismatch as exc:
-                log.error("%s", exc)
-                self._publish(LinkDown(self.wall(), str(exc)))
-                await self.transport.close()
-                return False
-            self._spawn(self._finish_session(old, hello, self.clock() - self._down_since))
-            return True
-        return False
-
     def _spawn(self, coro: Coroutine[Any, Any, None], name: str | None = None) -> None:
         task = asyncio.get_running_loop().create_task(coro, name=name)
         self._tasks.add(task)
         task.add_done_callback(self._tasks.discard)
-
-    def _accept_new_hello(self, hello: Hello) -> BoardInfo | None:
-        """The synchronous half of a new session: check the HELLO, keep the old info."""
-        old = self.info
-        self._accept_hello(hello)
-        self._up.set()
-        return old
-
-    async def _finish_session(self, old: BoardInfo | None, hello: Hello, down_s: float) -> None:
-        """The rest of a new session (runs beside the reader): rebooted? resubscribe."""
-        rebooted = None
-        if old is not None and old.boot_id != hello.boot_id:
-            rebooted = Rebooted(self.wall(), old.boot_id, hello.boot_id, hello.reset_cause,
-                                "boot id")
-        elif old is not None:
-            rebooted = await self._check_uptime(old, hello)
-        if rebooted is not None:
-            self.reboots += 1
-            log.warning("%s: board rebooted (%s changed, reset cause %s)", self.url,
-                        rebooted.how, rebooted.reset_cause_name)
-            self._publish(rebooted)
-        if self.info is not None:
-            self._publish(LinkUp(self.wall(), down_s, self.info))
-        if self._rate:
-            await self._resubscribe()
-
-    async def _check_uptime(self, old: BoardInfo, hello: Hello) -> Rebooted | None:
-        seen_ms, seen_at = self._seen_uptime
-        if not seen_at:
-            return None
-        try:
-            state = await self._request_now(GetState())
-        except (BoardUnreachable, BoardRefused):
-            return None
-        if not isinstance(state, State):
-            return None
-        away_ms = (self.clock() - seen_at) * 1000
-        self._note_uptime(state.uptime_ms)
-        if state.uptime_ms + UPTIME_SLACK_MS + away_ms * 0.05 < seen_ms + away_ms:
-            return Rebooted(self.wall(), old.boot_id, hello.boot_id, hello.reset_cause, "uptime")
-        return None
-
-    async def _resubscribe(self) -> None:
-        try:
-            await self._request_now(Subscribe(self._rate))
-        except (BoardUnreachable, BoardRefused) as exc:
-            log.warning("%s: resubscribing failed: %s", self.url, exc)
 
     # --- requests ---------------------------------------------------------------------
 
@@ -405,12 +337,10 @@ class BoardClient(ActuateMixin, ConfigMixin):
         if not self._up.is_set():
             if self._closing or self._reader is None:
                 raise LinkLost(f"{self.url}: not connected", "connect first")
-            try:
-                await asyncio.wait_for(self._up.wait(), self.timeout_s)
-            except TimeoutError:
-                raise BoardUnreachable(f"{self.url}: the link is down and did not come back "
-                                       f"within {self.timeout_s:g} s",
-                                       "check the board's power and the link") from None
+            raise BoardUnreachable(
+                f"{self.url}: the link to the board is down ({self.down_reason}); "
+                f"{type(msg).__name__} was not sent",
+                "it reconnects by itself; check the board's power and the link")
         return await self._request_now(msg)
 
     async def _expect(self, msg: Message, kind: type[Any]) -> Any:
@@ -435,6 +365,13 @@ class BoardClient(ActuateMixin, ConfigMixin):
 
     async def state(self) -> BoardState:
         st: State = await self._expect(GetState(), State)
+        n = self.info.channels if self.info else len(st.channels)
+        ids = [c.channel for c in st.channels]
+        if ids != list(range(n)):
+            raise BadReply(f"{self.url}: the board's STATE lists channels {ids}, but its HELLO "
+                           f"announced {n} channels (0..{n - 1})",
+                           "a corrupted or lying reply: nothing was believed from it; if it "
+                           "persists, the firmware may not match this host")
         self._note_uptime(st.uptime_ms)
         names = await self.channel_names()
         chans = tuple(
@@ -484,12 +421,12 @@ class BoardClient(ActuateMixin, ConfigMixin):
         try:
             if rate_hz > self._rate:
                 await self._expect(Subscribe(rate_hz), Ack)
-                self._rate = rate_hz
+                self._subscribed(rate_hz)
             while True:
                 yield await sub.queue.get()
         finally:
             self._subs.remove(sub)
             if not self._subs and self._rate and self.connected:
-                self._rate = 0
+                self._subscribed(0)
                 with contextlib.suppress(BoardUnreachable, BoardRefused):
                     await self._expect(Subscribe(0), Ack)

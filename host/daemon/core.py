@@ -340,13 +340,17 @@ class Daemon:
                 self.repairs.board_switched(item.channel, switched)
         elif isinstance(item, LinkDown):
             self._set_link(False, item.reason)
-        elif isinstance(item, LinkUp | Rebooted):
-            if isinstance(item, Rebooted):
-                self.emit(BoardEventRecord("rebooted", None, {
-                    "old_boot_id": f"{item.old_boot_id:08x}",
-                    "new_boot_id": f"{item.new_boot_id:08x}", "how": item.how}))
-            await self._board_state(await client.state(),
-                                    "link_up" if isinstance(item, LinkUp) else "state")
+        elif isinstance(item, Rebooted):  # LinkUp follows, with the new boot's state
+            cause = item.reset_cause_name
+            self.emit(BoardEventRecord("rebooted", None, {
+                "old_boot_id": f"{item.old_boot_id:08x}",
+                "new_boot_id": f"{item.new_boot_id:08x}", "how": item.how,
+                "reset_cause": cause}))
+            self.emit(Note(f"the board rebooted (reset cause {cause}): every channel started "
+                           "anew; its fresh state follows", "warning"))
+            self._set_link(False, f"the board rebooted (reset cause {cause})")
+        elif isinstance(item, LinkUp):
+            await self._board_state(await client.state(), "link_up")
 
     def _set_link(self, up: bool, reason: str) -> None:
         if up != self.link_up:

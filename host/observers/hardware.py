@@ -1,36 +1,47 @@
 """The hardware observer (HObs): the board's readings, events and link, as literals.
 
 Input: what ``BoardClient`` hands out (``host.board.types``): ``Reading`` (every channel's
-switch read-back and current), ``BoardEvent`` (trips, state changes, faults), ``BoardState``
-(the full channel states, which the daemon should feed after connecting and after every
-``LinkUp``/``Rebooted``), ``LinkDown``/``LinkUp`` and ``Rebooted``. For each switchable device
-``d`` (``Device``: its channel and current band from ``system.yaml``):
+switch read-back, live-fault bit and current), ``BoardEvent`` (trips, state changes, faults),
+``BoardState`` (the full channel states, which the daemon feeds after connecting and after every
+``LinkUp``), ``LinkDown``/``LinkUp`` and ``Rebooted``. For each switchable device ``d``
+(``Device``: its channel and current band from ``system.yaml``):
 
 - ``on(d)``: the channel's switch reads back on (``Reading.on_mask``, ``ChannelState.physical``);
-- ``in_band(d)``: while on, the current lies in the device's band ``[low, high]``; a change of
-  band (nominal, over, under — kept in ``bands`` for journals) counts only after ``settle``
-  consecutive readings agree, so one noisy sample or an inrush peak does not flip it; while off
-  the atom is retracted (a switched-off device has no band to judge);
-- ``tripped(d)``: the board's protection tripped, latched or (switch fault) faulted the channel
-  (``BoardEvent`` kind trip, or a state change to tripped/latched/faulted; ``¬tripped`` on a
-  change to off/inrush/on and from ``BoardState``);
+- ``in_band(d)``: while on, the current lies in the device's band ``[low, high]`` (the band —
+  nominal, over, under — is kept in ``bands`` for journals); while off the atom is retracted (a
+  switched-off device has no band to judge);
+- ``tripped(d)``: the board's protection tripped, latched or (switch fault) faulted the channel;
 - the link: ``link(board)`` (the atom is configurable, or None to leave it out) while readings
   arrive, ``¬link(board)`` on ``LinkDown`` or after ``link_timeout`` seconds without a reading.
   With the link gone every device literal is *retracted* at once — observations from a lost
-  link are unknown, never stale truths — and come back with the next readings. A reboot
-  retracts ``tripped`` (the board's channel states started anew) until events or a
-  ``BoardState`` tell again.
+  link are unknown, never stale truths — and comes back with the next readings that agree. A
+  reboot retracts ``tripped`` (the board's channel states started anew).
 
-Detection latency: ``on``/``tripped`` with the first reading or event that shows them (an event
-is pushed at once by the board: one link round trip); ``in_band`` after ``settle`` readings
-(30 ms at 100 Hz with the default 3); a dead link after ``link_timeout`` (default 0.25 s) or
-at once on ``LinkDown``.
+Agreement before belief: a frame can lie with a valid checksum (a firmware bug, a corrupted
+buffer), and one lie must not start a repair. So what readings show changes only after ``settle``
+consecutive readings agree: the switch (``on``), the band (``in_band``) and the channel's health
+(no live fault; off with a live fault; on with a live fault). A trip reported by an event (a trip,
+or a state change to tripped, latched or faulted) is a *claim*: it counts once the settled
+readings bear it out (a trip or a latch switches the channel off and leaves a live fault; a stuck
+switch leaves a live fault whichever way it is stuck) and is dropped, with a warning, after
+``settle`` readings that show no live fault. Readings without a live fault say ``¬tripped`` by
+themselves (every bad state keeps a live fault), so ``tripped`` recovers with the first readings
+after a silence, without waiting for a STATE. A state change to off, inrush or on says
+``¬tripped`` at once, and a ``BoardState`` (a reply to the host's own request) is believed at once.
+
+Detection latency (``settle`` readings, default 3): ``on`` after 3 readings (30 ms at 100 Hz,
+20 ms more than believing the first); ``in_band`` after 3 readings; a trip 3 readings after the
+board switched the channel off (the event itself comes first; at 100 Hz the trip counts about
+30-40 ms after it, the read-back lagging one tick); a dead link after ``link_timeout`` (default
+0.25 s) or at once on ``LinkDown``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import logging
+from collections.abc import Hashable, Mapping
 from dataclasses import dataclass
+from typing import Generic, TypeVar
 
 import host.atoms as A
 from host.board.types import (
@@ -50,11 +61,61 @@ from protocol.constants import (
     ST_TRIPPED,
 )
 
+log = logging.getLogger(__name__)
+
 BoardInput = StreamItem | BoardState
 DEFAULT_LINK_ATOM = str(A.link("board"))
 DEFAULT_LINK_TIMEOUT = 0.25
 DEFAULT_SETTLE = 3
 _BAD_STATES = (ST_TRIPPED, ST_LATCHED, ST_FAULTED)
+# what one reading shows of a channel's health (every bad state keeps a live fault)
+CLEAR, FAULT_OFF, FAULT_ON = "no live fault", "off with a live fault", "on with a live fault"
+
+V = TypeVar("V", bound=Hashable)
+
+
+class Settled(Generic[V]):
+    """A value that changes only after ``n`` consecutive samples agree on a new one."""
+
+    def __init__(self, n: int) -> None:
+        self.n = n
+        self.value: V | None = None
+        self._cand: V | None = None
+        self._count = 0
+
+    def add(self, sample: V) -> bool:
+        """Take one sample; True when the settled value changed."""
+        if sample == self.value:
+            self._cand, self._count = None, 0
+            return False
+        self._count = self._count + 1 if sample == self._cand else 1
+        self._cand = sample
+        if self._count < self.n:
+            return False
+        self.force(sample)
+        return True
+
+    def force(self, value: V | None) -> None:
+        """Set the value at once (a source believed without agreement), or forget it (None)."""
+        self.value, self._cand, self._count = value, None, 0
+
+
+def agrees(health: str | None, claim: int) -> bool:
+    """Does a channel's settled health bear out an event's claim of bad state ``claim``?"""
+    if claim == ST_FAULTED:  # a stuck switch: off (stuck off) or on (stuck on), fault live
+        return health in (FAULT_OFF, FAULT_ON)
+    return health == FAULT_OFF  # a trip or a latch switches the channel off
+
+
+@dataclass
+class _Evidence:
+    """What the readings showed of one device's channel, and a trip claim waiting for them."""
+
+    on: Settled[bool]
+    band: Settled[str]
+    health: Settled[str]
+    claim: int | None = None  # the bad state an event claimed, not yet borne out
+    clear_since_claim: int = 0  # readings with no live fault since the claim
 
 
 @dataclass(frozen=True)
@@ -88,7 +149,7 @@ class HardwareObserver(Observer[BoardInput]):
         self.settle = settle
         self.link_atom = link_atom
         self.bands: dict[str, str] = {}  # device -> the settled band (nominal, over, under)
-        self._pending: dict[str, tuple[str, int]] = {}  # device -> (candidate band, count)
+        self._ev = {d: self._fresh() for d in self.devices}
         self._last_reading: float | None = None
         self._up = False
 
@@ -114,7 +175,13 @@ class HardwareObserver(Observer[BoardInput]):
             self._link_up(now)
         elif isinstance(item, Rebooted):
             for d in self.devices.values():
+                ev = self._ev[d.name]
+                ev.health.force(None)  # the new boot's readings tell again
+                ev.claim = None
                 self._forget(str(A.tripped(d.name)), now)
+
+    def _fresh(self) -> _Evidence:
+        return _Evidence(Settled(self.settle), Settled(self.settle), Settled(self.settle))
 
     def _link_up(self, now: float) -> None:
         self._up = True
@@ -126,46 +193,74 @@ class HardwareObserver(Observer[BoardInput]):
         self._link_up(now)
         for d in self.devices.values():
             if d.channel < len(r.currents_ma):
-                self._device(d, bool(r.on_mask >> d.channel & 1), r.currents_ma[d.channel], now)
+                self._device(d, bool(r.on_mask >> d.channel & 1),
+                             bool(r.fault_mask >> d.channel & 1), r.currents_ma[d.channel], now)
 
     def _state(self, s: BoardState, now: float) -> None:
+        """A STATE answers the host's own request: believed at once, no agreement needed."""
         self._link_up(now)
         for ch in s.channels:
             d = self.by_channel.get(ch.channel)
-            if d is not None:
-                self._device(d, ch.physical, ch.current_ma, now)
-                self._say(str(A.tripped(d.name)), ch.state in _BAD_STATES, now)
+            if d is None:
+                continue
+            ev = self._ev[d.name]
+            ev.on.force(ch.physical)
+            ev.health.force(_health(ch.physical, bool(ch.live_faults)))
+            ev.claim = None
+            self._switch(d, ch.physical, now)
+            self._say(str(A.tripped(d.name)), ch.state in _BAD_STATES, now)
 
-    def _device(self, d: Device, on: bool, current_ma: int, now: float) -> None:
+    def _device(self, d: Device, on: bool, fault: bool, current_ma: int, now: float) -> None:
+        """One reading of one device's channel: each of its facts counts once it settled."""
+        ev = self._ev[d.name]
+        if ev.on.add(on) and ev.on.value is not None:
+            self._switch(d, ev.on.value, now)
+        if d.band is not None and on:  # the current of a switched-on channel only
+            ev.band.add(d.classify(current_ma / 1000.0))
+            if ev.on.value and ev.band.value is not None:
+                self.bands[d.name] = ev.band.value
+                self._say(str(A.in_band(d.name)), ev.band.value == "nominal", now)
+        self._health(d, ev, _health(on, fault), now)
+
+    def _switch(self, d: Device, on: bool, now: float) -> None:
         self._say(str(A.on(d.name)), on, now)
-        if d.band is None:
-            return
-        atom = str(A.in_band(d.name))
         if not on:
-            self._forget(atom, now)
+            self._forget(str(A.in_band(d.name)), now)
             self.bands.pop(d.name, None)
-            self._pending.pop(d.name, None)
+            self._ev[d.name].band.force(None)
+
+    def _health(self, d: Device, ev: _Evidence, sample: str, now: float) -> None:
+        ev.health.add(sample)
+        atom = str(A.tripped(d.name))
+        if ev.claim is None:
+            if ev.health.value == CLEAR:
+                self._say(atom, False, now)
             return
-        band = d.classify(current_ma / 1000.0)
-        if band == self.bands.get(d.name) and atom in self._said:
-            self._pending.pop(d.name, None)
+        if agrees(ev.health.value, ev.claim):
+            ev.claim = None
+            self._say(atom, True, now)
             return
-        cand, count = self._pending.get(d.name, (band, 0))
-        count = count + 1 if cand == band else 1
-        if count >= self.settle:
-            self._pending.pop(d.name, None)
-            self.bands[d.name] = band
-            self._say(atom, band == "nominal", now)
-        else:
-            self._pending[d.name] = (band, count)
+        ev.clear_since_claim = ev.clear_since_claim + 1 if sample == CLEAR else 0
+        if ev.clear_since_claim >= self.settle:
+            log.warning("%s: the board reported %s tripped, but %d readings since show it "
+                        "without a fault: not believed", self.name, d.name,
+                        ev.clear_since_claim)
+            ev.claim = None
 
     def _event(self, e: BoardEvent, now: float) -> None:
         d = self.by_channel.get(e.channel)
         if d is None:
             return
+        ev = self._ev[d.name]
         if e.kind == EV_TRIP or e.new_state in _BAD_STATES:
-            self._say(str(A.tripped(d.name)), True, now)
+            claim = e.new_state if e.new_state in _BAD_STATES else ST_TRIPPED
+            if agrees(ev.health.value, claim):  # the readings already show it
+                ev.claim = None
+                self._say(str(A.tripped(d.name)), True, now)
+            else:
+                ev.claim, ev.clear_since_claim = claim, 0
         elif e.new_state != e.old_state:  # a state change to off, inrush or on
+            ev.claim = None
             self._say(str(A.tripped(d.name)), False, now)
 
     # -- the link rule ---------------------------------------------------------------------
@@ -175,7 +270,7 @@ class HardwareObserver(Observer[BoardInput]):
             if atom != self.link_atom:
                 self._forget(atom, now)
         self.bands.clear()
-        self._pending.clear()
+        self._ev = {d: self._fresh() for d in self.devices}
         if self.link_atom:
             self._say(self.link_atom, False, now)
 
@@ -188,3 +283,10 @@ class HardwareObserver(Observer[BoardInput]):
         if self._up and self._last_reading is not None:
             return self._last_reading + self.link_timeout
         return None
+
+
+def _health(on: bool, fault: bool) -> str:
+    """What one reading shows of a channel's health."""
+    if not fault:
+        return CLEAR
+    return FAULT_ON if on else FAULT_OFF

@@ -7,8 +7,9 @@ ones (``RemoteError``: the board or the link) are every way a link fails (``Boar
 ``LinkLost`` while in use; ``RequestTimeout``, also a ``TimeoutError`` as python-can's
 ``CanTimeoutError`` is, so ``except TimeoutError`` catches it), a board speaking another
 protocol version (``VersionMismatch``), a board that refused a request (``BoardRefused``, with
-the board's E_* code; ``AuthRefused`` for a bad or missing key), and a switch that did not move
-(``ReadbackMismatch``). Garbage from the wire is never raised as a local error.
+the board's E_* code; ``AuthRefused`` for a bad or missing key), a switch that did not move
+(``ReadbackMismatch``) and a reply that contradicts the board's HELLO (``BadReply``). Garbage
+from the wire is never raised as a local error.
 """
 
 from __future__ import annotations
@@ -74,3 +75,8 @@ class AuthRefused(BoardRefused):
 
 class ReadbackMismatch(RemoteTransportError):
     """The board acknowledged a command but its read-back disagrees with what was asked."""
+
+
+class BadReply(RemoteTransportError):
+    """The board's reply contradicts what it said before (a STATE whose channels are not the
+    ones its HELLO announced): a lying or corrupted frame; nothing is believed from it."""

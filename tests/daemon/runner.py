@@ -7,6 +7,7 @@ reads the URLs it prints, and offers what a person would use: the JSON API (``st
 
 from __future__ import annotations
 
+import contextlib
 import json
 import signal
 import subprocess
@@ -14,7 +15,7 @@ import sys
 import threading
 import time
 import urllib.request
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -183,6 +184,19 @@ def healthy(s: dict[str, Any]) -> bool:
         r["state"] in ("succeeded", "failed", "timeout") for r in s["repairs"])
 
 
+@contextlib.contextmanager
+def healthy_robot(tmp: Path, heal_s: float = 90.0) -> Iterator[RunningDaemon]:
+    """The fast virtual TEDUSAR robot under ``dxboard run --emulate`` with a key file, once it
+    has powered up and is healthy (a module's shared daemon); stopped afterwards."""
+    key = key_file(tmp)
+    d = RunningDaemon(tmp, fast_copy(tmp), extra_args=("--key-file", str(key)))
+    try:
+        d.wait_for(healthy, heal_s, "the robot powered up and healthy")
+        yield d
+    finally:
+        d.close()
+
+
 def last_id(d: RunningDaemon) -> int:
     """The journal's last entry once it holds everything recorded until now (a mark)."""
     d.caught_up()
@@ -194,5 +208,6 @@ def bad_sets(status: dict[str, Any]) -> list[set[str]]:
 
 
 __all__ = [
-    "KEY", "RunningDaemon", "bad_sets", "fast_copy", "healthy", "key_file", "last_id",
+    "KEY", "RunningDaemon", "bad_sets", "fast_copy", "healthy", "healthy_robot",
+    "key_file", "last_id",
 ]

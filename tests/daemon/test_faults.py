@@ -40,9 +40,8 @@ from host.repair.executor import QUARANTINE_PLAN
 from tests.daemon.runner import (
     RunningDaemon,
     bad_sets,
-    fast_copy,
     healthy,
-    key_file,
+    healthy_robot,
     last_id,
 )
 
@@ -52,14 +51,8 @@ QUARANTINE_S = 150.0
 
 @pytest.fixture(scope="module")
 def robot(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RunningDaemon]:
-    tmp = tmp_path_factory.mktemp("faults")
-    key = key_file(tmp)
-    d = RunningDaemon(tmp, fast_copy(tmp), extra_args=("--key-file", str(key)))
-    try:
-        d.wait_for(healthy, HEAL_S, "the robot powered up and healthy")
+    with healthy_robot(tmp_path_factory.mktemp("faults"), HEAL_S) as d:
         yield d
-    finally:
-        d.close()
 
 
 # --- helpers ------------------------------------------------------------------------------

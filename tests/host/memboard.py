@@ -5,7 +5,10 @@
 ``memory://name`` and serves each link: HELLO at once, replies to what arrives, pushes when
 due. A reboot of the emulated board ends the link, as it ends a TCP connection on hardware.
 ``drop_links()`` ends every link without a reboot (a pulled cable); ``skip = N`` withholds the
-next N measurements, as the firmware's front end does for a client that cannot keep up.
+next N measurements, as the firmware's front end does for a client that cannot keep up;
+``freeze(s)`` holds every link for ``s`` seconds, both ways, new ones included (the emulator's
+``link_freeze``: bytes wait, none are lost); ``mute = True`` keeps the sessions answering but
+measuring nothing (a board whose network lives while its main loop does not).
 """
 
 from __future__ import annotations
@@ -43,6 +46,8 @@ class MemoryBoard:
         self.links: list[memory.MemoryEnd] = []
         self.sessions = 0
         self.skip = 0  # measurements to withhold (a host that cannot keep up): a seq gap
+        self.mute = False  # answer requests but send no measurement
+        self.frozen_until = 0.0  # loop time until which every link is held
         self._tasks: set[asyncio.Task[None]] = set()
         self._stop = asyncio.Event()
         self._unlisten = lambda: None
@@ -70,6 +75,15 @@ class MemoryBoard:
         self.links.append(end)
         self._spawn(self._serve(end))
 
+    def freeze(self, seconds: float) -> None:
+        """Hold every link, both ways, for ``seconds`` (nothing is lost, nothing moves)."""
+        self.frozen_until = asyncio.get_running_loop().time() + seconds
+
+    async def _thaw(self) -> None:
+        loop = asyncio.get_running_loop()
+        while loop.time() < self.frozen_until:
+            await asyncio.sleep(self.frozen_until - loop.time())
+
     def drop_links(self) -> None:
         for end in self.links:
             end.close()
@@ -82,6 +96,7 @@ class MemoryBoard:
         session = Session(board, board_key(board), emu.hal.random_bytes, "emulator", CAPS,
                           emu.hal.ticks_ms())
         self.sessions += 1
+        await self._thaw()
         end.write(session.start(emu.hal.ticks_ms()))
         inbox: asyncio.Queue[bytes] = asyncio.Queue()
 
@@ -94,6 +109,7 @@ class MemoryBoard:
 
         self._spawn(pump())
         while not end.closed:
+            await self._thaw()
             if emu.firmware is not firmware:  # the board rebooted: the link goes down
                 end.close()
                 return
@@ -110,8 +126,8 @@ class MemoryBoard:
                     return
                 out += session.receive(data, now)
             due = session.rate_hz and now >= session.meas_at
-            send = not (due and self.skip > 0)
-            if not send:
+            send = not (due and (self.skip > 0 or self.mute))
+            if not send and not self.mute:
                 self.skip -= 1
             out += session.poll(now, send_measurement=send)
             if out and not end.closed:
