@@ -105,7 +105,9 @@ class LinkMixin:
             return None
         if self.silence_s is not None:
             return self.silence_s
-        derived = max(SILENCE_MIN_S, SILENCE_PERIODS / self._rate)
+        most = self.transport.MAX_PUSH_HZ
+        rate = min(self._rate, most) if most else self._rate
+        derived = max(SILENCE_MIN_S, SILENCE_PERIODS / rate)
         return min(derived, self.keepalive_s + self.timeout_s)
 
     def _new_session(self) -> None:

@@ -79,11 +79,20 @@ class Journal:
         self.path = Path(path)
         self.retention = retention or Retention()
         self.max_pending = max_pending
-        self._lock = _writer_lock(self.path)
         self._conn = connect(path, create=True, sync=sync, busy_timeout_s=busy_timeout_s)
-        self.reader = JournalReader(path, connect(path, create=False))
-        row = self._conn.execute(
-            "SELECT seq FROM sqlite_sequence WHERE name = 'entries'").fetchone()
+        try:
+            self._lock = _writer_lock(self.path)  # after connect: its errors name a bad path
+        except BaseException:
+            self._conn.close()
+            raise
+        try:
+            self.reader = JournalReader(path, connect(path, create=False))
+            row = self._conn.execute(
+                "SELECT seq FROM sqlite_sequence WHERE name = 'entries'").fetchone()
+        except BaseException:
+            self._lock.close()
+            self._conn.close()
+            raise
         self._next_id = int(row[0]) + 1 if row else 1
         self._committed_id = self._next_id - 1
         self._queue: deque[_Row] = deque()

@@ -45,6 +45,9 @@ class Transport:
 
     SCHEME: ClassVar[str] = ""
     CAPS: ClassVar[frozenset[str]] = frozenset()
+    # the most measurements a second the board sends, whatever rate was subscribed (None: the
+    # subscribed rate); the link's silence rule counts periods of the rate actually sent
+    MAX_PUSH_HZ: ClassVar[float | None] = None
 
     def __init__(self, url: BoardUrl, key: bytes | None = None) -> None:
         self.url = url

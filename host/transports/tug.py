@@ -85,6 +85,7 @@ def _on(status: int) -> bool:
 class TugTransport(TranslatingTransport):
     SCHEME = SCHEME
     CAPS = frozenset({PUSH})
+    MAX_PUSH_HZ = 1.0  # both boards broadcast once a second whatever SET FREQUENCY asked
 
     def __init__(self, url: BoardUrl, key: bytes | None = None) -> None:
         super().__init__(url, key)
