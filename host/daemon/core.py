@@ -42,9 +42,10 @@ from host.diagnosis.observations import Observation as Seen
 from host.diagnosis.observations import ObservationSet
 from host.diagnosis.runner import DiagnosisRunner
 from host.errors import RemoteError, UserError
-from host.events import JOURNALED, Event, LinkChange, Note, Observation, Stamped
+from host.events import JOURNALED, Event, LinkChange, Note, Observation, RunStarted, Stamped
 from host.events import BoardEvent as BoardEventRecord
 from host.journal import Journal, TelemetryDownsampler
+from host.journal.runs import new_run_id
 from host.journal.summary import Replay
 from host.observers import ObserverHub, check_atoms, load_observers
 from host.observers.base import Update
@@ -145,6 +146,7 @@ class Daemon:
             clock=clock, max_parallel=opts.max_parallel_steps,
             debounce_s=opts.repair_debounce_s, board=self.model.board or "board")
         self.journal: Journal | None = None
+        self.run_id = ""  # set by start()
         self.web: WebServer | None = None
         self.web_port: int | None = None
         self.operator: OperatorServer | None = None
@@ -170,8 +172,9 @@ class Daemon:
         opts = self.opts
         if opts.journal is not None:
             self.attach_journal(Journal(opts.journal))
-        self.emit(Note(f"dxboard run {self.model.name}: board {opts.board_url}"
-                       + (" (dry run)" if opts.dry_run else "")))
+        # every entry from here to the next run's start is this run's (host.journal.runs)
+        self.run_id = new_run_id(self.stream.wall())
+        self.emit(RunStarted(self.run_id, self.model.name, opts.board_url, opts.dry_run))
         if self.journal is not None:
             self._restore(self.journal)
         if opts.web is not None:
