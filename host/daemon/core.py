@@ -36,6 +36,7 @@ from host.board import BoardClient
 from host.board.types import BoardEvent, BoardState, LinkDown, LinkUp, Reading, Rebooted
 from host.board.view import BoardView
 from host.diagnosis import Diagnoser, generate, load_system
+from host.diagnosis.healthy import healthy_values
 from host.diagnosis.logic import Theory
 from host.diagnosis.model import SystemModel
 from host.diagnosis.observations import Observation as Seen
@@ -172,9 +173,11 @@ class Daemon:
         opts = self.opts
         if opts.journal is not None:
             self.attach_journal(Journal(opts.journal))
-        # every entry from here to the next run's start is this run's (host.journal.runs)
+        # every entry from here to the next run's start is this run's (host.journal.runs); the
+        # healthy value of each atom lets the page colour observations by health
         self.run_id = new_run_id(self.stream.wall())
-        self.emit(RunStarted(self.run_id, self.model.name, opts.board_url, opts.dry_run))
+        self.emit(RunStarted(self.run_id, self.model.name, opts.board_url, opts.dry_run,
+                             str(opts.operator or ""), healthy_values(self.theory)))
         if self.journal is not None:
             self._restore(self.journal)
         if opts.web is not None:

@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 from host.journal import Journal, Note
-from host.web import DiagnosisStatus, MemoryStatusSource, WebServer
+from host.web import DiagnosisStatus, MemoryStatusSource, OutOfRepair, WebServer
 from tests.web.chromium import Chromium
 
 CHANNEL_STATE = "document.querySelector('[data-channel-id=\"{}\"]')?.dataset.state"
@@ -35,7 +35,7 @@ async def test_page_shows_the_board_and_follows_changes(
         assert chips == [["jaguar_node"], ["jaguar_teleop_node", "jaguar_node"]]
         assert await page.evaluate("document.querySelectorAll('#repairs .repair').length") == 3
         assert await page.evaluate(
-            "document.querySelector('.obs[data-value=\"false\"]').textContent") in {
+            "document.querySelector('.obs[data-value=\"false\"]').dataset.atom") in {
             "ok(jaguar_node)", "ok(jaguar_teleop_node)"}
         assert await page.wait_for("document.querySelectorAll('#journal .row').length") == 13
 
@@ -82,6 +82,69 @@ async def test_page_shows_stale_data_and_a_lost_link(
             assert await page.wait_for(f"{PILL} === 'live'", timeout=20)
         finally:
             await web.close()
+
+
+OBS = "document.querySelector('.obs[data-atom=\"{}\"]')"
+
+
+async def test_page_colours_by_health_lists_repairs_newest_first_and_shows_what_is_set_aside(
+        server: WebServer, source: MemoryStatusSource) -> None:
+    now = time.time()
+    source.update(
+        observations={"tripped(hokuyo)": False, "on(hokuyo)": True, "on(jaguar)": False,
+                      "tripped(jaguar)": True, "ok(/map)": None, "inc(odom_yaw_rate)": True},
+        healthy={"tripped(hokuyo)": False, "on(hokuyo)": True, "on(jaguar)": True,
+                 "tripped(jaguar)": False, "ok(/map)": True},
+        out_of_repair=(
+            OutOfRepair("hokuyo", "quarantined", "3 attempts in 10 min failed", "daemon",
+                        now - 120, "dxboard quarantine clear hokuyo", "shutdown(hokuyo)"),
+            OutOfRepair("jaguar", "held", "switched off on the board by a command this daemon "
+                        "did not send", "board", now - 30, "switch it on again (dxboard board "
+                        "tcp://127.0.0.1:7000 on jaguar), or dxboard hold release jaguar")),
+        updated=now)
+    async with Chromium.launch(f"http://127.0.0.1:{server.port}/") as page:
+        assert await page.wait_for(f"{OBS.format('inc(odom_yaw_rate)')}?.dataset.health")
+        health = await page.evaluate(
+            "Object.fromEntries([...document.querySelectorAll('.obs')].map(e =>"
+            " [e.dataset.atom, e.dataset.health]))")
+        assert health == {"tripped(hokuyo)": "healthy", "on(hokuyo)": "healthy",
+                          "on(jaguar)": "unhealthy", "tripped(jaguar)": "unhealthy",
+                          "ok(/map)": "unknown", "inc(odom_yaw_rate)": "free"}
+        # a healthy false looks like a healthy true, not like an unhealthy false
+        bg = "getComputedStyle({}).backgroundColor"
+        healthy_false = await page.evaluate(bg.format(OBS.format("tripped(hokuyo)")))
+        assert healthy_false == await page.evaluate(bg.format(OBS.format("on(hokuyo)")))
+        assert healthy_false != await page.evaluate(bg.format(OBS.format("on(jaguar)")))
+        assert await page.evaluate(bg.format(OBS.format("on(jaguar)"))) == await page.evaluate(
+            bg.format(OBS.format("tripped(jaguar)")))
+        # each says its value in words; the unhealthy ones come first
+        assert await page.evaluate(f"{OBS.format('tripped(hokuyo)')}.textContent") == (
+            "tripped(hokuyo) = false")
+        first = await page.evaluate(
+            "[...document.querySelectorAll('.obs')].slice(0, 2).map(e => e.dataset.atom)")
+        assert sorted(first) == ["on(jaguar)", "tripped(jaguar)"]
+
+        # repairs, newest first (the demo's power_up, stop_node, start_node started in turn)
+        assert await page.evaluate(
+            "[...document.querySelectorAll('#repairs .what')].map(e => e.textContent)") == [
+            "start_node(jaguar_node)", "stop_node(jaguar_node)", "power_up(jaguar)"]
+
+        # what is out of repair, and what a person does about it
+        rows = await page.evaluate(
+            "[...document.querySelectorAll('#out-of-repair .aside')].map(r =>"
+            " [r.dataset.component, r.dataset.state, r.querySelector('.why').textContent,"
+            "  r.querySelector('.release code').textContent])")
+        assert rows == [
+            ["hokuyo", "quarantined", "3 attempts in 10 min failed; left in safe state "
+             "shutdown(hokuyo)", "dxboard quarantine clear hokuyo"],
+            ["jaguar", "held", "switched off on the board by a command this daemon did not "
+             "send", "switch it on again (dxboard board tcp://127.0.0.1:7000 on jaguar), or "
+             "dxboard hold release jaguar"]]
+        assert await page.evaluate("document.getElementById('out-of-repair-count')"
+                                   ".textContent") == "2"
+        source.update(out_of_repair=(), updated=time.time())
+        assert await page.wait_for("document.querySelector('#out-of-repair .muted')"
+                                   "?.textContent === 'nothing quarantined or held'")
 
 
 async def test_screenshot_of_the_page_is_a_png(server: WebServer, tmp_path: Path) -> None:
