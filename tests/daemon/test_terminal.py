@@ -97,6 +97,10 @@ def test_a_fault_shows_as_lines_a_person_can_follow(told: Told) -> None:
     lines = told.loud
     assert told.loud_code == 0
     assert lines and all(STAMP.match(x) for x in lines), lines
+    # first the run's id, for dxboard report --run
+    with JournalReader(told.journal) as reader:
+        first_run = list_runs(reader)[0].run_id
+    assert re.match(rf"^\S+ run {first_run}: dxboard run tedusar, board tcp://", lines[0])
     after = told.fault_at
     diagnosis = _index(lines, r"diagnosis: \{[^}]*\bhokuyo(_node)?\b", after)
     plan = _index(lines, r" plan \S+: .*power_cycle\(hokuyo\)", diagnosis)
