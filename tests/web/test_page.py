@@ -13,6 +13,7 @@ from pathlib import Path
 from host.journal import Journal, Note
 from host.web import DiagnosisStatus, MemoryStatusSource, OutOfRepair, WebServer
 from tests.web.chromium import Chromium
+from tests.web.demo import kept_fresh
 
 CHANNEL_STATE = "document.querySelector('[data-channel-id=\"{}\"]')?.dataset.state"
 PILL = "document.getElementById('conn-state').dataset.state"
@@ -20,7 +21,7 @@ PILL = "document.getElementById('conn-state').dataset.state"
 
 async def test_page_shows_the_board_and_follows_changes(
         server: WebServer, source: MemoryStatusSource, journal: Journal) -> None:
-    async with Chromium.launch(f"http://127.0.0.1:{server.port}/") as page:
+    async with kept_fresh(source), Chromium.launch(f"http://127.0.0.1:{server.port}/") as page:
         assert await page.wait_for("document.querySelectorAll('.channel').length") == 10
         names = await page.evaluate(
             "[...document.querySelectorAll('.channel .name')].map(e => e.textContent)")
@@ -60,16 +61,17 @@ async def test_page_shows_stale_data_and_a_lost_link(
     port = await web.start("127.0.0.1", 0)
     async with Chromium.launch(f"http://127.0.0.1:{port}/") as page:
         try:
-            assert await page.wait_for(f"{PILL} === 'live'")
-            assert not await page.evaluate("document.body.classList.contains('stale')")
-            source.update(board_link_up=False)
-            assert await page.wait_for(f"{PILL} === 'board-down'")
+            async with kept_fresh(source):
+                assert await page.wait_for(f"{PILL} === 'live'")
+                assert not await page.evaluate("document.body.classList.contains('stale')")
+                source.update(board_link_up=False)
+                assert await page.wait_for(f"{PILL} === 'board-down'")
             source.update(board_link_up=True, updated=time.time() - 30)  # the daemon froze
             assert await page.wait_for(f"{PILL} === 'stale'")
             assert await page.evaluate("document.body.classList.contains('stale')")
             assert "s old" in await page.evaluate("document.getElementById('banner').textContent")
-            source.update(updated=time.time())
-            assert await page.wait_for(f"{PILL} === 'live'")
+            async with kept_fresh(source):  # it is back
+                assert await page.wait_for(f"{PILL} === 'live'")
         finally:
             await web.close()
         assert await page.wait_for(f"{PILL} === 'lost'")
@@ -79,7 +81,8 @@ async def test_page_shows_stale_data_and_a_lost_link(
         web = WebServer(source, journal.reader, push_interval_s=0.05, heartbeat_s=0.5)
         await web.start("127.0.0.1", port)
         try:
-            assert await page.wait_for(f"{PILL} === 'live'", timeout=20)
+            async with kept_fresh(source):
+                assert await page.wait_for(f"{PILL} === 'live'", timeout=20)
         finally:
             await web.close()
 
