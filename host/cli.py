@@ -4,13 +4,20 @@ Each entry of ``COMMANDS`` names a module with ``NAME`` (its sub-command), ``HEL
 ``add_arguments(parser)`` and ``run(args) -> int``. Modules import their heavy dependencies
 inside ``run`` so that ``dxboard --help`` stays fast. A ``DxboardError`` (a ``UserError`` or a
 ``RemoteError``) becomes one line on stderr and exit code 2; ``--verbose`` adds the traceback.
+A reader that closes our stdout early (``dxboard journal --json | head``) ends any command
+quietly with exit code 141 (128 + SIGPIPE, what a shell shows for a process a closed pipe
+stopped), here once for every command.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import logging
+import os
+import select
+import signal
 import sys
 import traceback
 from collections.abc import Sequence
@@ -73,6 +80,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     try:
         code: int = args._run(args)
+        sys.stdout.flush()  # inside the try: a closed pipe shows here, not at exit
+    except BrokenPipeError:
+        if not _stdout_gone():  # a socket's, not ours: a bug to show
+            raise
+        return _quiet_stdout()
     except DxboardError as exc:  # a person's mistake or a failing peer: one line
         if args.verbose:
             traceback.print_exc()
@@ -81,6 +93,26 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         return 130
     return code
+
+
+def _stdout_gone() -> bool:
+    """True when nobody reads our stdout any more (its pipe or socket is closed)."""
+    try:
+        poller = select.poll()
+        poller.register(sys.stdout.fileno(), select.POLLOUT)
+        return any(ev & (select.POLLERR | select.POLLHUP) for _, ev in poller.poll(0))
+    except (OSError, ValueError, AttributeError):  # not a file (an embedding, a test capture)
+        return False
+
+
+def _quiet_stdout() -> int:
+    """Point stdout at /dev/null, so that what is still buffered cannot fail again when the
+    interpreter flushes at exit; the exit code of a process stopped by a closed pipe."""
+    with contextlib.suppress(OSError, ValueError):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    return 128 + signal.SIGPIPE
 
 
 if __name__ == "__main__":

@@ -292,12 +292,18 @@ class HoldChange(_Plain):
 
 @dataclass(frozen=True)
 class RunStarted(_Plain):
-    """A daemon run began: every entry after it (until the next) belongs to ``run_id``."""
+    """A daemon run began: every entry after it (until the next) belongs to ``run_id``.
+
+    ``operator`` is its operator socket (for ``dxboard quarantine|hold --operator``), ``healthy``
+    the value each observable atom has when nothing is broken, as the model entails it
+    (``host.diagnosis.healthy``; atoms the model leaves free are absent)."""
 
     run_id: str
     robot: str
     board: str = ""
     dry_run: bool = False
+    operator: str = ""
+    healthy: Mapping[str, bool] = field(default_factory=dict)
     kind: ClassVar[Kind] = Kind.RUN
 
 

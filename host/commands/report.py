@@ -1,15 +1,18 @@
-"""Draw a journal's repair history: ``dxboard report JOURNAL -o FILE.png|FILE.svg``.
+"""Draw a journal's repair history: ``dxboard report JOURNAL -o FILE.png|FILE.svg [--run ID]``.
 
-A timeline like paper 000's figures 5 and 6: one row per component (hardware first, then
+A timeline like paper 000's figures 5 and 6, of one daemon run (a journal holds every run that
+wrote to it; the latest unless ``--run`` names another): one row per component (hardware first, then
 drivers, then nodes), red while the component is in the first-ranked diagnosis, green while
 it is not, grey before the first diagnosis; the repair actions along the top as bars from
 start to end, failed and timed-out ones hatched and labelled; a dashed line where everything
 became normal again ("all normal at 38.3 s"). Options:
 
   -o FILE            the image to write; .png or .svg picks the format
+  --run ID           the daemon run to draw: its id or a unique prefix (default: the latest)
+  --runs             list the runs the journal holds (id, start, length, entries) and stop
   --model DIR        the robot model (system.yaml): all its components as rows, in its order,
                      grouped by kind (hardware SH/H, drivers SN/HN, nodes N)
-  --from X, --to X   a window: seconds on the journal's time axis (12.5) or a journal id (#120);
+  --from X, --to X   a window: seconds on the run's time axis (12.5) or a journal id (#120);
                      the axis then counts from the window's start
   --title TEXT       replaces the title (robot: journal name)
   --dpi N            resolution of a PNG (default 150)
@@ -26,9 +29,12 @@ HELP = "draw a journal as a timeline (PNG/SVG) like the paper's figures 5 and 6"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from host.commands.journal import add_run_arguments
+
     parser.add_argument("journal", metavar="JOURNAL", help="journal file (SQLite)")
-    parser.add_argument("-o", "--output", required=True, metavar="FILE",
+    parser.add_argument("-o", "--output", metavar="FILE",
                         help="image to write: FILE.png or FILE.svg")
+    add_run_arguments(parser, "the latest")
     parser.add_argument("--model", metavar="SYSTEM_DIR",
                         help="robot model: its components as rows, grouped by kind")
     parser.add_argument("--from", dest="start", metavar="X",
@@ -42,9 +48,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from host.commands.journal import chosen_run
     from host.errors import UserError
+    from host.journal.store import JournalReader
     from host.report.source import load_timeline, parse_bound
 
+    if args.runs:
+        with JournalReader(args.journal) as reader:
+            chosen_run(reader, args)
+        return 0
+    if not args.output:
+        raise UserError("which image? -o is missing",
+                        "give -o FILE.png or -o FILE.svg (or --runs to list the runs)")
     out = Path(args.output)
     if out.suffix.lower() not in (".png", ".svg"):
         raise UserError(f"-o {args.output}: cannot write {out.suffix or 'a file without a suffix'}",
@@ -56,7 +71,8 @@ def run(args: argparse.Namespace) -> int:
         raise UserError(f"--dpi {args.dpi} is out of range", "give --dpi between 20 and 1200")
     start = parse_bound("--from", args.start)
     end = parse_bound("--to", args.end)
-    timeline = load_timeline(args.journal, model=args.model, start=start, end=end)
+    timeline = load_timeline(args.journal, model=args.model, start=start, end=end,
+                             run=args.run)
 
     from host.report.chart import render  # matplotlib only when there is something to draw
 
@@ -65,6 +81,7 @@ def run(args: argparse.Namespace) -> int:
     except OSError as exc:
         raise UserError(f"-o {args.output}: cannot write ({exc.strerror or exc})",
                         "check the directory's permissions and free space") from exc
-    print(f"wrote {out} ({len(timeline.rows)} components, {len(timeline.actions)} actions, "
-          f"{timeline.end:.1f} s)")
+    run = f"run {timeline.run}: " if timeline.run else ""
+    print(f"wrote {out} ({run}{len(timeline.rows)} components, {len(timeline.actions)} "
+          f"actions, {timeline.end:.1f} s)")
     return 0

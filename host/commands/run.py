@@ -7,9 +7,10 @@ what the observers see and repairs what it finds (power-cycles, driver restarts)
 step. ``--emulate`` also starts the robot's emulated board (``dxboard emulate``, with its
 virtual devices when the robot has them) and prints its board and fault-injection (control)
 URLs. It prints one URL a line (``board:``, ``control:``, ``device:``, ``web:``, ``journal:``),
-then one line per change of diagnosis, plan, step result, quarantine and hold, and the board
-link going down or up (``-q``: only the URLs), and runs until Ctrl-C, which stops everything
-cleanly. The robot directory and the addresses are checked before anything starts.
+then the run's id (for ``dxboard report --run``) and one line per change of diagnosis, plan,
+step result, quarantine and hold, and the board link going down or up (``-q``: only the URLs),
+and runs until Ctrl-C, which stops everything cleanly. The robot directory and the addresses
+are checked before anything starts.
 
 The key for switching comes from ``$DXBOARD_KEY`` or ``--key-file``; with ``--emulate`` the
 emulated board gets the ``--key-file`` key, or a fresh one. ``--dry-run`` diagnoses and plans

@@ -1,9 +1,10 @@
 """What ``dxboard run`` says on its terminal: one line per thing a person must know, as it happens.
 
 ``TerminalLines(write)`` is a reader of the daemon's event stream: it prints, with the local time,
-every change of diagnosis, every repair plan, every finished repair step (succeeded, failed,
-timed out), how each repair ended, every quarantine and hold (set or cleared), the board link
-going down or coming back, and the daemon's warnings and errors. Observations, telemetry and the
+the run's id (``dxboard report --run ID`` draws it), every change of diagnosis, every repair
+plan, every finished repair step (succeeded, failed, timed out), how each repair ended, every
+quarantine and hold (set or cleared), the board link going down or coming back, and the
+daemon's warnings and errors. Observations, telemetry and the
 steps' ``started`` states are left to the journal and the page (``dxboard run -q`` prints none
 of it). Each line is ``host.events.describe`` of the event: the journal and the page say the
 same words. ``paused=True`` queues the lines until ``resume()`` (``dxboard run`` prints its URLs
@@ -30,11 +31,13 @@ from host.events import (
     PlanRecord,
     QuarantineChange,
     RepairEnded,
+    RunStarted,
     Stamped,
     describe,
 )
 
-_ALWAYS = (DiagnosisRecord, PlanRecord, RepairEnded, QuarantineChange, HoldChange, LinkChange)
+_ALWAYS = (RunStarted, DiagnosisRecord, PlanRecord, RepairEnded, QuarantineChange, HoldChange,
+           LinkChange)
 
 
 def _stdout(line: str) -> None:

@@ -36,15 +36,17 @@ from host.board import BoardClient
 from host.board.types import BoardEvent, BoardState, LinkDown, LinkUp, Reading, Rebooted
 from host.board.view import BoardView
 from host.diagnosis import Diagnoser, generate, load_system
+from host.diagnosis.healthy import healthy_values
 from host.diagnosis.logic import Theory
 from host.diagnosis.model import SystemModel
 from host.diagnosis.observations import Observation as Seen
 from host.diagnosis.observations import ObservationSet
 from host.diagnosis.runner import DiagnosisRunner
 from host.errors import RemoteError, UserError
-from host.events import JOURNALED, Event, LinkChange, Note, Observation, Stamped
+from host.events import JOURNALED, Event, LinkChange, Note, Observation, RunStarted, Stamped
 from host.events import BoardEvent as BoardEventRecord
 from host.journal import Journal, TelemetryDownsampler
+from host.journal.runs import Run, list_runs, new_run_id
 from host.journal.summary import Replay
 from host.observers import ObserverHub, check_atoms, load_observers
 from host.observers.base import Update
@@ -146,6 +148,7 @@ class Daemon:
             clock=clock, max_parallel=opts.max_parallel_steps,
             debounce_s=opts.repair_debounce_s, board=self.model.board or "board")
         self.journal: Journal | None = None
+        self.run_id = ""  # set by start()
         self.web: WebServer | None = None
         self.web_port: int | None = None
         self.operator: OperatorServer | None = None
@@ -171,10 +174,14 @@ class Daemon:
         opts = self.opts
         if opts.journal is not None and self.journal is None:
             self.attach_journal(Journal(opts.journal))
-        self.emit(Note(f"dxboard run {self.model.name}: board {opts.board_url}"
-                       + (" (dry run)" if opts.dry_run else "")))
+        # every entry from here to the next run's start is this run's (host.journal.runs); the
+        # healthy value of each atom lets the page colour observations by health
+        self.run_id = new_run_id(self.stream.wall())
+        previous = list_runs(self.journal.reader)[-1:] if self.journal is not None else []
+        self.emit(RunStarted(self.run_id, self.model.name, opts.board_url, opts.dry_run,
+                             str(opts.operator or ""), healthy_values(self.theory)))
         if self.journal is not None:
-            self._restore(self.journal)
+            self._restore(self.journal, previous[0] if previous else None)
         if opts.web is not None:
             self.web = WebServer(self.status, self.journal.reader if self.journal else None)
             self.web_port = await self.web.start(*opts.web)
@@ -196,13 +203,16 @@ class Daemon:
         self._tasks = [asyncio.ensure_future(t) for t in (
             self._board_task(), self.diagnosis.task(), self._sample_task())]
 
-    def _restore(self, journal: Journal) -> None:
+    def _restore(self, journal: Journal, previous: Run | None) -> None:
         """Quarantines and holds that earlier runs left in the journal stay in force; a repair
-        an earlier run was killed in is said (the robot is diagnosed afresh)."""
+        the previous run was killed in is said (the robot is diagnosed afresh)."""
         past = Replay.of(journal.reader.query(kind=("quarantine", "hold"), limit=None))
         self.repairs.restore(past.quarantined, past.held)
-        cut = [a for a in Replay.of(journal.reader.tail(200, kind="action")).actions.values()
-               if a.finished is None]
+        if previous is None:
+            return
+        actions = journal.reader.tail(200, kind="action", after_id=previous.after_id,
+                                      to_id=previous.last_id)
+        cut = [a for a in Replay.of(actions).actions.values() if a.finished is None]
         if cut:
             self.emit(Note("an earlier run stopped during " + ", ".join(
                 f"{a.action}({','.join(a.args)})" for a in cut)

@@ -8,7 +8,8 @@ block the writer, and a committed transaction survives the process being killed.
 turns every way a file can be wrong (missing directory, a directory, not SQLite, another
 program's database, a newer schema, read-only) into a one-line ``UserError`` naming the file
 and the fix. ``JournalReader`` answers the queries the daemon's readers need: the tail, entries
-after an id (for live following), by kind, a wall-time range, counts and size. It owns one
+after an id (for live following), by kind, a wall-time range, an id range (one daemon run,
+``host.journal.runs``), counts and size. It owns one
 connection guarded by a lock, so it may be called from worker threads
 (``asyncio.to_thread``).
 """
@@ -174,15 +175,17 @@ class JournalReader:
 
     def query(self, *, after_id: int = 0, kind: Kind | str | Iterable[Kind | str] | None = None,
               wall_from: float | None = None, wall_to: float | None = None,
-              limit: int | None = None) -> list[Entry]:
-        """Entries with id > ``after_id``, of the given kind(s), ``wall_from <= wall < wall_to``,
-        the first ``limit`` of them."""
-        where, params = self._where(after_id, kind, wall_from, wall_to)
+              limit: int | None = None, to_id: int | None = None) -> list[Entry]:
+        """Entries with ``after_id < id <= to_id``, of the given kind(s),
+        ``wall_from <= wall < wall_to``, the first ``limit`` of them."""
+        where, params = self._where(after_id, kind, wall_from, wall_to, to_id)
         return self._select(where, params, "ASC", limit)
 
-    def tail(self, n: int, kind: Kind | str | Iterable[Kind | str] | None = None) -> list[Entry]:
-        """The last ``n`` entries (of the given kinds), oldest first."""
-        where, params = self._where(0, kind, None, None)
+    def tail(self, n: int, kind: Kind | str | Iterable[Kind | str] | None = None, *,
+             after_id: int = 0, to_id: int | None = None) -> list[Entry]:
+        """The last ``n`` entries (of the given kinds, with ``after_id < id <= to_id``),
+        oldest first."""
+        where, params = self._where(after_id, kind, None, None, to_id)
         return self._select(where, params, "DESC", n)
 
     def since(self, after_id: int, limit: int | None = 1000,
@@ -197,9 +200,13 @@ class JournalReader:
 
     @staticmethod
     def _where(after_id: int, kind: Kind | str | Iterable[Kind | str] | None,
-               wall_from: float | None, wall_to: float | None) -> tuple[list[str], list[Any]]:
+               wall_from: float | None, wall_to: float | None,
+               to_id: int | None = None) -> tuple[list[str], list[Any]]:
         where: list[str] = ["id > ?"]
         params: list[Any] = [after_id]
+        if to_id is not None:
+            where.append("id <= ?")
+            params.append(to_id)
         kinds = _kinds(kind)
         if kinds is not None:
             where.append(f"kind IN ({','.join('?' * len(kinds))})")
@@ -216,6 +223,19 @@ class JournalReader:
         with self._lock:
             row = self._conn.execute("SELECT max(id) FROM entries").fetchone()
         return int(row[0] or 0)
+
+    def span(self, after_id: int = 0, to_id: int | None = None
+             ) -> tuple[int, int, float, float] | None:
+        """``(entries, last id, first wall, last wall)`` of the ids in ``after_id < id <=
+        to_id``; None when there are none."""
+        sql = "SELECT count(*), max(id), min(wall), max(wall) FROM entries WHERE id > ?"
+        params: list[Any] = [after_id]
+        if to_id is not None:
+            sql += " AND id <= ?"
+            params.append(to_id)
+        with self._lock:
+            n, last, w0, w1 = self._conn.execute(sql, params).fetchone()
+        return None if not n else (int(n), int(last), float(w0), float(w1))
 
     def counts(self) -> dict[str, int]:
         """Entries per kind (every kind listed, zero included)."""

@@ -153,7 +153,8 @@ def _title(t: Timeline) -> tuple[str, str]:
     acts = f"{len(t.actions)} repair action{'s' if len(t.actions) != 1 else ''}"
     if n_fail:
         acts += f" ({n_fail} not succeeded)"
-    sub = (f"journal entries #{t.first_id}\u2013#{t.last_id}, t = 0 at {when}  \u00b7  "
+    run = f"run {t.run}, " if t.run else ""
+    sub = (f"{run}journal entries #{t.first_id}\u2013#{t.last_id}, t = 0 at {when}  \u00b7  "
            f"{len(t.rows)} components  \u00b7  {acts}")
     return head, sub
 
@@ -220,7 +221,8 @@ def render(t: Timeline, out: str | os.PathLike[str], *, title: str | None = None
     ax.grid(axis="x", color="#e6e6e6", lw=0.6, zorder=0)
     ax.set_axisbelow(True)
     ax.tick_params(axis="x", labelsize=8.5, colors=TEXT)
-    origin = f"the window ({t.window})" if t.window else "the journal"
+    origin = f"the window ({t.window})" if t.window else (f"run {t.run}" if t.run else
+                                                           "the journal")
     ax.set_xlabel(f"time since the start of {origin} [s]", fontsize=9, color=TEXT)
     for side in ("top", "right", "left"):
         ax.spines[side].set_visible(False)

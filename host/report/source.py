@@ -1,7 +1,10 @@
-"""Where a timeline comes from: a journal file, an optional robot model and a window.
+"""Where a timeline comes from: a journal file, one daemon run of it, an optional robot model and
+a window.
 
-``load_timeline`` reads every entry of a journal (``JournalReader``: a missing, unreadable or
-foreign file is already a one-line ``UserError`` there), optionally the robot model
+``load_timeline`` reads the entries of one run of a journal (``host.journal.runs``: the latest
+unless ``run`` names another; a journal holds every run that wrote to it, and each run numbers
+its actions afresh, so runs are never mixed) through ``JournalReader`` (a missing, unreadable
+or foreign file is already a one-line ``UserError`` there), optionally the robot model
 (``--model SYSTEM_DIR``: its components give the rows, their order and their groups: switchable
 and other hardware ``SH``/``H`` first, then the drivers ``SN``/``HN``, then the ordinary nodes
 ``N``), and builds the ``Timeline`` of the chosen window (``--from``/``--to``). Every way
@@ -16,7 +19,8 @@ import os
 from pathlib import Path
 
 from host.errors import UserError
-from host.events import DiagnosisRecord, Kind
+from host.events import DiagnosisRecord
+from host.journal.runs import list_runs, pick
 from host.journal.store import JournalReader
 from host.report.timeline import Bound, EmptyWindow, Group, Timeline, build_timeline
 
@@ -48,21 +52,22 @@ def parse_bound(flag: str, text: str | None) -> Bound | None:
 
 def load_timeline(journal: str | os.PathLike[str], *, model: str | None = None,
                   start: Bound | None = None, end: Bound | None = None,
-                  name: str | None = None) -> Timeline:
-    """The ``Timeline`` of ``journal`` (optionally ordered by ``model``, cut to a window)."""
+                  name: str | None = None, run: str | None = None) -> Timeline:
+    """The ``Timeline`` of one run of ``journal`` (the latest, or the one ``run`` names;
+    optionally ordered by ``model``, cut to a window)."""
     path = Path(journal)
     with JournalReader(path) as reader:
-        entries = reader.since(0, limit=None)
-        counts = reader.counts()
-    if not entries:
-        raise UserError(f"journal {path} is empty",
-                        "report a journal the daemon has written to (dxboard run --journal)")
-    if counts[Kind.DIAGNOSIS.value] == 0:
-        raise UserError(f"journal {path} has no diagnoses ({len(entries)} entries of other "
+        runs = list_runs(reader)
+        chosen = pick(runs, run, str(path))
+        entries = reader.query(after_id=chosen.after_id, to_id=chosen.last_id)
+    which = f"journal {path} run {chosen.run_id}" if len(runs) > 1 else f"journal {path}"
+    if not any(isinstance(e.payload, DiagnosisRecord) for e in entries):
+        raise UserError(f"{which} has no diagnoses ({len(entries)} entries of other "
                         f"kinds), so there is no timeline to draw",
-                        "report a journal of a daemon that ran diagnosis (dxboard run "
-                        "SYSTEM_DIR --journal FILE)")
-    robot, groups = ("", None) if model is None else model_groups(model)
+                        "pick a run of a daemon that ran diagnosis (--runs lists them)"
+                        if len(runs) > 1 else "report a journal of a daemon that ran "
+                        "diagnosis (dxboard run SYSTEM_DIR --journal FILE)")
+    robot, groups = (chosen.robot, None) if model is None else model_groups(model)
     if groups is not None:
         unknown = {c for e in entries if isinstance(e.payload, DiagnosisRecord)
                    for bad in e.payload.diagnoses for c in bad} - set(groups)
@@ -71,13 +76,13 @@ def load_timeline(journal: str | os.PathLike[str], *, model: str | None = None,
                         "its components", ", ".join(sorted(unknown)), model)
     try:
         timeline = build_timeline(entries, name=name or path.stem, robot=robot,
-                                  groups=groups, start=start, end=end)
+                                  groups=groups, start=start, end=end, run=chosen.run_id)
     except EmptyWindow as exc:
-        raise UserError(f"journal {path}: {exc}",
-                        "choose --from/--to inside the journal, or leave them out") from exc
+        raise UserError(f"{which}: {exc}",
+                        "choose --from/--to inside the run, or leave them out") from exc
     if timeline.diagnoses == 0 and not any(iv.state.value != "unknown" for r in timeline.rows
                                            for iv in r.intervals):
-        raise UserError(f"journal {path}: no diagnosis before or inside the window "
+        raise UserError(f"{which}: no diagnosis before or inside the window "
                         f"({start or 'start'} .. {end or 'end'})",
                         "move --from/--to to where the daemon was diagnosing")
     return timeline

@@ -17,10 +17,12 @@ system became normal again after something was abnormal. The rules:
   ``running`` if the journal holds no end. Action times are the daemon's own (``started`` and
   ``finished``); they are put on the axis through the entry that carried them, whichever of
   the entry's two clocks (wall or monotonic) they were taken on.
-- The time axis is in seconds from the start of the journal, or of the window when one is
-  chosen (``Bound``: seconds on the journal's axis, or ``#ID`` a journal id). It follows the
-  daemon's monotonic clock, so a wall-clock step cannot distort durations, unless that clock
-  goes backwards within the journal (a daemon restart): then it follows wall time.
+- The entries are one daemon run's (``host.journal.runs``: each run numbers its actions
+  afresh, so two runs' ``a1`` are different actions). The time axis is in seconds from the
+  start of the run, or of the window when one is chosen (``Bound``: seconds on the run's axis,
+  or ``#ID`` a journal id). It follows the daemon's monotonic clock, so a wall-clock step
+  cannot distort durations, unless that clock goes backwards within the entries (entries of an
+  older daemon that wrote no run ids, across a reboot): then it follows wall time.
 - Rows are the components that the model lists (when one is given), then every other
   component the journal names: in diagnoses, in component observations (``on(d)``,
   ``in_band(d)``, ``tripped(d)``, ``link(b)`` for hardware, ``running(n)`` for nodes) and as
@@ -174,7 +176,8 @@ class Timeline:
     plans: tuple[PlanMark, ...]
     recoveries: tuple[Recovery, ...]
     diagnoses: int  # diagnosis entries in the window
-    window: str = ""  # how the window was chosen ("" for the whole journal)
+    window: str = ""  # how the window was chosen ("" for the whole run)
+    run: str = ""  # the daemon run drawn (its run id), "" when not known
 
     def row(self, name: str) -> ComponentRow:
         for r in self.rows:
@@ -258,8 +261,9 @@ def _action_time(value: float, entry: Entry, entry_at: float) -> float:
 
 def build_timeline(entries: Sequence[Entry], *, name: str, robot: str = "",
                    groups: Mapping[str, Group] | None = None, start: Bound | None = None,
-                   end: Bound | None = None) -> Timeline:
-    """Fold ``entries`` (a whole journal, in id order) into a ``Timeline`` of the window.
+                   end: Bound | None = None, run: str = "") -> Timeline:
+    """Fold ``entries`` (one daemon run, ``run``, in id order) into a ``Timeline`` of the
+    window.
 
     ``groups`` is the model's components in its order, with their groups; ``start``/``end``
     bound the window. Raises ``EmptyWindow`` if the window holds no time.
@@ -360,7 +364,8 @@ def build_timeline(entries: Sequence[Entry], *, name: str, robot: str = "",
                     if ws <= p.time <= we),
         recoveries=tuple(recoveries),
         diagnoses=sum(1 for t in diag_times if ws <= t <= we),
-        window="" if start is None and end is None else f"{start or 'start'} .. {end or 'end'}")
+        window="" if start is None and end is None else f"{start or 'start'} .. {end or 'end'}",
+        run=run)
 
 
 def _wall_at(entries: Sequence[Entry], t: float, at: Callable[[Entry], float]) -> float:

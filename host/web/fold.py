@@ -5,7 +5,11 @@
 ``ChannelSample``, with a short history of currents per channel for the sparklines), the
 observed literals (``Observation``), the current diagnoses (``DiagnosisRecord``), the repair
 actions of the recent plans (``ActionRecord``, their times turned into wall time with the
-event's own stamp), the board link (``LinkChange``), quarantines and holds, and the running
+event's own stamp; in the order they started), the board link (``LinkChange``), the run
+(``RunStarted``: its id, and the healthy value of each observable atom, by which the page
+colours observations), quarantines and holds (``QuarantineChange``, ``HoldChange``: each with
+what a person does to release it — the command, with the run's operator socket when it is not
+the default, or for a channel a person switched off, switching it on again), and the running
 counters that ``/metrics`` exports (``DiagnosisRun``, ``RepairEnded``, changes). Nothing else
 feeds the page: what the page shows is what the stream said, folded.
 """
@@ -14,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections import Counter, deque
+from pathlib import Path
 from typing import Any
 
 from host.events import (
@@ -26,13 +31,17 @@ from host.events import (
     Observation,
     QuarantineChange,
     RepairEnded,
+    RunStarted,
     Stamped,
 )
+from host.operator.client import DEFAULT_SOCKET
 from host.web.status import (
     ChannelStatus,
     DiagnosisStatus,
     MemoryStatusSource,
+    OutOfRepair,
     RepairStatus,
+    Status,
 )
 
 HISTORY = 120  # sparkline points per channel
@@ -46,6 +55,7 @@ class StatusFold:
         self._actions: dict[str, RepairStatus] = {}  # by action id, oldest first
         self._outcomes: Counter[str] = Counter()
         self._observations: dict[str, bool | None] = {}
+        self._run: RunStarted | None = None
 
     def __call__(self, stamped: Stamped) -> None:
         e = stamped.event
@@ -73,19 +83,44 @@ class StatusFold:
         elif isinstance(e, RepairEnded):
             self._outcomes[e.outcome] += 1
             changes["repairs_by_outcome"] = dict(self._outcomes)
-        elif isinstance(e, QuarantineChange):
-            q = {k: v for k, v in status.quarantined.items() if k != e.component}
-            if e.quarantined:
-                q[e.component] = e.reason
-            changes["quarantined"] = q
-        elif isinstance(e, HoldChange):
-            h = {k: v for k, v in status.held.items() if k != e.component}
-            if e.held:
-                h[e.component] = e.reason
-            changes["held"] = h
+        elif isinstance(e, RunStarted):
+            self._run = e
+            changes["run_id"] = e.run_id
+            changes["healthy"] = dict(e.healthy)
+        elif isinstance(e, QuarantineChange | HoldChange):
+            changes.update(self._out_of_repair(e, status, stamped.wall))
         else:
             return
         self.source.set(dataclasses.replace(status, updated=stamped.wall, **changes))
+
+    def _out_of_repair(self, e: QuarantineChange | HoldChange, status: Status,
+                       wall: float) -> dict[str, Any]:
+        quarantine = isinstance(e, QuarantineChange)
+        state = "quarantined" if quarantine else "held"
+        now_set = e.quarantined if isinstance(e, QuarantineChange) else e.held
+        simple = {k: v for k, v in (status.quarantined if quarantine else status.held).items()
+                  if k != e.component}
+        rows = [r for r in status.out_of_repair
+                if not (r.component == e.component and r.state == state)]
+        if now_set:
+            simple[e.component] = e.reason
+            rows.append(OutOfRepair(e.component, state, e.reason, e.by, wall,
+                                    self._release(e),
+                                    e.safe_state if isinstance(e, QuarantineChange) else ""))
+        return {state: simple, "out_of_repair": tuple(rows)}
+
+    def _release(self, e: QuarantineChange | HoldChange) -> str:
+        """What a person does to give ``e.component`` back to automatic repair."""
+        run = self._run
+        op = "" if run is None or not run.operator or Path(run.operator) == DEFAULT_SOCKET \
+            else f" --operator {run.operator}"
+        if isinstance(e, QuarantineChange):
+            return f"dxboard quarantine clear {e.component}{op}"
+        command = f"dxboard hold release {e.component}{op}"
+        if e.by == "board":  # a person switched its channel off: switching it on releases it
+            board = run.board if run is not None and run.board else "BOARD_URL"
+            return f"switch it on again (dxboard board {board} on {e.component}), or {command}"
+        return command
 
     @staticmethod
     def _probabilities(e: DiagnosisRecord) -> list[float | None]:
@@ -105,8 +140,7 @@ class StatusFold:
         def wall(mono: float | None) -> float | None:
             return None if mono is None else stamped.wall - (stamped.mono - mono)
 
-        self._actions.pop(e.action_id, None)
-        self._actions[e.action_id] = RepairStatus(
+        self._actions[e.action_id] = RepairStatus(  # a known id keeps its place
             e.action, tuple(e.args), str(e.state), wall(e.started), wall(e.finished))
         while len(self._actions) > RECENT_ACTIONS:
             del self._actions[next(iter(self._actions))]

@@ -8,7 +8,10 @@ process-global registry that would have to be kept in sync with the snapshot. Ex
 channel's current, on flag and state (one series per state, 1 for the current one, the usual
 "enum" pattern); observed literals by value; observation changes, diagnosis runs and their
 latency (a summary's ``_sum`` and ``_count``, plus the last run's latency); repairs by outcome;
-the journal's size and entries by kind; whether the board link is up. A fleet's Prometheus
+a gauge per component out of automatic repair (``dxboard_component_quarantined`` and
+``dxboard_component_held``, 1 while it is; its series ends when a person releases it, so an
+alert is ``dxboard_component_quarantined == 1``); the journal's size and entries by kind;
+whether the board link is up. A fleet's Prometheus
 scrapes these directly (ARCHITECTURE.md, "Fleets").
 """
 
@@ -89,6 +92,14 @@ def render(status: Status, journal_counts: Mapping[str, int] | None = None,
     outcomes = {"succeeded": 0, "failed": 0, "timeout": 0, **status.repairs_by_outcome}
     lines += family("dxboard_repairs_total", "counter", "Repair actions finished, by outcome.",
                     [({"outcome": k}, float(n)) for k, n in sorted(outcomes.items())])
+    lines += family("dxboard_component_quarantined", "gauge",
+                    "1 for each component quarantined: out of automatic repair until a person "
+                    "clears it (dxboard quarantine clear).",
+                    [({"component": c}, 1.0) for c in sorted(status.quarantined)])
+    lines += family("dxboard_component_held", "gauge",
+                    "1 for each component held: no repair touches it until a person releases "
+                    "it (dxboard hold release).",
+                    [({"component": c}, 1.0) for c in sorted(status.held)])
     if journal_bytes is not None:
         lines += family("dxboard_journal_bytes", "gauge",
                         "Size of the journal file and its write-ahead log.",

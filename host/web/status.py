@@ -2,9 +2,12 @@
 
 ``Status`` is one immutable snapshot of what the daemon knows: the board's channels (state,
 current and a short history of currents for the sparkline), the observed literals (True, False,
-or None when unknown), the current minimal diagnoses, the repair actions of the current and
-recent plans, whether the board link is up, the wall time of the newest data in it, and the
-running counters that ``/metrics`` exports. ``StatusSource`` is the whole contract between the
+or None when unknown) and the value of each that is healthy (as the model entails it, so the
+page colours by health, not truth), the current minimal diagnoses, the repair actions of the
+current and recent plans (in the order they started), the components out of automatic repair
+(quarantined or held, with what a person does to release each), whether the board link is up,
+the daemon run, the wall time of the newest data in it, and the running counters that
+``/metrics`` exports. ``StatusSource`` is the whole contract between the
 daemon and the web server: ``snapshot()`` returns the latest ``Status`` and ``wait_changed``
 waits (on the daemon's loop) until a newer one exists. ``MemoryStatusSource`` is a complete
 implementation that holds a status and lets its owner replace or update it; the daemon can use
@@ -67,6 +70,23 @@ class RepairStatus:
 
 
 @dataclass(frozen=True)
+class OutOfRepair:
+    """A component no repair touches (``state``: quarantined or held) until a person releases
+    it: how (``release``, e.g. ``dxboard quarantine clear hokuyo``), since when (wall time)."""
+
+    component: str
+    state: str  # quarantined | held
+    reason: str
+    by: str
+    since: float
+    release: str
+    safe_state: str = ""
+
+    def to_json(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+@dataclass(frozen=True)
 class Status:
     """One snapshot; ``version`` grows with every change (the source sets it)."""
 
@@ -88,21 +108,27 @@ class Status:
     # held by a person for maintenance)
     quarantined: Mapping[str, str] = field(default_factory=dict)
     held: Mapping[str, str] = field(default_factory=dict)
+    out_of_repair: tuple[OutOfRepair, ...] = ()  # the same, in detail, in the order set
+    run_id: str = ""
+    healthy: Mapping[str, bool] = field(default_factory=dict)  # atom -> its healthy value
     version: int = 0
 
     def to_json(self) -> dict[str, Any]:
         return {
             "version": self.version,
             "robot": self.robot,
+            "run_id": self.run_id,
             "updated": self.updated,
             "board_link_up": self.board_link_up,
             "channels": [c.to_json() for c in self.channels],
             "observations": dict(sorted(self.observations.items())),
+            "healthy": dict(sorted(self.healthy.items())),
             "diagnoses": [d.to_json() for d in self.diagnoses],
             "diagnosis_complete": self.diagnosis_complete,
             "repairs": [r.to_json() for r in self.repairs],
             "quarantined": dict(sorted(self.quarantined.items())),
             "held": dict(sorted(self.held.items())),
+            "out_of_repair": [o.to_json() for o in self.out_of_repair],
             "counters": {
                 "observation_changes": self.observation_changes,
                 "diagnosis_runs": self.diagnosis_runs,

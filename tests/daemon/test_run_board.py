@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from host.journal import BoardEvent, DiagnosisRecord, Note, Observation
+from host.journal import BoardEvent, DiagnosisRecord, Note, Observation, RunStarted
 from tests.daemon.runner import RunningDaemon, bad_sets
 
 PAPER_POWER_UP = {
@@ -65,7 +65,9 @@ def test_ctrl_c_stops_cleanly_and_the_journal_holds_every_step(daemon: RunningDa
     assert daemon.interrupt() == 0
     entries = daemon.journal()
     payloads = [e.payload for e in entries]
-    assert isinstance(payloads[0], Note) and "dxboard run" in payloads[0].text
+    first = payloads[0]  # the run begins with its id (host.journal.runs)
+    assert isinstance(first, RunStarted) and first.robot == "tedusar" and first.dry_run
+    assert first.board == daemon.urls["board"]
     assert isinstance(payloads[-1], Note) and "stopped" in payloads[-1].text
     assert any(isinstance(p, BoardEvent) and p.event == "connected" for p in payloads)
     diagnoses = [p for p in payloads if isinstance(p, DiagnosisRecord)]

@@ -12,8 +12,11 @@ power; the diagnosis blames jaguar, then jaguar and jaguar_node (its odometry st
 powers jaguar up, a second plan stops and starts jaguar_node, and at 16.4 s all is normal again
 (the paper's figure 6).
 
-Entries carry wall = T0 + t and mono = MONO0 + t; actions' ``started``/``finished`` are wall
-times (or mono with ``action_clock="mono"``). Telemetry and notes are mixed in as a daemon would.
+Entries carry wall = T0 + t and mono = MONO0 + t (each shifted by ``offset`` seconds, for a
+later run in the same file); actions' ``started``/``finished`` are wall times (or mono with
+``action_clock="mono"``). Telemetry and notes are mixed in as a daemon would. With ``run=ID``
+the history begins with the ``RunStarted`` a daemon writes first, and is appended to the file:
+several runs in one journal, as ``make run`` leaves it, each counting its actions from ``a1``.
 ``python -m tests.report.journals DIR`` writes both (and the failing variant) into DIR.
 """
 
@@ -34,6 +37,7 @@ from host.journal import (
     Payload,
     PlanRecord,
     PlanStep,
+    RunStarted,
     Telemetry,
 )
 
@@ -49,16 +53,19 @@ Event = tuple[float, Payload]
 
 
 class _History:
-    def __init__(self, action_clock: str) -> None:
+    def __init__(self, action_clock: str, run: str | None = None, offset: float = 0.0) -> None:
         self.events: list[Event] = []
         self.clock = action_clock
+        self.offset = offset
         self._n = 0
+        if run is not None:
+            self.at(0.0, RunStarted(run, "tedusar", "tcp://127.0.0.1:7000"))
 
     def at(self, t: float, payload: Payload) -> None:
         self.events.append((t, payload))
 
     def _time(self, t: float) -> float:
-        return (MONO0 if self.clock == "mono" else T0) + t
+        return (MONO0 if self.clock == "mono" else T0) + self.offset + t
 
     def action(self, action: str, arg: str, start: float, end: float,
                state: ActionState = ActionState.SUCCEEDED, plan: str = "",
@@ -79,15 +86,16 @@ class _History:
     def write(self, path: Path) -> None:
         with Journal(path) as journal:
             for t, payload in sorted(self.events, key=lambda e: e[0]):
-                journal.record(payload, wall=T0 + t, mono=MONO0 + t)
+                journal.record(payload, wall=T0 + self.offset + t, mono=MONO0 + self.offset + t)
 
 
 def _bad(*components: str) -> DiagnosisRecord:
     return DiagnosisRecord.of([sorted(components)], trigger="observation", elapsed_s=0.01)
 
 
-def power_up(path: Path, *, failing: bool = False, action_clock: str = "wall") -> Path:
-    h = _History(action_clock)
+def power_up(path: Path, *, failing: bool = False, action_clock: str = "wall",
+             run: str | None = None, offset: float = 0.0) -> Path:
+    h = _History(action_clock, run, offset)
     h.at(0.0, Note("daemon started: robot tedusar"))
     for hw in HARDWARE:
         h.at(0.2, Observation(f"on({hw})", False, "board"))
@@ -123,8 +131,9 @@ def power_up(path: Path, *, failing: bool = False, action_clock: str = "wall") -
     return path
 
 
-def device_shut_down(path: Path, *, action_clock: str = "wall") -> Path:
-    h = _History(action_clock)
+def device_shut_down(path: Path, *, action_clock: str = "wall", run: str | None = None,
+                     offset: float = 0.0) -> Path:
+    h = _History(action_clock, run, offset)
     h.at(0.0, Note("daemon started: robot tedusar"))
     for hw in HARDWARE:
         h.at(0.2, Observation(f"on({hw})", True, "board"))

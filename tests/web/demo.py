@@ -4,11 +4,18 @@ Ten board channels as ``models/tedusar/system.yaml`` assigns them, the jaguar ba
 powered back up (the device-shut-down scenario of paper 000 §VI, figure 6), its driver still
 diagnosed broken, and a two-step plan half done. ``demo_status(now)`` builds the snapshot with
 times relative to ``now``; ``demo_journal(journal, now)`` writes the matching history.
+``kept_fresh(source)`` keeps the snapshot's time current while a test runs, as a running
+daemon's channel samples do, so that a browser slow to start on a busy machine does not find
+the demo's data stale.
 """
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import math
+import time
+from collections.abc import AsyncIterator
 
 from host.journal import (
     ActionRecord,
@@ -20,7 +27,7 @@ from host.journal import (
     PlanRecord,
     PlanStep,
 )
-from host.web import ChannelStatus, DiagnosisStatus, RepairStatus, Status
+from host.web import ChannelStatus, DiagnosisStatus, MemoryStatusSource, RepairStatus, Status
 
 CHANNELS = [  # id, name, state, current in mA
     (0, "sensor_head", "on", 820.0), (1, "laser_alignment", "on", 310.0), (2, "pc", "on", 3900.0),
@@ -85,3 +92,20 @@ def demo_journal(journal: Journal, now: float) -> None:
     for i, payload in enumerate(items):
         journal.record(payload, wall=t + i * 0.7, mono=1000.0 + i * 0.7)
     journal.flush_blocking(timeout=10)
+
+
+@contextlib.asynccontextmanager
+async def kept_fresh(source: MemoryStatusSource, every_s: float = 0.5) -> AsyncIterator[None]:
+    """While inside, the status's ``updated`` is now (refreshed every ``every_s``)."""
+    async def touch() -> None:
+        while True:
+            source.update(updated=time.time())
+            await asyncio.sleep(every_s)
+
+    task = asyncio.create_task(touch())
+    try:
+        yield
+    finally:
+        task.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await task

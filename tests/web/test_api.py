@@ -113,6 +113,26 @@ async def test_metrics_are_prometheus_text(server: WebServer,
     assert samples["dxboard_journal_bytes"] > 0
 
 
+async def test_metrics_have_a_gauge_per_quarantined_and_held_component(
+        server: WebServer, source: MemoryStatusSource) -> None:
+    source.update(quarantined={"hokuyo": "3 attempts failed"},
+                  held={"jaguar": "switched off", "imu": "new cable"})
+    async with aiohttp.ClientSession() as s, s.get(url(server, "/metrics")) as resp:
+        text = await resp.text()
+    assert "# TYPE dxboard_component_quarantined gauge" in text
+    assert "# TYPE dxboard_component_held gauge" in text
+    lines = set(text.splitlines())
+    assert 'dxboard_component_quarantined{component="hokuyo"} 1' in lines
+    assert 'dxboard_component_held{component="imu"} 1' in lines
+    assert 'dxboard_component_held{component="jaguar"} 1' in lines
+    assert not any(x.startswith('dxboard_component_quarantined{component="jaguar"}')
+                   for x in lines)
+    source.update(quarantined={}, held={})
+    async with aiohttp.ClientSession() as s, s.get(url(server, "/metrics")) as resp:
+        text = await resp.text()
+    assert "dxboard_component_quarantined{" not in text and "dxboard_component_held{" not in text
+
+
 async def test_metrics_escape_label_values() -> None:
     from host.web import metrics
     from host.web.status import ChannelStatus

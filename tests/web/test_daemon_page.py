@@ -21,6 +21,7 @@ from tests.web.chromium import Chromium
 
 NAMES = ["sensor_head", "laser_alignment", "pc", "hokuyo", "kinect", "router",
          "thermal_camera", "jaguar", "spare8", "spare9"]
+HEAL_S = 90.0  # on a busy machine a node's topic may flicker a while after a repair
 CHANNEL_STATE = "document.querySelector('[data-channel-id=\"{}\"]')?.dataset.state"
 # every chip and repair row the page ever showed, sampled every 20 ms (they come and go)
 WATCH = """
@@ -55,7 +56,7 @@ async def test_the_daemon_page_shows_the_robot_and_a_fault(daemon: RunningDaemon
         for ch in (2, 3, 7):  # the PC and the devices the daemon powered up
             assert await page.wait_for(f"{CHANNEL_STATE.format(ch)} === 'on'", 30)
         assert await page.wait_for("document.querySelector('#diagnoses .muted')"
-                                   "?.textContent === 'none'", 30)
+                                   "?.textContent === 'none'", HEAL_S)
         assert await page.evaluate(
             "[...document.querySelectorAll('#repairs .what')].some(e =>"
             " e.textContent === 'power_up(hokuyo)')")
@@ -67,6 +68,6 @@ async def test_the_daemon_page_shows_the_robot_and_a_fault(daemon: RunningDaemon
         assert await page.wait_for("seenRepairs.has('power_cycle(hokuyo) succeeded')", 90)
         await asyncio.to_thread(daemon.wait_for, healthy, 90.0, "healthy again")
         assert await page.wait_for("document.querySelector('#diagnoses .muted')"
-                                   "?.textContent === 'none'", 30)
+                                   "?.textContent === 'none'", HEAL_S)
         assert await page.wait_for(f"{CHANNEL_STATE.format(3)} === 'on'", 30)
         await page.screenshot(tmp_path / "daemon-page.png")
