@@ -2,9 +2,11 @@
 
 ``dxboard emulate SYSTEM_DIR [--listen H:P] [--control H:P] [--modbus H:P] [--serial]
 [--can INTERFACE:CHANNEL] [--runtime cpython|micropython] [--scenario FILE] [--seed N]
-[--key-file FILE] [--robot]`` loads ``SYSTEM_DIR/emulator.yaml`` (the loads) and ``board.json`` (the
-board configuration, written to the emulated flash on first boot), boots the firmware, starts
-its front ends and prints one URL a line, then runs on the wall clock until SIGINT/SIGTERM::
+[--key-file FILE] [--robot] [--flash DIR]`` loads ``SYSTEM_DIR/emulator.yaml`` (the loads)
+and ``board.json`` (the board configuration, written to the emulated flash on first boot;
+``--flash DIR`` keeps that flash in a directory, so that ``config save`` survives a
+restart), boots the firmware, starts its front ends and prints one URL a line, then runs on
+the wall clock until SIGINT/SIGTERM::
 
     board: tcp://127.0.0.1:7000
     control: control://127.0.0.1:7001
@@ -58,6 +60,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="actuation key (hex); default $DXBOARD_KEY")
     parser.add_argument("--robot", action="store_true",
                         help="also serve the virtual robot's devices (SYSTEM_DIR/robot.yaml)")
+    parser.add_argument("--flash", metavar="DIR",
+                        help="keep the board's flash (saved configuration, boot record) in "
+                             "this directory, so that it survives a restart; default: memory")
 
 
 def parse_address(text: str, option: str) -> tuple[str, int]:
@@ -95,6 +100,7 @@ def run(args: argparse.Namespace) -> int:
         seed=args.seed,
         key=load_key(args.key_file),
         robot=args.robot,
+        flash=Path(args.flash) if args.flash else None,
     )
     try:
         return run_emulator(opts, sys.stdout)
