@@ -36,6 +36,7 @@ from emulator.model import EmulatorModel, ModelError
 from firmware import config
 from firmware.app import App
 from firmware.hal.storage import MemStorage
+from protocol import settings
 from protocol.constants import (
     FAULT_NAMES,
     RESET_BROWNOUT,
@@ -262,18 +263,8 @@ class Emulator:
 
 def make_config(board_config: dict[str, Any], n: int) -> dict[str, Any]:
     """A full firmware configuration from a model's partial one; ``ModelError`` if invalid."""
-    cfg = config.defaults(n)
-    board = board_config.get("board", {})
-    bad = config.check_board(board)
-    if bad is not None:
-        raise ModelError(f"board config: bad board field {bad!r}")
-    cfg["board"].update(board)
-    chans = board_config.get("channels", [])
-    if not isinstance(chans, list) or len(chans) > n:
-        raise ModelError(f"board config: 'channels' must be a list of at most {n}")
-    for i, c in enumerate(chans):
-        bad = config.check_channel(c)
-        if bad is not None:
-            raise ModelError(f"board config: channel {i}: bad field {bad!r}")
-        cfg["channels"][i].update(c)
-    return cfg
+    cfg, bad = settings.merge(board_config, n, config.VERSION)
+    if cfg is None:
+        raise ModelError(f"board config: bad field {bad}")
+    result: dict[str, Any] = cfg
+    return result

@@ -61,6 +61,7 @@ from protocol.constants import (
     ST_ON,
     ST_TRIPPED,
 )
+from protocol.settings import BOARD_WIRE_KEYS
 
 TOTAL_SAMPLES = const(2)
 UV_SAMPLES = const(3)
@@ -388,10 +389,14 @@ class Board:
         return 0
 
     def get_board_config(self) -> dict:  # type: ignore[type-arg]
-        """A copy of the board configuration without the key (which never leaves the board)."""
-        b = dict(self.cfg["board"])
-        b.pop("key", None)
-        return b
+        """A copy of the board configuration as BOARD_CONFIG carries it: never the key (which
+        never leaves the board) nor the listen address."""
+        b = self.cfg["board"]
+        out = {}
+        for name in BOARD_WIRE_KEYS:
+            out[name] = b[name]
+        out["modbus_allow"] = list(out["modbus_allow"])
+        return out
 
     def set_board_config(self, fields: dict) -> int:  # type: ignore[type-arg]
         if config.check_board(fields) is not None:

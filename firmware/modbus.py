@@ -36,40 +36,45 @@ the first refusal.
 import asyncio
 import struct
 
-from firmware import config
-from protocol.compat import const
+from protocol import settings
 from protocol.constants import E_BAD_CHANNEL, PROTOCOL_VERSION
-
-MAX_LEN = const(254)
-MAX_CHANNELS = const(16)
-COIL_SPAN = const(16)
-DISCRETE_SPAN = const(32)
-INPUT_SPAN = const(110)
-HOLD_LO = const(900)
-HOLD_HI = const(1512)  # exclusive
-CH_BASE = const(1000)
-CH_STRIDE = const(32)
-CMD_REG = const(990)
-
-X_FUNCTION = const(1)
-X_ADDRESS = const(2)
-X_VALUE = const(3)
-X_DEVICE = const(4)
-
-# field -> (offset, words); words 2 = u32 high word first
-CH_REGS = (
-    ("rated_ma", 0, 2), ("inrush_ms", 2, 1), ("inrush_factor_x10", 3, 1),
-    ("trip_factor_x10", 4, 1), ("trip_samples", 5, 1), ("overload_start_x100", 6, 1),
-    ("i2t_ms", 7, 1), ("short_retries", 8, 1), ("open_load_ma", 9, 1), ("open_load_ms", 10, 1),
-    ("stuck_on_ma", 11, 1), ("stuck_on_ms", 12, 1), ("powerup", 13, 1), ("priority", 14, 1),
-    ("protected", 15, 1), ("retry_reset_ms", 20, 2),
-)
-RETRY_OFF = const(16)
-RETRY_N = const(4)
-BOARD_REGS = (
-    ("total_limit_ma", 900, 2), ("uv_warn_mv", 902, 1), ("uv_shed_mv", 903, 1),
-    ("uv_off_mv", 904, 1), ("uv_hyst_mv", 905, 1), ("tick_ms", 906, 1),
-    ("powerup_spacing_ms", 907, 1), ("deadman_ms", 908, 2),
+from protocol.modbus_map import (
+    BOARD_FLAGS,
+    BOARD_REGS,
+    BOARD_REGS_END,
+    CH_BASE,
+    CH_REGS,
+    CH_STRIDE,
+    CHANNEL_COUNT,
+    CMD_REG,
+    CMD_SAVE,
+    COIL_SPAN,
+    CONFIG_STATUS,
+    CURRENT,
+    DISCRETE_SPAN,
+    FAULT_INPUTS,
+    HOLD_HI,
+    HOLD_LO,
+    INPUT_MV,
+    INPUT_SPAN,
+    LIVE_FAULTS,
+    MAX_CHANNELS,
+    MAX_LEN,
+    PROTECTED_OFF,
+    RESET_CAUSE,
+    RETRY_N,
+    RETRY_OFF,
+    STATE,
+    STICKY_FAULTS,
+    TOTAL_MA,
+    TRIPS,
+    UPTIME_MS,
+    VERSION,
+    X_ADDRESS,
+    X_DEVICE,
+    X_FUNCTION,
+    X_VALUE,
+    is_assigned,
 )
 
 
@@ -117,27 +122,23 @@ def _input_regs(board: object) -> list:  # type: ignore[type-arg]
     (mv, total, uptime, cause, cfg_status, flags), chans = board.status()  # type: ignore[attr-defined]
     for k in range(min(len(chans), MAX_CHANNELS)):
         c = chans[k]
-        regs[k] = _u16(c[3])
-        regs[16 + k] = c[2]
-        regs[32 + k] = c[4] & 0xFFFF
-        regs[48 + k] = c[5] & 0xFFFF
-        regs[64 + k] = _u16(c[6])
-    regs[100] = _u16(mv)
-    t = _u32(total)
-    regs[101] = t >> 16
-    regs[102] = t & 0xFFFF
-    u = _u32(uptime)
-    regs[103] = u >> 16
-    regs[104] = u & 0xFFFF
-    regs[105] = flags & 0xFFFF
-    regs[106] = cause
-    regs[107] = cfg_status
-    regs[108] = board.n  # type: ignore[attr-defined]
-    regs[109] = PROTOCOL_VERSION
+        regs[CURRENT + k] = _u16(c[3])
+        regs[STATE + k] = c[2]
+        regs[LIVE_FAULTS + k] = c[4] & 0xFFFF
+        regs[STICKY_FAULTS + k] = c[5] & 0xFFFF
+        regs[TRIPS + k] = _u16(c[6])
+    regs[INPUT_MV] = _u16(mv)
+    _put(regs, TOTAL_MA, 2, total)
+    _put(regs, UPTIME_MS, 2, uptime)
+    regs[BOARD_FLAGS] = flags & 0xFFFF
+    regs[RESET_CAUSE] = cause
+    regs[CONFIG_STATUS] = cfg_status
+    regs[CHANNEL_COUNT] = board.n  # type: ignore[attr-defined]
+    regs[VERSION] = PROTOCOL_VERSION
     return regs
 
 
-def _put(regs: dict, addr: int, words: int, value: int) -> None:  # type: ignore[type-arg]
+def _put(regs: "dict | list", addr: int, words: int, value: int) -> None:  # type: ignore[type-arg]
     if words == 2:
         v = _u32(value)
         regs[addr] = v >> 16
@@ -180,13 +181,6 @@ def _holding(board: object, lo: int, hi: int) -> dict:  # type: ignore[type-arg]
     return regs
 
 
-def _is_assigned(addr: int) -> bool:
-    if addr >= CH_BASE:
-        off = (addr - CH_BASE) % CH_STRIDE
-        return off < 22
-    return 900 <= addr < 910 or addr == CMD_REG
-
-
 # --- requests ----------------------------------------------------------------------------
 
 
@@ -218,12 +212,12 @@ def _read(board: object, fc: int, addr: int, count: int) -> "bytes | int":
         n = len(chans)
         vals = []
         for a in range(addr, addr + count):
-            k = a % 16
+            k = a % MAX_CHANNELS
             if k >= n:
                 vals.append(0)
             elif fc == 1:
                 vals.append(chans[k].commanded)
-            elif a < 16:
+            elif a < FAULT_INPUTS:
                 vals.append(chans[k].physical)
             else:
                 vals.append(chans[k].live != 0)
@@ -261,21 +255,21 @@ def _write_regs(board: object, addr: int, values: list) -> int:  # type: ignore[
     regs = _holding(board, addr, end)
     for i in range(len(values)):
         a = addr + i
-        if not _is_assigned(a) or (a >= CH_BASE and (a - CH_BASE) // CH_STRIDE >= n):
+        if not is_assigned(a) or (a >= CH_BASE and (a - CH_BASE) // CH_STRIDE >= n):
             return X_ADDRESS
-        if a >= CH_BASE and (a - CH_BASE) % CH_STRIDE == 15 and values[i] != regs[a]:
+        if a >= CH_BASE and (a - CH_BASE) % CH_STRIDE == PROTECTED_OFF and values[i] != regs[a]:
             return X_ADDRESS  # protected: never writable over Modbus
         regs[a] = values[i]
     save = CMD_REG in regs and addr <= CMD_REG < end
-    if save and regs[CMD_REG] != 1:
+    if save and regs[CMD_REG] != CMD_SAVE:
         return X_VALUE
     # decode and check everything before applying anything
     board_fields = None
-    if addr < 910:
+    if addr < BOARD_REGS_END:
         board_fields = {}
         for name, a, words in BOARD_REGS:
             board_fields[name] = _get(regs, a, words)
-        if config.check_board(board_fields) is not None:
+        if settings.check_board(board_fields) is not None:
             return X_VALUE
     updates = []
     for k in range(min(n, MAX_CHANNELS)):
@@ -296,7 +290,7 @@ def _write_regs(board: object, addr: int, values: list) -> int:  # type: ignore[
             if v:
                 retry.append(v)
         fields["retry_ms"] = retry
-        if config.check_channel(fields) is not None:
+        if settings.check_channel(fields) is not None:
             return X_VALUE
         updates.append((k, fields))
     if board_fields is not None and board.set_board_config(board_fields):  # type: ignore[attr-defined]

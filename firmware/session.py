@@ -73,6 +73,7 @@ from protocol.messages import (
     Switch,
     Switched,
 )
+from protocol.settings import int_to_ip, ip_to_int
 
 FIRMWARE_VERSION = "0.1.0"
 MAX_RATE_HZ = 100
@@ -89,31 +90,6 @@ def board_key(board: object) -> "bytes | None":
         return bytes.fromhex(text)
     except ValueError:
         return None
-
-
-def ip_to_int(text: str) -> int:
-    """``"10.0.0.1"`` -> 0x0A000001; ValueError if it is not a dotted IPv4 address."""
-    parts = text.split(".")
-    if len(parts) != 4:
-        raise ValueError("not an IPv4 address: %r" % text)
-    n = 0
-    for p in parts:
-        v = int(p)
-        if not 0 <= v <= 255:
-            raise ValueError("not an IPv4 address: %r" % text)
-        n = n * 256 + v
-    return n
-
-
-def _ip_or_none(text: str) -> "int | None":
-    try:
-        return ip_to_int(text)
-    except ValueError:
-        return None
-
-
-def int_to_ip(n: int) -> str:
-    return "%d.%d.%d.%d" % ((n >> 24) & 255, (n >> 16) & 255, (n >> 8) & 255, n & 255)
 
 
 def _u16(v: int) -> int:
@@ -274,12 +250,7 @@ class Session:
 
     def board_config_message(self, req_id: int = 0) -> BoardConfig:
         cfg = self.board.get_board_config()  # type: ignore[attr-defined]
-        allow = []
-        for text in cfg.get("modbus_allow", []):
-            n = _ip_or_none(text)
-            if n is not None:  # a hostname or a malformed entry is not representable
-                allow.append(n)
-        cfg["modbus_allow"] = allow
+        cfg["modbus_allow"] = [ip_to_int(text) for text in cfg["modbus_allow"]]
         return BoardConfig(req_id=req_id, **cfg)
 
     # --- pushes -----------------------------------------------------------------------

@@ -71,26 +71,17 @@ for p in {paths!r}:
     print('DXH', binascii.hexlify(h.digest()).decode(), p)
 """
 
-# runs on the board: the firmware's own config module validates and saves the settings
+# runs on the board: the board's own code merges, validates and saves the settings
 _CONFIG = """
 import json, os
 from firmware import config
 from firmware.hal.storage import FileStorage
+from protocol import settings
 with open({upload!r}) as f:
     src = json.load(f)
 os.remove({upload!r})
 n = {n!r}
-cfg = config.defaults(n)
-board = src.get('board', {{}})
-bad = config.check_board(board)
-if bad is None:
-    cfg['board'].update(board)
-    for i, c in enumerate(src.get('channels', [])):
-        bad = config.check_channel(c)
-        if bad is not None:
-            bad = 'channel %d: %s' % (i, bad)
-            break
-        cfg['channels'][i].update(c)
+cfg, bad = settings.merge(src, n, config.VERSION)
 if bad is None:
     st = FileStorage('')
     config.save(st, cfg)

@@ -41,6 +41,7 @@ from host.transports.base import PUSH, SAVE
 from host.transports.errors import BadUrl
 from host.transports.translate import Handler, Refused, TranslatingTransport
 from host.transports.url import BoardUrl
+from protocol import modbus_map as M
 from protocol.constants import (
     CAP_SUBSCRIBE,
     CFG_OK,
@@ -72,20 +73,22 @@ from protocol.messages import (
 
 log = logging.getLogger(__name__)
 
-BOARD_MAP: dict[str, Any] = {
-    "channel_count": 108, "version": 109, "switch_coils": 0, "readback_inputs": 0,
-    "fault_inputs": 16, "current_registers": 0, "current_scale": 1.0, "state_registers": 16,
-    "live_fault_registers": 32, "sticky_fault_registers": 48, "trip_registers": 64,
-    "input_mv": 100, "total_ma": 101, "uptime_ms": 103, "board_flags": 105,
-    "reset_cause": 106, "config_status": 107, "save_register": 990, "save_value": 1,
+BOARD_MAP: dict[str, Any] = {  # the board's own map (protocol/modbus_map.py)
+    "channel_count": M.CHANNEL_COUNT, "version": M.VERSION, "switch_coils": 0,
+    "readback_inputs": 0, "fault_inputs": M.FAULT_INPUTS, "current_registers": M.CURRENT,
+    "current_scale": 1.0, "state_registers": M.STATE, "live_fault_registers": M.LIVE_FAULTS,
+    "sticky_fault_registers": M.STICKY_FAULTS, "trip_registers": M.TRIPS,
+    "input_mv": M.INPUT_MV, "total_ma": M.TOTAL_MA, "uptime_ms": M.UPTIME_MS,
+    "board_flags": M.BOARD_FLAGS, "reset_cause": M.RESET_CAUSE,
+    "config_status": M.CONFIG_STATUS, "save_register": M.CMD_REG, "save_value": M.CMD_SAVE,
 }
 _KEYS = set(BOARD_MAP) | {"channels"}
 _EXCEPTIONS = {
-    1: (E_INHIBITED, "Modbus writes are not enabled for this client (exception 01): "
+    M.X_FUNCTION: (E_INHIBITED, "Modbus writes are not enabled for this client (exception 01): "
                      "set modbus_write and modbus_allow in the board config"),
-    2: (E_BAD_CHANNEL, "no such register (exception 02)"),
-    3: (E_BAD_VALUE, "value refused (exception 03)"),
-    4: (E_INTERNAL, "refused by the board (exception 04)"),
+    M.X_ADDRESS: (E_BAD_CHANNEL, "no such register (exception 02)"),
+    M.X_VALUE: (E_BAD_VALUE, "value refused (exception 03)"),
+    M.X_DEVICE: (E_INTERNAL, "refused by the board (exception 04)"),
 }
 SPAN = 120  # registers per read request (Modbus allows 125)
 SETTLE_S = 0.3  # how long a switch's read-back may take to follow a write

@@ -17,8 +17,8 @@ from emulator import model
 from emulator.control import Background
 from emulator.frontends import FrontEnds
 from emulator.sim import Emulator
-from firmware.can import OP_ON, command_frame, command_tag
 from host.commands.inject import request as control
+from protocol.can import OP_ON, command_frame, command_tag
 from protocol.connection import HOST, Connection
 from protocol.messages import GetState, Hello, HelloRequest, State, Switch, Switched
 from tests.emulator.conftest import TEDUSAR
@@ -130,7 +130,7 @@ def test_dbc_round_trips() -> None:
         for k, v in values.items():
             assert abs(float(back[k]) - float(v)) < 1e-6 * max(1.0, abs(float(v))), (m.name, k)
     # the firmware's own encoders agree with the DBC
-    from firmware.can import channel_frame, result_frame, status_frame
+    from protocol.can import channel_frame, result_frame, status_frame
 
     ch = db.get_message_by_name("DXB_Channel_0").decode(
         channel_frame((True, False, 3, -1234, 0x21, 0, 7, 2)), decode_choices=False)

@@ -3,7 +3,8 @@
 import struct
 import unittest
 
-from firmware.can import (
+from firmware.can import CanNode
+from protocol.can import (
     ID_CHANNEL,
     ID_CMD,
     ID_CURRENTS,
@@ -15,11 +16,15 @@ from firmware.can import (
     OP_CYCLE,
     OP_OFF,
     OP_ON,
-    CanNode,
     channel_frame,
     command_frame,
     command_tag,
     currents_frame,
+    parse_channel,
+    parse_command,
+    parse_currents,
+    parse_result,
+    parse_status,
     result_frame,
     status_frame,
 )
@@ -59,6 +64,19 @@ class FrameTest(unittest.TestCase):
         self.assertEqual(command_frame(OP_CYCLE, 3, True, 20, 0x01020304),
                          bytes.fromhex("0303011404030201"))
         self.assertEqual(result_frame(OP_ON, 3, 301, 4, True), bytes.fromhex("01032d0114000000"))
+
+    def test_parse_inverts_pack(self):
+        self.assertEqual(parse_channel(channel_frame((True, True, 2, -1500, 3, 0, 1, 0))),
+                         (2, True, True, -1500, 3, 1, 0))
+        self.assertEqual(parse_status(status_frame((24000, 0, 61999, 1, 2, 0x21))),
+                         (61, 24000, 0x21, 1, 2))
+        self.assertEqual(parse_currents(currents_frame([1234, -20, 0, 70000], 0)),
+                         [1230, -20, 0, 70000])
+        self.assertEqual(parse_command(command_frame(OP_CYCLE, 3, True, 20, 7)),
+                         (OP_CYCLE, 3, True, 20, 7))
+        self.assertEqual(parse_result(result_frame(OP_ON, 3, 301, 4, True)),
+                         (OP_ON, 3, 301, 4, True))
+        self.assertRaises(ValueError, parse_command, bytes(7))
 
     def test_current_saturates(self):
         f = channel_frame((False, False, 0, 10 ** 7, 0, 0, 300, 999))

@@ -2,7 +2,7 @@
 
 import unittest
 
-from firmware.session import Session, int_to_ip, ip_to_int
+from firmware.session import Session
 from protocol.connection import HOST, Connection
 from protocol.constants import (
     E_AUTH_REQUIRED,
@@ -45,6 +45,7 @@ from protocol.messages import (
     Switch,
     Switched,
 )
+from protocol.settings import check_board, int_to_ip, ip_to_int
 from tests.firmware.testhal import Rig
 
 KEY = bytes(range(32))
@@ -150,7 +151,7 @@ class ReadTest(unittest.TestCase):
 
     def test_get_config(self):
         p = Pair(rig(channels={2: {"name": "laser", "rated_ma": 1500}},
-                     board={"modbus_allow": ["10.0.0.7", "not-an-ip"]}))
+                     board={"modbus_allow": ["10.0.0.7"]}))
         cc = p.one(GetConfig(2), ChannelConfig)
         self.assertEqual((cc.channel, cc.name, cc.rated_ma), (2, "laser", 1500))
         bc = p.one(GetConfig(255), BoardConfig)
@@ -161,8 +162,12 @@ class ReadTest(unittest.TestCase):
     def test_ip_conversion(self):
         self.assertEqual(ip_to_int("192.168.1.20"), 0xC0A80114)
         self.assertEqual(int_to_ip(0xC0A80114), "192.168.1.20")
-        for bad in ("1.2.3", "1.2.3.256", "a.b.c.d"):
+        for bad in ("1.2.3", "1.2.3.256", "a.b.c.d", "1.2.3.-4", "1.2.3.4 "):
             self.assertRaises(ValueError, ip_to_int, bad)
+        # a configuration holds dotted IPv4 addresses only: a host name cannot be reported
+        self.assertEqual(check_board({"modbus_allow": ["10.0.0.7", "not-an-ip"]}),
+                         "modbus_allow")
+        self.assertIsNone(check_board({"modbus_allow": ["10.0.0.7"]}))
 
 
 class ActuationTest(unittest.TestCase):
