@@ -132,11 +132,7 @@ class FrontEnds:
             asyncio.Protocol, os.fdopen(os.dup(master), "wb", 0))
         writer = _PipeWriter(wtrans)
         assert self.net is not None
-        while True:  # the stream never ends while the slave stays open; restart if it does
-            await self.net.serve_stream(reader, writer, close=False)
-            if reader.at_eof():
-                return
-            await asyncio.sleep(0.1)
+        await self.net.serve_serial(reader, writer)
 
     async def stop(self) -> None:
         with contextlib.suppress(ValueError):

@@ -44,13 +44,8 @@ async def run(app: App, uart: object) -> None:
     await modbus.serve(net, "0.0.0.0", MODBUS_PORT)
     tasks = [asyncio.create_task(net.housekeeping())]
     stream = asyncio.StreamReader(uart)  # type: ignore[arg-type] # MicroPython: one Stream
-    tasks.append(asyncio.create_task(_serial(net, stream)))
+    tasks.append(asyncio.create_task(net.serve_serial(stream, stream)))
     await net.protect()
-
-
-async def _serial(net: Net, stream: object) -> None:
-    while True:  # one session per stream; a new one if it ever ends
-        await net.serve_stream(stream, stream, close=False)
 
 
 def main() -> None:

@@ -11,6 +11,8 @@ events are never skipped: a client that lets ``HARD_CAP`` bytes pile up is disco
 instead. A flood of bytes is read ``READ_SIZE`` at a time with a yield after each chunk.
 TCP connections silent for ``read_timeout_ms`` (30 s; hosts PING) are closed, which also
 ends half-open connections; at most ``max_clients`` (8) are served, more are closed at once.
+``serve_serial`` serves a serial line: one session after another on the same stream, each
+dropping an incomplete frame after ``FRAME_GAP_MS`` of silence.
 
 ``Net(app, firmware_version, capabilities)``; ``attach(app)`` after a reboot (closes every
 client, as a reset would); ``await serve_tcp(host, port)`` returns the server;
@@ -22,7 +24,7 @@ beats the supervisor's ``net`` task once a second. Runs on MicroPython's asyncio
 
 import asyncio
 
-from firmware.session import Session, board_key
+from firmware.session import FRAME_GAP_MS, Session, board_key
 from protocol.compat import const
 
 READ_SIZE = const(512)
@@ -121,10 +123,10 @@ class Net:
     def now(self) -> int:
         return self.hal.ticks_ms()  # type: ignore[no-any-return]
 
-    def _session(self) -> Session:
+    def _session(self, frame_gap_ms: int = 0) -> Session:
         board = self.app.board  # type: ignore[attr-defined]
         return Session(board, board_key(board), self.hal.random_bytes, self.firmware_version,
-                       self.capabilities, self.now())
+                       self.capabilities, self.now(), frame_gap_ms)
 
     # --- pushes, after every protection step ------------------------------------------
 
@@ -168,11 +170,23 @@ class Net:
             return
         await self.serve_stream(reader, writer, self.read_timeout_ms)
 
+    async def serve_serial(self, reader: object, writer: object) -> None:
+        """Serve a serial line until its stream ends (a UART's never does)."""
+        while True:
+            await self.serve_stream(reader, writer, close=False, frame_gap_ms=FRAME_GAP_MS)
+            at_eof = getattr(reader, "at_eof", None)
+            if at_eof is not None and at_eof():
+                return
+            await sleep_ms(100)
+
     async def serve_stream(self, reader: object, writer: object, timeout_ms: int = 0,
-                           name: str = "", close: bool = True) -> None:
+                           name: str = "", close: bool = True, frame_gap_ms: int = 0) -> None:
         """Serve one byte stream until it ends (``timeout_ms`` 0: never time out); a serial
-        port passes ``close=False`` so that the next session can use it."""
-        s = self._session()
+        port passes ``close=False`` so that the next session can use it, and
+        ``frame_gap_ms=FRAME_GAP_MS``: an incomplete frame followed by that much silence is
+        dropped (PROTOCOL.md §2), so a host that opens the port after another program left
+        half a frame behind is heard at once."""
+        s = self._session(frame_gap_ms)
         c = Client(s, writer, name)
         self.clients.append(c)
         c.queue(s.start(self.now()))

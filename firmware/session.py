@@ -76,6 +76,7 @@ from protocol.messages import (
 from protocol.settings import int_to_ip, ip_to_int
 
 FIRMWARE_VERSION = "0.1.0"
+FRAME_GAP_MS = 250  # serial lines: an incomplete frame is dropped after this much silence
 MAX_RATE_HZ = 100
 EVENTS_PER_POLL = 16
 IDLE_DUE_MS = 1000  # next_due when nothing is scheduled
@@ -98,8 +99,10 @@ def _u16(v: int) -> int:
 
 class Session:
     def __init__(self, board: object, key: "bytes | None", random_bytes: object,
-                 firmware_version: str, capabilities: int, now_ms: int) -> None:
+                 firmware_version: str, capabilities: int, now_ms: int,
+                 frame_gap_ms: int = 0) -> None:
         self.board = board
+        self.frame_gap_ms = frame_gap_ms
         self.conn = Connection(BOARD, key)
         self.random_bytes = random_bytes
         self.firmware_version = firmware_version
@@ -116,7 +119,13 @@ class Session:
     # --- session ----------------------------------------------------------------------
 
     def _hello(self, req_id: int) -> bytes:
+        """A HELLO that starts a new session: a fresh nonce and counter (the codec), and no
+        subscription, measurements counted from 1 again, only events from now on."""
         b = self.board
+        self.rate_hz = 0
+        self.meas_seq = 0
+        self.cursor = b.events.seq  # type: ignore[attr-defined]
+        self.lost = 0
         nonce = self.random_bytes(NONCE_LEN)  # type: ignore[operator]
         return self.conn.send(Hello(
             PROTOCOL_VERSION, b.cfg["board"]["board_id"], self.firmware_version,  # type: ignore[attr-defined]
@@ -125,7 +134,6 @@ class Session:
 
     def start(self, now_ms: int) -> bytes:
         self.last_rx = now_ms
-        self.cursor = self.board.events.seq  # type: ignore[attr-defined]
         return self._hello(0)
 
     def idle_ms(self, now_ms: int) -> int:
@@ -135,12 +143,20 @@ class Session:
 
     def receive(self, data: bytes, now_ms: int) -> bytes:
         conn = self.conn
+        out = []
         if data:
+            if self.frame_gap_ms and conn.pending and now_ms - self.last_rx >= self.frame_gap_ms:
+                conn.truncate()  # the frame in progress stopped arriving: drop it (E_TRUNCATED)
+                self._drain(now_ms, out)
             self.last_rx = now_ms
         else:
             self.closed = True
         conn.receive_data(data)
-        out = []
+        self._drain(now_ms, out)
+        return b"".join(out)
+
+    def _drain(self, now_ms: int, out: list) -> None:  # type: ignore[type-arg]
+        conn = self.conn
         while True:
             ev = conn.next_event()
             if ev is None:
@@ -153,7 +169,6 @@ class Session:
                 reply = self._answer(ev, now_ms)
             if reply:
                 out.append(reply)
-        return b"".join(out)
 
     def _error(self, code: int, msg: object) -> bytes:
         return self.conn.send(Error(code, msg.TYPE, ERROR_TEXT.get(code, ""),  # type: ignore[attr-defined]
