@@ -6,8 +6,10 @@ does on the board, except that the emulator's clock drives the protection steps:
 step (``emu.step_listeners``) the front ends ``pump`` their pushes, and after a reboot they
 ``attach`` to the new boot's firmware (which closes every client, as a reset does). Clients
 never reach the firmware's servers directly: a ``LinkProxy`` (``emulator/link.py``) in front of
-each applies the injected link faults, and its address is the one printed. The serial front end
-sits on the master side of a pseudo-terminal pair; clients open the slave (``serial_path``).
+each applies the injected link faults, and its address is the one printed; the Modbus proxy
+names each client to the firmware (a PROXY line), so the write allow-list sees the client.
+The serial front end sits on the master side of a pseudo-terminal pair; clients open the
+slave (``serial_path``).
 The CAN front end (``emulator/canbus.py``) puts ``firmware/can.py`` on a python-can bus.
 
 ``start(listen, modbus=None, serial=False, can=None)`` must run on the emulator's loop (see
@@ -79,9 +81,10 @@ class FrontEnds:
         host, port = await self._proxy(server, listen)
         self.urls["board"] = f"tcp://{host}:{port}"
         if modbus_at is not None:
-            mserver: Any = await modbus.serve(net, "127.0.0.1", 0)
+            mserver: Any = await modbus.serve(net, "127.0.0.1", 0, proxied=True)
             self.servers.append(mserver)
-            host, port = await self._proxy(mserver, modbus_at)
+            host, port = await self.proxy_to(mserver.sockets[0].getsockname()[:2], modbus_at,
+                                             proxy_line=True)
             self.urls["modbus"] = f"modbus+tcp://{host}:{port}"
         if serial:
             self.urls["serial"] = "serial://" + await self._start_serial()
@@ -95,9 +98,11 @@ class FrontEnds:
     async def _proxy(self, server: Any, listen: tuple[str, int]) -> tuple[str, int]:
         return await self.proxy_to(server.sockets[0].getsockname()[:2], listen)
 
-    async def proxy_to(self, target: tuple[str, int], listen: tuple[str, int]) -> tuple[str, int]:
-        """A link-fault proxy listening on ``listen`` in front of ``target``: (host, port)."""
-        proxy = LinkProxy(self.emu, target, self.seed + len(self.proxies))
+    async def proxy_to(self, target: tuple[str, int], listen: tuple[str, int],
+                       proxy_line: bool = False) -> tuple[str, int]:
+        """A link-fault proxy listening on ``listen`` in front of ``target``: (host, port);
+        ``proxy_line``: it names each client to the firmware first (the Modbus server)."""
+        proxy = LinkProxy(self.emu, target, self.seed + len(self.proxies), proxy_line)
         self.proxies.append(proxy)
         host, port = await proxy.start(*listen)
         return url_host(host), port

@@ -163,7 +163,8 @@ class MicroRuntime:
         host, port = await fronts.proxy_to(("127.0.0.1", self.tcp_port), listen)
         fronts.urls["board"] = f"tcp://{host}:{port}"
         if modbus_at is not None and self.modbus_port is not None:
-            host, port = await fronts.proxy_to(("127.0.0.1", self.modbus_port), modbus_at)
+            host, port = await fronts.proxy_to(("127.0.0.1", self.modbus_port), modbus_at,
+                                               proxy_line=True)
             fronts.urls["modbus"] = f"modbus+tcp://{host}:{port}"
         return fronts.urls
 

@@ -309,30 +309,39 @@ class Board:
             return err, 0, False
         return err, c.state, self.hal.read_switch(c.index)  # type: ignore[attr-defined]
 
+    def check_switch(self, ch: int, on: bool, force: bool = False) -> int:
+        """The error ``switch`` would answer now (0: it would act); changes nothing, so that a
+        command on several channels can be refused whole before any of them moves."""
+        c = self._ch(ch)
+        if c is None:
+            return E_BAD_CHANNEL
+        if not isinstance(on, bool):
+            return E_BAD_VALUE
+        if on:
+            return E_INHIBITED if self._inhibited(c) else c.refuses(X_ON)
+        if c.protected and not force and c.state != ST_OFF and c.state != ST_LATCHED:
+            return E_PROTECTED
+        return c.refuses(X_OFF)
+
     def switch(self, ch: int, on: bool, force: bool = False) -> tuple:  # type: ignore[type-arg]
         """Switch a channel on or off: ``(error, state, physical)``."""
+        err = self.check_switch(ch, on, force)
         c = self._ch(ch)
-        if c is None or not isinstance(on, bool):
-            return self._reply(E_BAD_CHANNEL if c is None else E_BAD_VALUE, c)
-        if on:
-            if self._inhibited(c):
-                return self._reply(E_INHIBITED, c)
-            err = c.fire(X_ON, self.now)
-            if not err:
-                c.commanded = True
-                c.cycle_at = -1
-                c.live &= ~SHED_FLAGS
+        if err or c is None:
             return self._reply(err, c)
-        if c.protected and not force and c.state != ST_OFF and c.state != ST_LATCHED:
-            return self._reply(E_PROTECTED, c)
-        err = c.fire(X_OFF, self.now)
-        if not err:
-            c.commanded = False
+        if on:
+            c.fire(X_ON, self.now)
+            c.commanded = True
             c.cycle_at = -1
             c.live &= ~SHED_FLAGS
-            if ch in self.queue:
-                self.queue.remove(ch)
-        return self._reply(err, c)
+            return self._reply(0, c)
+        c.fire(X_OFF, self.now)
+        c.commanded = False
+        c.cycle_at = -1
+        c.live &= ~SHED_FLAGS
+        if ch in self.queue:
+            self.queue.remove(ch)
+        return self._reply(0, c)
 
     def power_cycle(self, ch: int, off_ms: int, force: bool = False) -> tuple:  # type: ignore[type-arg]
         """Switch off now and on again ``off_ms`` later: ``(error, state, physical)``."""

@@ -174,6 +174,11 @@ class Channel:
 
     # --- the state machine ------------------------------------------------------------
 
+    def refuses(self, x: int) -> int:
+        """The error with which the table would refuse input ``x`` now (0: accepted)."""
+        err: int = TRANSITIONS[(self.state, x)][1]
+        return err
+
     def fire(self, x: int, now: int) -> int:
         """Apply input ``x``; returns 0 or the error code that refused it."""
         old = self.state

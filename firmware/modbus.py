@@ -10,27 +10,18 @@ client_ip) -> bytes`` answers one whole ADU; ``serve(net, host, port)`` is the a
         2        2        2       1      1     length-2
 
 Any unit id is answered. A protocol id other than 0 or a length above 254 (or below 2)
-closes the connection. Map, channel k (addresses of missing channels read 0):
+closes the connection. The register map is ``protocol/modbus_map.py`` (PROTOCOL.md §8), the
+configuration fields ``protocol/settings.py``; ``protected`` is never writable here: writing
+a value other than the current one is exception 02.
 
-- coils (FC1, FC5, FC15) 0..15: commanded switch; a write switches without force.
-- discrete inputs (FC2) 0..15: physical read-back; 16..31: any live fault.
-- input registers (FC4) 0..15 current mA (u16, negative -> 0, saturating), 16..31 state,
-  32..47 live faults, 48..63 sticky faults, 64..79 trips, 100 input mV, 101-102 total mA
-  (u32, high word first), 103-104 uptime ms (u32), 105 board flags, 106 reset cause,
-  107 config status, 108 channel count, 109 protocol version.
-- holding registers (FC3, FC6, FC16): channel k's configuration at 1000+32k (offsets in
-  ``CH_REGS``; u32 fields take two registers, high word first; ``retry_ms`` four, 0 = unused;
-  values above 65535 read 65535), the board's at 900-909 (``BOARD_REGS``), 990 the command
-  register (write 1 = save the configuration; reads 0). ``protected`` is never writable here:
-  writing a value other than the current one is exception 02.
-
-Requests reaching outside a table's span (coils 0-15, discrete inputs 0-31, input registers
-0-109, holding registers 900-1511) get exception 02; unassigned addresses inside it read 0 and
-are not writable (02). Counts out of range or bad values: 03. Writes need ``modbus_write``
-and the client's IPv4 address in ``modbus_allow``, else 01; an unknown function is 01; the
-board refusing (latched, protected, switch fault, inhibited, storage) is 04. A write is checked
-completely before anything changes, except that FC15 switches channel by channel and stops at
-the first refusal.
+Requests reaching outside a table's span get exception 02; unassigned addresses inside it read
+0 and are not writable (02). Counts out of range or bad values: 03. Writes need
+``modbus_write`` and the client's IPv4 address in ``modbus_allow``, else 01; an unknown
+function is 01; the board refusing (latched, protected, switch fault, inhibited, storage) is
+04. A write is checked completely before anything changes: FC15 checks every coil with
+``Board.check_switch`` before it switches any. The client's address is the socket's peer
+(``peer_ip`` reads CPython's tuple and MicroPython's raw sockaddr alike), or with
+``proxied`` the one named by the PROXY line the emulator's link proxy sends first.
 """
 
 import asyncio
@@ -87,18 +78,52 @@ def _u32(v: int) -> int:
     v = int(v)
     return 0 if v < 0 else (0xFFFFFFFF if v > 0xFFFFFFFF else v)
 
+PROXY_TAG = b"PROXY "
+PROXY_MAX = 107  # the longest PROXY v1 line, CRLF included
+
 
 class Framer:
-    """Bytes in, whole MBAP ADUs out; ``bad`` once the stream must be closed."""
+    """Bytes in, whole MBAP ADUs out; ``bad`` once the stream must be closed.
 
-    def __init__(self) -> None:
+    ``proxied``: the connection comes through the emulator's link proxy, which sends one
+    PROXY protocol line first (HAProxy's version 1: ``PROXY TCP4 SRC DST SPORT DPORT\r\n``);
+    ``client_ip`` is then the client's own address, the one the allow-list checks. Without
+    that line (or with a malformed one) the connection is closed before any request."""
+
+    def __init__(self, proxied: bool = False) -> None:
         self.buf = b""
         self.bad = False
+        self.proxied = proxied
+        self.client_ip: "str | None" = None
 
     def feed(self, data: bytes) -> None:
         self.buf += data
 
+    def _proxy_line(self) -> bool:
+        """Take the PROXY line off the front; False while it is still incomplete."""
+        end = self.buf.find(b"\r\n")
+        if end < 0:
+            if len(self.buf) > PROXY_MAX or not PROXY_TAG.startswith(self.buf[:6]):
+                self.bad = True
+            return False
+        parts = bytes(self.buf[:end]).split(b" ")
+        self.buf = self.buf[end + 2:]
+        self.client_ip = ""
+        if parts[:2] == [b"PROXY", b"UNKNOWN"]:
+            return True
+        if len(parts) != 6 or parts[:2] != [b"PROXY", b"TCP4"]:
+            self.bad = True
+            return False
+        try:
+            self.client_ip = settings.int_to_ip(settings.ip_to_int(parts[2].decode()))
+        except (ValueError, UnicodeError):
+            self.bad = True
+            return False
+        return True
+
     def next(self) -> "bytes | None":
+        if self.proxied and self.client_ip is None and not self.bad and not self._proxy_line():
+            return None
         buf = self.buf
         if self.bad or len(buf) < 7:
             return None
@@ -112,6 +137,18 @@ class Framer:
             return None
         self.buf = buf[end:]
         return buf[:end]
+
+
+def peer_ip(peer: object) -> str:
+    """The dotted IPv4 address of a peer as the socket layer reports it: CPython's
+    ``(host, port)``, or MicroPython's raw ``struct sockaddr_in`` (family, port, address
+    bytes); "" for anything else (nothing on the allow-list matches it)."""
+    if isinstance(peer, (tuple, list)):
+        return str(peer[0]) if peer and isinstance(peer[0], str) else ""
+    if isinstance(peer, (bytes, bytearray)) and len(peer) >= 8 \
+            and ((peer[0] == 2 and peer[1] == 0) or (peer[0] == 0 and peer[1] == 2)):
+        return "%d.%d.%d.%d" % (peer[4], peer[5], peer[6], peer[7])
+    return ""
 
 
 # --- register images ---------------------------------------------------------------------
@@ -235,14 +272,18 @@ def _read(board: object, fc: int, addr: int, count: int) -> "bytes | int":
 
 
 def _write_coils(board: object, addr: int, values: list) -> int:  # type: ignore[type-arg]
+    """Every coil is checked before any switch moves: a refusal changes nothing (FC15 too)."""
     n = board.n  # type: ignore[attr-defined]
     if addr + len(values) > COIL_SPAN or addr + len(values) > n:
         return X_ADDRESS
     for i in range(len(values)):
-        err = board.switch(addr + i, bool(values[i]), False)[0]  # type: ignore[attr-defined]
+        err = board.check_switch(addr + i, bool(values[i]), False)  # type: ignore[attr-defined]
         if err == E_BAD_CHANNEL:
             return X_ADDRESS
         if err:
+            return X_DEVICE
+    for i in range(len(values)):
+        if board.switch(addr + i, bool(values[i]), False)[0]:  # type: ignore[attr-defined]
             return X_DEVICE
     return 0
 
@@ -364,13 +405,14 @@ def handle(board: object, adu: bytes, client_ip: str) -> bytes:
 # --- asyncio wrapper ---------------------------------------------------------------------
 
 
-async def serve(net: object, host: str = "0.0.0.0", port: int = 502) -> object:
-    """Serve Modbus TCP for ``net.app.board`` (a ``firmware.net.Net``)."""
+async def serve(net: object, host: str = "0.0.0.0", port: int = 502,
+                proxied: bool = False) -> object:
+    """Serve Modbus TCP for ``net.app.board`` (a ``firmware.net.Net``); ``proxied``: every
+    connection starts with a PROXY line naming the client (see ``Framer``)."""
 
     async def client(reader: object, writer: object) -> None:
-        peer = writer.get_extra_info("peername")  # type: ignore[attr-defined]
-        ip = peer[0] if peer else ""
-        framer = Framer()
+        framer = Framer(proxied)
+        ip = peer_ip(writer.get_extra_info("peername"))  # type: ignore[attr-defined]
         timeout = net.read_timeout_ms / 1000  # type: ignore[attr-defined]
         try:
             while True:
@@ -385,7 +427,8 @@ async def serve(net: object, host: str = "0.0.0.0", port: int = 502) -> object:
                     adu = framer.next()
                     if adu is None:
                         break
-                    writer.write(handle(net.app.board, adu, ip))  # type: ignore[attr-defined]
+                    who = framer.client_ip if proxied else ip
+                    writer.write(handle(net.app.board, adu, who or ""))  # type: ignore[attr-defined]
                     await writer.drain()  # type: ignore[attr-defined]
                 if framer.bad:
                     break
@@ -401,4 +444,4 @@ async def serve(net: object, host: str = "0.0.0.0", port: int = 502) -> object:
     return await asyncio.start_server(client, host, port)
 
 
-__all__ = ["Framer", "handle", "handle_pdu", "serve"]
+__all__ = ["Framer", "handle", "handle_pdu", "peer_ip", "serve"]

@@ -143,7 +143,7 @@ class Session:
 
     def receive(self, data: bytes, now_ms: int) -> bytes:
         conn = self.conn
-        out = []
+        out: list = []  # type: ignore[type-arg]
         if data:
             if self.frame_gap_ms and conn.pending and now_ms - self.last_rx >= self.frame_gap_ms:
                 conn.truncate()  # the frame in progress stopped arriving: drop it (E_TRUNCATED)

@@ -139,8 +139,8 @@ class Runner:
         if self.net is None:
             self.net = Net(app, FIRMWARE_VERSION, req.get("caps", 0))
             await self.net.serve_tcp("127.0.0.1", req["tcp"])
-            if req.get("modbus"):
-                await modbus.serve(self.net, "127.0.0.1", req["modbus"])
+            if req.get("modbus"):  # behind the emulator's link proxy, which names clients
+                await modbus.serve(self.net, "127.0.0.1", req["modbus"], proxied=True)
             self.tasks.append(asyncio.create_task(self.net.housekeeping()))
         else:
             self.net.attach(app)

@@ -52,8 +52,16 @@ class AuthRefused(BoardRefused):
     """The board refused the authentication tag: the key is wrong, or missing."""
 
 
+class KeyMissing(TransportError):
+    """An authenticated command was asked for without a key: nothing was sent."""
+
+
 class BadChannel(TransportError):
     """A channel number or name the board does not have."""
+
+
+class BadSetting(TransportError):
+    """A configuration field the board does not have, or a value outside its range."""
 
 
 class ReadbackMismatch(TransportError):

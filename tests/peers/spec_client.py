@@ -106,7 +106,7 @@ def parse_state(p: bytes) -> dict[str, Any]:
 
 def parse_measurement(p: bytes) -> dict[str, Any]:
     seq, uptime, mv, on, faults, n = struct.unpack_from(">IIHHHB", p, 0)
-    currents = list(struct.unpack_from(">%di" % n, p, 15))
+    currents = list(struct.unpack_from(f">{n}i", p, 15))
     return {"seq": seq, "uptime_ms": uptime, "input_mv": mv, "on_mask": on,
             "fault_mask": faults, "currents_ma": currents}
 
