@@ -15,7 +15,7 @@ from typing import Any
 from host.board.types import SwitchResult
 from host.transports.base import AUTH, Transport
 from host.transports.errors import BadChannel, KeyMissing, ReadbackMismatch
-from protocol.constants import BOARD_CHANNEL, ST_INRUSH, ST_ON
+from protocol.constants import BOARD_CHANNEL, ST_INRUSH, ST_ON, STATE_NAMES
 from protocol.messages import Ack, Clear, Message, PowerCycle, Switch, Switched
 
 log = logging.getLogger(__name__)
@@ -27,6 +27,20 @@ def need_key(url: str, transport: Transport, key: bytes | None, what: str) -> No
     if key is None and AUTH in transport.CAPS:
         raise KeyMissing(f"{url}: {what} needs the board's key, and none was given",
                          "set DXBOARD_KEY (hex) or pass --key-file FILE")
+
+
+def readback_problem(reply: Switched, on: bool) -> str:
+    """What in a SWITCHED disagrees with switching ``on`` (or off); "" when nothing does.
+    Each part is named as it is: the command, the switch's read-back, the channel's state."""
+    name = STATE_NAMES[reply.state] if reply.state < len(STATE_NAMES) else "unknown"
+    want = "on" if on else "off"
+    if reply.commanded != on:
+        return f"the board reports it commanded {'on' if reply.commanded else 'off'}"
+    if reply.physical != on:
+        return f"its switch reads back {'on' if reply.physical else 'off'} (state {name})"
+    if on and reply.state not in (ST_INRUSH, ST_ON):
+        return f"its switch reads back {want} while the board reports the channel state {name}"
+    return ""
 
 
 class ActuateMixin:
@@ -63,12 +77,11 @@ class ActuateMixin:
         need_key(self.url, self.transport, self.key, "switching a channel")
         n = await self.channel(ch)
         reply = await self._switched(Switch(n, on, force), n)
-        ok = reply.physical and reply.state in (ST_INRUSH, ST_ON) if on else not reply.physical
-        if not ok or reply.commanded != on:
-            raise ReadbackMismatch(
-                f"{self.url}: channel {n} was switched {'on' if on else 'off'} but reads back "
-                f"{'on' if reply.physical else 'off'} (state {reply.state})",
-                "the switch may be faulty: see `dxboard board URL status`")
+        problem = readback_problem(reply, on)
+        if problem:
+            raise ReadbackMismatch(f"{self.url}: channel {n} was switched "
+                                   f"{'on' if on else 'off'}, but {problem}",
+                                   "the switch may be faulty: see `dxboard board URL status`")
         return await self._result(reply)
 
     async def power_cycle(self, ch: int | str, off_s: float = 1.0,

@@ -32,6 +32,11 @@ class RequestTimeout(BoardUnreachable, TimeoutError):
     """The board did not answer a request in time."""
 
 
+class UnexpectedDevice(BoardUnreachable):
+    """The device at the URL answers, but not as the URL says it should (a Modbus device
+    without the registers of the map, a unit id it does not serve, no channels)."""
+
+
 class NotSupported(TransportError):
     """The transport cannot do this (for instance: configuration over CAN)."""
 
