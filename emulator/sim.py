@@ -8,8 +8,9 @@ Both run the same steps in the same order, so a scenario behaves the same on eit
 Resets are the emulator's job, as they are the hardware's: ``reboot`` from the firmware gives a
 soft reset; ``wdt_reset`` hangs the firmware's main loop (its steps stop) so that the watchdog,
 no longer fed by the supervisor, resets the board after ``wdt_timeout_ms``; a ``brownout``
-below ``reset_mv`` holds the microcontroller in reset (every switch opens) until the voltage
-returns, then boots with ``RESET_BROWNOUT``; a shallower one only lowers the input the firmware
+below ``reset_mv`` holds the microcontroller in reset (every switch opens, every connection
+drops: ``reset_listeners``; nothing runs and nothing is served) until the voltage returns,
+then boots with ``RESET_BROWNOUT``; a shallower one only lowers the input the firmware
 measures. Each boot builds a new ``App`` on a new ``SimHal``; storage and electronics persist.
 
 Runtime seam: everything the firmware sees passes through ``SimHal``'s methods, and the
@@ -75,6 +76,9 @@ class Emulator:
         self.link_listeners: list[Callable[[dict[str, dict[str, Any]]], None]] = []
         # called after every firmware step (front ends push what the step produced)
         self.step_listeners: list[Callable[[], None]] = []
+        # called when the microcontroller goes into reset (a deep brown-out): the front ends
+        # drop every connection and serve nothing until the next boot
+        self.reset_listeners: list[Callable[[], None]] = []
         self.firmware_factory: Callable[[SimHal], Any] = firmware_factory or App
         self.timers: list[tuple[int, Callable[[], None]]] = []
         self.last_feed = 0
@@ -104,6 +108,11 @@ class Emulator:
     @property
     def board(self) -> Any:
         return self.firmware.board
+
+    @property
+    def in_reset(self) -> bool:
+        """Held in reset by a deep brown-out: the microcontroller runs nothing at all."""
+        return self.down_until >= 0
 
     def at(self, when_ms: int, action: Callable[[], None]) -> None:
         """Run ``action`` when the clock reaches ``when_ms`` (scenario events, fault ends)."""
@@ -186,6 +195,8 @@ class Emulator:
             if self.electronics.input_mv < self.model.board.reset_mv:
                 self.down_until = end
                 self.electronics.release_all(self.now)
+                for listener in self.reset_listeners:
+                    listener()
             self.at(end, self._brownout_over)
         else:
             self.link_faults[fault] = params

@@ -15,11 +15,15 @@ bytes). The nonce is 8 random bytes chosen at boot and broadcast in DXB_Nonce. E
 is answered with DXB_CmdResult (0x188+N): op, channel, error (0 or E_*), state, read-back. A
 command whose tags do not arrive in time (E_AUTH_REQUIRED), with a bad tag (E_BAD_TAG), with
 a counter not above the last accepted (E_REPLAYED) or on a board without key changes nothing.
+An unknown op is E_BAD_VALUE (303), checked after the tag and the counter. A DXB_Cmd whose
+data is not 8 bytes is answered with E_MALFORMED (105), and so is the pending command when a
+tag frame of the wrong length comes: a command is never silently ignored.
 """
 
 from protocol.auth import equal
 from protocol.can import (
     CURRENT_GROUPS,
+    FRAME_LEN,
     ID_CMD,
     ID_NONCE,
     ID_RESULT,
@@ -47,6 +51,7 @@ from protocol.constants import (
     E_BAD_CHANNEL,
     E_BAD_TAG,
     E_BAD_VALUE,
+    E_MALFORMED,
     E_REPLAYED,
 )
 
@@ -101,10 +106,24 @@ class CanNode:
 
     def receive(self, can_id: int, data: bytes, now: int) -> list:  # type: ignore[type-arg]
         n = self.node
-        if len(data) != 8:
-            return []
         out = []
-        if can_id == ID_CMD + n:
+        cmd_ids = can_id == ID_CMD + n
+        tag_ids = can_id == ID_TAG_A + n or can_id == ID_TAG_B + n
+        if len(data) != FRAME_LEN:
+            # a command frame of the wrong length is answered (E_MALFORMED), as is the
+            # command pending when a tag frame of the wrong length comes; others: not ours
+            if cmd_ids or (tag_ids and self.pending is not None):
+                if self.pending is not None:
+                    pending = self.pending
+                    self.pending = None
+                    self.tag_a = None
+                    out.append(self._result(pending, E_AUTH_REQUIRED if cmd_ids
+                                            else E_MALFORMED))
+                if cmd_ids:
+                    out.append(self._result(bytes(data[:2]) + bytes(2 - len(data[:2])),
+                                            E_MALFORMED))
+            return out
+        if cmd_ids:
             if self.pending is not None:
                 out.append(self._result(self.pending, E_AUTH_REQUIRED))
             self.pending = bytes(data)

@@ -411,16 +411,21 @@ async def serve(net: object, host: str = "0.0.0.0", port: int = 502,
     connection starts with a PROXY line naming the client (see ``Framer``)."""
 
     async def client(reader: object, writer: object) -> None:
+        if net.halted:  # type: ignore[attr-defined]  # held in reset: nobody is served
+            await _close(writer)
+            return
+        links = net.links  # type: ignore[attr-defined]  # closed by a reset (Net.close_all)
+        links.append(writer)
         framer = Framer(proxied)
         ip = peer_ip(writer.get_extra_info("peername"))  # type: ignore[attr-defined]
         timeout = net.read_timeout_ms / 1000  # type: ignore[attr-defined]
         try:
-            while True:
+            while not net.halted:  # type: ignore[attr-defined]
                 try:
                     data = await asyncio.wait_for(reader.read(512), timeout)  # type: ignore[attr-defined]
                 except asyncio.TimeoutError:  # noqa: UP041 (MicroPython has no builtin TimeoutError)
                     break
-                if not data:
+                if not data or net.halted:  # type: ignore[attr-defined]
                     break
                 framer.feed(data)
                 while True:
@@ -435,13 +440,20 @@ async def serve(net: object, host: str = "0.0.0.0", port: int = 502,
                 await asyncio.sleep(0)
         except OSError:
             pass
-        try:
-            writer.close()  # type: ignore[attr-defined]
-            await writer.wait_closed()  # type: ignore[attr-defined]
-        except OSError:
-            pass
+        finally:
+            if writer in links:
+                links.remove(writer)
+        await _close(writer)
 
     return await asyncio.start_server(client, host, port)
+
+
+async def _close(writer: object) -> None:
+    try:
+        writer.close()  # type: ignore[attr-defined]
+        await writer.wait_closed()  # type: ignore[attr-defined]
+    except OSError:
+        pass
 
 
 __all__ = ["Framer", "handle", "handle_pdu", "peer_ip", "serve"]

@@ -106,6 +106,8 @@ class Net:
         self.read_timeout_ms = read_timeout_ms
         self.max_clients = max_clients
         self.clients: list = []  # type: ignore[type-arg]
+        self.links: list = []  # type: ignore[type-arg]  # other streams (Modbus): writers
+        self.halted = False
         self.app = app
         self.hal = app.hal  # type: ignore[attr-defined]
         self.task = -1
@@ -115,10 +117,25 @@ class Net:
         """Serve ``app`` (a new boot): every client of the old one is closed."""
         self.app = app
         self.hal = app.hal  # type: ignore[attr-defined]
-        for c in self.clients:
-            c.close()
+        self.halted = False
+        self.close_all()
         sup = app.supervisor  # type: ignore[attr-defined]
         self.task = sup.register("net", NET_SILENCE_MS, self.hal.ticks_ms())
+
+    def close_all(self) -> None:
+        """Close every client and every other stream (as a reset of the board does)."""
+        for c in self.clients:
+            c.close()
+        for w in self.links:
+            try:  # noqa: SIM105 (MicroPython has no contextlib)
+                w.close()
+            except OSError:
+                pass
+
+    def halt(self) -> None:
+        """The board is held in reset: close everything, serve nothing until ``attach``."""
+        self.halted = True
+        self.close_all()
 
     def now(self) -> int:
         return self.hal.ticks_ms()  # type: ignore[no-any-return]
@@ -161,6 +178,9 @@ class Net:
         return await asyncio.start_server(self._tcp_client, host, port)
 
     async def _tcp_client(self, reader: object, writer: object) -> None:
+        if self.halted:
+            await _close(writer)
+            return
         live = 0
         for c in self.clients:
             if not c.closed:
@@ -173,19 +193,22 @@ class Net:
     async def serve_serial(self, reader: object, writer: object) -> None:
         """Serve a serial line until its stream ends (a UART's never does)."""
         while True:
-            await self.serve_stream(reader, writer, close=False, frame_gap_ms=FRAME_GAP_MS)
-            at_eof = getattr(reader, "at_eof", None)
-            if at_eof is not None and at_eof():
+            if self.halted:  # bytes sent to a board held in reset are lost
+                if not await reader.read(READ_SIZE):  # type: ignore[attr-defined]
+                    return
+                continue
+            if await self.serve_stream(reader, writer, close=False, frame_gap_ms=FRAME_GAP_MS):
                 return
-            await sleep_ms(100)
+            await sleep_ms(10)  # the board closed the session (a reset): serve a new one
 
     async def serve_stream(self, reader: object, writer: object, timeout_ms: int = 0,
-                           name: str = "", close: bool = True, frame_gap_ms: int = 0) -> None:
+                           name: str = "", close: bool = True, frame_gap_ms: int = 0) -> bool:
         """Serve one byte stream until it ends (``timeout_ms`` 0: never time out); a serial
         port passes ``close=False`` so that the next session can use it, and
         ``frame_gap_ms=FRAME_GAP_MS``: an incomplete frame followed by that much silence is
         dropped (PROTOCOL.md §2), so a host that opens the port after another program left
-        half a frame behind is heard at once."""
+        half a frame behind is heard at once. True when the stream itself ended."""
+        ended = False
         s = self._session(frame_gap_ms)
         c = Client(s, writer, name)
         self.clients.append(c)
@@ -213,12 +236,13 @@ class Net:
                     break
                 if not data:
                     s.receive(b"", self.now())
+                    ended = True
                     break
                 c.queue(s.receive(data, self.now()))
                 c.queue(s.poll(self.now(), c.n < SOFT_CAP))  # a Reboot's ACK, new events
                 await asyncio.sleep(0)  # a flood must not starve the others
         except OSError:
-            pass
+            ended = True
         finally:
             c.close()
             if c in self.clients:
@@ -226,6 +250,7 @@ class Net:
             wt.cancel()
             if close:
                 await _close(writer)
+        return ended
 
 
 async def _close(writer: object) -> None:

@@ -18,7 +18,9 @@ the wall clock until SIGINT/SIGTERM::
 Port 0 (the default) picks a free port; the URL shows the real one. The actuation key is
 provisioned from ``--key-file`` or ``$DXBOARD_KEY`` (hex), as ``dxboard board`` reads it;
 without one the board refuses every actuation. ``--runtime micropython`` runs the firmware
-inside the ``micropython`` interpreter (its own TCP server, behind the same link-fault proxy).
+inside the ``micropython`` interpreter: its own TCP and Modbus servers (behind the same
+link-fault proxies), its serial front end (the pty's bytes relayed to it) and its CAN node
+(frames carried between the bus and it), so every front end runs there too.
 ``--robot`` also serves the virtual robot's devices of ``SYSTEM_DIR/robot.yaml`` (each on a
 free TCP port, powered by its channel: ``emulator.robot``) for the nodes of
 ``python -m emulator.robot.node NAME SYSTEM_DIR`` to read.

@@ -136,7 +136,7 @@ def test_dbc_round_trips() -> None:
         channel_frame((True, False, 3, -1234, 0x21, 0, 7, 2)), decode_choices=False)
     assert (ch["State"], ch["Commanded"], ch["Physical"], ch["LiveFaults"], ch["Trips"],
             ch["Retries"]) == (3, 1, 0, 0x21, 7, 2)
-    assert abs(ch["CurrentMa"] + 1.234) < 1e-9
+    assert ch["CurrentMa"] == -1234  # decodes in mA, as its name says
     st = db.get_message_by_name("DXB_Status").decode(status_frame((23456, 0, 5000, 2, 1, 9)))
     assert (st["UptimeS"], st["BoardFlags"], st["ResetCause"], st["ConfigStatus"]) == (5, 9, 2, 1)
     assert abs(st["InputVoltage"] - 23.456) < 1e-9

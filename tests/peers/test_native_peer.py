@@ -20,7 +20,7 @@ import serial
 from tests.emulator.wire import KEY, Emulate
 from tests.peers import spec_client as sc
 
-RUNTIMES = ["cpython"]
+RUNTIMES = ["cpython", "micropython"]
 
 
 @pytest.fixture(scope="module", params=RUNTIMES)
