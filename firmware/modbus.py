@@ -415,7 +415,8 @@ async def serve(net: object, host: str = "0.0.0.0", port: int = 502,
             await _close(writer)
             return
         links = net.links  # type: ignore[attr-defined]  # closed by a reset (Net.close_all)
-        links.append(writer)
+        link = (writer, asyncio.current_task())
+        links.append(link)
         framer = Framer(proxied)
         ip = peer_ip(writer.get_extra_info("peername"))  # type: ignore[attr-defined]
         timeout = net.read_timeout_ms / 1000  # type: ignore[attr-defined]
@@ -438,11 +439,11 @@ async def serve(net: object, host: str = "0.0.0.0", port: int = 502,
                 if framer.bad:
                     break
                 await asyncio.sleep(0)
-        except OSError:
-            pass
+        except (OSError, asyncio.CancelledError):
+            pass  # the peer went away, or a reset of the board closed the stream
         finally:
-            if writer in links:
-                links.remove(writer)
+            if link in links:
+                links.remove(link)
         await _close(writer)
 
     return await asyncio.start_server(client, host, port)

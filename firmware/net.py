@@ -106,7 +106,7 @@ class Net:
         self.read_timeout_ms = read_timeout_ms
         self.max_clients = max_clients
         self.clients: list = []  # type: ignore[type-arg]
-        self.links: list = []  # type: ignore[type-arg]  # other streams (Modbus): writers
+        self.links: list = []  # type: ignore[type-arg]  # other streams (Modbus): (writer, task)
         self.halted = False
         self.app = app
         self.hal = app.hal  # type: ignore[attr-defined]
@@ -126,11 +126,12 @@ class Net:
         """Close every client and every other stream (as a reset of the board does)."""
         for c in self.clients:
             c.close()
-        for w in self.links:
+        for w, task in self.links:
             try:  # noqa: SIM105 (MicroPython has no contextlib)
                 w.close()
             except OSError:
                 pass
+            task.cancel()  # MicroPython does not wake a read pending on a closed socket
 
     def halt(self) -> None:
         """The board is held in reset: close everything, serve nothing until ``attach``."""
