@@ -241,6 +241,7 @@ class MicroFirmware:
         self.rt.request({"op": "boot", "cause": self.hal.cause, "n": self.hal.n_channels,
                          "seed": seed, "tcp": self.rt.tcp_port, "modbus": self.rt.modbus_port,
                          "serial": self.rt.serial_port, "caps": self.rt.caps,
+                         "factory": self.hal.emu.factory,
                          "can": {"node": 0, "rate": 10} if self.rt.can else None})
 
     def step(self) -> int:

@@ -61,16 +61,20 @@ class Emulator:
                  firmware_factory: Callable[[SimHal], Any] | None = None) -> None:
         """``firmware_factory(hal)`` builds the firmware of each boot (default ``App``: the
         firmware in this interpreter; ``emulator.mpy.MicroFirmware`` runs it in MicroPython).
-        ``board_config`` (channels/board fields, as in ``models/<robot>/board.json``) is
-        written to storage as the persisted configuration if storage holds none yet, as
-        flashing a board would."""
+        ``board_config`` (channels/board fields, as in ``models/<robot>/board.json``) is what
+        flashing a board does with it: built into the firmware as its factory configuration
+        (``factory``, booted when no stored copy is good) and written to storage as the
+        persisted configuration if storage holds none yet."""
         self.model = model
         self.now = 0
         self.storage: Any = storage if storage is not None else MemStorage()
         self.electronics = Electronics(list(model.channels), model.board.input_mv,
                                        model.board.seed)
-        if board_config is not None and self.storage.read(config.FILE) is None:
-            config.save(self.storage, make_config(board_config, len(model.channels)))
+        # what flashing the board built into its firmware: its factory configuration
+        self.factory = make_config(board_config, len(model.channels)) \
+            if board_config is not None else None
+        if self.factory is not None and not config.exists(self.storage):
+            config.save(self.storage, self.factory)
         self.active: dict[tuple[str, str], dict[str, Any]] = {}
         self.link_faults: dict[str, dict[str, Any]] = {}
         self.link_listeners: list[Callable[[dict[str, dict[str, Any]]], None]] = []
@@ -79,7 +83,7 @@ class Emulator:
         # called when the microcontroller goes into reset (a deep brown-out): the front ends
         # drop every connection and serve nothing until the next boot
         self.reset_listeners: list[Callable[[], None]] = []
-        self.firmware_factory: Callable[[SimHal], Any] = firmware_factory or App
+        self.firmware_factory: Callable[[SimHal], Any] = firmware_factory or self._app
         self.timers: list[tuple[int, Callable[[], None]]] = []
         self.last_feed = 0
         self.reboot_requested = False
@@ -91,6 +95,9 @@ class Emulator:
         self._boot(RESET_POWER_ON)
 
     # --- clock and resets ---------------------------------------------------------------
+
+    def _app(self, hal: SimHal) -> App:
+        return App(hal, self.factory)
 
     def _boot(self, cause: int) -> None:
         self.electronics.release_all(self.now)

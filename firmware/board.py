@@ -1,10 +1,12 @@
 """The board: its channels, the board-level rules, the commands and the status.
 
-``Board(hal)`` then ``boot(now_ms)`` loads the configuration (``config``), counts watchdog
-resets (``bootlog``), logs ``EV_REBOOT`` and queues the power-up set. ``tick(now_ms)`` runs one
-protection step and never waits for anything: it samples every channel's current and switch,
-steps each ``Channel`` (inrush, instant trip, I²t, retries, open load, stuck switch), then the
-board rules:
+``Board(hal, factory)`` then ``boot(now_ms)`` loads the configuration (``config``: the newest
+good stored copy, else ``factory``, the configuration built into the firmware, so that a board
+whose stored configuration is lost still powers and protects the computer it feeds), counts
+watchdog resets (``bootlog``), logs ``EV_REBOOT`` and queues the power-up set.
+``tick(now_ms)`` runs one protection step and never waits for anything: it samples every
+channel's current and switch, steps each ``Channel`` (inrush, instant trip, I²t, retries,
+open load, stuck switch), then the board rules:
 
 - power-up and restore queue: channels switch on one at a time in priority order (lower
   ``priority`` first), ``powerup_spacing_ms`` apart; used at boot and after under-voltage.
@@ -61,7 +63,7 @@ from protocol.constants import (
     ST_ON,
     ST_TRIPPED,
 )
-from protocol.settings import BOARD_WIRE_KEYS
+from protocol.settings import BOARD_WIRE_KEYS, merge
 
 TOTAL_SAMPLES = const(2)
 UV_SAMPLES = const(3)
@@ -122,11 +124,8 @@ class Board:
         hal = self.hal
         self.boot_ms = self.now = self.last = self.host_ms = now
         cfg, status = config.load(hal.storage, self.n)  # type: ignore[attr-defined]
-        if status and self.factory is not None:
-            cfg = config.defaults(self.n)
-            cfg["board"].update(self.factory["board"])
-            for i, c in enumerate(self.factory["channels"][: self.n]):
-                cfg["channels"][i].update(c)
+        if cfg is None:
+            cfg = self.factory_config()
         self.cfg = cfg
         self.cfg_status = status
         self.reset_cause = hal.reset_cause()  # type: ignore[attr-defined]
@@ -149,6 +148,16 @@ class Board:
                 ch.commanded = True
                 self._enqueue(ch.index)
         self.queue_at = now
+
+    def factory_config(self) -> dict:  # type: ignore[type-arg]
+        """The configuration built into the firmware (``factory``: the one the board was
+        flashed with, its key and its protected boot channel included), used when no good copy
+        is stored; without one (or a bad one), the defaults of ``protocol.settings``."""
+        if self.factory is not None:
+            cfg: "dict | None" = merge(self.factory, self.n, config.VERSION)[0]  # type: ignore[type-arg]
+            if cfg is not None:
+                return cfg
+        return config.defaults(self.n)
 
     def _enqueue(self, i: int) -> None:
         if i in self.queue:

@@ -12,8 +12,9 @@ import asyncio
 
 import machine  # type: ignore[import-not-found]
 
-from firmware import modbus
+from firmware import build, modbus
 from firmware.app import App
+from firmware.factory import FACTORY
 from firmware.hal.storage import FileStorage
 from firmware.hal.target import TargetHal
 from firmware.net import Net
@@ -45,6 +46,7 @@ async def run(app: App, uart: object) -> None:
     tasks = [asyncio.create_task(net.housekeeping())]
     stream = asyncio.StreamReader(uart)  # type: ignore[arg-type] # MicroPython: one Stream
     tasks.append(asyncio.create_task(net.serve_serial(stream, stream)))
+    build.running = True  # dxboard flash checks this after a reset
     await net.protect()
 
 
@@ -53,7 +55,7 @@ def main() -> None:
     hal = TargetHal(EN_PINS, STATUS_PINS, i2c=i2c, ina226_addrs=INA226_ADDRS,
                     shunt_uohm=10000, vin_adc_pin=VIN_PIN, mv_per_count_x1000=55000,
                     storage=FileStorage(""))
-    app = App(hal)
+    app = App(hal, FACTORY)  # the flashed configuration, if no stored copy is good
     app.start()
     uart = machine.UART(UART_ID, UART_BAUD)
     asyncio.run(run(app, uart))

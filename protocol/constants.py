@@ -69,11 +69,12 @@ RESET_NAMES = ("power_on", "watchdog", "soft", "brownout", "unknown")
 
 # --- configuration status (u8), reported in HELLO and STATE ---------------------------
 CFG_OK = const(0)  # loaded from the persisted file
-CFG_MISSING = const(1)  # no file: safe defaults
-CFG_CORRUPT = const(2)  # bad JSON or CRC: safe defaults
-CFG_VERSION = const(3)  # unsupported config version: safe defaults
+CFG_MISSING = const(1)  # no file: factory configuration
+CFG_CORRUPT = const(2)  # bad JSON or CRC: factory configuration
+CFG_VERSION = const(3)  # unsupported config version: factory configuration
 CFG_SAFE_MODE = const(4)  # watchdog reset loop: only protected channels on
-CONFIG_STATUS_NAMES = ("ok", "missing", "corrupt", "version", "safe_mode")
+CFG_FALLBACK = const(5)  # a copy was damaged: the last-known-good copy was loaded
+CONFIG_STATUS_NAMES = ("ok", "missing", "corrupt", "version", "safe_mode", "fallback")
 
 # --- capabilities (u16 bit mask in HELLO) ---------------------------------------------
 CAP_AUTH = const(0x0001)  # actuation needs HMAC (always set by dxboard firmware)

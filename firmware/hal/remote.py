@@ -7,7 +7,8 @@ MicroPython's asyncio. Two links, JSON lines (``\\n``-terminated), lock-step:
 
 - link A, emulator -> firmware, one reply per request, read by an asyncio task here:
   ``{"op": "boot", "cause": C, "n": N, "seed": S, "tcp": P, "modbus": P|null,
-  "serial": P|null, "can": {"node": N, "rate": HZ}|null}`` builds a new ``App`` on a new
+  "serial": P|null, "can": {"node": N, "rate": HZ}|null, "factory": CONFIG|null}`` builds a
+  new ``App`` (with that factory configuration) on a new
   ``RemoteHal`` (the first boot also starts the servers on 127.0.0.1: the native protocol,
   Modbus behind the emulator's proxy, and the serial line, which the emulator relays to its
   pty byte for byte) and, with ``can``, a new ``CanNode``;
@@ -142,7 +143,7 @@ class Runner:
 
     async def boot(self, req: dict) -> dict:  # type: ignore[type-arg]
         hal = RemoteHal(self.link, req["n"], req["cause"], req["seed"])
-        app = App(hal)
+        app = App(hal, req.get("factory"))
         self.hal = hal
         self.app = app
         app.start()

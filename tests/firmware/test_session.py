@@ -46,7 +46,7 @@ from protocol.messages import (
     Switched,
 )
 from protocol.settings import check_board, int_to_ip, ip_to_int
-from tests.firmware.testhal import Rig
+from tests.firmware.testhal import Rig, config_text
 
 KEY = bytes(range(32))
 KEY_HEX = KEY.hex() if hasattr(KEY, "hex") else "".join("%02x" % b for b in KEY)
@@ -283,7 +283,7 @@ class ActuationTest(unittest.TestCase):
         self.assertEqual(got.modbus_allow, [0x7F000001])
         self.assertEqual(p.r.board.cfg["board"]["key"], KEY_HEX)
         self.assertEqual(p.one(SaveConfig(), Ack).of_type, SaveConfig.TYPE)
-        self.assertIn(b"2500", p.r.hal.storage.read("config.json"))
+        self.assertIn(b"2500", config_text(p.r.hal.storage))
         self.assertEqual(p.one(Reboot(), Ack).of_type, Reboot.TYPE)
         p.r.run(20)
         self.assertTrue(p.r.hal.rebooted)

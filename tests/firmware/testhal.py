@@ -66,7 +66,7 @@ class Rig:
     """A booted App on a TestHal; ``run(ms)`` steps it tick by tick on simulated time."""
 
     def __init__(self, channels=None, board=None, n=10, storage=None, cause=RESET_POWER_ON,
-                 save=True):
+                 save=True, factory=None):
         self.hal = TestHal(n, storage, cause)
         if channels or board:
             from firmware import config
@@ -77,7 +77,7 @@ class Rig:
                 cfg["channels"][i].update(c)
             if save:
                 config.save(self.hal.storage, cfg)
-        self.app = App(self.hal)
+        self.app = App(self.hal, factory)
         self.app.start()
         self.board = self.app.board
         self.cursor = 0
@@ -106,3 +106,18 @@ class Rig:
     def events(self):
         evs, self.cursor, _ = self.board.events.read(self.cursor, 1000)
         return evs
+
+
+def config_text(storage):
+    """The newest stored copy of the configuration, as bytes (for tests that look inside)."""
+    from firmware import config
+
+    best = b""
+    top = -1
+    for name in config.SLOTS:
+        data = storage.read(name)
+        if data is not None:
+            seq = config.parse_seq(data, 16)[2]
+            if seq > top:
+                best, top = data, seq
+    return best

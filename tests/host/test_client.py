@@ -26,6 +26,7 @@ from host.transports.errors import (
 from protocol.constants import ST_OFF, ST_ON
 from protocol.framing import encode_frame
 from protocol.messages import Hello
+from tests.firmware.testhal import config_text
 from tests.host.memboard import KEY, MemoryBoard, tedusar
 
 
@@ -106,7 +107,7 @@ async def test_config_set_is_read_back_and_bad_values_refused() -> None:
         b = await c.set_board_config(powerup_spacing_ms=300)
         assert b["powerup_spacing_ms"] == 300
         await c.save_config()
-        assert b'"powerup_spacing_ms":300' in mb.emu.storage.read("config.json")
+        assert b'"powerup_spacing_ms":300' in config_text(mb.emu.storage)
 
 
 async def test_board_that_stops_answering_times_out() -> None:
