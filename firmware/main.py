@@ -5,7 +5,9 @@ below is the dxboard rev A: ten high-side switches with status outputs, ten INA2
 I2C(0), the input voltage on an ADC pin through a 1:11 divider. Everything runs on asyncio
 (``firmware.net``): the protection loop (one step per tick, then the pushes), the native
 protocol on TCP port 7000 and on UART(1), Modbus TCP on port 502, each registered with the
-supervisor. The network interface is brought up by ``boot.py`` before this runs.
+supervisor. The network interface is brought up by ``boot.py`` before this runs; the servers
+listen on its address only (or on the configuration's ``listen``), never on every interface
+unless the configuration says ``listen: "0.0.0.0"``.
 """
 
 import asyncio
@@ -39,10 +41,34 @@ UART_BAUD = 115200
 CAPS = CAP_AUTH | CAP_SUBSCRIBE | CAP_EVENTS | CAP_CONFIG | CAP_MODBUS | CAP_VOLTAGE
 
 
+def listen_address(app: App) -> str:
+    """Where the servers listen: the configuration's ``listen`` if set (``dxboard flash``;
+    "0.0.0.0" means every interface, on purpose), else the address of the network interface
+    ``boot.py`` brought up (wired first, then Wi-Fi station), else loopback only."""
+    chosen = app.board.cfg["board"].get("listen", "")
+    if chosen:
+        return chosen  # type: ignore[no-any-return]
+    try:
+        import network  # type: ignore[import-not-found]
+    except ImportError:
+        return "127.0.0.1"
+    for kind in ("LAN", "WLAN"):
+        if not hasattr(network, kind):
+            continue
+        try:
+            nic = network.LAN() if kind == "LAN" else network.WLAN(network.STA_IF)
+            if nic.active() and nic.isconnected():
+                return nic.ifconfig()[0]  # type: ignore[no-any-return]
+        except (OSError, ValueError):
+            continue
+    return "127.0.0.1"
+
+
 async def run(app: App, uart: object) -> None:
     net = Net(app, FIRMWARE_VERSION, CAPS)
-    await net.serve_tcp("0.0.0.0", TCP_PORT)
-    await modbus.serve(net, "0.0.0.0", MODBUS_PORT)
+    host = listen_address(app)
+    await net.serve_tcp(host, TCP_PORT)
+    await modbus.serve(net, host, MODBUS_PORT)
     tasks = [asyncio.create_task(net.housekeeping())]
     stream = asyncio.StreamReader(uart)  # type: ignore[arg-type] # MicroPython: one Stream
     tasks.append(asyncio.create_task(net.serve_serial(stream, stream)))

@@ -17,8 +17,10 @@ clock (time comes in as ``now_ms``, on the HAL clock the board ticks on). The fr
     feed bytes (``b""`` = the stream ended); returns every reply frame: STATE, ACK, PONG,
     HELLO, SWITCHED (with the physical read-back), CHANNEL_CONFIG, BOARD_CONFIG, or ERROR
     (``Connection.error_reply`` for a bad frame, the board's E_* for a refused command). A
-    refused or malformed command changes nothing. Every authenticated message and every PING
-    restarts the board's host dead-man (``board.host_seen``).
+    refused or malformed command changes nothing. A request whose HMAC checks out (any
+    authenticated command, AUTH_PING first of all) makes the session ``authenticated``: the
+    host's. Every authenticated message, and a PING of the host's session, restarts the
+    board's host dead-man (``board.host_seen``); a PING of anyone else does not.
 ``poll(now_ms, send_measurement=True) -> bytes``
     the pushes due now: every new board event as EVENT (its log ``seq``; ``dropped`` = events
     this session lost to the ring since the last EVENT), then a MEASUREMENT when the
@@ -28,8 +30,11 @@ clock (time comes in as ``now_ms``, on the HAL clock the board ticks on). The fr
 ``next_due(now_ms) -> int``
     when ``poll`` next has something to send (``now_ms`` if events are waiting).
 ``idle_ms(now_ms) -> int``
-    ms since bytes last arrived; the front end closes a session silent for longer than its read
-    timeout (hosts PING to stay connected).
+    how long the session has been idle; the front end closes a session idle for longer than
+    its read timeout, and evicts the idlest unauthenticated session for a newcomer. The host's
+    (authenticated) session is idle only while nothing arrives (it PINGs to stay connected);
+    an unauthenticated one while it sends nothing but PING (a subscribed one never is), so
+    PINGs alone do not keep a stranger's session open.
 ``closed``
     True once the stream ended (``receive(b"")``).
 """
@@ -50,6 +55,7 @@ from protocol.constants import BOARD_CHANNEL, E_BAD_VALUE, ERROR_TEXT, PROTOCOL_
 from protocol.framing import BadFrame
 from protocol.messages import (
     Ack,
+    AuthPing,
     BoardConfig,
     ChannelConfig,
     ChannelStatus,
@@ -108,6 +114,8 @@ class Session:
         self.firmware_version = firmware_version
         self.capabilities = capabilities
         self.last_rx = now_ms
+        self.last_active = now_ms  # the last request that counts against the idle timeout
+        self.authenticated = False  # a request of this session passed the HMAC check
         self.cursor = board.events.seq  # type: ignore[attr-defined]
         self.lost = 0
         self.rate_hz = 0
@@ -122,6 +130,7 @@ class Session:
         """A HELLO that starts a new session: a fresh nonce and counter (the codec), and no
         subscription, measurements counted from 1 again, only events from now on."""
         b = self.board
+        self.authenticated = False
         self.rate_hz = 0
         self.meas_seq = 0
         self.cursor = b.events.seq  # type: ignore[attr-defined]
@@ -133,11 +142,18 @@ class Session:
             b.reset_cause, b.cfg_status, req_id))  # type: ignore[attr-defined]
 
     def start(self, now_ms: int) -> bytes:
-        self.last_rx = now_ms
+        self.last_rx = self.last_active = now_ms
         return self._hello(0)
 
     def idle_ms(self, now_ms: int) -> int:
-        return now_ms - self.last_rx
+        """How long this session has been idle: since the last bytes for the authenticated
+        host; for anyone else since the last request other than PING (a subscribed session,
+        busy reading its measurements, is never idle)."""
+        if self.authenticated:
+            return now_ms - self.last_rx
+        if self.rate_hz:
+            return 0
+        return now_ms - self.last_active
 
     # --- receiving --------------------------------------------------------------------
 
@@ -164,8 +180,12 @@ class Session:
             if isinstance(ev, BadFrame):
                 reply = conn.error_reply(ev)
             else:
-                if ev.AUTH or isinstance(ev, Ping):
+                if ev.AUTH:  # its tag checked out: this is the host that holds the key
+                    self.authenticated = True
+                if ev.AUTH or (self.authenticated and isinstance(ev, Ping)):
                     self.board.host_seen(now_ms)  # type: ignore[attr-defined]
+                if self.authenticated or not isinstance(ev, Ping):
+                    self.last_active = now_ms
                 reply = self._answer(ev, now_ms)
             if reply:
                 out.append(reply)
@@ -188,7 +208,7 @@ class Session:
         rid = msg.req_id  # type: ignore[attr-defined]
         if isinstance(msg, GetState):
             return send(self.state_message(rid))
-        if isinstance(msg, Ping):
+        if isinstance(msg, (Ping, AuthPing)):
             return send(Pong(msg.token, _uptime(b), rid))
         if isinstance(msg, Subscribe):
             rate = msg.rate_hz

@@ -115,6 +115,20 @@ class Ping(Message):
         self.req_id = req_id
 
 
+class AuthPing(Message):
+    """Host -> board, authenticated PING: proves that this session's host holds the key. The
+    board answers PONG and from then on counts the session as the authenticated host's: its
+    PINGs keep it open and feed the dead-man, and it is never evicted for a newcomer."""
+
+    TYPE = 0x05
+    AUTH = True
+    FIELDS = (("token", "I"),)
+
+    def __init__(self, token: int, req_id: int = 0) -> None:
+        self.token = token
+        self.req_id = req_id
+
+
 class Pong(Message):
     """Board -> host: the PING's token and the board's uptime."""
 
@@ -489,6 +503,7 @@ ALL = (
     HelloRequest,
     Ping,
     Pong,
+    AuthPing,
     GetState,
     State,
     Subscribe,

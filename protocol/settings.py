@@ -3,7 +3,9 @@
 A board's configuration is ``{"version": 1, "board": {...}, "channels": [{...}, ...]}``. Every
 field is one row below: its name, its kind on the wire (``protocol.fields`` kinds, in the order
 of CHANNEL_CONFIG / BOARD_CONFIG, PROTOCOL.md §4.4; ``None`` for the two board fields that
-never travel: the HMAC ``key``, hex, and the ``listen`` address), its default and its range.
+never travel: the HMAC ``key``, hex, and ``listen``, the IPv4 address the board's servers
+listen on, "" for its own address on the network, never every interface unless it says
+"0.0.0.0"), its default and its range.
 The message classes (``protocol.messages``), the firmware's persisted file
 (``firmware/config.py``), the Modbus register map (``protocol/modbus_map.py``), the emulator's
 board config and ``dxboard flash`` all read these tables; a range never exceeds what the wire
@@ -131,11 +133,13 @@ def check_value(row: tuple, v: object) -> bool:  # type: ignore[type-arg]
     if isinstance(d, str):
         if not isinstance(v, str) or not lo <= len(v) <= hi:
             return False
-        if name == "key":
-            try:
+        try:
+            if name == "key":
                 bytes.fromhex(v)
-            except ValueError:
-                return False
+            elif name == "listen" and v:
+                ip_to_int(v)
+        except ValueError:
+            return False
         return True
     if not isinstance(v, list) or len(v) > MAX_LIST:
         return False

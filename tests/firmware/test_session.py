@@ -23,6 +23,7 @@ from protocol.constants import (
 from protocol.framing import BadFrame
 from protocol.messages import (
     Ack,
+    AuthPing,
     BoardConfig,
     ChannelConfig,
     Clear,
@@ -147,6 +148,11 @@ class ReadTest(unittest.TestCase):
         pong = p.one(Ping(0xDEADBEEF), Pong)
         self.assertEqual(pong.token, 0xDEADBEEF)
         self.assertEqual(pong.uptime_ms, p.r.hal.now)
+        self.assertEqual(p.r.board.host_ms, 0)  # a stranger's PING does not feed the dead-man
+        pong = p.one(AuthPing(7), Pong)  # the host: it holds the key
+        self.assertEqual((pong.token, p.r.board.host_ms), (7, p.r.hal.now))
+        p.r.run(100)
+        p.one(Ping(8), Pong)  # from now on its PINGs feed the dead-man too
         self.assertEqual(p.r.board.host_ms, p.r.hal.now)
 
     def test_get_config(self):

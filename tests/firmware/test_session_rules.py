@@ -5,8 +5,19 @@ import unittest
 
 from firmware.session import FRAME_GAP_MS, Session
 from protocol.connection import HOST, Connection
+from protocol.constants import E_BAD_TAG
 from protocol.framing import encode_frame
-from protocol.messages import Ack, Hello, HelloRequest, Measurement, Ping, Pong, Subscribe
+from protocol.messages import (
+    Ack,
+    AuthPing,
+    GetState,
+    Hello,
+    HelloRequest,
+    Measurement,
+    Ping,
+    Pong,
+    Subscribe,
+)
 from tests.firmware.test_session import KEY, Counter, rig
 
 
@@ -80,3 +91,41 @@ class NewSessionTest(unittest.TestCase):
         ser.host.receive_data(ser.s.poll(ser.r.hal.now))
         first = [m.seq for m in ser.host.events() if isinstance(m, Measurement)]
         self.assertEqual(first, [1])  # each session counts from 1
+
+
+class StrangerTest(unittest.TestCase):
+    """Who is the host: a session whose request passed the HMAC check. Only its PINGs keep it
+    open and feed the dead-man; a stranger that only PINGs goes idle."""
+
+    def test_auth_ping_makes_the_session_the_hosts_until_a_new_hello(self):
+        ser = Serial(gap=0)
+        self.assertFalse(ser.s.authenticated)
+        got = ser.send(ser.host.send(AuthPing(5, req_id=1)), 0)
+        self.assertIsInstance(got[0], Pong)
+        self.assertTrue(ser.s.authenticated)
+        ser.send(ser.host.send(HelloRequest(req_id=2)), 10)
+        self.assertFalse(ser.s.authenticated)  # a new session: not proven yet
+
+    def test_a_wrong_key_proves_nothing(self):
+        ser = Serial(gap=0)
+        ser.host.key = b"\x55" * 32
+        got = ser.send(ser.host.send(AuthPing(5, req_id=1)), 0)
+        self.assertEqual(got[0].code, E_BAD_TAG)
+        self.assertFalse(ser.s.authenticated)
+
+    def test_a_strangers_pings_do_not_keep_it_open(self):
+        ser = Serial(gap=0)
+        for t in range(1000, 31000, 1000):
+            ser.send(ser.host.send(Ping(t, req_id=t // 1000)), t)
+        self.assertEqual(ser.s.idle_ms(31000), 31000)
+        ser.send(ser.host.send(GetState(req_id=99)), 31000)  # a real request does
+        self.assertEqual(ser.s.idle_ms(31000), 0)
+        ser.send(ser.host.send(Subscribe(1, req_id=100)), 32000)
+        self.assertEqual(ser.s.idle_ms(90000), 0)  # a subscriber reads: never idle
+
+    def test_the_hosts_pings_keep_it_open(self):
+        ser = Serial(gap=0)
+        ser.send(ser.host.send(AuthPing(1, req_id=1)), 0)
+        for t in range(1000, 31000, 1000):
+            ser.send(ser.host.send(Ping(t, req_id=t // 1000 + 1)), t)
+        self.assertEqual(ser.s.idle_ms(31000), 1000)

@@ -99,3 +99,12 @@ class MergeTest(unittest.TestCase):
         for partial, where in cases:
             with self.subTest(where=where):
                 self.assertEqual(settings.merge(partial, 3), (None, where))
+
+
+class ListenTest(unittest.TestCase):
+    def test_listen_is_an_ipv4_address_or_empty(self):
+        for good in ("", "192.168.1.7", "0.0.0.0"):
+            self.assertIsNone(settings.check_board({"listen": good}))
+        for bad in ("eth0", "::", "1.2.3", 7):
+            self.assertEqual(settings.check_board({"listen": bad}), "listen")
+        self.assertEqual(settings.default_board()["listen"], "")  # not every interface
