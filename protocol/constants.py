@@ -29,6 +29,7 @@ F_STUCK_OFF = const(0x0020)  # commanded on but the switch reads back off
 F_SHED_TOTAL = const(0x0040)  # switched off to keep the board under its total limit
 F_SHED_UV = const(0x0080)  # switched off by input under-voltage
 F_DEADMAN = const(0x0100)  # set to the safe state by the host dead-man timeout
+F_SENSOR = const(0x0200)  # the current sensor reads current while the switch reads back open
 FAULT_NAMES = (
     "short",
     "overload",
@@ -39,6 +40,7 @@ FAULT_NAMES = (
     "shed_total",
     "shed_uv",
     "deadman",
+    "sensor",
 )
 
 # --- board flags (u16 bit mask) ---------------------------------------------------------

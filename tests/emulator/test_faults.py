@@ -249,3 +249,19 @@ def test_model_errors_name_the_field() -> None:
     with pytest.raises(ModelError, match="must be a non-negative integer"):
         parse({"channels": [{"nominal_ma": -3}]})
     assert TEDUSAR.is_dir()
+
+
+def test_sensor_offset_on_the_pc_keeps_it_on_and_flags_it() -> None:
+    """The finding of issue 12, on the emulated TEDUSAR board: a +4 A offset on the pc's
+    current sensor trips it, but the board does not latch it off; it says ``sensor``."""
+    e = tedusar()
+    e.advance(2000)
+    e.inject("pc", "sensor_offset", {"amps": "4"})
+    states = set()
+    for _ in range(120):
+        e.advance(1000)
+        states.add(e.status()["channels"][2]["state"])
+    pc = e.status()["channels"][2]
+    assert "faulted" not in states and "latched" not in states
+    assert pc["state"] == "on" and pc["physical"]
+    assert "sensor" in pc["live"] and "stuck_on" not in pc["sticky"]

@@ -1,7 +1,8 @@
 """A tiny HAL for the firmware tests: a simulated clock and ideal electronics set by the test.
 
-``load_ma[ch]`` is what the channel draws while its switch is on; ``stuck[ch]`` forces the
-switch (None = follows the command, True = stuck on, False = stuck off). The same file runs
+``load_ma[ch]`` is what the channel draws while its switch is on; ``offset_ma[ch]`` is added to
+every reading (a faulty current sensor); ``stuck[ch]`` forces the switch (None = follows the
+command, True = stuck on, False = stuck off). The same file runs
 under CPython and MicroPython. ``Rig`` boots an ``App`` on it and steps it on simulated time.
 """
 
@@ -15,6 +16,7 @@ class TestHal:
         self.n_channels = n
         self.now = 0
         self.load_ma = [0] * n
+        self.offset_ma = [0] * n  # a current sensor's error: read even with the switch open
         self.stuck = [None] * n
         self.cmd = [False] * n
         self.switch_log = []  # (now, ch, on) for every change of a command
@@ -33,10 +35,10 @@ class TestHal:
 
     def read_currents_ma(self, out):
         for ch in range(self.n_channels):
-            out[ch] = self.load_ma[ch] if self._on(ch) else 0
+            out[ch] = self.read_current_ma(ch)
 
     def read_current_ma(self, ch):
-        return self.load_ma[ch] if self._on(ch) else 0
+        return (self.load_ma[ch] if self._on(ch) else 0) + self.offset_ma[ch]
 
     def set_switch(self, ch, on):
         if self.cmd[ch] != on:
