@@ -38,6 +38,7 @@ from firmware import config
 from firmware.app import App
 from firmware.hal.storage import MemStorage
 from protocol import settings
+from protocol.events import flag_names
 from protocol.constants import (
     FAULT_NAMES,
     RESET_BROWNOUT,
@@ -49,10 +50,6 @@ from protocol.constants import (
 )
 
 BOARD = "board"
-
-
-def flag_names(mask: int, names: tuple[str, ...]) -> list[str]:
-    return [n for i, n in enumerate(names) if mask & (1 << i)]
 
 
 class Emulator:

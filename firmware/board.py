@@ -293,7 +293,8 @@ class Board:
 
     def _deadman(self, now: int, mask: int) -> None:
         self.flags |= B_DEADMAN
-        self.events.put(EV_WARNING, BOARD_CHANNEL, 0, 0, B_DEADMAN, 0, now - self.boot_ms)
+        self.events.put(EV_WARNING, BOARD_CHANNEL, 0, 0, self.flags, self.input_mv,
+                        now - self.boot_ms)
         for ch in self.channels:
             if ch.protected or mask & (1 << ch.index) or ch.state == ST_OFF:
                 continue

@@ -62,6 +62,11 @@ class RangesFitTheWireTest(unittest.TestCase):
                     self.assertEqual(getattr(back, name), v)
             self.assertEqual(settings.check_board({name: hi + 1}), name)
 
+    def test_channel_config_size_is_as_the_spec_says(self):
+        for name, retries in (("", []), ("hokuyo", [1000, 2000, 5000]), ("x" * 16, [1] * 8)):
+            msg = _channel(name=name, retry_ms=retries)
+            self.assertEqual(len(msg.payload()), 31 + len(name) + 2 * len(retries))
+
     def test_messages_carry_exactly_the_tables(self):
         self.assertEqual(CHANNEL_CONFIG_KEYS, ("channel",) + settings.CHANNEL_KEYS)
         wire = tuple(r[0] for r in settings.BOARD if r[1] is not None)
