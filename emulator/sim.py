@@ -38,7 +38,6 @@ from firmware import config
 from firmware.app import App
 from firmware.hal.storage import MemStorage
 from protocol import settings
-from protocol.events import flag_names
 from protocol.constants import (
     FAULT_NAMES,
     RESET_BROWNOUT,
@@ -48,6 +47,7 @@ from protocol.constants import (
     RESET_WATCHDOG,
     STATE_NAMES,
 )
+from protocol.events import flag_names
 
 BOARD = "board"
 

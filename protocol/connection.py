@@ -15,8 +15,8 @@ start marker through the counter) cut to 16 bytes. The BOARD checks the tag in c
 first, then the counter, and hands over the message only if both hold; otherwise it yields a
 ``BadFrame`` with E_BAD_TAG, E_REPLAYED, E_AUTH_REQUIRED or E_NO_SESSION. Reading needs no
 key. The BOARD refuses a request with ``req_id`` 0 (E_MALFORMED, before any authentication):
-0 marks pushes, so its reply could not be told from one. Sending a message the role may not send, or an authenticated one without key or
-session, raises ``LocalProtocolError``.
+0 marks pushes, so its reply could not be told from one. Sending a message the role may not
+send, or an authenticated one without key or session, raises ``LocalProtocolError``.
 """
 
 import struct
