@@ -6,10 +6,12 @@ does on the board, except that the emulator's clock drives the protection steps:
 step (``emu.step_listeners``) the front ends ``pump`` their pushes, and after a reboot they
 ``attach`` to the new boot's firmware (which closes every client, as a reset does). Clients
 never reach the firmware's servers directly: a ``LinkProxy`` (``emulator/link.py``) in front of
-each applies the injected link faults, and its address is the one printed. The serial front end
-sits on the master side of a pseudo-terminal pair; clients open the slave (``serial_path``).
-The CAN front end (``emulator/canbus.py``) puts ``firmware/can.py`` on a python-can bus; the
-original TEDUSAR format (``firmware/tug.py``) is served by the firmware like Modbus.
+each applies the injected link faults, and its address is the one printed; the Modbus proxy
+names each client to the firmware (a PROXY line), so the write allow-list sees the client.
+The serial front end sits on the master side of a pseudo-terminal pair; clients open the
+slave (``serial_path``). The CAN front end (``emulator/canbus.py``) puts ``firmware/can.py``
+on a python-can bus; the original TEDUSAR format (``firmware/tug.py``) is served by the
+firmware like Modbus.
 
 ``start(listen, modbus=None, serial=False, can=None, tug_at=None, tug_switch=False)`` must run
 on the emulator's loop (see ``control.Background.run``); the ``urls`` it returns are the ones
@@ -76,15 +78,17 @@ class FrontEnds:
                   self.read_timeout_ms, self.max_clients)
         self.net = net
         emu.step_listeners.append(self._after_step)
+        emu.reset_listeners.append(net.halt)
         self.tasks.append(asyncio.create_task(net.housekeeping()))
         server: Any = await net.serve_tcp("127.0.0.1", 0)
         self.servers.append(server)
         host, port = await self._proxy(server, listen)
         self.urls["board"] = f"tcp://{host}:{port}"
         if modbus_at is not None:
-            mserver: Any = await modbus.serve(net, "127.0.0.1", 0)
+            mserver: Any = await modbus.serve(net, "127.0.0.1", 0, proxied=True)
             self.servers.append(mserver)
-            host, port = await self._proxy(mserver, modbus_at)
+            host, port = await self.proxy_to(mserver.sockets[0].getsockname()[:2], modbus_at,
+                                             proxy_line=True)
             self.urls["modbus"] = f"modbus+tcp://{host}:{port}"
         if tug_at is not None:
             tserver: Any = await tug.serve(net, "127.0.0.1", 0, tug_switch)
@@ -92,20 +96,34 @@ class FrontEnds:
             host, port = await self._proxy(tserver, tug_at)
             self.urls["tug"] = f"tug://{host}:{port}"
         if serial:
-            self.urls["serial"] = "serial://" + await self._start_serial()
+            await self.start_serial()
         if can is not None:
-            from emulator.canbus import CanFrontEnd
-
-            self.can = CanFrontEnd(emu, can)
-            self.urls["can"] = self.can.url
+            self.start_can(can)
         return self.urls
+
+    def start_can(self, spec: str, node_factory: Any = None) -> str:
+        """The CAN front end on the bus ``spec``; ``node_factory(firmware)`` builds each
+        boot's node (default: the firmware's ``CanNode`` in this interpreter)."""
+        from emulator.canbus import CanFrontEnd, local_node
+
+        front = CanFrontEnd(self.emu, spec, node_factory or local_node)
+        self.can = front
+        self.emu.step_listeners.append(self._pump_can)
+        self.urls["can"] = front.url
+        return front.url
+
+    def _pump_can(self) -> None:
+        if self.can is not None:
+            self.can.pump(self.emu.hal.ticks_ms())
 
     async def _proxy(self, server: Any, listen: tuple[str, int]) -> tuple[str, int]:
         return await self.proxy_to(server.sockets[0].getsockname()[:2], listen)
 
-    async def proxy_to(self, target: tuple[str, int], listen: tuple[str, int]) -> tuple[str, int]:
-        """A link-fault proxy listening on ``listen`` in front of ``target``: (host, port)."""
-        proxy = LinkProxy(self.emu, target, self.seed + len(self.proxies))
+    async def proxy_to(self, target: tuple[str, int], listen: tuple[str, int],
+                       proxy_line: bool = False) -> tuple[str, int]:
+        """A link-fault proxy listening on ``listen`` in front of ``target``: (host, port);
+        ``proxy_line``: it names each client to the firmware first (the Modbus server)."""
+        proxy = LinkProxy(self.emu, target, self.seed + len(self.proxies), proxy_line)
         self.proxies.append(proxy)
         host, port = await proxy.start(*listen)
         return url_host(host), port
@@ -116,39 +134,59 @@ class FrontEnds:
             return
         if net.app is not self.emu.firmware:
             net.attach(self.emu.firmware)
-        now = self.emu.hal.ticks_ms()
-        net.pump(now)
-        if self.can is not None:
-            self.can.pump(now)
+        net.pump(self.emu.hal.ticks_ms())
 
     # --- serial -------------------------------------------------------------------------
 
-    async def _start_serial(self) -> str:
+    async def start_serial(self, relay_to: tuple[str, int] | None = None) -> str:
+        """A pty pair; the firmware's serial front end on its master side: served here by
+        ``Net.serve_serial``, or (``relay_to``, the micropython runtime) relayed byte for byte
+        to the firmware's serial server there. The URL of the slave side."""
         master, slave = os.openpty()
         tty.setraw(slave)
         self._pty = (master, slave)
         self.serial_path = os.ttyname(slave)
-        self.tasks.append(asyncio.create_task(self._serve_serial(master)))
-        return self.serial_path
+        serve = self._serve_serial(master) if relay_to is None else \
+            self._relay_serial(master, relay_to)
+        self.tasks.append(asyncio.create_task(serve))
+        self.urls["serial"] = "serial://" + self.serial_path
+        return self.urls["serial"]
 
-    async def _serve_serial(self, master: int) -> None:
+    async def _pty_streams(self, master: int) -> tuple[asyncio.StreamReader, _PipeWriter]:
         loop = asyncio.get_running_loop()
         reader = asyncio.StreamReader()
         rproto = asyncio.StreamReaderProtocol(reader)
         await loop.connect_read_pipe(lambda: rproto, os.fdopen(os.dup(master), "rb", 0))
         wtrans, _ = await loop.connect_write_pipe(
             asyncio.Protocol, os.fdopen(os.dup(master), "wb", 0))
-        writer = _PipeWriter(wtrans)
+        return reader, _PipeWriter(wtrans)
+
+    async def _serve_serial(self, master: int) -> None:
+        reader, writer = await self._pty_streams(master)
         assert self.net is not None
-        while True:  # the stream never ends while the slave stays open; restart if it does
-            await self.net.serve_stream(reader, writer, close=False)
-            if reader.at_eof():
-                return
-            await asyncio.sleep(0.1)
+        await self.net.serve_serial(reader, writer)
+
+    async def _relay_serial(self, master: int, target: tuple[str, int]) -> None:
+        reader, writer = await self._pty_streams(master)
+        up_r, up_w = await asyncio.open_connection(*target)
+
+        async def copy(src: asyncio.StreamReader, dst: Any) -> None:
+            while data := await src.read(4096):
+                dst.write(data)
+                await dst.drain()
+
+        try:
+            await asyncio.gather(copy(reader, up_w), copy(up_r, writer))
+        finally:
+            up_w.close()
 
     async def stop(self) -> None:
-        with contextlib.suppress(ValueError):
-            self.emu.step_listeners.remove(self._after_step)
+        for listener in (self._after_step, self._pump_can):
+            with contextlib.suppress(ValueError):
+                self.emu.step_listeners.remove(listener)
+        if self.net is not None:
+            with contextlib.suppress(ValueError):
+                self.emu.reset_listeners.remove(self.net.halt)
         for p in self.proxies:
             p.close()
         for s in self.servers:

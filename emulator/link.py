@@ -12,13 +12,18 @@ byte streams, both directions:
 - ``link_corrupt rate=R``: each byte is replaced by a random one with probability R.
 
 The firmware never knows: its sockets see a client that is slow, silent, gone or noisy. The
-printed board URL is the proxy's.
+printed board URL is the proxy's. With ``proxy_line`` the proxy tells the firmware who the
+client is, as a load balancer does: each upstream connection starts with one line of HAProxy's
+PROXY protocol, version 1 (``PROXY TCP4 CLIENT PROXY CPORT PPORT\r\n``; ``PROXY UNKNOWN`` for
+a client that is not IPv4), which the firmware's Modbus server reads to apply its write
+allow-list to the client's address rather than the proxy's.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import ipaddress
 import random
 import time
 from typing import Any
@@ -29,10 +34,30 @@ CHUNK = 4096
 QUEUE_CHUNKS = 16
 
 
+def _ipv4(addr: object) -> tuple[str, int] | None:
+    """(IPv4 address, port) of a socket address, also of an IPv4-mapped IPv6 one; else None."""
+    if not isinstance(addr, tuple) or len(addr) < 2 or not isinstance(addr[0], str):
+        return None
+    try:
+        return str(ipaddress.IPv4Address(addr[0].removeprefix("::ffff:"))), int(addr[1])
+    except ValueError:
+        return None
+
+
+def proxy_line(peer: object, local: object) -> bytes:
+    """The PROXY protocol v1 line for a connection from ``peer`` accepted at ``local``."""
+    src, dst = _ipv4(peer), _ipv4(local)
+    if src is None or dst is None:
+        return b"PROXY UNKNOWN\r\n"
+    return f"PROXY TCP4 {src[0]} {dst[0]} {src[1]} {dst[1]}\r\n".encode()
+
+
 class LinkProxy:
-    def __init__(self, emu: Emulator, target: tuple[str, int], seed: int = 0) -> None:
+    def __init__(self, emu: Emulator, target: tuple[str, int], seed: int = 0,
+                 proxy_line: bool = False) -> None:
         self.emu = emu
         self.target = target
+        self.proxy_line = proxy_line
         self.rng = random.Random(seed)
         self.faults: dict[str, dict[str, Any]] = dict(emu.link_faults)
         self.freeze_until = 0.0
@@ -82,6 +107,9 @@ class LinkProxy:
             writer.close()
             return
         self.writers.update((writer, up_w))
+        if self.proxy_line:
+            up_w.write(proxy_line(writer.get_extra_info("peername"),
+                                  writer.get_extra_info("sockname")))
         try:
             await asyncio.gather(self._pipe(reader, up_w), self._pipe(up_r, writer))
         finally:

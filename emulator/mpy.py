@@ -7,8 +7,11 @@ gets a ``MicroFirmware`` whose ``start``/``step``/``board`` cross link A, while 
 switch commands and storage come back over link B and are served here on the boot's
 ``SimHal``, both while a step waits (``select`` on both links) and between steps (a reader on
 the emulator's loop). The electronics and the clock stay in CPython; the TCP, Modbus and tug
-servers listen inside MicroPython, on loopback ports chosen here, behind the link-fault proxies of
-``FrontEnds``. One process serves every boot: a reboot is a new ``App`` there, not a new process.
+servers listen inside MicroPython, on loopback ports chosen here, behind the link-fault proxies
+of ``FrontEnds``; the serial front end too, with the pty's bytes relayed to it unchanged; the
+CAN node runs there as well, its frames carried over link A (``RemoteCanNode``) between the bus
+and the firmware. One process serves every boot: a reboot is a new ``App`` there, not a new
+process; a board held in reset is told to drop everything (``halt``).
 """
 
 from __future__ import annotations
@@ -75,13 +78,16 @@ class _Line:
 
 
 class MicroRuntime:
-    def __init__(self, modbus: bool = False, can: bool = False,
+    def __init__(self, modbus: bool = False, can: bool = False, serial: bool = False,
                  micropython: str | None = None, tug: bool = False,
                  tug_switch: bool = False) -> None:
         self.tcp_port = free_port()
         self.modbus_port = free_port() if modbus else None
+        self.serial_port = free_port() if serial else None
         self.tug_port = free_port() if tug else None
         self.tug_switch = tug_switch
+        self.can = can
+        self.can_out: list[tuple[int, bytes]] = []  # frames the last step's poll made
         self.caps = capabilities(modbus, can)
         self.hal: SimHal | None = None
         listener = socket.create_server(("127.0.0.1", 0))
@@ -160,19 +166,29 @@ class MicroRuntime:
                               modbus_at: tuple[str, int] | None, serial: bool,
                               can: str | None,
                               tug_at: tuple[str, int] | None = None) -> dict[str, str]:
-        """Serve link B from the loop between steps; put the proxies in front of the servers."""
-        if serial or can:
-            raise MicroError("--serial and --can need --runtime cpython")
+        """Serve link B from the loop between steps; put the proxies in front of the servers,
+        relay the pty to the firmware's serial server, and move CAN frames for its node."""
         asyncio.get_running_loop().add_reader(self.b.sock.fileno(), self._serve_b)
+        fronts.emu.reset_listeners.append(self.halt)
         host, port = await fronts.proxy_to(("127.0.0.1", self.tcp_port), listen)
         fronts.urls["board"] = f"tcp://{host}:{port}"
         if modbus_at is not None and self.modbus_port is not None:
-            host, port = await fronts.proxy_to(("127.0.0.1", self.modbus_port), modbus_at)
+            host, port = await fronts.proxy_to(("127.0.0.1", self.modbus_port), modbus_at,
+                                               proxy_line=True)
             fronts.urls["modbus"] = f"modbus+tcp://{host}:{port}"
         if tug_at is not None and self.tug_port is not None:
             host, port = await fronts.proxy_to(("127.0.0.1", self.tug_port), tug_at)
             fronts.urls["tug"] = f"tug://{host}:{port}"
+        if serial and self.serial_port is not None:
+            await fronts.start_serial(relay_to=("127.0.0.1", self.serial_port))
+        if can is not None:
+            fronts.start_can(can, lambda firmware: RemoteCanNode(self))
         return fronts.urls
+
+    def halt(self) -> None:
+        """The board is held in reset: the firmware there closes everything (``Net.halt``)."""
+        self.request({"op": "halt"})
+        self.can_out = []
 
     def close(self) -> None:
         if self.proc.poll() is None:
@@ -182,6 +198,26 @@ class MicroRuntime:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()
+
+
+def _frames(rows: list[list[Any]]) -> list[tuple[int, bytes]]:
+    return [(int(can_id), bytes.fromhex(data)) for can_id, data in rows]
+
+
+class RemoteCanNode:
+    """The firmware's ``CanNode`` in the micropython process, as ``CanFrontEnd`` sees it:
+    ``poll`` hands over what the last step's poll made there, ``receive`` crosses link A."""
+
+    def __init__(self, rt: MicroRuntime) -> None:
+        self.rt = rt
+
+    def poll(self, now: int) -> list[tuple[int, bytes]]:
+        out, self.rt.can_out = self.rt.can_out, []
+        return out
+
+    def receive(self, can_id: int, data: bytes, now: int) -> list[tuple[int, bytes]]:
+        rep = self.rt.request({"op": "can", "id": can_id, "data": data.hex()})
+        return _frames(rep["frames"])
 
 
 class _BoardProxy:
@@ -208,10 +244,13 @@ class MicroFirmware:
     def start(self) -> None:
         self.rt.hal = self.hal
         seed = int.from_bytes(self.hal.random_bytes(4), "big")
+        self.rt.can_out = []
         self.rt.request({"op": "boot", "cause": self.hal.cause, "n": self.hal.n_channels,
                          "seed": seed, "tcp": self.rt.tcp_port, "modbus": self.rt.modbus_port,
-                         "caps": self.rt.caps, "tug": self.rt.tug_port,
-                         "tug_switch": self.rt.tug_switch})
+                         "serial": self.rt.serial_port, "caps": self.rt.caps,
+                         "factory": self.hal.emu.factory,
+                         "can": {"node": 0, "rate": 10} if self.rt.can else None,
+                         "tug": self.rt.tug_port, "tug_switch": self.rt.tug_switch})
 
     def step(self) -> int:
         hal = self.hal
@@ -221,6 +260,7 @@ class MicroFirmware:
         rep = self.rt.request({"op": "step", "t": hal.ticks_ms(), "ma": ma,
                                "sw": [hal.read_switch(i) for i in range(n)],
                                "mv": hal.read_input_mv()})
+        self.rt.can_out = _frames(rep.get("can", []))
         if rep["feeds"]:
             hal.wdt_feed()
         if rep["reboot"]:

@@ -125,6 +125,8 @@ def _run(emu: Emulator, step: Step) -> None:
         emu.clear(step.channel, step.name or None)
     else:
         assert step.channel is not None
+        if emu.in_reset:  # a board held in reset executes nothing
+            return
         ch = emu.channel_index(step.channel)
         board = emu.board
         if step.name == "on":

@@ -8,8 +8,9 @@ Both run the same steps in the same order, so a scenario behaves the same on eit
 Resets are the emulator's job, as they are the hardware's: ``reboot`` from the firmware gives a
 soft reset; ``wdt_reset`` hangs the firmware's main loop (its steps stop) so that the watchdog,
 no longer fed by the supervisor, resets the board after ``wdt_timeout_ms``; a ``brownout``
-below ``reset_mv`` holds the microcontroller in reset (every switch opens) until the voltage
-returns, then boots with ``RESET_BROWNOUT``; a shallower one only lowers the input the firmware
+below ``reset_mv`` holds the microcontroller in reset (every switch opens, every connection
+drops: ``reset_listeners``; nothing runs and nothing is served) until the voltage returns,
+then boots with ``RESET_BROWNOUT``; a shallower one only lowers the input the firmware
 measures. Each boot builds a new ``App`` on a new ``SimHal``; storage and electronics persist.
 
 Runtime seam: everything the firmware sees passes through ``SimHal``'s methods, and the
@@ -36,6 +37,7 @@ from emulator.model import EmulatorModel, ModelError
 from firmware import config
 from firmware.app import App
 from firmware.hal.storage import MemStorage
+from protocol import settings
 from protocol.constants import (
     FAULT_NAMES,
     RESET_BROWNOUT,
@@ -45,12 +47,9 @@ from protocol.constants import (
     RESET_WATCHDOG,
     STATE_NAMES,
 )
+from protocol.events import flag_names
 
 BOARD = "board"
-
-
-def flag_names(mask: int, names: tuple[str, ...]) -> list[str]:
-    return [n for i, n in enumerate(names) if mask & (1 << i)]
 
 
 class Emulator:
@@ -59,22 +58,29 @@ class Emulator:
                  firmware_factory: Callable[[SimHal], Any] | None = None) -> None:
         """``firmware_factory(hal)`` builds the firmware of each boot (default ``App``: the
         firmware in this interpreter; ``emulator.mpy.MicroFirmware`` runs it in MicroPython).
-        ``board_config`` (channels/board fields, as in ``models/<robot>/board.json``) is
-        written to storage as the persisted configuration if storage holds none yet, as
-        flashing a board would."""
+        ``board_config`` (channels/board fields, as in ``models/<robot>/board.json``) is what
+        flashing a board does with it: built into the firmware as its factory configuration
+        (``factory``, booted when no stored copy is good) and written to storage as the
+        persisted configuration if storage holds none yet."""
         self.model = model
         self.now = 0
         self.storage: Any = storage if storage is not None else MemStorage()
         self.electronics = Electronics(list(model.channels), model.board.input_mv,
                                        model.board.seed)
-        if board_config is not None and self.storage.read(config.FILE) is None:
-            config.save(self.storage, make_config(board_config, len(model.channels)))
+        # what flashing the board built into its firmware: its factory configuration
+        self.factory = make_config(board_config, len(model.channels)) \
+            if board_config is not None else None
+        if self.factory is not None and not config.exists(self.storage):
+            config.save(self.storage, self.factory)
         self.active: dict[tuple[str, str], dict[str, Any]] = {}
         self.link_faults: dict[str, dict[str, Any]] = {}
         self.link_listeners: list[Callable[[dict[str, dict[str, Any]]], None]] = []
         # called after every firmware step (front ends push what the step produced)
         self.step_listeners: list[Callable[[], None]] = []
-        self.firmware_factory: Callable[[SimHal], Any] = firmware_factory or App
+        # called when the microcontroller goes into reset (a deep brown-out): the front ends
+        # drop every connection and serve nothing until the next boot
+        self.reset_listeners: list[Callable[[], None]] = []
+        self.firmware_factory: Callable[[SimHal], Any] = firmware_factory or self._app
         self.timers: list[tuple[int, Callable[[], None]]] = []
         self.last_feed = 0
         self.reboot_requested = False
@@ -86,6 +92,9 @@ class Emulator:
         self._boot(RESET_POWER_ON)
 
     # --- clock and resets ---------------------------------------------------------------
+
+    def _app(self, hal: SimHal) -> App:
+        return App(hal, self.factory)
 
     def _boot(self, cause: int) -> None:
         self.electronics.release_all(self.now)
@@ -103,6 +112,11 @@ class Emulator:
     @property
     def board(self) -> Any:
         return self.firmware.board
+
+    @property
+    def in_reset(self) -> bool:
+        """Held in reset by a deep brown-out: the microcontroller runs nothing at all."""
+        return self.down_until >= 0
 
     def at(self, when_ms: int, action: Callable[[], None]) -> None:
         """Run ``action`` when the clock reaches ``when_ms`` (scenario events, fault ends)."""
@@ -185,6 +199,8 @@ class Emulator:
             if self.electronics.input_mv < self.model.board.reset_mv:
                 self.down_until = end
                 self.electronics.release_all(self.now)
+                for listener in self.reset_listeners:
+                    listener()
             self.at(end, self._brownout_over)
         else:
             self.link_faults[fault] = params
@@ -262,18 +278,8 @@ class Emulator:
 
 def make_config(board_config: dict[str, Any], n: int) -> dict[str, Any]:
     """A full firmware configuration from a model's partial one; ``ModelError`` if invalid."""
-    cfg = config.defaults(n)
-    board = board_config.get("board", {})
-    bad = config.check_board(board)
-    if bad is not None:
-        raise ModelError(f"board config: bad board field {bad!r}")
-    cfg["board"].update(board)
-    chans = board_config.get("channels", [])
-    if not isinstance(chans, list) or len(chans) > n:
-        raise ModelError(f"board config: 'channels' must be a list of at most {n}")
-    for i, c in enumerate(chans):
-        bad = config.check_channel(c)
-        if bad is not None:
-            raise ModelError(f"board config: channel {i}: bad field {bad!r}")
-        cfg["channels"][i].update(c)
-    return cfg
+    cfg, bad = settings.merge(board_config, n, config.VERSION)
+    if cfg is None:
+        raise ModelError(f"board config: bad field {bad}")
+    result: dict[str, Any] = cfg
+    return result

@@ -1,10 +1,12 @@
 """The board: its channels, the board-level rules, the commands and the status.
 
-``Board(hal)`` then ``boot(now_ms)`` loads the configuration (``config``), counts watchdog
-resets (``bootlog``), logs ``EV_REBOOT`` and queues the power-up set. ``tick(now_ms)`` runs one
-protection step and never waits for anything: it samples every channel's current and switch,
-steps each ``Channel`` (inrush, instant trip, I²t, retries, open load, stuck switch), then the
-board rules:
+``Board(hal, factory)`` then ``boot(now_ms)`` loads the configuration (``config``: the newest
+good stored copy, else ``factory``, the configuration built into the firmware, so that a board
+whose stored configuration is lost still powers and protects the computer it feeds), counts
+watchdog resets (``bootlog``), logs ``EV_REBOOT`` and queues the power-up set.
+``tick(now_ms)`` runs one protection step and never waits for anything: it samples every
+channel's current and switch, steps each ``Channel`` (inrush, instant trip, I²t, retries,
+open load, stuck switch), then the board rules:
 
 - power-up and restore queue: channels switch on one at a time in priority order (lower
   ``priority`` first), ``powerup_spacing_ms`` apart; used at boot and after under-voltage.
@@ -61,6 +63,7 @@ from protocol.constants import (
     ST_ON,
     ST_TRIPPED,
 )
+from protocol.settings import BOARD_WIRE_KEYS, merge
 
 TOTAL_SAMPLES = const(2)
 UV_SAMPLES = const(3)
@@ -121,11 +124,8 @@ class Board:
         hal = self.hal
         self.boot_ms = self.now = self.last = self.host_ms = now
         cfg, status = config.load(hal.storage, self.n)  # type: ignore[attr-defined]
-        if status and self.factory is not None:
-            cfg = config.defaults(self.n)
-            cfg["board"].update(self.factory["board"])
-            for i, c in enumerate(self.factory["channels"][: self.n]):
-                cfg["channels"][i].update(c)
+        if cfg is None:
+            cfg = self.factory_config()
         self.cfg = cfg
         self.cfg_status = status
         self.reset_cause = hal.reset_cause()  # type: ignore[attr-defined]
@@ -148,6 +148,16 @@ class Board:
                 ch.commanded = True
                 self._enqueue(ch.index)
         self.queue_at = now
+
+    def factory_config(self) -> dict:  # type: ignore[type-arg]
+        """The configuration built into the firmware (``factory``: the one the board was
+        flashed with, its key and its protected boot channel included), used when no good copy
+        is stored; without one (or a bad one), the defaults of ``protocol.settings``."""
+        if self.factory is not None:
+            cfg: "dict | None" = merge(self.factory, self.n, config.VERSION)[0]  # type: ignore[type-arg]
+            if cfg is not None:
+                return cfg
+        return config.defaults(self.n)
 
     def _enqueue(self, i: int) -> None:
         if i in self.queue:
@@ -283,7 +293,8 @@ class Board:
 
     def _deadman(self, now: int, mask: int) -> None:
         self.flags |= B_DEADMAN
-        self.events.put(EV_WARNING, BOARD_CHANNEL, 0, 0, B_DEADMAN, 0, now - self.boot_ms)
+        self.events.put(EV_WARNING, BOARD_CHANNEL, 0, 0, self.flags, self.input_mv,
+                        now - self.boot_ms)
         for ch in self.channels:
             if ch.protected or mask & (1 << ch.index) or ch.state == ST_OFF:
                 continue
@@ -308,30 +319,39 @@ class Board:
             return err, 0, False
         return err, c.state, self.hal.read_switch(c.index)  # type: ignore[attr-defined]
 
+    def check_switch(self, ch: int, on: bool, force: bool = False) -> int:
+        """The error ``switch`` would answer now (0: it would act); changes nothing, so that a
+        command on several channels can be refused whole before any of them moves."""
+        c = self._ch(ch)
+        if c is None:
+            return E_BAD_CHANNEL
+        if not isinstance(on, bool):
+            return E_BAD_VALUE
+        if on:
+            return E_INHIBITED if self._inhibited(c) else c.refuses(X_ON)
+        if c.protected and not force and c.state != ST_OFF and c.state != ST_LATCHED:
+            return E_PROTECTED
+        return c.refuses(X_OFF)
+
     def switch(self, ch: int, on: bool, force: bool = False) -> tuple:  # type: ignore[type-arg]
         """Switch a channel on or off: ``(error, state, physical)``."""
+        err = self.check_switch(ch, on, force)
         c = self._ch(ch)
-        if c is None or not isinstance(on, bool):
-            return self._reply(E_BAD_CHANNEL if c is None else E_BAD_VALUE, c)
-        if on:
-            if self._inhibited(c):
-                return self._reply(E_INHIBITED, c)
-            err = c.fire(X_ON, self.now)
-            if not err:
-                c.commanded = True
-                c.cycle_at = -1
-                c.live &= ~SHED_FLAGS
+        if err or c is None:
             return self._reply(err, c)
-        if c.protected and not force and c.state != ST_OFF and c.state != ST_LATCHED:
-            return self._reply(E_PROTECTED, c)
-        err = c.fire(X_OFF, self.now)
-        if not err:
-            c.commanded = False
+        if on:
+            c.fire(X_ON, self.now)
+            c.commanded = True
             c.cycle_at = -1
             c.live &= ~SHED_FLAGS
-            if ch in self.queue:
-                self.queue.remove(ch)
-        return self._reply(err, c)
+            return self._reply(0, c)
+        c.fire(X_OFF, self.now)
+        c.commanded = False
+        c.cycle_at = -1
+        c.live &= ~SHED_FLAGS
+        if ch in self.queue:
+            self.queue.remove(ch)
+        return self._reply(0, c)
 
     def power_cycle(self, ch: int, off_ms: int, force: bool = False) -> tuple:  # type: ignore[type-arg]
         """Switch off now and on again ``off_ms`` later: ``(error, state, physical)``."""
@@ -388,10 +408,14 @@ class Board:
         return 0
 
     def get_board_config(self) -> dict:  # type: ignore[type-arg]
-        """A copy of the board configuration without the key (which never leaves the board)."""
-        b = dict(self.cfg["board"])
-        b.pop("key", None)
-        return b
+        """A copy of the board configuration as BOARD_CONFIG carries it: never the key (which
+        never leaves the board) nor the listen address."""
+        b = self.cfg["board"]
+        out = {}
+        for name in BOARD_WIRE_KEYS:
+            out[name] = b[name]
+        out["modbus_allow"] = list(out["modbus_allow"])
+        return out
 
     def set_board_config(self, fields: dict) -> int:  # type: ignore[type-arg]
         if config.check_board(fields) is not None:

@@ -1,4 +1,4 @@
-"""The board on CAN, sans I/O: frames per ``protocol/dxboard.dbc`` out, commands in.
+"""The board on CAN, sans I/O: frames per ``protocol/can.py`` (and the DBC) out, commands in.
 
 ``CanNode(board, key, random_bytes, node=0, rate_hz=10)``; ``poll(now_ms)`` returns the
 frames due, as ``(can_id, data)`` pairs (11-bit ids, 8 data bytes, little-endian as the DBC
@@ -15,78 +15,45 @@ bytes). The nonce is 8 random bytes chosen at boot and broadcast in DXB_Nonce. E
 is answered with DXB_CmdResult (0x188+N): op, channel, error (0 or E_*), state, read-back. A
 command whose tags do not arrive in time (E_AUTH_REQUIRED), with a bad tag (E_BAD_TAG), with
 a counter not above the last accepted (E_REPLAYED) or on a board without key changes nothing.
+An unknown op is E_BAD_VALUE (303), checked after the tag and the counter. A DXB_Cmd whose
+data is not 8 bytes is answered with E_MALFORMED (105), and so is the pending command when a
+tag frame of the wrong length comes: a command is never silently ignored.
 """
 
-import struct
-
-from protocol.auth import equal, hmac_sha256
-from protocol.compat import const
+from protocol.auth import equal
+from protocol.can import (
+    CURRENT_GROUPS,
+    FRAME_LEN,
+    ID_CMD,
+    ID_NONCE,
+    ID_RESULT,
+    ID_STATUS,
+    ID_TAG_A,
+    ID_TAG_B,
+    MAX_CHANNELS,
+    OP_CLEAR,
+    OP_CYCLE,
+    OP_OFF,
+    OP_ON,
+    SLOW_MS,
+    TAG_WINDOW_MS,
+    channel_frame,
+    channel_id,
+    command_tag,
+    currents_frame,
+    currents_id,
+    parse_command,
+    result_frame,
+    status_frame,
+)
 from protocol.constants import (
     E_AUTH_REQUIRED,
     E_BAD_CHANNEL,
     E_BAD_TAG,
     E_BAD_VALUE,
+    E_MALFORMED,
     E_REPLAYED,
 )
-
-ID_STATUS = const(0x100)
-ID_CURRENTS = const(0x110)
-ID_CHANNEL = const(0x140)
-ID_CMD = const(0x180)
-ID_TAG_A = const(0x181)
-ID_TAG_B = const(0x182)
-ID_RESULT = const(0x188)
-ID_NONCE = const(0x1F0)
-SLOW_MS = const(1000)
-TAG_WINDOW_MS = const(100)
-OP_ON = const(1)
-OP_OFF = const(2)
-OP_CYCLE = const(3)
-OP_CLEAR = const(4)
-CURRENT_GROUPS = const(3)
-MAX_CHANNELS = const(16)
-
-
-def _clamp(v: int, lo: int, hi: int) -> int:
-    return lo if v < lo else (hi if v > hi else v)
-
-
-def channel_frame(ch: tuple) -> bytes:  # type: ignore[type-arg]
-    """DXB_Channel data from a ``Board.channel_status`` tuple."""
-    commanded, physical, state, ma, live, _sticky, trips, retries = ch
-    ma = _clamp(ma, -0x80000, 0x7FFFF) & 0xFFFFF
-    b0 = (state & 0xF) | (0x10 if commanded else 0) | (0x20 if physical else 0)
-    return struct.pack("<BBBBHBB", b0, ma & 0xFF, (ma >> 8) & 0xFF, ma >> 16, live & 0xFFFF,
-                       _clamp(trips, 0, 255), _clamp(retries, 0, 255))
-
-
-def status_frame(board_status: tuple) -> bytes:  # type: ignore[type-arg]
-    mv, _total, uptime, cause, cfg_status, flags = board_status
-    return struct.pack("<IHBB", (uptime // 1000) & 0xFFFFFFFF, _clamp(mv, 0, 0xFFFF),
-                       flags & 0xFF, (cause & 0xF) | ((cfg_status & 0xF) << 4))
-
-
-def currents_frame(currents_ma: list, g: int) -> bytes:  # type: ignore[type-arg]
-    vals = []
-    for i in range(4 * g, 4 * g + 4):
-        ma = currents_ma[i] if i < len(currents_ma) else 0
-        vals.append(_clamp((ma + 5) // 10 if ma >= 0 else -((-ma + 5) // 10), -32768, 32767))
-    return struct.pack("<4h", *vals)
-
-
-def command_frame(op: int, ch: int, force: bool = False, off_100ms: int = 0,
-                  counter: int = 0) -> bytes:
-    return struct.pack("<BBBBI", op, ch, 1 if force else 0, off_100ms, counter)
-
-
-def command_tag(key: bytes, nonce: bytes, cmd: bytes) -> bytes:
-    """The 16 bytes that DXB_CmdTagA (first 8) and DXB_CmdTagB (last 8) carry."""
-    return hmac_sha256(key, nonce + cmd)[:16]
-
-
-def result_frame(op: int, ch: int, err: int, state: int, physical: bool) -> bytes:
-    return struct.pack("<BBHBBBB", op, ch, err, (state & 0xF) | (0x10 if physical else 0),
-                       0, 0, 0)
 
 
 class CanNode:
@@ -125,13 +92,13 @@ class CanNode:
             self.fast_at = now + self.period
             currents = [c[3] for c in chans]
             for g in range(CURRENT_GROUPS):
-                out.append((ID_CURRENTS + 4 * n + g, currents_frame(currents, g)))
+                out.append((currents_id(n, g), currents_frame(currents, g)))
         last = self.last
         for k in range(len(chans)):
             c = chans[k]
             key = (c[0], c[1], c[2])
             if slow or k >= len(last) or last[k] != key:
-                out.append((ID_CHANNEL + 16 * n + k, channel_frame(c)))
+                out.append((channel_id(n, k), channel_frame(c)))
         self.last = [(c[0], c[1], c[2]) for c in chans]
         return out
 
@@ -139,10 +106,24 @@ class CanNode:
 
     def receive(self, can_id: int, data: bytes, now: int) -> list:  # type: ignore[type-arg]
         n = self.node
-        if len(data) != 8:
-            return []
         out = []
-        if can_id == ID_CMD + n:
+        cmd_ids = can_id == ID_CMD + n
+        tag_ids = can_id == ID_TAG_A + n or can_id == ID_TAG_B + n
+        if len(data) != FRAME_LEN:
+            # a command frame of the wrong length is answered (E_MALFORMED), as is the
+            # command pending when a tag frame of the wrong length comes; others: not ours
+            if cmd_ids or (tag_ids and self.pending is not None):
+                if self.pending is not None:
+                    pending = self.pending
+                    self.pending = None
+                    self.tag_a = None
+                    out.append(self._result(pending, E_AUTH_REQUIRED if cmd_ids
+                                            else E_MALFORMED))
+                if cmd_ids:
+                    out.append(self._result(bytes(data[:2]) + bytes(2 - len(data[:2])),
+                                            E_MALFORMED))
+            return out
+        if cmd_ids:
             if self.pending is not None:
                 out.append(self._result(self.pending, E_AUTH_REQUIRED))
             self.pending = bytes(data)
@@ -167,7 +148,7 @@ class CanNode:
             return E_AUTH_REQUIRED
         if not equal(command_tag(self.key, self.nonce, cmd), tag):
             return E_BAD_TAG
-        op, ch, force, off, counter = struct.unpack("<BBBBI", cmd)
+        op, ch, force, off, counter = parse_command(cmd)
         if counter <= self.counter:
             return E_REPLAYED
         self.counter = counter
@@ -176,9 +157,9 @@ class CanNode:
         if op == OP_ON:
             res = b.switch(ch, True)  # type: ignore[attr-defined]
         elif op == OP_OFF:
-            res = b.switch(ch, False, bool(force & 1))  # type: ignore[attr-defined]
+            res = b.switch(ch, False, force)  # type: ignore[attr-defined]
         elif op == OP_CYCLE:
-            res = b.power_cycle(ch, off * 100, bool(force & 1))  # type: ignore[attr-defined]
+            res = b.power_cycle(ch, off * 100, force)  # type: ignore[attr-defined]
         elif op == OP_CLEAR:
             res = b.clear(ch)  # type: ignore[attr-defined]
         else:

@@ -36,6 +36,14 @@ Protection, per tick, from the integer current ``ma`` (no floating point on the 
 - Stuck on: not switched on (OFF, TRIPPED, LATCHED) and above ``stuck_on_ma`` for
   ``stuck_on_ms`` → FAULTED. Stuck off: INRUSH or ON and the switch reads back off for
   ``STUCK_OFF_SAMPLES`` samples → FAULTED. FAULTED keeps the switch off until ``clear``.
+- A doubtful sensor on a *protected* channel (the computer that runs the host): current above
+  ``stuck_on_ma`` for ``stuck_on_ms`` while the switch is off *and reads back open* is not
+  a stuck switch but a sensor that lies. The channel is not latched off for it: ``F_SENSOR``
+  (live and sticky, and an EV_FAULT) tells the host, the reading with the switch open is kept
+  as the sensor's offset and taken off every reading protection uses from then on, and a trip
+  or latch that the lying sensor caused is retried (``X_DOUBT``: LATCHED goes back to TRIPPED
+  when the channel is wanted on). Reported currents stay the raw readings. ``clear`` forgets
+  the offset. Other channels keep the stuck-on rule: off is their safe state.
 
 ``live`` faults are conditions present now; ``sticky`` faults accumulate until ``clear``.
 """
@@ -52,6 +60,7 @@ from protocol.constants import (
     F_INRUSH,
     F_OPEN_LOAD,
     F_OVERLOAD,
+    F_SENSOR,
     F_SHED_TOTAL,
     F_SHED_UV,
     F_SHORT,
@@ -76,6 +85,7 @@ X_TRIP_LATCH = const(6)
 X_RETRY = const(7)
 X_STUCK_ON = const(8)
 X_STUCK_OFF = const(9)
+X_DOUBT = const(10)  # protected channel: the sensor reads current with the switch open
 
 STUCK_OFF_SAMPLES = const(2)
 RATIO_CAP = const(1000)  # r = 100·I/Ir is capped at 10x to keep r² a small int
@@ -118,6 +128,8 @@ TRANSITIONS = {
     (ST_FAULTED, X_OFF): (ST_FAULTED, 0),
     (ST_FAULTED, X_CLEAR): (ST_OFF, 0),
     (ST_FAULTED, X_SHED): (ST_FAULTED, 0),
+    (ST_TRIPPED, X_DOUBT): (ST_TRIPPED, 0),  # the retry comes, with the offset taken off
+    (ST_LATCHED, X_DOUBT): (ST_TRIPPED, 0),  # latched on a lying sensor: retry instead
 }
 
 
@@ -146,6 +158,9 @@ class Channel:
         self.stuck_since = -1
         self.last_fault_ms = 0
         self.cycle_at = -1  # power-cycle: switch back on at this time
+        self.offset_ma = 0  # protected channel: what the sensor reads with the switch open
+        self.open_sum = 0  # readings with the switch open during the stuck-on window
+        self.open_n = 0
         self.cfg = cfg
         self.apply(cfg)
 
@@ -173,6 +188,11 @@ class Channel:
         self.protected = cfg["protected"]
 
     # --- the state machine ------------------------------------------------------------
+
+    def refuses(self, x: int) -> int:
+        """The error with which the table would refuse input ``x`` now (0: accepted)."""
+        err: int = TRANSITIONS[(self.state, x)][1]
+        return err
 
     def fire(self, x: int, now: int) -> int:
         """Apply input ``x``; returns 0 or the error code that refused it."""
@@ -243,13 +263,34 @@ class Channel:
             self.retries = 0
             self.short_used = 0
             self.heat = 0
+            self.offset_ma = 0
+            self.live &= ~F_SENSOR
         return err
+
+    def _doubt(self, now: int) -> None:
+        """A protected channel's sensor reads current with the switch open: keep that as its
+        offset, tell the host, and never leave the channel latched off for it."""
+        self.offset_ma = self.open_sum // self.open_n if self.open_n else self.current_ma
+        self.stuck_since = -1
+        self.open_sum = self.open_n = 0
+        if not self.live & F_SENSOR:
+            self.live |= F_SENSOR
+            self.sticky |= F_SENSOR
+            self.log.put(EV_FAULT, self.index, self.state, self.state,  # type: ignore[attr-defined]
+                         F_SENSOR, self.current_ma, now - self.boot_ms)
+        if self.state == ST_LATCHED and self.commanded:
+            self.fire(X_DOUBT, now)
+            self.deadline = now + (self.retry_ms[0] if self.retry_ms else 1000)
+        elif self.state == ST_TRIPPED:
+            self.fire(X_DOUBT, now)
 
     # --- the protection step, every tick -------------------------------------------------
 
     def step(self, now: int, ma: int, sw: bool, dt: int) -> None:
         self.current_ma = ma
         self.physical = sw
+        if self.offset_ma:  # protection uses the reading without the sensor's known offset
+            ma = ma - self.offset_ma if ma > self.offset_ma else 0
         st = self.state
         if st == ST_ON or st == ST_INRUSH:  # noqa: SIM109 (no tuple built on the hot path)
             if not sw:
@@ -300,9 +341,15 @@ class Channel:
                 if ma > self.stuck_on_ma:
                     if self.stuck_since < 0:
                         self.stuck_since = now
+                        self.open_sum = self.open_n = 0
+                    self.open_sum += self.current_ma
+                    self.open_n += 1
                     if now - self.stuck_since >= self.stuck_on_ms:
-                        self._fault(now, X_STUCK_ON, F_STUCK_ON)
-                        return
+                        if self.protected and not sw:
+                            self._doubt(now)
+                        else:
+                            self._fault(now, X_STUCK_ON, F_STUCK_ON)
+                            return
                 else:
                     self.stuck_since = -1
                 if st == ST_TRIPPED:

@@ -3,7 +3,9 @@
 Each event is a tuple ``(seq, kind, channel, old_state, new_state, faults, value_ma,
 uptime_ms)``: ``kind`` an ``EV_*``, ``channel`` 0..n-1 or ``BOARD_CHANNEL``, the states
 ``ST_*`` (equal for non-state events), ``faults`` the ``F_*`` (or ``B_*`` for board events)
-involved, ``value_ma`` the current that caused it (or mV for under-voltage). ``EV_REBOOT``
+involved, ``value_ma`` the current that caused it; a board event (channel ``BOARD_CHANNEL``)
+carries the board flags after the change in ``faults`` and the input voltage (mV) in
+``value_ma`` (``protocol/events.py`` names all of it, for every reader). ``EV_REBOOT``
 carries the reset cause (``RESET_*``) in ``old_state`` and the configuration status (``CFG_*``)
 in ``new_state``. ``seq`` counts from 1 and never repeats within a boot.
 

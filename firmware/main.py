@@ -7,15 +7,18 @@ I2C(0), the input voltage on an ADC pin through a 1:11 divider. Everything runs 
 protocol on TCP port 7000 and on UART(1), Modbus TCP on port 502, each registered with the
 supervisor; the original TEDUSAR format (``firmware/tug.py``) only when ``TUG_PORT`` is set
 (it has no authentication), switching only when ``TUG_SWITCH`` is true as well. The network
-interface is brought up by ``boot.py`` before this runs.
+interface is brought up by ``boot.py`` before this runs; the servers listen on its address
+only (or on the configuration's ``listen``), never on every interface unless the
+configuration says ``listen: "0.0.0.0"``.
 """
 
 import asyncio
 
 import machine  # type: ignore[import-not-found]
 
-from firmware import modbus, tug
+from firmware import build, modbus, tug
 from firmware.app import App
+from firmware.factory import FACTORY
 from firmware.hal.storage import FileStorage
 from firmware.hal.target import TargetHal
 from firmware.net import Net
@@ -42,21 +45,41 @@ TUG_SWITCH = False  # let tug clients switch channels (never a protected one off
 CAPS = CAP_AUTH | CAP_SUBSCRIBE | CAP_EVENTS | CAP_CONFIG | CAP_MODBUS | CAP_VOLTAGE
 
 
+def listen_address(app: App) -> str:
+    """Where the servers listen: the configuration's ``listen`` if set (``dxboard flash``;
+    "0.0.0.0" means every interface, on purpose), else the address of the network interface
+    ``boot.py`` brought up (wired first, then Wi-Fi station), else loopback only."""
+    chosen = app.board.cfg["board"].get("listen", "")
+    if chosen:
+        return chosen  # type: ignore[no-any-return]
+    try:
+        import network  # type: ignore[import-not-found]
+    except ImportError:
+        return "127.0.0.1"
+    for kind in ("LAN", "WLAN"):
+        if not hasattr(network, kind):
+            continue
+        try:
+            nic = network.LAN() if kind == "LAN" else network.WLAN(network.STA_IF)
+            if nic.active() and nic.isconnected():
+                return nic.ifconfig()[0]  # type: ignore[no-any-return]
+        except (OSError, ValueError):
+            continue
+    return "127.0.0.1"
+
+
 async def run(app: App, uart: object) -> None:
     net = Net(app, FIRMWARE_VERSION, CAPS)
-    await net.serve_tcp("0.0.0.0", TCP_PORT)
-    await modbus.serve(net, "0.0.0.0", MODBUS_PORT)
+    host = listen_address(app)
+    await net.serve_tcp(host, TCP_PORT)
+    await modbus.serve(net, host, MODBUS_PORT)
     if TUG_PORT:
-        await tug.serve(net, "0.0.0.0", TUG_PORT, TUG_SWITCH)
+        await tug.serve(net, host, TUG_PORT, TUG_SWITCH)
     tasks = [asyncio.create_task(net.housekeeping())]
     stream = asyncio.StreamReader(uart)  # type: ignore[arg-type] # MicroPython: one Stream
-    tasks.append(asyncio.create_task(_serial(net, stream)))
+    tasks.append(asyncio.create_task(net.serve_serial(stream, stream)))
+    build.running = True  # dxboard flash checks this after a reset
     await net.protect()
-
-
-async def _serial(net: Net, stream: object) -> None:
-    while True:  # one session per stream; a new one if it ever ends
-        await net.serve_stream(stream, stream, close=False)
 
 
 def main() -> None:
@@ -64,7 +87,7 @@ def main() -> None:
     hal = TargetHal(EN_PINS, STATUS_PINS, i2c=i2c, ina226_addrs=INA226_ADDRS,
                     shunt_uohm=10000, vin_adc_pin=VIN_PIN, mv_per_count_x1000=55000,
                     storage=FileStorage(""))
-    app = App(hal)
+    app = App(hal, FACTORY)  # the flashed configuration, if no stored copy is good
     app.start()
     uart = machine.UART(UART_ID, UART_BAUD)
     asyncio.run(run(app, uart))

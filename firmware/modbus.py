@@ -10,66 +10,62 @@ client_ip) -> bytes`` answers one whole ADU; ``serve(net, host, port)`` is the a
         2        2        2       1      1     length-2
 
 Any unit id is answered. A protocol id other than 0 or a length above 254 (or below 2)
-closes the connection. Map, channel k (addresses of missing channels read 0):
+closes the connection. The register map is ``protocol/modbus_map.py`` (PROTOCOL.md §8), the
+configuration fields ``protocol/settings.py``; ``protected`` is never writable here: writing
+a value other than the current one is exception 02.
 
-- coils (FC1, FC5, FC15) 0..15: commanded switch; a write switches without force.
-- discrete inputs (FC2) 0..15: physical read-back; 16..31: any live fault.
-- input registers (FC4) 0..15 current mA (u16, negative -> 0, saturating), 16..31 state,
-  32..47 live faults, 48..63 sticky faults, 64..79 trips, 100 input mV, 101-102 total mA
-  (u32, high word first), 103-104 uptime ms (u32), 105 board flags, 106 reset cause,
-  107 config status, 108 channel count, 109 protocol version.
-- holding registers (FC3, FC6, FC16): channel k's configuration at 1000+32k (offsets in
-  ``CH_REGS``; u32 fields take two registers, high word first; ``retry_ms`` four, 0 = unused;
-  values above 65535 read 65535), the board's at 900-909 (``BOARD_REGS``), 990 the command
-  register (write 1 = save the configuration; reads 0). ``protected`` is never writable here:
-  writing a value other than the current one is exception 02.
-
-Requests reaching outside a table's span (coils 0-15, discrete inputs 0-31, input registers
-0-109, holding registers 900-1511) get exception 02; unassigned addresses inside it read 0 and
-are not writable (02). Counts out of range or bad values: 03. Writes need ``modbus_write``
-and the client's IPv4 address in ``modbus_allow``, else 01; an unknown function is 01; the
-board refusing (latched, protected, switch fault, inhibited, storage) is 04. A write is checked
-completely before anything changes, except that FC15 switches channel by channel and stops at
-the first refusal.
+Requests reaching outside a table's span get exception 02; unassigned addresses inside it read
+0 and are not writable (02). Counts out of range or bad values: 03. Writes need
+``modbus_write`` and the client's IPv4 address in ``modbus_allow``, else 01; an unknown
+function is 01; the board refusing (latched, protected, switch fault, inhibited, storage) is
+04. A write is checked completely before anything changes: FC15 checks every coil with
+``Board.check_switch`` before it switches any. The client's address is the socket's peer
+(``peer_ip`` reads CPython's tuple and MicroPython's raw sockaddr alike), or with
+``proxied`` the one named by the PROXY line the emulator's link proxy sends first.
 """
 
 import asyncio
 import struct
 
-from firmware import config
-from protocol.compat import const
+from protocol import settings
 from protocol.constants import E_BAD_CHANNEL, PROTOCOL_VERSION
-
-MAX_LEN = const(254)
-MAX_CHANNELS = const(16)
-COIL_SPAN = const(16)
-DISCRETE_SPAN = const(32)
-INPUT_SPAN = const(110)
-HOLD_LO = const(900)
-HOLD_HI = const(1512)  # exclusive
-CH_BASE = const(1000)
-CH_STRIDE = const(32)
-CMD_REG = const(990)
-
-X_FUNCTION = const(1)
-X_ADDRESS = const(2)
-X_VALUE = const(3)
-X_DEVICE = const(4)
-
-# field -> (offset, words); words 2 = u32 high word first
-CH_REGS = (
-    ("rated_ma", 0, 2), ("inrush_ms", 2, 1), ("inrush_factor_x10", 3, 1),
-    ("trip_factor_x10", 4, 1), ("trip_samples", 5, 1), ("overload_start_x100", 6, 1),
-    ("i2t_ms", 7, 1), ("short_retries", 8, 1), ("open_load_ma", 9, 1), ("open_load_ms", 10, 1),
-    ("stuck_on_ma", 11, 1), ("stuck_on_ms", 12, 1), ("powerup", 13, 1), ("priority", 14, 1),
-    ("protected", 15, 1), ("retry_reset_ms", 20, 2),
-)
-RETRY_OFF = const(16)
-RETRY_N = const(4)
-BOARD_REGS = (
-    ("total_limit_ma", 900, 2), ("uv_warn_mv", 902, 1), ("uv_shed_mv", 903, 1),
-    ("uv_off_mv", 904, 1), ("uv_hyst_mv", 905, 1), ("tick_ms", 906, 1),
-    ("powerup_spacing_ms", 907, 1), ("deadman_ms", 908, 2),
+from protocol.modbus_map import (
+    BOARD_FLAGS,
+    BOARD_REGS,
+    BOARD_REGS_END,
+    CH_BASE,
+    CH_REGS,
+    CH_STRIDE,
+    CHANNEL_COUNT,
+    CMD_REG,
+    CMD_SAVE,
+    COIL_SPAN,
+    CONFIG_STATUS,
+    CURRENT,
+    DISCRETE_SPAN,
+    FAULT_INPUTS,
+    HOLD_HI,
+    HOLD_LO,
+    INPUT_MV,
+    INPUT_SPAN,
+    LIVE_FAULTS,
+    MAX_CHANNELS,
+    MAX_LEN,
+    PROTECTED_OFF,
+    RESET_CAUSE,
+    RETRY_N,
+    RETRY_OFF,
+    STATE,
+    STICKY_FAULTS,
+    TOTAL_MA,
+    TRIPS,
+    UPTIME_MS,
+    VERSION,
+    X_ADDRESS,
+    X_DEVICE,
+    X_FUNCTION,
+    X_VALUE,
+    is_assigned,
 )
 
 
@@ -82,18 +78,52 @@ def _u32(v: int) -> int:
     v = int(v)
     return 0 if v < 0 else (0xFFFFFFFF if v > 0xFFFFFFFF else v)
 
+PROXY_TAG = b"PROXY "
+PROXY_MAX = 107  # the longest PROXY v1 line, CRLF included
+
 
 class Framer:
-    """Bytes in, whole MBAP ADUs out; ``bad`` once the stream must be closed."""
+    """Bytes in, whole MBAP ADUs out; ``bad`` once the stream must be closed.
 
-    def __init__(self) -> None:
+    ``proxied``: the connection comes through the emulator's link proxy, which sends one
+    PROXY protocol line first (HAProxy's version 1: ``PROXY TCP4 SRC DST SPORT DPORT\r\n``);
+    ``client_ip`` is then the client's own address, the one the allow-list checks. Without
+    that line (or with a malformed one) the connection is closed before any request."""
+
+    def __init__(self, proxied: bool = False) -> None:
         self.buf = b""
         self.bad = False
+        self.proxied = proxied
+        self.client_ip: "str | None" = None
 
     def feed(self, data: bytes) -> None:
         self.buf += data
 
+    def _proxy_line(self) -> bool:
+        """Take the PROXY line off the front; False while it is still incomplete."""
+        end = self.buf.find(b"\r\n")
+        if end < 0:
+            if len(self.buf) > PROXY_MAX or not PROXY_TAG.startswith(self.buf[:6]):
+                self.bad = True
+            return False
+        parts = bytes(self.buf[:end]).split(b" ")
+        self.buf = self.buf[end + 2:]
+        self.client_ip = ""
+        if parts[:2] == [b"PROXY", b"UNKNOWN"]:
+            return True
+        if len(parts) != 6 or parts[:2] != [b"PROXY", b"TCP4"]:
+            self.bad = True
+            return False
+        try:
+            self.client_ip = settings.int_to_ip(settings.ip_to_int(parts[2].decode()))
+        except (ValueError, UnicodeError):
+            self.bad = True
+            return False
+        return True
+
     def next(self) -> "bytes | None":
+        if self.proxied and self.client_ip is None and not self.bad and not self._proxy_line():
+            return None
         buf = self.buf
         if self.bad or len(buf) < 7:
             return None
@@ -109,6 +139,18 @@ class Framer:
         return buf[:end]
 
 
+def peer_ip(peer: object) -> str:
+    """The dotted IPv4 address of a peer as the socket layer reports it: CPython's
+    ``(host, port)``, or MicroPython's raw ``struct sockaddr_in`` (family, port, address
+    bytes); "" for anything else (nothing on the allow-list matches it)."""
+    if isinstance(peer, (tuple, list)):
+        return str(peer[0]) if peer and isinstance(peer[0], str) else ""
+    if isinstance(peer, (bytes, bytearray)) and len(peer) >= 8 \
+            and ((peer[0] == 2 and peer[1] == 0) or (peer[0] == 0 and peer[1] == 2)):
+        return "%d.%d.%d.%d" % (peer[4], peer[5], peer[6], peer[7])
+    return ""
+
+
 # --- register images ---------------------------------------------------------------------
 
 
@@ -117,27 +159,23 @@ def _input_regs(board: object) -> list:  # type: ignore[type-arg]
     (mv, total, uptime, cause, cfg_status, flags), chans = board.status()  # type: ignore[attr-defined]
     for k in range(min(len(chans), MAX_CHANNELS)):
         c = chans[k]
-        regs[k] = _u16(c[3])
-        regs[16 + k] = c[2]
-        regs[32 + k] = c[4] & 0xFFFF
-        regs[48 + k] = c[5] & 0xFFFF
-        regs[64 + k] = _u16(c[6])
-    regs[100] = _u16(mv)
-    t = _u32(total)
-    regs[101] = t >> 16
-    regs[102] = t & 0xFFFF
-    u = _u32(uptime)
-    regs[103] = u >> 16
-    regs[104] = u & 0xFFFF
-    regs[105] = flags & 0xFFFF
-    regs[106] = cause
-    regs[107] = cfg_status
-    regs[108] = board.n  # type: ignore[attr-defined]
-    regs[109] = PROTOCOL_VERSION
+        regs[CURRENT + k] = _u16(c[3])
+        regs[STATE + k] = c[2]
+        regs[LIVE_FAULTS + k] = c[4] & 0xFFFF
+        regs[STICKY_FAULTS + k] = c[5] & 0xFFFF
+        regs[TRIPS + k] = _u16(c[6])
+    regs[INPUT_MV] = _u16(mv)
+    _put(regs, TOTAL_MA, 2, total)
+    _put(regs, UPTIME_MS, 2, uptime)
+    regs[BOARD_FLAGS] = flags & 0xFFFF
+    regs[RESET_CAUSE] = cause
+    regs[CONFIG_STATUS] = cfg_status
+    regs[CHANNEL_COUNT] = board.n  # type: ignore[attr-defined]
+    regs[VERSION] = PROTOCOL_VERSION
     return regs
 
 
-def _put(regs: dict, addr: int, words: int, value: int) -> None:  # type: ignore[type-arg]
+def _put(regs: "dict | list", addr: int, words: int, value: int) -> None:  # type: ignore[type-arg]
     if words == 2:
         v = _u32(value)
         regs[addr] = v >> 16
@@ -180,13 +218,6 @@ def _holding(board: object, lo: int, hi: int) -> dict:  # type: ignore[type-arg]
     return regs
 
 
-def _is_assigned(addr: int) -> bool:
-    if addr >= CH_BASE:
-        off = (addr - CH_BASE) % CH_STRIDE
-        return off < 22
-    return 900 <= addr < 910 or addr == CMD_REG
-
-
 # --- requests ----------------------------------------------------------------------------
 
 
@@ -218,12 +249,12 @@ def _read(board: object, fc: int, addr: int, count: int) -> "bytes | int":
         n = len(chans)
         vals = []
         for a in range(addr, addr + count):
-            k = a % 16
+            k = a % MAX_CHANNELS
             if k >= n:
                 vals.append(0)
             elif fc == 1:
                 vals.append(chans[k].commanded)
-            elif a < 16:
+            elif a < FAULT_INPUTS:
                 vals.append(chans[k].physical)
             else:
                 vals.append(chans[k].live != 0)
@@ -241,14 +272,18 @@ def _read(board: object, fc: int, addr: int, count: int) -> "bytes | int":
 
 
 def _write_coils(board: object, addr: int, values: list) -> int:  # type: ignore[type-arg]
+    """Every coil is checked before any switch moves: a refusal changes nothing (FC15 too)."""
     n = board.n  # type: ignore[attr-defined]
     if addr + len(values) > COIL_SPAN or addr + len(values) > n:
         return X_ADDRESS
     for i in range(len(values)):
-        err = board.switch(addr + i, bool(values[i]), False)[0]  # type: ignore[attr-defined]
+        err = board.check_switch(addr + i, bool(values[i]), False)  # type: ignore[attr-defined]
         if err == E_BAD_CHANNEL:
             return X_ADDRESS
         if err:
+            return X_DEVICE
+    for i in range(len(values)):
+        if board.switch(addr + i, bool(values[i]), False)[0]:  # type: ignore[attr-defined]
             return X_DEVICE
     return 0
 
@@ -261,21 +296,21 @@ def _write_regs(board: object, addr: int, values: list) -> int:  # type: ignore[
     regs = _holding(board, addr, end)
     for i in range(len(values)):
         a = addr + i
-        if not _is_assigned(a) or (a >= CH_BASE and (a - CH_BASE) // CH_STRIDE >= n):
+        if not is_assigned(a) or (a >= CH_BASE and (a - CH_BASE) // CH_STRIDE >= n):
             return X_ADDRESS
-        if a >= CH_BASE and (a - CH_BASE) % CH_STRIDE == 15 and values[i] != regs[a]:
+        if a >= CH_BASE and (a - CH_BASE) % CH_STRIDE == PROTECTED_OFF and values[i] != regs[a]:
             return X_ADDRESS  # protected: never writable over Modbus
         regs[a] = values[i]
     save = CMD_REG in regs and addr <= CMD_REG < end
-    if save and regs[CMD_REG] != 1:
+    if save and regs[CMD_REG] != CMD_SAVE:
         return X_VALUE
     # decode and check everything before applying anything
     board_fields = None
-    if addr < 910:
+    if addr < BOARD_REGS_END:
         board_fields = {}
         for name, a, words in BOARD_REGS:
             board_fields[name] = _get(regs, a, words)
-        if config.check_board(board_fields) is not None:
+        if settings.check_board(board_fields) is not None:
             return X_VALUE
     updates = []
     for k in range(min(n, MAX_CHANNELS)):
@@ -296,7 +331,7 @@ def _write_regs(board: object, addr: int, values: list) -> int:  # type: ignore[
             if v:
                 retry.append(v)
         fields["retry_ms"] = retry
-        if config.check_channel(fields) is not None:
+        if settings.check_channel(fields) is not None:
             return X_VALUE
         updates.append((k, fields))
     if board_fields is not None and board.set_board_config(board_fields):  # type: ignore[attr-defined]
@@ -370,41 +405,56 @@ def handle(board: object, adu: bytes, client_ip: str) -> bytes:
 # --- asyncio wrapper ---------------------------------------------------------------------
 
 
-async def serve(net: object, host: str = "0.0.0.0", port: int = 502) -> object:
-    """Serve Modbus TCP for ``net.app.board`` (a ``firmware.net.Net``)."""
+async def serve(net: object, host: str = "0.0.0.0", port: int = 502,
+                proxied: bool = False) -> object:
+    """Serve Modbus TCP for ``net.app.board`` (a ``firmware.net.Net``); ``proxied``: every
+    connection starts with a PROXY line naming the client (see ``Framer``)."""
 
     async def client(reader: object, writer: object) -> None:
-        peer = writer.get_extra_info("peername")  # type: ignore[attr-defined]
-        ip = peer[0] if peer else ""
-        framer = Framer()
+        if net.halted:  # type: ignore[attr-defined]  # held in reset: nobody is served
+            await _close(writer)
+            return
+        links = net.links  # type: ignore[attr-defined]  # closed by a reset (Net.close_all)
+        link = (writer, asyncio.current_task())
+        links.append(link)
+        framer = Framer(proxied)
+        ip = peer_ip(writer.get_extra_info("peername"))  # type: ignore[attr-defined]
         timeout = net.read_timeout_ms / 1000  # type: ignore[attr-defined]
         try:
-            while True:
+            while not net.halted:  # type: ignore[attr-defined]
                 try:
                     data = await asyncio.wait_for(reader.read(512), timeout)  # type: ignore[attr-defined]
                 except asyncio.TimeoutError:  # noqa: UP041 (MicroPython has no builtin TimeoutError)
                     break
-                if not data:
+                if not data or net.halted:  # type: ignore[attr-defined]
                     break
                 framer.feed(data)
                 while True:
                     adu = framer.next()
                     if adu is None:
                         break
-                    writer.write(handle(net.app.board, adu, ip))  # type: ignore[attr-defined]
+                    who = framer.client_ip if proxied else ip
+                    writer.write(handle(net.app.board, adu, who or ""))  # type: ignore[attr-defined]
                     await writer.drain()  # type: ignore[attr-defined]
                 if framer.bad:
                     break
                 await asyncio.sleep(0)
-        except OSError:
-            pass
-        try:
-            writer.close()  # type: ignore[attr-defined]
-            await writer.wait_closed()  # type: ignore[attr-defined]
-        except OSError:
-            pass
+        except (OSError, asyncio.CancelledError):
+            pass  # the peer went away, or a reset of the board closed the stream
+        finally:
+            if link in links:
+                links.remove(link)
+        await _close(writer)
 
     return await asyncio.start_server(client, host, port)
 
 
-__all__ = ["Framer", "handle", "handle_pdu", "serve"]
+async def _close(writer: object) -> None:
+    try:
+        writer.close()  # type: ignore[attr-defined]
+        await writer.wait_closed()  # type: ignore[attr-defined]
+    except OSError:
+        pass
+
+
+__all__ = ["Framer", "handle", "handle_pdu", "peer_ip", "serve"]

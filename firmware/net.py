@@ -9,8 +9,14 @@ and a client whose queue holds more than ``SOFT_CAP`` bytes (a slow reader) has 
 measurements skipped (the session keeps counting, so the client sees the gap in ``seq``);
 events are never skipped: a client that lets ``HARD_CAP`` bytes pile up is disconnected
 instead. A flood of bytes is read ``READ_SIZE`` at a time with a yield after each chunk.
-TCP connections silent for ``read_timeout_ms`` (30 s; hosts PING) are closed, which also
-ends half-open connections; at most ``max_clients`` (8) are served, more are closed at once.
+TCP sessions idle for ``read_timeout_ms`` (30 s; ``Session.idle_ms``: the host PINGs, a
+stranger's PINGs do not count) are closed, which also ends half-open connections. At most
+``max_clients`` (8) are served, of which ``reserved`` (2) only for authenticated sessions (the
+host's, after its AUTH_PING): a newcomer when the board is full evicts the idlest
+unauthenticated session, so idle strangers can never lock the host out, and the host's
+session is never evicted (a newcomer is refused only when every slot is the host's).
+``serve_serial`` serves a serial line: one session after another on the same stream, each
+dropping an incomplete frame after ``FRAME_GAP_MS`` of silence.
 
 ``Net(app, firmware_version, capabilities)``; ``attach(app)`` after a reboot (closes every
 client, as a reset would); ``await serve_tcp(host, port)`` returns the server;
@@ -22,13 +28,14 @@ beats the supervisor's ``net`` task once a second. Runs on MicroPython's asyncio
 
 import asyncio
 
-from firmware.session import Session, board_key
+from firmware.session import FRAME_GAP_MS, Session, board_key
 from protocol.compat import const
 
 READ_SIZE = const(512)
 SOFT_CAP = const(2048)
 HARD_CAP = const(32768)
 MAX_CLIENTS = const(8)
+RESERVED = const(2)  # of MAX_CLIENTS, only for authenticated (host) sessions
 READ_TIMEOUT_MS = const(30000)
 NET_SILENCE_MS = const(5000)
 
@@ -57,6 +64,7 @@ class Client:
         self.task: object = None  # the task reading this stream
         self.reading = False
         self.kicked = False
+        self.limited = False  # counted against max_clients (a TCP connection)
 
     def queue(self, data: bytes) -> None:
         if not data or self.closed:
@@ -98,12 +106,16 @@ class Client:
 
 class Net:
     def __init__(self, app: object, firmware_version: str, capabilities: int,
-                 read_timeout_ms: int = READ_TIMEOUT_MS, max_clients: int = MAX_CLIENTS) -> None:
+                 read_timeout_ms: int = READ_TIMEOUT_MS, max_clients: int = MAX_CLIENTS,
+                 reserved: int = RESERVED) -> None:
         self.firmware_version = firmware_version
         self.capabilities = capabilities
         self.read_timeout_ms = read_timeout_ms
         self.max_clients = max_clients
+        self.reserved = reserved
         self.clients: list = []  # type: ignore[type-arg]
+        self.links: list = []  # type: ignore[type-arg]  # other streams (Modbus): (writer, task)
+        self.halted = False
         self.app = app
         self.hal = app.hal  # type: ignore[attr-defined]
         self.task = -1
@@ -113,18 +125,34 @@ class Net:
         """Serve ``app`` (a new boot): every client of the old one is closed."""
         self.app = app
         self.hal = app.hal  # type: ignore[attr-defined]
-        for c in self.clients:
-            c.close()
+        self.halted = False
+        self.close_all()
         sup = app.supervisor  # type: ignore[attr-defined]
         self.task = sup.register("net", NET_SILENCE_MS, self.hal.ticks_ms())
+
+    def close_all(self) -> None:
+        """Close every client and every other stream (as a reset of the board does)."""
+        for c in self.clients:
+            c.close()
+        for w, task in self.links:
+            try:  # noqa: SIM105 (MicroPython has no contextlib)
+                w.close()
+            except OSError:
+                pass
+            task.cancel()  # MicroPython does not wake a read pending on a closed socket
+
+    def halt(self) -> None:
+        """The board is held in reset: close everything, serve nothing until ``attach``."""
+        self.halted = True
+        self.close_all()
 
     def now(self) -> int:
         return self.hal.ticks_ms()  # type: ignore[no-any-return]
 
-    def _session(self) -> Session:
+    def _session(self, frame_gap_ms: int = 0) -> Session:
         board = self.app.board  # type: ignore[attr-defined]
         return Session(board, board_key(board), self.hal.random_bytes, self.firmware_version,
-                       self.capabilities, self.now())
+                       self.capabilities, self.now(), frame_gap_ms)
 
     # --- pushes, after every protection step ------------------------------------------
 
@@ -159,23 +187,53 @@ class Net:
         return await asyncio.start_server(self._tcp_client, host, port)
 
     async def _tcp_client(self, reader: object, writer: object) -> None:
-        live = 0
-        for c in self.clients:
-            if not c.closed:
-                live += 1
-        if live >= self.max_clients:
+        if self.halted or not self._make_room():
             await _close(writer)
             return
         await self.serve_stream(reader, writer, self.read_timeout_ms)
 
+    def _make_room(self) -> bool:
+        """Room for one more connection: evict the idlest unauthenticated session when the
+        board is full or strangers hold every unreserved slot. False only when every slot is
+        the authenticated host's (which a newcomer never displaces)."""
+        live = [c for c in self.clients if not c.closed and c.limited]  # TCP, not serial
+        strangers = [c for c in live if not c.session.authenticated]
+        if len(live) < self.max_clients and len(strangers) < self.max_clients - self.reserved:
+            return True
+        if not strangers:
+            return False
+        now = self.now()
+        victim = strangers[0]
+        for c in strangers:
+            if c.session.idle_ms(now) > victim.session.idle_ms(now):
+                victim = c
+        victim.close()
+        return True
+
+    async def serve_serial(self, reader: object, writer: object) -> None:
+        """Serve a serial line until its stream ends (a UART's never does)."""
+        while True:
+            if self.halted:  # bytes sent to a board held in reset are lost
+                if not await reader.read(READ_SIZE):  # type: ignore[attr-defined]
+                    return
+                continue
+            if await self.serve_stream(reader, writer, close=False, frame_gap_ms=FRAME_GAP_MS):
+                return
+            await sleep_ms(10)  # the board closed the session (a reset): serve a new one
+
     async def serve_stream(self, reader: object, writer: object, timeout_ms: int = 0,
                            name: str = "", close: bool = True,
-                           session: "Session | None" = None) -> None:
+                           session: "Session | None" = None, frame_gap_ms: int = 0) -> bool:
         """Serve one byte stream until it ends (``timeout_ms`` 0: never time out); a serial
-        port passes ``close=False`` so that the next session can use it. ``session``: another
-        front end's sans-I/O session with the same methods (``firmware/tug.py``)."""
-        s = session if session is not None else self._session()
+        port passes ``close=False`` so that the next session can use it, and
+        ``frame_gap_ms=FRAME_GAP_MS``: an incomplete frame followed by that much silence is
+        dropped (PROTOCOL.md §2), so a host that opens the port after another program left
+        half a frame behind is heard at once. ``session``: another front end's sans-I/O session
+        with the same methods (``firmware/tug.py``). True when the stream itself ended."""
+        ended = False
+        s = session if session is not None else self._session(frame_gap_ms)
         c = Client(s, writer, name)
+        c.limited = timeout_ms > 0
         self.clients.append(c)
         c.queue(s.start(self.now()))
         wt = asyncio.create_task(c.write_loop())
@@ -185,12 +243,15 @@ class Net:
                 c.reading = True
                 try:
                     if timeout_ms:
+                        left = timeout_ms - s.idle_ms(self.now())
+                        if left <= 0:  # idle for too long (see Session.idle_ms)
+                            break
                         data = await asyncio.wait_for(reader.read(READ_SIZE),  # type: ignore[attr-defined]
-                                                      timeout_ms / 1000)
+                                                      left / 1000)
                     else:
                         data = await reader.read(READ_SIZE)  # type: ignore[attr-defined]
                 except asyncio.TimeoutError:  # noqa: UP041 (MicroPython has no builtin TimeoutError)
-                    break
+                    continue  # the loop checks how idle the session is now
                 except asyncio.CancelledError:
                     if c.kicked:  # closed by the board itself: not a cancellation of ours
                         break
@@ -201,12 +262,13 @@ class Net:
                     break
                 if not data:
                     s.receive(b"", self.now())
+                    ended = True
                     break
                 c.queue(s.receive(data, self.now()))
                 c.queue(s.poll(self.now(), c.n < SOFT_CAP))  # a Reboot's ACK, new events
                 await asyncio.sleep(0)  # a flood must not starve the others
         except OSError:
-            pass
+            ended = True
         finally:
             c.close()
             if c in self.clients:
@@ -214,6 +276,7 @@ class Net:
             wt.cancel()
             if close:
                 await _close(writer)
+        return ended
 
 
 async def _close(writer: object) -> None:

@@ -17,8 +17,10 @@ clock (time comes in as ``now_ms``, on the HAL clock the board ticks on). The fr
     feed bytes (``b""`` = the stream ended); returns every reply frame: STATE, ACK, PONG,
     HELLO, SWITCHED (with the physical read-back), CHANNEL_CONFIG, BOARD_CONFIG, or ERROR
     (``Connection.error_reply`` for a bad frame, the board's E_* for a refused command). A
-    refused or malformed command changes nothing. Every authenticated message and every PING
-    restarts the board's host dead-man (``board.host_seen``).
+    refused or malformed command changes nothing. A request whose HMAC checks out (any
+    authenticated command, AUTH_PING first of all) makes the session ``authenticated``: the
+    host's. Every authenticated message, and a PING of the host's session, restarts the
+    board's host dead-man (``board.host_seen``); a PING of anyone else does not.
 ``poll(now_ms, send_measurement=True) -> bytes``
     the pushes due now: every new board event as EVENT (its log ``seq``; ``dropped`` = events
     this session lost to the ring since the last EVENT), then a MEASUREMENT when the
@@ -28,8 +30,11 @@ clock (time comes in as ``now_ms``, on the HAL clock the board ticks on). The fr
 ``next_due(now_ms) -> int``
     when ``poll`` next has something to send (``now_ms`` if events are waiting).
 ``idle_ms(now_ms) -> int``
-    ms since bytes last arrived; the front end closes a session silent for longer than its read
-    timeout (hosts PING to stay connected).
+    how long the session has been idle; the front end closes a session idle for longer than
+    its read timeout, and evicts the idlest unauthenticated session for a newcomer. The host's
+    (authenticated) session is idle only while nothing arrives (it PINGs to stay connected);
+    an unauthenticated one while it sends nothing but PING (a subscribed one never is), so
+    PINGs alone do not keep a stranger's session open.
 ``closed``
     True once the stream ended (``receive(b"")``).
 """
@@ -50,6 +55,7 @@ from protocol.constants import BOARD_CHANNEL, E_BAD_VALUE, ERROR_TEXT, PROTOCOL_
 from protocol.framing import BadFrame
 from protocol.messages import (
     Ack,
+    AuthPing,
     BoardConfig,
     ChannelConfig,
     ChannelStatus,
@@ -73,8 +79,10 @@ from protocol.messages import (
     Switch,
     Switched,
 )
+from protocol.settings import int_to_ip, ip_to_int
 
 FIRMWARE_VERSION = "0.1.0"
+FRAME_GAP_MS = 250  # serial lines: an incomplete frame is dropped after this much silence
 MAX_RATE_HZ = 100
 EVENTS_PER_POLL = 16
 IDLE_DUE_MS = 1000  # next_due when nothing is scheduled
@@ -91,44 +99,23 @@ def board_key(board: object) -> "bytes | None":
         return None
 
 
-def ip_to_int(text: str) -> int:
-    """``"10.0.0.1"`` -> 0x0A000001; ValueError if it is not a dotted IPv4 address."""
-    parts = text.split(".")
-    if len(parts) != 4:
-        raise ValueError("not an IPv4 address: %r" % text)
-    n = 0
-    for p in parts:
-        v = int(p)
-        if not 0 <= v <= 255:
-            raise ValueError("not an IPv4 address: %r" % text)
-        n = n * 256 + v
-    return n
-
-
-def _ip_or_none(text: str) -> "int | None":
-    try:
-        return ip_to_int(text)
-    except ValueError:
-        return None
-
-
-def int_to_ip(n: int) -> str:
-    return "%d.%d.%d.%d" % ((n >> 24) & 255, (n >> 16) & 255, (n >> 8) & 255, n & 255)
-
-
 def _u16(v: int) -> int:
     return 0 if v < 0 else (0xFFFF if v > 0xFFFF else v)
 
 
 class Session:
     def __init__(self, board: object, key: "bytes | None", random_bytes: object,
-                 firmware_version: str, capabilities: int, now_ms: int) -> None:
+                 firmware_version: str, capabilities: int, now_ms: int,
+                 frame_gap_ms: int = 0) -> None:
         self.board = board
+        self.frame_gap_ms = frame_gap_ms
         self.conn = Connection(BOARD, key)
         self.random_bytes = random_bytes
         self.firmware_version = firmware_version
         self.capabilities = capabilities
         self.last_rx = now_ms
+        self.last_active = now_ms  # the last request that counts against the idle timeout
+        self.authenticated = False  # a request of this session passed the HMAC check
         self.cursor = board.events.seq  # type: ignore[attr-defined]
         self.lost = 0
         self.rate_hz = 0
@@ -140,7 +127,14 @@ class Session:
     # --- session ----------------------------------------------------------------------
 
     def _hello(self, req_id: int) -> bytes:
+        """A HELLO that starts a new session: a fresh nonce and counter (the codec), and no
+        subscription, measurements counted from 1 again, only events from now on."""
         b = self.board
+        self.authenticated = False
+        self.rate_hz = 0
+        self.meas_seq = 0
+        self.cursor = b.events.seq  # type: ignore[attr-defined]
+        self.lost = 0
         nonce = self.random_bytes(NONCE_LEN)  # type: ignore[operator]
         return self.conn.send(Hello(
             PROTOCOL_VERSION, b.cfg["board"]["board_id"], self.firmware_version,  # type: ignore[attr-defined]
@@ -148,23 +142,37 @@ class Session:
             b.reset_cause, b.cfg_status, req_id))  # type: ignore[attr-defined]
 
     def start(self, now_ms: int) -> bytes:
-        self.last_rx = now_ms
-        self.cursor = self.board.events.seq  # type: ignore[attr-defined]
+        self.last_rx = self.last_active = now_ms
         return self._hello(0)
 
     def idle_ms(self, now_ms: int) -> int:
-        return now_ms - self.last_rx
+        """How long this session has been idle: since the last bytes for the authenticated
+        host; for anyone else since the last request other than PING (a subscribed session,
+        busy reading its measurements, is never idle)."""
+        if self.authenticated:
+            return now_ms - self.last_rx
+        if self.rate_hz:
+            return 0
+        return now_ms - self.last_active
 
     # --- receiving --------------------------------------------------------------------
 
     def receive(self, data: bytes, now_ms: int) -> bytes:
         conn = self.conn
+        out: list = []  # type: ignore[type-arg]
         if data:
+            if self.frame_gap_ms and conn.pending and now_ms - self.last_rx >= self.frame_gap_ms:
+                conn.truncate()  # the frame in progress stopped arriving: drop it (E_TRUNCATED)
+                self._drain(now_ms, out)
             self.last_rx = now_ms
         else:
             self.closed = True
         conn.receive_data(data)
-        out = []
+        self._drain(now_ms, out)
+        return b"".join(out)
+
+    def _drain(self, now_ms: int, out: list) -> None:  # type: ignore[type-arg]
+        conn = self.conn
         while True:
             ev = conn.next_event()
             if ev is None:
@@ -172,12 +180,15 @@ class Session:
             if isinstance(ev, BadFrame):
                 reply = conn.error_reply(ev)
             else:
-                if ev.AUTH or isinstance(ev, Ping):
+                if ev.AUTH:  # its tag checked out: this is the host that holds the key
+                    self.authenticated = True
+                if ev.AUTH or (self.authenticated and isinstance(ev, Ping)):
                     self.board.host_seen(now_ms)  # type: ignore[attr-defined]
+                if self.authenticated or not isinstance(ev, Ping):
+                    self.last_active = now_ms
                 reply = self._answer(ev, now_ms)
             if reply:
                 out.append(reply)
-        return b"".join(out)
 
     def _error(self, code: int, msg: object) -> bytes:
         return self.conn.send(Error(code, msg.TYPE, ERROR_TEXT.get(code, ""),  # type: ignore[attr-defined]
@@ -197,7 +208,7 @@ class Session:
         rid = msg.req_id  # type: ignore[attr-defined]
         if isinstance(msg, GetState):
             return send(self.state_message(rid))
-        if isinstance(msg, Ping):
+        if isinstance(msg, (Ping, AuthPing)):
             return send(Pong(msg.token, _uptime(b), rid))
         if isinstance(msg, Subscribe):
             rate = msg.rate_hz
@@ -274,12 +285,7 @@ class Session:
 
     def board_config_message(self, req_id: int = 0) -> BoardConfig:
         cfg = self.board.get_board_config()  # type: ignore[attr-defined]
-        allow = []
-        for text in cfg.get("modbus_allow", []):
-            n = _ip_or_none(text)
-            if n is not None:  # a hostname or a malformed entry is not representable
-                allow.append(n)
-        cfg["modbus_allow"] = allow
+        cfg["modbus_allow"] = [ip_to_int(text) for text in cfg["modbus_allow"]]
         return BoardConfig(req_id=req_id, **cfg)
 
     # --- pushes -----------------------------------------------------------------------

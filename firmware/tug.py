@@ -119,6 +119,9 @@ async def serve(net: object, host: str = "127.0.0.1", port: int = 5000,
     """Serve the tug format on ``host:port`` through ``net`` (a ``firmware.net.Net``)."""
 
     async def client(reader: object, writer: object) -> None:
+        if net.halted:  # type: ignore[attr-defined] # a board held in reset serves nothing
+            writer.close()  # type: ignore[attr-defined]
+            return
         links = []
         for c in net.clients:  # type: ignore[attr-defined]
             if not c.closed and isinstance(c.session, TugSession):

@@ -14,8 +14,9 @@ increasing within the session, and a 16-byte tag, HMAC-SHA256(key, nonce || fram
 start marker through the counter) cut to 16 bytes. The BOARD checks the tag in constant time
 first, then the counter, and hands over the message only if both hold; otherwise it yields a
 ``BadFrame`` with E_BAD_TAG, E_REPLAYED, E_AUTH_REQUIRED or E_NO_SESSION. Reading needs no
-key. Sending a message the role may not send, or an authenticated one without key or
-session, raises ``LocalProtocolError``.
+key. The BOARD refuses a request with ``req_id`` 0 (E_MALFORMED, before any authentication):
+0 marks pushes, so its reply could not be told from one. Sending a message the role may not
+send, or an authenticated one without key or session, raises ``LocalProtocolError``.
 """
 
 import struct
@@ -183,6 +184,8 @@ class Connection:
             return BadFrame(E_UNKNOWN_TYPE, "type 0x%02x" % t, frame.req_id, t)
         if self._sends == cls.DIR:
             return BadFrame(E_NOT_A_REQUEST, cls.__name__, frame.req_id, t)
+        if self.role == BOARD and frame.req_id == 0:  # 0 marks pushes: a reply could not
+            return BadFrame(E_MALFORMED, "req_id 0 is reserved for pushes", 0, t)  # tell
         payload = frame.payload
         if cls.AUTH and self.role == BOARD:
             checked = self._check_auth(frame, payload)

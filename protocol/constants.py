@@ -29,6 +29,7 @@ F_STUCK_OFF = const(0x0020)  # commanded on but the switch reads back off
 F_SHED_TOTAL = const(0x0040)  # switched off to keep the board under its total limit
 F_SHED_UV = const(0x0080)  # switched off by input under-voltage
 F_DEADMAN = const(0x0100)  # set to the safe state by the host dead-man timeout
+F_SENSOR = const(0x0200)  # the current sensor reads current while the switch reads back open
 FAULT_NAMES = (
     "short",
     "overload",
@@ -39,6 +40,7 @@ FAULT_NAMES = (
     "shed_total",
     "shed_uv",
     "deadman",
+    "sensor",
 )
 
 # --- board flags (u16 bit mask) ---------------------------------------------------------
@@ -69,11 +71,12 @@ RESET_NAMES = ("power_on", "watchdog", "soft", "brownout", "unknown")
 
 # --- configuration status (u8), reported in HELLO and STATE ---------------------------
 CFG_OK = const(0)  # loaded from the persisted file
-CFG_MISSING = const(1)  # no file: safe defaults
-CFG_CORRUPT = const(2)  # bad JSON or CRC: safe defaults
-CFG_VERSION = const(3)  # unsupported config version: safe defaults
+CFG_MISSING = const(1)  # no file: factory configuration
+CFG_CORRUPT = const(2)  # bad JSON or CRC: factory configuration
+CFG_VERSION = const(3)  # unsupported config version: factory configuration
 CFG_SAFE_MODE = const(4)  # watchdog reset loop: only protected channels on
-CONFIG_STATUS_NAMES = ("ok", "missing", "corrupt", "version", "safe_mode")
+CFG_FALLBACK = const(5)  # a copy was damaged: the last-known-good copy was loaded
+CONFIG_STATUS_NAMES = ("ok", "missing", "corrupt", "version", "safe_mode", "fallback")
 
 # --- capabilities (u16 bit mask in HELLO) ---------------------------------------------
 CAP_AUTH = const(0x0001)  # actuation needs HMAC (always set by dxboard firmware)

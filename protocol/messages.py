@@ -7,6 +7,7 @@ frame's request id: a reply carries its request's id; pushes carry 0). Messages 
 value, and ``to_dict``/``message_from_dict`` give the JSON form used by the golden vectors.
 """
 
+from protocol import settings
 from protocol.fields import Record, from_dict_values, pack, to_dict, unpack
 
 if False:  # typing only; MicroPython never imports typing
@@ -107,6 +108,20 @@ class Ping(Message):
     """Host -> board keepalive; also feeds the board's host dead-man timer."""
 
     TYPE = 0x03
+    FIELDS = (("token", "I"),)
+
+    def __init__(self, token: int, req_id: int = 0) -> None:
+        self.token = token
+        self.req_id = req_id
+
+
+class AuthPing(Message):
+    """Host -> board, authenticated PING: proves that this session's host holds the key. The
+    board answers PONG and from then on counts the session as the authenticated host's: its
+    PINGs keep it open and feed the dead-man, and it is never evicted for a newcomer."""
+
+    TYPE = 0x05
+    AUTH = True
     FIELDS = (("token", "I"),)
 
     def __init__(self, token: int, req_id: int = 0) -> None:
@@ -374,80 +389,35 @@ class GetConfig(Message):
         self.req_id = req_id
 
 
-_CHANNEL_CONFIG_FIELDS = (
-    ("channel", "B"),
-    ("name", "str"),
-    ("rated_ma", "I"),
-    ("inrush_ms", "H"),
-    ("inrush_factor_x10", "B"),
-    ("trip_factor_x10", "B"),
-    ("trip_samples", "B"),
-    ("overload_start_x100", "B"),
-    ("i2t_ms", "H"),
-    ("retry_reset_ms", "I"),
-    ("short_retries", "B"),
-    ("open_load_ma", "H"),
-    ("open_load_ms", "H"),
-    ("stuck_on_ma", "H"),
-    ("stuck_on_ms", "H"),
-    ("powerup", "?"),
-    ("priority", "B"),
-    ("protected", "?"),
-    ("retry_ms", "[H"),
-)
+_CHANNEL_CONFIG_FIELDS = settings.CHANNEL_WIRE
 CHANNEL_CONFIG_KEYS = tuple(name for name, _ in _CHANNEL_CONFIG_FIELDS)
 
 
-class ChannelConfig(Message):
-    """Board -> host: one channel's configuration (field meanings in PROTOCOL.md §4.4)."""
+class _Settings(Message):
+    """A message whose payload is a table of ``protocol.settings``: built from keywords, one
+    per field, every field required (the table, not a signature, lists them)."""
+
+    def __init__(self, req_id: int = 0, **fields: "Any") -> None:
+        names = [name for name, _ in self.FIELDS]
+        missing = [n for n in names if n not in fields]
+        unknown = [n for n in fields if n not in names]
+        if missing or unknown:
+            raise TypeError("%s: missing %s, unknown %s" % (type(self).__name__, missing,
+                                                            unknown))
+        for name in names:
+            setattr(self, name, fields[name])
+        self.req_id = req_id
+
+    def __getattr__(self, name: str) -> "Any":  # the fields, for type checkers
+        raise AttributeError(name)
+
+
+class ChannelConfig(_Settings):
+    """Board -> host: one channel's configuration (fields: ``protocol.settings.CHANNEL``)."""
 
     TYPE = 0x31
     DIR = "B"
     FIELDS = _CHANNEL_CONFIG_FIELDS
-
-    def __init__(
-        self,
-        channel: int,
-        name: str,
-        rated_ma: int,
-        inrush_ms: int,
-        inrush_factor_x10: int,
-        trip_factor_x10: int,
-        trip_samples: int,
-        overload_start_x100: int,
-        i2t_ms: int,
-        retry_reset_ms: int,
-        short_retries: int,
-        open_load_ma: int,
-        open_load_ms: int,
-        stuck_on_ma: int,
-        stuck_on_ms: int,
-        powerup: bool,
-        priority: int,
-        protected: bool,
-        retry_ms: "list[int]",
-        req_id: int = 0,
-    ) -> None:
-        self.channel = channel
-        self.name = name
-        self.rated_ma = rated_ma
-        self.inrush_ms = inrush_ms
-        self.inrush_factor_x10 = inrush_factor_x10
-        self.trip_factor_x10 = trip_factor_x10
-        self.trip_samples = trip_samples
-        self.overload_start_x100 = overload_start_x100
-        self.i2t_ms = i2t_ms
-        self.retry_reset_ms = retry_reset_ms
-        self.short_retries = short_retries
-        self.open_load_ma = open_load_ma
-        self.open_load_ms = open_load_ms
-        self.stuck_on_ma = stuck_on_ma
-        self.stuck_on_ms = stuck_on_ms
-        self.powerup = powerup
-        self.priority = priority
-        self.protected = protected
-        self.retry_ms = retry_ms
-        self.req_id = req_id
 
 
 class SetChannelConfig(ChannelConfig):
@@ -458,59 +428,17 @@ class SetChannelConfig(ChannelConfig):
     AUTH = True
 
 
-_BOARD_CONFIG_FIELDS = (
-    ("total_limit_ma", "I"),
-    ("uv_warn_mv", "H"),
-    ("uv_shed_mv", "H"),
-    ("uv_off_mv", "H"),
-    ("uv_hyst_mv", "H"),
-    ("tick_ms", "H"),
-    ("powerup_spacing_ms", "H"),
-    ("deadman_ms", "I"),
-    ("deadman_on_mask", "H"),
-    ("modbus_write", "?"),
-    ("board_id", "str"),
-    ("modbus_allow", "[I"),
-)
+_BOARD_CONFIG_FIELDS = settings.BOARD_WIRE
 BOARD_CONFIG_KEYS = tuple(name for name, _ in _BOARD_CONFIG_FIELDS)
 
 
-class BoardConfig(Message):
-    """Board -> host: the board-wide configuration (PROTOCOL.md §4.6); never the key."""
+class BoardConfig(_Settings):
+    """Board -> host: the board-wide configuration (fields: ``protocol.settings.BOARD``, those
+    with a wire kind); never the key."""
 
     TYPE = 0x33
     DIR = "B"
     FIELDS = _BOARD_CONFIG_FIELDS
-
-    def __init__(
-        self,
-        total_limit_ma: int,
-        uv_warn_mv: int,
-        uv_shed_mv: int,
-        uv_off_mv: int,
-        uv_hyst_mv: int,
-        tick_ms: int,
-        powerup_spacing_ms: int,
-        deadman_ms: int,
-        deadman_on_mask: int,
-        modbus_write: bool,
-        board_id: str,
-        modbus_allow: "list[int]",
-        req_id: int = 0,
-    ) -> None:
-        self.total_limit_ma = total_limit_ma
-        self.uv_warn_mv = uv_warn_mv
-        self.uv_shed_mv = uv_shed_mv
-        self.uv_off_mv = uv_off_mv
-        self.uv_hyst_mv = uv_hyst_mv
-        self.tick_ms = tick_ms
-        self.powerup_spacing_ms = powerup_spacing_ms
-        self.deadman_ms = deadman_ms
-        self.deadman_on_mask = deadman_on_mask
-        self.modbus_write = modbus_write
-        self.board_id = board_id
-        self.modbus_allow = modbus_allow
-        self.req_id = req_id
 
 
 class SetBoardConfig(BoardConfig):
@@ -575,6 +503,7 @@ ALL = (
     HelloRequest,
     Ping,
     Pong,
+    AuthPing,
     GetState,
     State,
     Subscribe,

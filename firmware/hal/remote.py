@@ -7,10 +7,17 @@ MicroPython's asyncio. Two links, JSON lines (``\\n``-terminated), lock-step:
 
 - link A, emulator -> firmware, one reply per request, read by an asyncio task here:
   ``{"op": "boot", "cause": C, "n": N, "seed": S, "tcp": P, "modbus": P|null, "tug": P|null,
-  "tug_switch": B}`` builds a new ``App`` on a new ``RemoteHal`` (the first boot also starts
-  the servers on 127.0.0.1);
+  "tug_switch": B, "serial": P|null, "can": {"node": N, "rate": HZ}|null,
+  "factory": CONFIG|null}`` builds a new ``App`` (with that factory configuration) on a new
+  ``RemoteHal`` (the first boot also starts the servers on 127.0.0.1: the native protocol,
+  Modbus behind the emulator's proxy, the original TEDUSAR format, and the serial line, which
+  the emulator relays to its pty byte for byte) and, with ``can``, a new ``CanNode``;
   ``{"op": "step", "t": ms, "ma": [..], "sw": [..], "mv": mv}`` sets this step's clock and
-  readings, runs ``App.step`` and ``Net.pump``, answers ``{"due", "feeds", "reboot"}``;
+  readings, runs ``App.step``, ``Net.pump`` and the CAN node's ``poll``, answers ``{"due",
+  "feeds", "reboot", "can": [[id, hex], ..]}``; ``{"op": "can", "id": ID, "data": hex}`` hands
+  a frame from the bus to the CAN node and answers ``{"frames": [[id, hex], ..]}`` to send;
+  ``{"op": "halt"}`` closes every connection and serves nothing until the next boot (the
+  board held in reset);
   ``{"op": "call", "m": NAME, "a": [..]}`` calls a ``Board`` method (the emulator's status,
   scenario commands) and answers ``{"r": result}``; ``{"op": "mem"}`` collects garbage and
   answers ``{"alloc": B, "free": B}``: the heap the running firmware holds beyond what was
@@ -32,8 +39,9 @@ import sys
 
 from firmware import modbus, tug
 from firmware.app import App
+from firmware.can import CanNode
 from firmware.net import Net
-from firmware.session import FIRMWARE_VERSION
+from firmware.session import FIRMWARE_VERSION, board_key
 
 
 class Link:
@@ -130,24 +138,47 @@ class Runner:
         self.hal: "RemoteHal | None" = None
         self.net: "Net | None" = None
         self.tasks: list = []  # type: ignore[type-arg]
+        self.can_cfg: "dict | None" = None  # type: ignore[type-arg]
+        self.can: "CanNode | None" = None
 
     async def boot(self, req: dict) -> dict:  # type: ignore[type-arg]
         hal = RemoteHal(self.link, req["n"], req["cause"], req["seed"])
-        app = App(hal)
+        app = App(hal, req.get("factory"))
         self.hal = hal
         self.app = app
         app.start()
         if self.net is None:
             self.net = Net(app, FIRMWARE_VERSION, req.get("caps", 0))
             await self.net.serve_tcp("127.0.0.1", req["tcp"])
-            if req.get("modbus"):
-                await modbus.serve(self.net, "127.0.0.1", req["modbus"])
+            if req.get("modbus"):  # behind the emulator's link proxy, which names clients
+                await modbus.serve(self.net, "127.0.0.1", req["modbus"], proxied=True)
             if req.get("tug"):
                 await tug.serve(self.net, "127.0.0.1", req["tug"], bool(req.get("tug_switch")))
+            if req.get("serial"):  # the emulator relays its pty here, byte for byte
+                await asyncio.start_server(self._serial, "127.0.0.1", req["serial"])
             self.tasks.append(asyncio.create_task(self.net.housekeeping()))
+            self.can_cfg = req.get("can")
         else:
             self.net.attach(app)
+        cfg = self.can_cfg
+        if cfg:
+            self.can = CanNode(app.board, board_key(app.board), hal.random_bytes, cfg["node"],
+                               cfg["rate"])
         return {"ok": 1}
+
+    async def _serial(self, reader: object, writer: object) -> None:
+        await self.net.serve_serial(reader, writer)  # type: ignore[union-attr]
+        writer.close()  # type: ignore[attr-defined]
+
+    def can_frames(self, frames: list) -> list:  # type: ignore[type-arg]
+        return [[can_id, binascii.hexlify(data).decode()] for can_id, data in frames]
+
+    def can_rx(self, req: dict) -> dict:  # type: ignore[type-arg]
+        if self.can is None:
+            return {"frames": []}
+        data = binascii.unhexlify(req["data"])
+        return {"frames": self.can_frames(self.can.receive(req["id"], data,
+                                                           self.hal.now))}  # type: ignore[union-attr]
 
     def step(self, req: dict) -> dict:  # type: ignore[type-arg]
         hal = self.hal
@@ -159,7 +190,10 @@ class Runner:
         hal.feeds = 0  # type: ignore[union-attr]
         due = app.step()  # type: ignore[union-attr]
         self.net.pump(hal.now)  # type: ignore[union-attr]
-        return {"due": due, "feeds": hal.feeds, "reboot": hal.rebooted}  # type: ignore[union-attr]
+        rep = {"due": due, "feeds": hal.feeds, "reboot": hal.rebooted}  # type: ignore[union-attr]
+        if self.can is not None:
+            rep["can"] = self.can_frames(self.can.poll(hal.now))  # type: ignore[union-attr]
+        return rep
 
     def call(self, req: dict) -> dict:  # type: ignore[type-arg]
         board = self.app.board  # type: ignore[union-attr]
@@ -179,6 +213,12 @@ class Runner:
                 rep = self.step(req)
             elif op == "boot":
                 rep = await self.boot(req)
+            elif op == "can":
+                rep = self.can_rx(req)
+            elif op == "halt":
+                self.net.halt()  # type: ignore[union-attr]
+                self.can = None
+                rep = {"ok": 1}
             elif op == "mem":
                 gc.collect()
                 rep = {"alloc": gc.mem_alloc() - self.base,  # type: ignore[attr-defined]

@@ -13,17 +13,42 @@ import logging
 from typing import Any
 
 from host.board.types import SwitchResult
-from host.transports.errors import BadRequest, ReadbackMismatch
-from protocol.constants import BOARD_CHANNEL, ST_INRUSH, ST_ON
+from host.transports.base import AUTH, Transport
+from host.transports.errors import BadRequest, KeyMissing, ReadbackMismatch
+from protocol.constants import BOARD_CHANNEL, ST_INRUSH, ST_ON, STATE_NAMES
 from protocol.messages import Ack, Clear, Message, PowerCycle, Switch, Switched
 
 log = logging.getLogger(__name__)
 
 
+def need_key(url: str, transport: Transport, key: bytes | None, what: str) -> None:
+    """``KeyMissing`` before anything is sent when the wire authenticates and there is no key
+    (the codec cannot sign without one: a person gets one line saying where the key goes)."""
+    if key is None and AUTH in transport.CAPS:
+        raise KeyMissing(f"{url}: {what} needs the board's key, and none was given",
+                         "set DXBOARD_KEY (hex) or pass --key-file FILE")
+
+
+def readback_problem(reply: Switched, on: bool) -> str:
+    """What in a SWITCHED disagrees with switching ``on`` (or off); "" when nothing does.
+    Each part is named as it is: the command, the switch's read-back, the channel's state."""
+    name = STATE_NAMES[reply.state] if reply.state < len(STATE_NAMES) else "unknown"
+    want = "on" if on else "off"
+    if reply.commanded != on:
+        return f"the board reports it commanded {'on' if reply.commanded else 'off'}"
+    if reply.physical != on:
+        return f"its switch reads back {'on' if reply.physical else 'off'} (state {name})"
+    if on and reply.state not in (ST_INRUSH, ST_ON):
+        return f"its switch reads back {want} while the board reports the channel state {name}"
+    return ""
+
+
 class ActuateMixin:
-    """Needs ``url``, ``channel``, ``channel_names`` and ``_expect``."""
+    """Needs ``url``, ``key``, ``transport``, ``channel``, ``channel_names`` and ``_expect``."""
 
     url: str
+    key: bytes | None
+    transport: Transport
 
     async def channel(self, ch: int | str) -> int:
         raise NotImplementedError
@@ -49,19 +74,20 @@ class ActuateMixin:
 
     async def switch(self, ch: int | str, on: bool, force: bool = False) -> SwitchResult:
         """Switch a channel; the read-back must show the switch where it was asked to be."""
+        need_key(self.url, self.transport, self.key, "switching a channel")
         n = await self.channel(ch)
         reply = await self._switched(Switch(n, on, force), n)
-        ok = reply.physical and reply.state in (ST_INRUSH, ST_ON) if on else not reply.physical
-        if not ok or reply.commanded != on:
-            raise ReadbackMismatch(
-                f"{self.url}: channel {n} was switched {'on' if on else 'off'} but reads back "
-                f"{'on' if reply.physical else 'off'} (state {reply.state})",
-                "the switch may be faulty: see `dxboard board URL status`")
+        problem = readback_problem(reply, on)
+        if problem:
+            raise ReadbackMismatch(f"{self.url}: channel {n} was switched "
+                                   f"{'on' if on else 'off'}, but {problem}",
+                                   "the switch may be faulty: see `dxboard board URL status`")
         return await self._result(reply)
 
     async def power_cycle(self, ch: int | str, off_s: float = 1.0,
                           force: bool = False) -> SwitchResult:
         """Switch off, wait ``off_s``, switch on (the board times it where it can)."""
+        need_key(self.url, self.transport, self.key, "a power cycle")
         n = await self.channel(ch)
         off_ms = round(off_s * 1000)
         if not 0 <= off_ms <= 60000:
@@ -74,6 +100,7 @@ class ActuateMixin:
 
     async def clear(self, ch: int | str) -> SwitchResult | None:
         """Clear a channel's latch and sticky faults (``"all"``: every channel)."""
+        need_key(self.url, self.transport, self.key, "clearing a channel")
         if str(ch) == "all":
             await self._expect(Clear(BOARD_CHANNEL), Ack)
             return None

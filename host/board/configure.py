@@ -5,7 +5,10 @@ one concept). Setting reads the current configuration, changes only the fields g
 whole record (the protocol replaces a channel's or the board's configuration at once) and
 compares the board's answer with what was asked: ``ReadbackMismatch`` names the fields that
 differ. An unknown field name is refused before anything is sent, with the list of valid ones.
-Nothing is persisted until ``save_config``.
+Nothing is persisted until ``save_config``. Values are checked against the protocol's own
+tables (``protocol.settings``) before anything is sent: a wrong value is ``BadSetting`` naming
+the field and its range, never a traceback. ``modbus_allow`` is a list of dotted IPv4
+addresses here (a comma-separated text is accepted too), ``u32`` numbers on the wire.
 """
 
 from __future__ import annotations
@@ -13,8 +16,10 @@ from __future__ import annotations
 import logging
 from typing import Any
 
+from host.board.actuate import need_key
 from host.transports.base import CONFIG, SAVE, Transport
-from host.transports.errors import BadRequest, ReadbackMismatch
+from host.transports.errors import BadSetting, ReadbackMismatch
+from protocol import settings
 from protocol.constants import BOARD_CHANNEL
 from protocol.messages import (
     BOARD_CONFIG_KEYS,
@@ -33,9 +38,10 @@ log = logging.getLogger(__name__)
 
 
 class ConfigMixin:
-    """Needs ``url``, ``transport``, ``_names``, ``channel``, ``_expect`` and ``_need``."""
+    """Needs ``url``, ``key``, ``transport``, ``_names``, ``channel``, ``_expect``, ``_need``."""
 
     url: str
+    key: bytes | None
     transport: Transport
     _names: list[str] | None
 
@@ -57,11 +63,11 @@ class ConfigMixin:
     async def set_channel_config(self, ch: int | str, **fields: Any) -> dict[str, Any]:
         """Change some fields of a channel's configuration; the read-back must match."""
         self._need(CONFIG, "changing configuration")
+        need_key(self.url, self.transport, self.key, "changing configuration")
+        if isinstance(fields.get("retry_ms"), int):  # one retry, as `retry_ms=1000` reads
+            fields = {**fields, "retry_ms": [fields["retry_ms"]]}
+        _check(fields, settings.CHANNEL, settings.check_channel, "channel")
         current = await self.get_channel_config(ch)
-        unknown = sorted(set(fields) - set(CHANNEL_CONFIG_KEYS) - {"channel"})
-        if unknown:
-            raise BadRequest(f"unknown channel setting(s) {', '.join(unknown)}",
-                             "settings: " + ", ".join(CHANNEL_CONFIG_KEYS[1:]))
         current.update(fields)
         reply: ChannelConfig = await self._expect(SetChannelConfig(**current), ChannelConfig)
         got = {k: getattr(reply, k) for k in CHANNEL_CONFIG_KEYS}
@@ -73,18 +79,21 @@ class ConfigMixin:
     async def get_board_config(self) -> dict[str, Any]:
         self._need(CONFIG, "reading configuration")
         cfg: BoardConfig = await self._expect(GetConfig(BOARD_CHANNEL), BoardConfig)
-        return {k: getattr(cfg, k) for k in BOARD_CONFIG_KEYS}
+        return _board_dict(cfg)
 
     async def set_board_config(self, **fields: Any) -> dict[str, Any]:
         self._need(CONFIG, "changing configuration")
-        unknown = sorted(set(fields) - set(BOARD_CONFIG_KEYS))
-        if unknown:
-            raise BadRequest(f"unknown board setting(s) {', '.join(unknown)}",
-                             "settings: " + ", ".join(BOARD_CONFIG_KEYS))
+        need_key(self.url, self.transport, self.key, "changing configuration")
+        if "modbus_allow" in fields:
+            fields = {**fields, "modbus_allow": allow_list(fields["modbus_allow"])}
+        wire = [r for r in settings.BOARD if r[1] is not None]
+        _check(fields, tuple(wire), settings.check_board, "board")
         current = await self.get_board_config()
         current.update(fields)
-        reply: BoardConfig = await self._expect(SetBoardConfig(**current), BoardConfig)
-        got = {k: getattr(reply, k) for k in BOARD_CONFIG_KEYS}
+        msg = SetBoardConfig(**{**current, "modbus_allow": [settings.ip_to_int(a) for a in
+                                                            current["modbus_allow"]]})
+        reply: BoardConfig = await self._expect(msg, BoardConfig)
+        got = _board_dict(reply)
         self._check_readback(current, got)
         return got
 
@@ -97,4 +106,60 @@ class ConfigMixin:
 
     async def save_config(self) -> None:
         self._need(SAVE, "saving configuration")
+        need_key(self.url, self.transport, self.key, "saving the configuration")
         await self._expect(SaveConfig(), Ack)
+
+
+def allow_list(value: Any) -> list[str]:
+    """``modbus_allow`` as dotted IPv4 addresses, from text ("a.b.c.d,e.f.g.h"), a list of
+    texts or u32 numbers; ``BadSetting`` for anything that is not an IPv4 address."""
+    items = [x for x in value.split(",") if x.strip()] if isinstance(value, str) else value
+    if isinstance(items, int) and not isinstance(items, bool):
+        items = [items]
+    if not isinstance(items, list | tuple):
+        raise BadSetting(f"modbus_allow: {value!r} is not a list of IPv4 addresses",
+                         "e.g. modbus_allow=10.0.0.2,10.0.0.3")
+    out = []
+    for item in items:
+        try:
+            if isinstance(item, int) and not isinstance(item, bool) and 0 <= item < 2**32:
+                out.append(settings.int_to_ip(item))
+            else:
+                out.append(settings.int_to_ip(settings.ip_to_int(str(item).strip())))
+        except ValueError:
+            raise BadSetting(f"modbus_allow: {item!r} is not an IPv4 address",
+                             "write dotted addresses, e.g. modbus_allow=10.0.0.2,10.0.0.3"
+                             ) from None
+    return out
+
+
+def _board_dict(cfg: BoardConfig) -> dict[str, Any]:
+    out = {k: getattr(cfg, k) for k in BOARD_CONFIG_KEYS}
+    out["modbus_allow"] = [settings.int_to_ip(n) for n in out["modbus_allow"]]
+    return out
+
+
+def _check(fields: dict[str, Any], table: tuple[tuple[Any, ...], ...],
+           check: Any, what: str) -> None:
+    """``BadSetting`` for an unknown field or a value out of range, before anything is sent."""
+    names = [row[0] for row in table]
+    unknown = sorted(set(fields) - set(names))
+    if unknown:
+        raise BadSetting(f"unknown {what} setting(s) {', '.join(unknown)}",
+                         "settings: " + ", ".join(names))
+    bad = check(fields)
+    if bad is not None:
+        row = next(r for r in table if r[0] == bad)
+        raise BadSetting(f"{what} setting {bad}={fields[bad]!r} is out of range",
+                         f"{bad} takes {_range(row)}")
+
+
+def _range(row: tuple[Any, ...]) -> str:
+    default, lo, hi = row[2:]
+    if isinstance(default, bool):
+        return "true or false"
+    if isinstance(default, str):
+        return f"a text of {lo}..{hi} characters"
+    if isinstance(default, list):
+        return f"a comma-separated list of at most {settings.MAX_LIST} numbers {lo}..{hi}"
+    return f"a whole number {lo}..{hi}"

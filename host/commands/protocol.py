@@ -2,8 +2,10 @@
 
 ``dxboard protocol decode HEX...`` feeds the bytes to a host-side (or, with ``--as-board``,
 a board-side) codec and prints one line per event: each message with its fields, each
-error with its code and text. Authenticated frames are shown without checking their tag
-unless decoded as the board with ``--key-file`` and the session's ``--nonce``.
+error with its code and text. The exit code is 0 when every event is a message, 2 (with one
+line on stderr) when the input held anything that is not a whole, valid frame.
+Authenticated frames are decoded without checking their tag as the host; decoded as the board
+(which has no key here) they show as error 200, authentication required.
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ def _read_hex(parts: list[str]) -> bytes:
 
 def run(args: argparse.Namespace) -> int:
     from protocol.connection import BOARD, HOST, Connection
+    from protocol.constants import E_NOT_A_REQUEST
     from protocol.framing import BadFrame
     from protocol.messages import Hello, Message
 
@@ -52,6 +55,7 @@ def run(args: argparse.Namespace) -> int:
         conn.send(Hello(1, "decoder", "", 0, 0, 0, bytes(16), 0, 0))
     conn.receive_data(data)
     conn.receive_data(b"")
+    errors = []
     for ev in conn.events():
         if isinstance(ev, Message):
             if args.json:
@@ -60,8 +64,17 @@ def run(args: argparse.Namespace) -> int:
             else:
                 print(repr(ev))
         elif isinstance(ev, BadFrame):
+            errors.append(ev)
             if args.json:
                 print(json.dumps({"error": ev.code, "text": ev.text, "skipped": ev.skipped}))
             else:
                 print(f"error {ev.code}: {ev.text} ({ev.skipped} bytes skipped)")
+    if errors:
+        first = errors[0]
+        hint = "give whole frames as hex, from the start marker db58 to the CRC"
+        if first.code == E_NOT_A_REQUEST:
+            hint = ("a message of the other direction: decode it without --as-board"
+                    if args.as_board else "a host's message: decode it with --as-board")
+        raise UserError(f"not every byte is part of a valid frame ({len(errors)} error(s); "
+                        f"the first: error {first.code}, {first.text})", hint)
     return 0

@@ -35,7 +35,21 @@ import can as pycan
 from host.transports.base import AUTH, CYCLE, PUSH
 from host.transports.translate import Handler, Refused, TranslatingTransport
 from host.transports.url import BoardUrl
-from protocol.auth import hmac_sha256
+from protocol import can as layout
+from protocol.can import (
+    ID_CMD,
+    ID_NONCE,
+    ID_RESULT,
+    ID_STATUS,
+    ID_TAG_A,
+    ID_TAG_B,
+    OP_CLEAR,
+    OP_CYCLE,
+    OP_OFF,
+    OP_ON,
+    channel_id,
+    currents_id,
+)
 from protocol.constants import (
     CAP_AUTH,
     CAP_CAN,
@@ -64,15 +78,8 @@ from protocol.messages import (
 log = logging.getLogger(__name__)
 
 SCHEME = "can"
-ID_STATUS, ID_CURRENTS, ID_CHANNEL, ID_CMD = 0x100, 0x110, 0x140, 0x180
-ID_TAG_A, ID_TAG_B, ID_RESULT, ID_NONCE = 0x181, 0x182, 0x188, 0x1F0
-OP_ON, OP_OFF, OP_CYCLE, OP_CLEAR = 1, 2, 3, 4
 EPOCH_2024 = 1704067200.0
 SETTLE_S = 0.15  # after the first broadcasts, how long to collect a round of channel frames
-
-
-def _signed(value: int, bits: int) -> int:
-    return value - (1 << bits) if value & (1 << (bits - 1)) else value
 
 
 class CanTransport(TranslatingTransport):
@@ -136,7 +143,7 @@ class CanTransport(TranslatingTransport):
                 continue
             try:
                 self._frame(msg.arbitration_id, bytes(msg.data))
-            except (struct.error, IndexError) as exc:
+            except (ValueError, struct.error, IndexError) as exc:
                 log.warning("%s: bad frame 0x%03x: %s", self.url.text, msg.arbitration_id, exc)
 
     def _frame(self, can_id: int, data: bytes) -> None:
@@ -147,23 +154,18 @@ class CanTransport(TranslatingTransport):
                 self.push(self._hello())  # a new nonce: the board rebooted
             self.nonce = data
         elif can_id == ID_STATUS + n:
-            up, mv, flags, b7 = struct.unpack("<IHBB", data)
-            self.status = (up, mv, flags, b7 & 0xF, b7 >> 4)
+            self.status = layout.parse_status(data)
             self.status_at = time.monotonic()
-        elif ID_CHANNEL + 16 * n <= can_id < ID_CHANNEL + 16 * n + 16:
-            b0 = data[0]
-            ma = _signed(data[1] | data[2] << 8 | (data[3] & 0x0F) << 16, 20)
-            live, trips, retries = struct.unpack_from("<HBB", data, 4)
-            self.chan[can_id - ID_CHANNEL - 16 * n] = (b0 & 0xF, bool(b0 & 0x10),
-                                                       bool(b0 & 0x20), ma, live, trips, retries)
-        elif ID_CURRENTS + 4 * n <= can_id < ID_CURRENTS + 4 * n + 3:
-            g = can_id - ID_CURRENTS - 4 * n
-            self.currents[g] = [v * 10 for v in struct.unpack("<4h", data)]
+        elif channel_id(n, 0) <= can_id < channel_id(n, 16):
+            self.chan[can_id - channel_id(n, 0)] = layout.parse_channel(data)
+        elif currents_id(n, 0) <= can_id < currents_id(n, layout.CURRENT_GROUPS):
+            g = can_id - currents_id(n, 0)
+            self.currents[g] = layout.parse_currents(data)
             if self._subscribed and self.n and g == (self.n - 1) // 4:
                 self._seq += 1
                 self.push(self._measurement())
         elif can_id == ID_RESULT + n:
-            op, ch = data[0], data[1]
+            op, ch = layout.parse_result(data)[:2]
             waiters = self._results[(op, ch)]
             while waiters:
                 fut = waiters.popleft()
@@ -189,9 +191,8 @@ class CanTransport(TranslatingTransport):
         if self.key is None:
             raise Refused(E_AUTH_REQUIRED, "no key: set DXBOARD_KEY or --key-file")
         self.counter = max(self.counter + 1, int((time.time() - EPOCH_2024) * 10))
-        cmd = struct.pack("<BBBBI", op, ch, 1 if force else 0, off_100ms,
-                          self.counter & 0xFFFFFFFF)
-        tag = hmac_sha256(self.key, self.nonce + cmd)[:16]
+        cmd = layout.command_frame(op, ch, force, off_100ms, self.counter & 0xFFFFFFFF)
+        tag = layout.command_tag(self.key, self.nonce, cmd)
         fut: asyncio.Future[bytes] = asyncio.get_running_loop().create_future()
         self._results[(op, ch)].append(fut)
         n = self.node
@@ -202,14 +203,15 @@ class CanTransport(TranslatingTransport):
             except pycan.CanError as exc:
                 raise OSError(f"CAN send failed: {exc}") from exc
         result = await fut
-        err = struct.unpack_from("<H", result, 2)[0]
+        err = layout.parse_result(result)[2]
         if err:
             raise Refused(err)
         return result
 
     @staticmethod
     def _switched(result: bytes, commanded: bool) -> Switched:
-        return Switched(result[1], commanded, bool(result[4] & 0x10), result[4] & 0xF)
+        _op, ch, _err, state, physical = layout.parse_result(result)
+        return Switched(ch, commanded, physical, state)
 
     # --- handlers ---------------------------------------------------------------------
 

@@ -2,9 +2,11 @@
 
 ``TransportError`` is the family. Local ones (``UserError``: the person fixes the input) are a
 board URL that cannot be used (``BadUrl``), a request the transport cannot carry
-(``NotSupported``), a channel or a value out of range (``BadChannel``, ``BadRequest``). Remote
-ones (``RemoteError``: the board or the link) are every way a link fails (``BoardUnreachable``;
-``LinkLost`` while in use; ``RequestTimeout``, also a ``TimeoutError`` as python-can's
+(``NotSupported``), a channel or a value out of range (``BadChannel``, ``BadRequest``; a
+configuration field or value: ``BadSetting``), and an authenticated command without a key
+(``KeyMissing``). Remote ones (``RemoteError``: the board or the link) are every way a link
+fails (``BoardUnreachable``; ``LinkLost`` while in use; a device that answers but not as the
+URL says: ``UnexpectedDevice``; ``RequestTimeout``, also a ``TimeoutError`` as python-can's
 ``CanTimeoutError`` is, so ``except TimeoutError`` catches it), a board speaking another
 protocol version (``VersionMismatch``), a board that refused a request (``BoardRefused``, with
 the board's E_* code; ``AuthRefused`` for a bad or missing key), a switch that did not move
@@ -57,6 +59,11 @@ class RequestTimeout(BoardUnreachable, TimeoutError):
     """The board did not answer a request in time."""
 
 
+class UnexpectedDevice(BoardUnreachable):
+    """The device at the URL answers, but not as the URL says it should (a Modbus device
+    without the registers of the map, a unit id it does not serve, no channels)."""
+
+
 class VersionMismatch(RemoteTransportError):
     """The board speaks another protocol version than this host."""
 
@@ -71,6 +78,14 @@ class BoardRefused(RemoteTransportError):
 
 class AuthRefused(BoardRefused):
     """The board refused the authentication tag: the key is wrong, or missing."""
+
+
+class KeyMissing(LocalTransportError):
+    """An authenticated command was asked for without a key: nothing was sent."""
+
+
+class BadSetting(BadRequest):
+    """A configuration field the board does not have, or a value outside its range."""
 
 
 class ReadbackMismatch(RemoteTransportError):

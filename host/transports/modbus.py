@@ -23,7 +23,10 @@ only from the client addresses its config allows (exception 01 otherwise, report
 no power cycle, so it is off, wait, on timed by the host; no events, no clearing, no channel
 names, no configuration through the client (``save`` only). The HELLO is made up from the
 registers: board id ``modbus@HOST:PORT/N``, the protocol version register, boot id 0 and one
-more each time the uptime register goes backwards (a reboot seen between two polls).
+more each time the uptime register goes backwards (a reboot seen between two polls). A device
+that does not answer as its map says (a channel count of 0 or too many, a register it does
+not have, exception 04 for a unit id it does not serve) is ``UnexpectedDevice`` on opening:
+one line naming the register or the unit and how to describe the device instead.
 """
 
 from __future__ import annotations
@@ -38,9 +41,10 @@ from pymodbus.client import AsyncModbusSerialClient, AsyncModbusTcpClient
 from pymodbus.exceptions import ModbusException
 
 from host.transports.base import PUSH, SAVE
-from host.transports.errors import BadUrl
+from host.transports.errors import BadUrl, UnexpectedDevice
 from host.transports.translate import Handler, Refused, TranslatingTransport
 from host.transports.url import BoardUrl
+from protocol import modbus_map as M
 from protocol.constants import (
     CAP_SUBSCRIBE,
     CFG_OK,
@@ -72,20 +76,22 @@ from protocol.messages import (
 
 log = logging.getLogger(__name__)
 
-BOARD_MAP: dict[str, Any] = {
-    "channel_count": 108, "version": 109, "switch_coils": 0, "readback_inputs": 0,
-    "fault_inputs": 16, "current_registers": 0, "current_scale": 1.0, "state_registers": 16,
-    "live_fault_registers": 32, "sticky_fault_registers": 48, "trip_registers": 64,
-    "input_mv": 100, "total_ma": 101, "uptime_ms": 103, "board_flags": 105,
-    "reset_cause": 106, "config_status": 107, "save_register": 990, "save_value": 1,
+BOARD_MAP: dict[str, Any] = {  # the board's own map (protocol/modbus_map.py)
+    "channel_count": M.CHANNEL_COUNT, "version": M.VERSION, "switch_coils": 0,
+    "readback_inputs": 0, "fault_inputs": M.FAULT_INPUTS, "current_registers": M.CURRENT,
+    "current_scale": 1.0, "state_registers": M.STATE, "live_fault_registers": M.LIVE_FAULTS,
+    "sticky_fault_registers": M.STICKY_FAULTS, "trip_registers": M.TRIPS,
+    "input_mv": M.INPUT_MV, "total_ma": M.TOTAL_MA, "uptime_ms": M.UPTIME_MS,
+    "board_flags": M.BOARD_FLAGS, "reset_cause": M.RESET_CAUSE,
+    "config_status": M.CONFIG_STATUS, "save_register": M.CMD_REG, "save_value": M.CMD_SAVE,
 }
 _KEYS = set(BOARD_MAP) | {"channels"}
 _EXCEPTIONS = {
-    1: (E_INHIBITED, "Modbus writes are not enabled for this client (exception 01): "
+    M.X_FUNCTION: (E_INHIBITED, "Modbus writes are not enabled for this client (exception 01): "
                      "set modbus_write and modbus_allow in the board config"),
-    2: (E_BAD_CHANNEL, "no such register (exception 02)"),
-    3: (E_BAD_VALUE, "value refused (exception 03)"),
-    4: (E_INTERNAL, "refused by the board (exception 04)"),
+    M.X_ADDRESS: (E_BAD_CHANNEL, "no such register (exception 02)"),
+    M.X_VALUE: (E_BAD_VALUE, "value refused (exception 03)"),
+    M.X_DEVICE: (E_INTERNAL, "refused by the board (exception 04)"),
 }
 SPAN = 120  # registers per read request (Modbus allows 125)
 SETTLE_S = 0.3  # how long a switch's read-back may take to follow a write
@@ -135,6 +141,8 @@ class ModbusTransport(TranslatingTransport):
         super().__init__(url, None)  # Modbus has no authentication: the key is never sent
         self.unit = url.int_param("unit", 1, 0, 247)
         self.map = load_map(url.query["map"]) if "map" in url.query else dict(BOARD_MAP)
+        self.custom_map = "map" in url.query
+        self._reading = ""
         if url.scheme == "modbus+tcp":
             url.check_params(("unit", "map"))
             host, port = url.need_host_port("modbus+tcp://HOST:PORT")
@@ -166,7 +174,7 @@ class ModbusTransport(TranslatingTransport):
                 raise ConnectionResetError(f"Modbus: {exc}") from exc
         if reply.isError():
             code, text = _EXCEPTIONS.get(reply.exception_code, (E_INTERNAL, "Modbus exception"))
-            raise Refused(code, text)
+            raise Refused(code, text, reply.exception_code)
         return reply
 
     async def _bits(self, fn: str, base: int, n: int) -> list[bool]:
@@ -247,15 +255,44 @@ class ModbusTransport(TranslatingTransport):
         self.client = self._make()
         if not await self.client.connect():
             raise ConnectionRefusedError(f"no Modbus server at {self.where}")
-        m = self.map
+        try:
+            return await self._learn(self.map)
+        except Refused as exc:
+            raise self._unexpected(exc) from None
+
+    async def _learn(self, m: dict[str, Any]) -> Hello:
+        """Channel count, version and a first snapshot, read from the device."""
         fixed = m.get("channels")
         head = [a for a in (m.get("channel_count"), m.get("version")) if a is not None]
+        self._reading = " and ".join(
+            f"the {what} (input register {m[key]})" for key, what in
+            (("channel_count", "channel count"), ("version", "version")) if m.get(key) is not None)
         regs = await self._registers(head) if head else {}
-        self.n = int(fixed) if fixed is not None else regs[m["channel_count"]]
+        n = int(fixed) if fixed is not None else regs[m["channel_count"]]
+        limit = 255 if self.custom_map else M.MAX_CHANNELS
+        if not 1 <= n <= limit:
+            where = ("the map's \"channels\"" if fixed is not None else
+                     f"input register {m['channel_count']}")
+            raise UnexpectedDevice(f"{self.url.text}: the device reports {n} channels "
+                                   f"({where}); expected 1..{limit}",
+                                   "is it a dxboard board? describe another device with "
+                                   '?map=FILE ("channels": N, ...)')
+        self.n = n
         self._version = regs[m["version"]] if m.get("version") is not None else PROTOCOL_VERSION
+        self._reading = "the registers of the map"
         snap = await self.snapshot()
         self._last_uptime = snap.uptime_ms if snap.uptime_ms is not None else -1
         return self._hello(snap)
+
+    def _unexpected(self, exc: Refused) -> UnexpectedDevice:
+        if exc.modbus == M.X_DEVICE:
+            return UnexpectedDevice(
+                f"{self.url.text}: the device answered exception 04 (device failure) for "
+                f"unit {self.unit} while reading {self._reading}",
+                "is that its unit id? give the right one with ?unit=N")
+        return UnexpectedDevice(
+            f"{self.url.text}: unit {self.unit} refused reading {self._reading}: {exc.text}",
+            "is it a dxboard board? describe another device with ?map=FILE")
 
     async def _poll(self, rate_hz: int) -> None:
         period = 1 / rate_hz

@@ -4,7 +4,9 @@ Theory of operation. A ``StreamTransport`` owns a ``Connection(HOST, key)``. ``_
 the backend, then waits for the board's HELLO: a board that greets on connect (TCP) sends it at
 once; if none arrives within ``HELLO_WAIT_S`` (a serial line to a board that booted long ago),
 the host asks with HELLO_REQUEST and takes the HELLO that answers it. Messages before the first
-HELLO cannot be trusted to belong to this session and are dropped. ``_send`` signs through the
+HELLO cannot be trusted to belong to this session and are dropped. With a key, the host then
+proves it holds it (AUTH_PING) before anything else: the board counts the session as the
+host's, keeps it open on its PINGs and never evicts it for a newcomer. ``_send`` signs through the
 codec (the key signs actuation, PROTOCOL.md §5); ``_receive`` feeds bytes to the codec until it
 yields an event, and turns the end of the stream into ``LinkLost``. A frame left incomplete
 when the stream ends becomes a ``BadFrame`` (E_TRUNCATED), never an exception.
@@ -18,17 +20,20 @@ from __future__ import annotations
 import asyncio
 import collections
 import logging
+import random
 
 from host.transports.base import AUTH, CONFIG, CYCLE, EVENTS, NAMES, PUSH, SAVE, Transport
 from host.transports.errors import LinkLost, VersionMismatch
 from protocol.connection import HOST, Connection
 from protocol.constants import E_VERSION, PROTOCOL_VERSION
 from protocol.framing import BadFrame
-from protocol.messages import Hello, HelloRequest, Message
+from protocol.messages import AuthPing, Hello, HelloRequest, Message, Pong
 
 log = logging.getLogger(__name__)
 
 HELLO_WAIT_S = 0.3
+CLAIM_WAIT_S = 2.0
+CLAIM_REQ_ID = 0xFFFF  # the board client numbers its own requests from 1
 READ_SIZE = 4096
 
 
@@ -49,12 +54,34 @@ class StreamTransport(Transport):
         self._eof = False
         await self._connect()
         try:
-            return await asyncio.wait_for(self._await_hello(None), HELLO_WAIT_S)
+            hello = await asyncio.wait_for(self._await_hello(None), HELLO_WAIT_S)
         except TimeoutError:
-            pass
-        req = HelloRequest(req_id=self.conn.next_request_id())
-        await self._write(self.conn.send(req))
-        return await self._await_hello(req.req_id)
+            req = HelloRequest(req_id=self.conn.next_request_id())
+            await self._write(self.conn.send(req))
+            hello = await self._await_hello(req.req_id)
+        if self.key is not None:
+            await self._claim()
+        return hello
+
+    async def _claim(self) -> None:
+        """Prove at once that this host holds the key (AUTH_PING, PROTOCOL.md §3), so that the
+        board counts the session as the host's: never evicted for a newcomer. A board that
+        refuses it (a wrong key, an older firmware) is left to refuse the commands later."""
+        msg = AuthPing(random.getrandbits(32), req_id=CLAIM_REQ_ID)
+        await self._write(self.conn.send(msg))
+        others: list[Message | BadFrame] = []
+        try:
+            async with asyncio.timeout(CLAIM_WAIT_S):
+                while True:
+                    ev = await self._next_event()
+                    if getattr(ev, "req_id", None) == CLAIM_REQ_ID:
+                        if not isinstance(ev, Pong):
+                            log.info("%s: the board refused AUTH_PING: %r", self.url.text, ev)
+                        break
+                    others.append(ev)
+        except TimeoutError:
+            log.info("%s: no answer to AUTH_PING within %g s", self.url.text, CLAIM_WAIT_S)
+        self._events.extendleft(reversed(others))
 
     async def _await_hello(self, req_id: int | None) -> Hello:
         while True:

@@ -35,10 +35,11 @@ Handler = Callable[[Any], Awaitable[Message | None]]
 class Refused(Exception):
     """The board (or the wire's server) refused a request: ``code`` is an E_* code."""
 
-    def __init__(self, code: int, text: str = "") -> None:
+    def __init__(self, code: int, text: str = "", modbus: int = 0) -> None:
         super().__init__(text or ERROR_TEXT.get(code, "refused"))
         self.code = code
         self.text = text or ERROR_TEXT.get(code, "refused")
+        self.modbus = modbus  # the wire's own exception code, where it has one
 
 
 class TranslatingTransport(Transport):

@@ -14,7 +14,6 @@ from tests.emulator.wire import DXBOARD, ROOT, TEDUSAR, Emulate
     ["/nonexistent/robot"],
     [str(TEDUSAR), "--listen", "localhost"],
     [str(TEDUSAR), "--modbus", "1.2.3.4:99999"],
-    [str(TEDUSAR), "--runtime", "micropython", "--serial"],
     [str(TEDUSAR), "--can", "nosuchbus:x"],
     [str(ROOT / "models")],  # a directory without emulator.yaml
 ])

@@ -11,7 +11,9 @@ from emulator.model import ModelError, parse
 from emulator.sim import Emulator
 from firmware import config
 from firmware.hal.storage import FileStorage
+from protocol.constants import E_PROTECTED
 from tests.emulator.conftest import TEDUSAR, tedusar
+from tests.firmware.testhal import config_text
 
 
 def ch(emu: Emulator, name: str) -> dict:  # type: ignore[type-arg]
@@ -197,16 +199,19 @@ def test_soft_reboot_keeps_saved_config(tmp_path) -> None:  # type: ignore[no-un
     e.advance(2000)
     s = e.status()
     assert s["reset_cause"] == "soft" and s["channels"][3]["state"] == "on"
-    assert json.loads((tmp_path / "config.json").read_text())["channels"][3]["powerup"] is True
+    assert json.loads(config_text(FileStorage(str(tmp_path))))["channels"][3]["powerup"] is True
 
 
-def test_corrupt_config_boots_safe_defaults(tmp_path) -> None:  # type: ignore[no-untyped-def]
-    (tmp_path / config.FILE).write_text('{"version": 1, "crc": "00000000"}')
+def test_corrupt_config_boots_the_factory_config(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    for name in config.SLOTS:
+        (tmp_path / name).write_text('{"version": 1, "crc": "00000000"}')
     e = tedusar(storage=FileStorage(str(tmp_path)))
     e.advance(2000)
     s = e.status()
     assert s["config_status"] == "corrupt"
-    assert all(c["state"] == "off" for c in s["channels"])
+    # the configuration flashed with the board (board.json) keeps the pc on and protected
+    assert [c["state"] for c in s["channels"]] == ["off", "off", "on"] + ["off"] * 7
+    assert e.board.switch(2, False)[0] == E_PROTECTED
 
 
 def test_link_faults_are_recorded_with_a_clear_hook(emu: Emulator) -> None:
@@ -244,3 +249,19 @@ def test_model_errors_name_the_field() -> None:
     with pytest.raises(ModelError, match="must be a non-negative integer"):
         parse({"channels": [{"nominal_ma": -3}]})
     assert TEDUSAR.is_dir()
+
+
+def test_sensor_offset_on_the_pc_keeps_it_on_and_flags_it() -> None:
+    """The finding of issue 12, on the emulated TEDUSAR board: a +4 A offset on the pc's
+    current sensor trips it, but the board does not latch it off; it says ``sensor``."""
+    e = tedusar()
+    e.advance(2000)
+    e.inject("pc", "sensor_offset", {"amps": "4"})
+    states = set()
+    for _ in range(120):
+        e.advance(1000)
+        states.add(e.status()["channels"][2]["state"])
+    pc = e.status()["channels"][2]
+    assert "faulted" not in states and "latched" not in states
+    assert pc["state"] == "on" and pc["physical"]
+    assert "sensor" in pc["live"] and "stuck_on" not in pc["sticky"]

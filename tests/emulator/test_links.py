@@ -17,8 +17,8 @@ from emulator import model
 from emulator.control import Background
 from emulator.frontends import FrontEnds
 from emulator.sim import Emulator
-from firmware.can import OP_ON, command_frame, command_tag
 from host.launch.control import request as control
+from protocol.can import OP_ON, command_frame, command_tag
 from protocol.connection import HOST, Connection
 from protocol.messages import GetState, Hello, HelloRequest, State, Switch, Switched
 from tests.emulator.conftest import TEDUSAR
@@ -130,13 +130,13 @@ def test_dbc_round_trips() -> None:
         for k, v in values.items():
             assert abs(float(back[k]) - float(v)) < 1e-6 * max(1.0, abs(float(v))), (m.name, k)
     # the firmware's own encoders agree with the DBC
-    from firmware.can import channel_frame, result_frame, status_frame
+    from protocol.can import channel_frame, result_frame, status_frame
 
     ch = db.get_message_by_name("DXB_Channel_0").decode(
         channel_frame((True, False, 3, -1234, 0x21, 0, 7, 2)), decode_choices=False)
     assert (ch["State"], ch["Commanded"], ch["Physical"], ch["LiveFaults"], ch["Trips"],
             ch["Retries"]) == (3, 1, 0, 0x21, 7, 2)
-    assert abs(ch["CurrentMa"] + 1.234) < 1e-9
+    assert ch["CurrentMa"] == -1234  # decodes in mA, as its name says
     st = db.get_message_by_name("DXB_Status").decode(status_frame((23456, 0, 5000, 2, 1, 9)))
     assert (st["UptimeS"], st["BoardFlags"], st["ResetCause"], st["ConfigStatus"]) == (5, 9, 2, 1)
     assert abs(st["InputVoltage"] - 23.456) < 1e-9

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import itertools
 import json
 from collections.abc import Iterator
@@ -14,7 +15,16 @@ from emulator.control import Background
 from emulator.frontends import FrontEnds
 from emulator.sim import Emulator
 from protocol.connection import HOST, Connection
-from protocol.messages import Ack, GetState, Measurement, Ping, Pong, State, Subscribe
+from protocol.messages import (
+    Ack,
+    AuthPing,
+    GetState,
+    Measurement,
+    Ping,
+    Pong,
+    State,
+    Subscribe,
+)
 from tests.emulator.conftest import TEDUSAR
 from tests.emulator.wire import KEY, Wire
 from tests.rates import assert_no_gaps
@@ -48,42 +58,55 @@ async def _closed_within(reader: asyncio.StreamReader, seconds: float) -> bool:
     return False
 
 
-async def _served(address: tuple[str, int]) -> Wire | None:
-    """A connection the board keeps and answers, or None (it closed it: no slot)."""
-    try:
-        wire = await Wire.open(address)
-    except (OSError, AssertionError):
-        return None
-    if await _closed_within(wire.reader, 0.3):
-        return None
-    return wire
-
-
-async def test_silent_connection_closed_pinging_one_kept(
+async def test_idle_strangers_closed_the_pinging_host_kept(
         served: tuple[Background, FrontEnds, tuple[str, int]]) -> None:
     _, _, address = served
     silent = await Wire.open(address)
-    alive = await Wire.open(address)
+    stranger = await Wire.open(address)  # PINGs without proving the key
+    host = await Wire.open(address)
+    assert isinstance(await host.request(AuthPing(1)), Pong)
 
-    async def ping() -> None:  # every 0.2 s, a third of the read timeout
-        assert isinstance(await alive.request(Ping(1)), Pong)
+    async def ping() -> None:  # every 0.2 s at most, a third of the read timeout
+        assert isinstance(await host.request(Ping(1)), Pong)
+        with contextlib.suppress(AssertionError, ConnectionError, TimeoutError):
+            await stranger.request(Ping(2), timeout=0.2)
 
     await wait_until_async(lambda: _closed_within(silent.reader, 0.2), each=ping,
                            what="the silent connection closed", interval=0)
-    assert isinstance(await alive.request(GetState()), State)
-    await alive.close()
+    await wait_until_async(lambda: _closed_within(stranger.reader, 0.2), each=ping,
+                           what="the stranger closed though it PINGs", interval=0)
+    assert isinstance(await host.request(GetState()), State)
+    await host.close()
 
 
-async def test_connection_limit(served: tuple[Background, FrontEnds, tuple[str, int]]) -> None:
+async def test_strangers_never_lock_the_host_out(
+        served: tuple[Background, FrontEnds, tuple[str, int]]) -> None:
+    """Six slots, two of them for the host only: strangers that only PING are evicted for
+    a newcomer (the idlest first), the authenticated host is never evicted, and a newcomer is
+    refused only when every slot is the host's."""
     _, _, address = served
-    wires = [await Wire.open(address) for _ in range(6)]
-    r, w = await asyncio.open_connection(*address)
-    assert await _closed_within(r, 30.0)  # the seventh is closed at once
+    host = await Wire.open(address)
+    assert isinstance(await host.request(AuthPing(1)), Pong)
+    strangers = [await Wire.open(address) for _ in range(8)]
+    for w in strangers[-4:]:
+        assert isinstance(await w.request(Ping(3)), Pong)
+    for w in strangers[:4]:  # the first four were evicted for the last four
+        assert await _closed_within(w.reader, 2.0)
+    for attempt in range(12):  # a fresh client is always served
+        fresh = await Wire.open(address)
+        assert isinstance(await fresh.request(GetState()), State), attempt
+        await fresh.close()
+    assert isinstance(await host.request(GetState()), State)  # never evicted
+    hosts = [host]
+    for _ in range(5):
+        w = await Wire.open(address)
+        assert isinstance(await w.request(AuthPing(2)), Pong)
+        hosts.append(w)
+    r, w = await asyncio.open_connection(*address)  # six host sessions: no room at all
+    assert await _closed_within(r, 2.0)
     w.close()
-    await wires[0].close()
-    again = await wait_until_async(lambda: _served(address), what="a slot free again")
-    assert isinstance(await again.request(GetState()), State)
-    for x in [*wires[1:], again]:
+    for x in hosts:
+        assert isinstance(await x.request(Ping(4)), Pong)
         await x.close()
 
 

@@ -3,7 +3,8 @@
 import struct
 import unittest
 
-from firmware.can import (
+from firmware.can import CanNode
+from protocol.can import (
     ID_CHANNEL,
     ID_CMD,
     ID_CURRENTS,
@@ -15,17 +16,23 @@ from firmware.can import (
     OP_CYCLE,
     OP_OFF,
     OP_ON,
-    CanNode,
     channel_frame,
     command_frame,
     command_tag,
     currents_frame,
+    parse_channel,
+    parse_command,
+    parse_currents,
+    parse_result,
+    parse_status,
     result_frame,
     status_frame,
 )
 from protocol.constants import (
     E_AUTH_REQUIRED,
     E_BAD_TAG,
+    E_BAD_VALUE,
+    E_MALFORMED,
     E_PROTECTED,
     E_REPLAYED,
     ST_INRUSH,
@@ -59,6 +66,19 @@ class FrameTest(unittest.TestCase):
         self.assertEqual(command_frame(OP_CYCLE, 3, True, 20, 0x01020304),
                          bytes.fromhex("0303011404030201"))
         self.assertEqual(result_frame(OP_ON, 3, 301, 4, True), bytes.fromhex("01032d0114000000"))
+
+    def test_parse_inverts_pack(self):
+        self.assertEqual(parse_channel(channel_frame((True, True, 2, -1500, 3, 0, 1, 0))),
+                         (2, True, True, -1500, 3, 1, 0))
+        self.assertEqual(parse_status(status_frame((24000, 0, 61999, 1, 2, 0x21))),
+                         (61, 24000, 0x21, 1, 2))
+        self.assertEqual(parse_currents(currents_frame([1234, -20, 0, 70000], 0)),
+                         [1230, -20, 0, 70000])
+        self.assertEqual(parse_command(command_frame(OP_CYCLE, 3, True, 20, 7)),
+                         (OP_CYCLE, 3, True, 20, 7))
+        self.assertEqual(parse_result(result_frame(OP_ON, 3, 301, 4, True)),
+                         (OP_ON, 3, 301, 4, True))
+        self.assertRaises(ValueError, parse_command, bytes(7))
 
     def test_current_saturates(self):
         f = channel_frame((False, False, 0, 10 ** 7, 0, 0, 300, 999))
@@ -171,8 +191,39 @@ class CommandTest(unittest.TestCase):
         self.r.run(400)
         self.assertTrue(self.r.hal.cmd[2])
 
-    def test_garbage_frames_ignored(self):
-        self.assertEqual(self.node.receive(ID_CMD, b"\x01\x02", 0), [])
+    def test_garbage_frames_change_nothing(self):
+        self.assertEqual(self.result(self.node.receive(ID_CMD, b"\x01\x02", 0))[2], E_MALFORMED)
         self.assertEqual(self.node.receive(ID_TAG_B, bytes(8), 0), [])
         self.assertEqual(self.node.receive(0x7FF, bytes(8), 0), [])
         self.assertEqual(self.r.hal.cmd, [False] * 10)
+
+
+class MalformedTest(unittest.TestCase):
+    """Frames of the command ids that are not 8 bytes are answered, never ignored."""
+
+    setUp = CommandTest.setUp
+    send = CommandTest.send
+    result = CommandTest.result
+
+    def test_short_command_is_answered_with_105(self):
+        out = self.node.receive(ID_CMD, command_frame(OP_ON, 3, counter=1)[:5], self.r.hal.now)
+        self.assertEqual(self.result(out), (OP_ON, 3, E_MALFORMED, ST_OFF, False))
+        out = self.node.receive(ID_CMD, b"", self.r.hal.now)
+        self.assertEqual(self.result(out)[:3], (0, 0, E_MALFORMED))
+        self.assertFalse(self.r.hal.cmd[3])
+
+    def test_short_tag_ends_the_pending_command(self):
+        cmd = command_frame(OP_ON, 3, counter=1)
+        tag = command_tag(KEY, self.node.nonce, cmd)
+        now = self.r.hal.now
+        self.assertEqual(self.node.receive(ID_CMD, cmd, now), [])
+        self.assertEqual(self.result(self.node.receive(ID_TAG_A, tag[:7], now))[2],
+                         E_MALFORMED)
+        self.assertEqual(self.node.receive(ID_TAG_B, tag[8:], now), [])  # nothing pending
+        self.assertFalse(self.r.hal.cmd[3])
+        self.assertEqual(self.result(self.send(cmd))[2], 0)  # the counter was not spent
+
+    def test_unknown_op_is_303_and_changes_nothing(self):
+        self.assertEqual(self.result(self.send(command_frame(9, 3, counter=1)))[:3],
+                         (9, 3, E_BAD_VALUE))
+        self.assertFalse(self.r.hal.cmd[3])

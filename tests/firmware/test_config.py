@@ -8,6 +8,7 @@ from firmware.hal.storage import MemStorage
 from protocol.constants import (
     B_SAFE_MODE,
     CFG_CORRUPT,
+    CFG_FALLBACK,
     CFG_MISSING,
     CFG_OK,
     CFG_SAFE_MODE,
@@ -23,9 +24,14 @@ from tests.firmware.testhal import Rig
 CHANS = {2: {"powerup": True, "protected": True, "name": "pc"}, 4: {"powerup": True}}
 
 
-class FailingRename(MemStorage):
-    def rename(self, old, new):
-        raise OSError(28)
+class FailingWrite(MemStorage):
+    fail = False
+
+    def write(self, name, data):
+        if self.fail:
+            self.files[name] = bytes(data[:10])  # a short write, then the error
+            raise OSError(28)
+        MemStorage.write(self, name, data)
 
 
 class ConfigFileTest(unittest.TestCase):
@@ -54,18 +60,19 @@ class ConfigFileTest(unittest.TestCase):
         cfg["channels"][0]["rated_ma"] = -5
         self.assertEqual(config.parse(config.dumps(cfg), 10), (None, CFG_CORRUPT))
 
-    def test_atomic_write_keeps_the_old_file_on_failure(self):
-        st = FailingRename()
-        old = config.dumps(config.defaults(10))
-        st.files[config.FILE] = old
+    def test_a_failed_write_keeps_the_good_copy(self):
+        st = FailingWrite()
+        config.save(st, config.defaults(10))
+        st.fail = True
         with self.assertRaises(OSError):
             config.save(st, config.defaults(10))
-        self.assertEqual(st.files[config.FILE], old)
+        # the half-written copy is damage: the good one loads, and the board says so
+        self.assertEqual(config.load(st, 10), (config.defaults(10), CFG_FALLBACK))
 
-    def test_save_writes_tmp_then_renames(self):
+    def test_save_writes_one_slot_and_reads_it_back(self):
         st = MemStorage()
         config.save(st, config.defaults(10))
-        self.assertEqual(sorted(st.files), [config.FILE])
+        self.assertEqual(sorted(st.files), [config.SLOTS[0]])
         self.assertEqual(config.load(st, 10)[1], CFG_OK)
 
 
@@ -80,8 +87,9 @@ class BootTest(unittest.TestCase):
 
     def test_corrupt_file_boots_safe_defaults_with_reason(self):
         r = Rig(channels=CHANS)
-        data = r.hal.storage.files[config.FILE]
-        r.hal.storage.files[config.FILE] = data.replace(b'"pc"', b'"pd"')
+        slot = config.SLOTS[0]
+        data = r.hal.storage.files[slot]
+        r.hal.storage.files[slot] = data.replace(b'"pc"', b'"pd"')
         r2 = Rig(storage=r.hal.storage)
         r2.run(1000)
         self.assertEqual(r2.board.board_status()[4], CFG_CORRUPT)
@@ -90,7 +98,7 @@ class BootTest(unittest.TestCase):
 
     def test_factory_defaults_when_given(self):
         r = Rig(channels=CHANS)
-        r.hal.storage.files[config.FILE] = b"garbage"
+        r.hal.storage.files[config.SLOTS[0]] = b"garbage"
         from firmware.app import App
         from tests.firmware.testhal import TestHal
 
@@ -106,7 +114,7 @@ class BootTest(unittest.TestCase):
 
     def test_persisted_file_is_json_a_person_can_read(self):
         r = Rig(channels=CHANS)
-        obj = json.loads(r.hal.storage.files[config.FILE])
+        obj = json.loads(r.hal.storage.files[config.SLOTS[0]])
         self.assertEqual(obj["channels"][2]["name"], "pc")
         self.assertEqual(len(obj["crc"]), 8)
 

@@ -5,7 +5,7 @@ import unittest
 
 from firmware.modbus import Framer, handle
 from protocol.constants import ST_LATCHED, ST_OFF, ST_ON
-from tests.firmware.testhal import Rig
+from tests.firmware.testhal import Rig, config_text
 
 ALLOWED = "10.0.0.5"
 
@@ -152,7 +152,7 @@ class WriteTest(unittest.TestCase):
         self.assertEqual(exc(r, struct.pack(">BHH", 6, 990, 2)), 3)
         ask(r, struct.pack(">BHH", 6, 1000 + 1, 3333))
         self.assertEqual(ask(r, struct.pack(">BHH", 6, 990, 1))[0], 6)
-        self.assertIn(b"3333", r.hal.storage.read("config.json"))
+        self.assertIn(b"3333", config_text(r.hal.storage))
 
 
 class FramerTest(unittest.TestCase):

@@ -2,7 +2,7 @@
 
 import unittest
 
-from firmware.session import Session, int_to_ip, ip_to_int
+from firmware.session import Session
 from protocol.connection import HOST, Connection
 from protocol.constants import (
     E_AUTH_REQUIRED,
@@ -23,6 +23,7 @@ from protocol.constants import (
 from protocol.framing import BadFrame
 from protocol.messages import (
     Ack,
+    AuthPing,
     BoardConfig,
     ChannelConfig,
     Clear,
@@ -45,7 +46,8 @@ from protocol.messages import (
     Switch,
     Switched,
 )
-from tests.firmware.testhal import Rig
+from protocol.settings import check_board, int_to_ip, ip_to_int
+from tests.firmware.testhal import Rig, config_text
 
 KEY = bytes(range(32))
 KEY_HEX = KEY.hex() if hasattr(KEY, "hex") else "".join("%02x" % b for b in KEY)
@@ -146,11 +148,16 @@ class ReadTest(unittest.TestCase):
         pong = p.one(Ping(0xDEADBEEF), Pong)
         self.assertEqual(pong.token, 0xDEADBEEF)
         self.assertEqual(pong.uptime_ms, p.r.hal.now)
+        self.assertEqual(p.r.board.host_ms, 0)  # a stranger's PING does not feed the dead-man
+        pong = p.one(AuthPing(7), Pong)  # the host: it holds the key
+        self.assertEqual((pong.token, p.r.board.host_ms), (7, p.r.hal.now))
+        p.r.run(100)
+        p.one(Ping(8), Pong)  # from now on its PINGs feed the dead-man too
         self.assertEqual(p.r.board.host_ms, p.r.hal.now)
 
     def test_get_config(self):
         p = Pair(rig(channels={2: {"name": "laser", "rated_ma": 1500}},
-                     board={"modbus_allow": ["10.0.0.7", "not-an-ip"]}))
+                     board={"modbus_allow": ["10.0.0.7"]}))
         cc = p.one(GetConfig(2), ChannelConfig)
         self.assertEqual((cc.channel, cc.name, cc.rated_ma), (2, "laser", 1500))
         bc = p.one(GetConfig(255), BoardConfig)
@@ -161,8 +168,12 @@ class ReadTest(unittest.TestCase):
     def test_ip_conversion(self):
         self.assertEqual(ip_to_int("192.168.1.20"), 0xC0A80114)
         self.assertEqual(int_to_ip(0xC0A80114), "192.168.1.20")
-        for bad in ("1.2.3", "1.2.3.256", "a.b.c.d"):
+        for bad in ("1.2.3", "1.2.3.256", "a.b.c.d", "1.2.3.-4", "1.2.3.4 "):
             self.assertRaises(ValueError, ip_to_int, bad)
+        # a configuration holds dotted IPv4 addresses only: a host name cannot be reported
+        self.assertEqual(check_board({"modbus_allow": ["10.0.0.7", "not-an-ip"]}),
+                         "modbus_allow")
+        self.assertIsNone(check_board({"modbus_allow": ["10.0.0.7"]}))
 
 
 class ActuationTest(unittest.TestCase):
@@ -278,7 +289,7 @@ class ActuationTest(unittest.TestCase):
         self.assertEqual(got.modbus_allow, [0x7F000001])
         self.assertEqual(p.r.board.cfg["board"]["key"], KEY_HEX)
         self.assertEqual(p.one(SaveConfig(), Ack).of_type, SaveConfig.TYPE)
-        self.assertIn(b"2500", p.r.hal.storage.read("config.json"))
+        self.assertIn(b"2500", config_text(p.r.hal.storage))
         self.assertEqual(p.one(Reboot(), Ack).of_type, Reboot.TYPE)
         p.r.run(20)
         self.assertTrue(p.r.hal.rebooted)

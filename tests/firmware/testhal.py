@@ -1,7 +1,8 @@
 """A tiny HAL for the firmware tests: a simulated clock and ideal electronics set by the test.
 
-``load_ma[ch]`` is what the channel draws while its switch is on; ``stuck[ch]`` forces the
-switch (None = follows the command, True = stuck on, False = stuck off). The same file runs
+``load_ma[ch]`` is what the channel draws while its switch is on; ``offset_ma[ch]`` is added to
+every reading (a faulty current sensor); ``stuck[ch]`` forces the switch (None = follows the
+command, True = stuck on, False = stuck off). The same file runs
 under CPython and MicroPython. ``Rig`` boots an ``App`` on it and steps it on simulated time.
 """
 
@@ -15,6 +16,7 @@ class TestHal:
         self.n_channels = n
         self.now = 0
         self.load_ma = [0] * n
+        self.offset_ma = [0] * n  # a current sensor's error: read even with the switch open
         self.stuck = [None] * n
         self.cmd = [False] * n
         self.switch_log = []  # (now, ch, on) for every change of a command
@@ -33,10 +35,10 @@ class TestHal:
 
     def read_currents_ma(self, out):
         for ch in range(self.n_channels):
-            out[ch] = self.load_ma[ch] if self._on(ch) else 0
+            out[ch] = self.read_current_ma(ch)
 
     def read_current_ma(self, ch):
-        return self.load_ma[ch] if self._on(ch) else 0
+        return (self.load_ma[ch] if self._on(ch) else 0) + self.offset_ma[ch]
 
     def set_switch(self, ch, on):
         if self.cmd[ch] != on:
@@ -66,7 +68,7 @@ class Rig:
     """A booted App on a TestHal; ``run(ms)`` steps it tick by tick on simulated time."""
 
     def __init__(self, channels=None, board=None, n=10, storage=None, cause=RESET_POWER_ON,
-                 save=True):
+                 save=True, factory=None):
         self.hal = TestHal(n, storage, cause)
         if channels or board:
             from firmware import config
@@ -77,7 +79,7 @@ class Rig:
                 cfg["channels"][i].update(c)
             if save:
                 config.save(self.hal.storage, cfg)
-        self.app = App(self.hal)
+        self.app = App(self.hal, factory)
         self.app.start()
         self.board = self.app.board
         self.cursor = 0
@@ -106,3 +108,18 @@ class Rig:
     def events(self):
         evs, self.cursor, _ = self.board.events.read(self.cursor, 1000)
         return evs
+
+
+def config_text(storage):
+    """The newest stored copy of the configuration, as bytes (for tests that look inside)."""
+    from firmware import config
+
+    best = b""
+    top = -1
+    for name in config.SLOTS:
+        data = storage.read(name)
+        if data is not None:
+            seq = config.parse_seq(data, 16)[2]
+            if seq > top:
+                best, top = data, seq
+    return best

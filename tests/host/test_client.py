@@ -20,14 +20,17 @@ from host.transports import memory, open_transport, parse
 from host.transports.errors import (
     AuthRefused,
     BadChannel,
+    BadSetting,
     BadUrl,
     BoardUnreachable,
+    KeyMissing,
     RequestTimeout,
     VersionMismatch,
 )
 from protocol.constants import ST_OFF, ST_ON
 from protocol.framing import encode_frame
 from protocol.messages import Hello, State
+from tests.firmware.testhal import config_text
 from tests.host.memboard import KEY, MemoryBoard, tedusar
 from tests.wait import wait_until_async
 
@@ -100,7 +103,7 @@ async def test_wrong_key_is_refused_and_nothing_changes() -> None:
 
 async def test_no_key_is_refused() -> None:
     async with MemoryBoard(tedusar()) as mb, client(mb.url, None) as c:
-        with pytest.raises(Exception, match="needs a key"):
+        with pytest.raises(KeyMissing, match="needs the board's key"):
             await c.switch(3, True)
         assert not mb.emu.board.channels[3].commanded
 
@@ -124,13 +127,13 @@ async def test_config_set_is_read_back_and_bad_values_refused() -> None:
         got = await c.set_channel_config("kinect", rated_ma=1200, name="kinect2")
         assert got["rated_ma"] == 1200 and mb.emu.board.channels[4].cfg["rated_ma"] == 1200
         assert await c.channel("kinect2") == 4
-        with pytest.raises(Exception, match="value out of range"):
+        with pytest.raises(BadSetting, match="rated_ma=0 is out of range"):
             await c.set_channel_config(4, rated_ma=0)
         assert mb.emu.board.channels[4].cfg["rated_ma"] == 1200
         b = await c.set_board_config(powerup_spacing_ms=300)
         assert b["powerup_spacing_ms"] == 300
         await c.save_config()
-        assert b'"powerup_spacing_ms":300' in mb.emu.storage.read("config.json")
+        assert b'"powerup_spacing_ms":300' in config_text(mb.emu.storage)
 
 
 async def test_board_that_stops_answering_times_out() -> None:

@@ -85,18 +85,26 @@ def test_flash_deploys_verifies_and_boots(repl: PtyRepl, tmp_path: Path) -> None
                    env={"DXBOARD_KEY": KEY_HEX})
     assert done.returncode == 0, done.stderr
     out = done.stdout
-    assert "verified" in out and "wrote config.json (10 channels" in out and "key set" in out
-    assert "reset the board" in out
-    # every source file arrived unchanged; the stale module is gone
+    assert "verified" in out and "wrote the config (10 channels" in out and "key set" in out
+    # the unix port cannot reset: flash says so, and does not claim it reset the board
+    assert "cannot reset itself" in out and "reset the board" not in out
+    # every source file arrived unchanged (but the two written for this board); no stale one
+    generated = {"firmware/factory.py", "firmware/build.py"}
     for pkg in ("firmware", "protocol"):
         for src in (ROOT / pkg).rglob("*.py"):
-            if "__pycache__" in src.parts:
-                continue
             rel = src.relative_to(ROOT)
+            if "__pycache__" in src.parts or rel.as_posix() in generated:
+                continue
             assert (repl.root / rel).read_bytes() == src.read_bytes(), rel
     assert not (stale / "old_module.py").exists()
     assert (repl.root / "main.py").read_text().strip().endswith("import firmware.main")
-    assert (repl.root / "config.json").exists()
+    # the flashed configuration is built into the firmware as its factory configuration
+    namespace: dict[str, object] = {}
+    exec((repl.root / "firmware" / "factory.py").read_text(), namespace)
+    factory = namespace["FACTORY"]
+    assert isinstance(factory, dict) and factory["board"]["key"] == KEY_HEX
+    assert factory["channels"][2]["name"] == "pc" and factory["channels"][2]["protected"]
+    assert "BUILD = '" in (repl.root / "firmware" / "build.py").read_text()
     # the flashed firmware boots in the interpreter with the flashed config
     line = next(x for x in mpremote_exec(repl.device, BOOT).splitlines() if x.startswith("BOOT"))
     booted = json.loads(line[5:])
@@ -106,12 +114,30 @@ def test_flash_deploys_verifies_and_boots(repl: PtyRepl, tmp_path: Path) -> None
     assert booted["on"] == [2]  # only "pc" has powerup in board.json
 
 
+def test_flash_resets_and_checks_that_the_new_firmware_runs(tmp_path: Path) -> None:
+    """A board that can reset is reset, and flash checks that it came back running the new
+    build. On the unix port the flashed firmware cannot start (no I2C, no pins): flash must
+    say that it did not come back running it, rather than that all went well."""
+    board = tmp_path / "board"
+    board.mkdir()
+    r = PtyRepl(board, resettable=True)
+    try:
+        done = dxboard("flash", "--port", r.device)
+        assert r.boots == 2  # it was reset, and booted again
+        assert done.returncode == 2, done.stdout
+        assert "does not run the new firmware" in done.stderr
+        assert "did not start" in done.stderr and "Traceback" not in done.stderr
+        assert done.stderr.count("\n") == 1
+    finally:
+        r.close()
+
+
 def test_flash_mpy_with_json_summary(repl: PtyRepl) -> None:
     done = dxboard("flash", "--port", repl.device, "--mpy", "--no-reset", "--json")
     assert done.returncode == 0, done.stderr
     summary = json.loads(done.stdout)
     assert summary["mpy"] is True and summary["reset"] is False
-    assert summary["verified"] == summary["files"] > 20
+    assert summary["verified"] == summary["files"] > 20 and len(summary["build"]) == 16
     assert (repl.root / "firmware" / "board.mpy").exists()
     assert not (repl.root / "firmware" / "board.py").exists()
     code = "from firmware import config\nprint('N', len(config.defaults(3)['channels']))"
@@ -125,7 +151,7 @@ def test_flash_refuses_a_bad_config(repl: PtyRepl, tmp_path: Path) -> None:
     done = dxboard("flash", "--port", repl.device, "--config", str(cfg), "--no-reset")
     assert done.returncode == 2
     assert "channel 0: rated_ma" in done.stderr and "Traceback" not in done.stderr
-    assert not (repl.root / "config.json").exists()
+    assert not list(repl.root.iterdir())  # refused before anything was copied
 
 
 def test_flash_missing_device_is_one_line() -> None:

@@ -158,6 +158,20 @@ class TestBadFrames(unittest.TestCase):
                 got = feed(board, frame, how)
                 self.assertEqual(codes(got), [E_NOT_A_REQUEST])
 
+    def test_request_with_req_id_0_is_refused(self) -> None:
+        """0 marks pushes: the board refuses a request that uses it (its ERROR carries 0)."""
+        board, host = pair()
+        host.counter = 0
+        signed = host.send(m.Switch(2, True, req_id=0))
+        for frame in (encode_frame(m.GetState.TYPE, 0, b""), signed):
+            got = feed(board, frame, "whole")
+            self.assertEqual(codes(got), [E_MALFORMED])
+            self.assertEqual((got[0].req_id, got[0].text), (0, "malformed payload: req_id 0 "
+                                                                 "is reserved for pushes"))
+            reply = board.error_reply(got[0])
+            self.assertIsNotNone(reply)
+        self.assertEqual(board.counter, 0)  # the signed one was refused before its counter
+
 
 class TestAuthentication(unittest.TestCase):
     def test_signed_command_accepted_once(self) -> None:
