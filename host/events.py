@@ -250,6 +250,9 @@ class LinkChange(_Plain):
 
     up: bool
     reason: str = ""
+    # with up: what the board said of this daemon's key ("accepted", "refused: why", "none"
+    # when the daemon has no key, "" when the wire cannot tell before a command)
+    key: str = ""
     kind: ClassVar[Kind] = Kind.LINK
 
 
@@ -426,7 +429,10 @@ def describe(event: Event) -> str:
         case Note():
             return event.text if event.level == "info" else f"{event.level}: {event.text}"
         case LinkChange():
-            return "board link up" if event.up else f"board link down: {event.reason}"
+            if not event.up:
+                return f"board link down: {event.reason}"
+            return "board link up" + (f" (the board {event.key} this daemon's key)"
+                                      if event.key.startswith("refused") else "")
         case RepairEnded():
             why = f" ({event.reason})" if event.reason else ""
             return f"repair ended: {event.outcome} after {event.rounds} round(s){why}"

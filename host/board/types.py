@@ -16,6 +16,7 @@ import time
 from dataclasses import dataclass
 
 from protocol.constants import (
+    BOARD_CHANNEL,
     BOARD_FLAG_NAMES,
     CAPABILITY_NAMES,
     CONFIG_STATUS_NAMES,
@@ -31,6 +32,7 @@ from protocol.constants import (
     ST_ON,
     STATE_NAMES,
 )
+from protocol.events import describe_event
 
 
 def flag_names(mask: int, names: tuple[str, ...]) -> list[str]:
@@ -202,15 +204,23 @@ class BoardEvent:
     def fields(self, channel_names: list[str]) -> dict[str, object]:
         """What the event says, by name, for the journal: the channel's name, its state
         change, its faults and the value that triggered it."""
+        if self.channel == BOARD_CHANNEL:  # board flags and millivolts (PROTOCOL.md §4.2)
+            said = describe_event(self)
+            return {"name": "board", **{k: v for k, v in said.items()
+                                        if k not in ("kind", "board")}}
         name = channel_names[self.channel] if self.channel < len(channel_names) else "board"
         return {"name": name, "from": _name(STATE_NAMES, self.old_state),
                 "to": _name(STATE_NAMES, self.new_state),
                 "faults": flag_names(self.faults, FAULT_NAMES), "value_ma": self.value_ma}
 
     def to_dict(self) -> dict[str, object]:
-        return {"host_time": self.host_time, "event": self.kind_name, "seq": self.seq,
-                "uptime_ms": self.uptime_ms, "channel": self.channel,
-                "old_state": _name(STATE_NAMES, self.old_state),
+        head = {"host_time": self.host_time, "event": self.kind_name, "seq": self.seq,
+                "uptime_ms": self.uptime_ms, "channel": self.channel}
+        if self.channel == BOARD_CHANNEL:
+            said = describe_event(self)
+            return {**head, **{k: v for k, v in said.items() if k != "kind"},
+                    "dropped": self.dropped}
+        return {**head, "old_state": _name(STATE_NAMES, self.old_state),
                 "new_state": _name(STATE_NAMES, self.new_state), "faults": self.faults,
                 "value_ma": self.value_ma, "dropped": self.dropped}
 

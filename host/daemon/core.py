@@ -366,7 +366,19 @@ class Daemon:
         if up != self.link_up:
             self.link_up = up
             self.repairs.link(self.client if up else None)
-            self.emit(LinkChange(up, reason))
+            key = self._key_check() if up else ""
+            self.emit(LinkChange(up, reason, key))
+            if key.startswith("refused"):
+                why = key.partition(":")[2].strip()
+                self.emit(Note(f"the board refused this daemon's key ({why}): every repair "
+                               "that switches power will fail; give the board's own key "
+                               "(--key-file or $DXBOARD_KEY)", "error"))
+
+    def _key_check(self) -> str:
+        """What the board said of the key as the link came up (``LinkChange.key``)."""
+        if self.opts.key is None:
+            return "none"
+        return self.client.transport.key_check if self.client is not None else ""
 
     async def _sample_task(self) -> None:
         while True:

@@ -52,6 +52,9 @@ class Transport:
     def __init__(self, url: BoardUrl, key: bytes | None = None) -> None:
         self.url = url
         self.key = key
+        # what the board said of the key at open: "accepted", "refused: <why>", or "" (not
+        # known: no key, or a wire that cannot ask before a command)
+        self.key_check = ""
         self._opened = False
         self._closed = False
 

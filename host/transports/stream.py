@@ -25,15 +25,16 @@ import random
 from host.transports.base import AUTH, CONFIG, CYCLE, EVENTS, NAMES, PUSH, SAVE, Transport
 from host.transports.errors import LinkLost, VersionMismatch
 from protocol.connection import HOST, Connection
-from protocol.constants import E_VERSION, PROTOCOL_VERSION
+from protocol.constants import E_AUTH_REQUIRED, E_BAD_TAG, E_VERSION, PROTOCOL_VERSION
 from protocol.framing import BadFrame
-from protocol.messages import AuthPing, Hello, HelloRequest, Message, Pong
+from protocol.messages import AuthPing, Error, Hello, HelloRequest, Message, Pong
 
 log = logging.getLogger(__name__)
 
 HELLO_WAIT_S = 0.3
 CLAIM_WAIT_S = 2.0
 CLAIM_REQ_ID = 0xFFFF  # the board client numbers its own requests from 1
+KEY_REFUSED = (E_BAD_TAG, E_AUTH_REQUIRED)  # the key is wrong, or the board has none
 READ_SIZE = 4096
 
 
@@ -75,7 +76,11 @@ class StreamTransport(Transport):
                 while True:
                     ev = await self._next_event()
                     if getattr(ev, "req_id", None) == CLAIM_REQ_ID:
-                        if not isinstance(ev, Pong):
+                        if isinstance(ev, Pong):
+                            self.key_check = "accepted"
+                        elif isinstance(ev, Error) and ev.code in KEY_REFUSED:
+                            self.key_check = f"refused: {ev.text or f'error {ev.code}'}"
+                        else:  # an older firmware without AUTH_PING: commands will tell
                             log.info("%s: the board refused AUTH_PING: %r", self.url.text, ev)
                         break
                     others.append(ev)

@@ -80,6 +80,8 @@ class StatusFold:
             changes["repairs"] = self._action(e, stamped)
         elif isinstance(e, LinkChange):
             changes["board_link_up"] = e.up
+            if e.up:
+                changes["board_key"] = e.key
         elif isinstance(e, RepairEnded):
             self._outcomes[e.outcome] += 1
             changes["repairs_by_outcome"] = dict(self._outcomes)

@@ -96,6 +96,7 @@ class Status:
     diagnosis_complete: bool = True
     repairs: tuple[RepairStatus, ...] = ()
     board_link_up: bool = False
+    board_key: str = ""  # what the board said of the daemon's key (``LinkChange.key``)
     updated: float = 0.0  # wall time (daemon's clock) of the newest data in this snapshot
     robot: str = ""
     # running counters for /metrics
@@ -120,6 +121,7 @@ class Status:
             "run_id": self.run_id,
             "updated": self.updated,
             "board_link_up": self.board_link_up,
+            "board_key": self.board_key,
             "channels": [c.to_json() for c in self.channels],
             "observations": dict(sorted(self.observations.items())),
             "healthy": dict(sorted(self.healthy.items())),

@@ -68,6 +68,14 @@ async def test_page_shows_stale_data_and_a_lost_link(
                 assert not await page.evaluate("document.body.classList.contains('stale')")
                 source.update(board_link_up=False)
                 assert await page.wait_for(f"{PILL} === 'board-down'")
+                source.update(board_link_up=True, board_key="refused: bad tag")
+                assert await page.wait_for(f"{PILL} === 'key-refused'")
+                banner = "document.getElementById('banner')"
+                assert "--key-file" in await page.evaluate(f"{banner}.textContent")
+                assert await page.evaluate(f"getComputedStyle({banner}).display") == "block"
+                assert not await page.evaluate("document.body.classList.contains('stale')")
+                source.update(board_key="accepted")
+                assert await page.wait_for(f"{PILL} === 'live'")
             source.update(board_link_up=True, updated=time.time() - 30)  # the daemon froze
             assert await page.wait_for(f"{PILL} === 'stale'")
             assert await page.evaluate("document.body.classList.contains('stale')")
