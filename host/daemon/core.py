@@ -352,6 +352,7 @@ class Daemon:
             self._set_link(False, item.reason)
         elif isinstance(item, Rebooted):  # LinkUp follows, with the new boot's state
             cause = item.reset_cause_name
+            self.repairs.board_rebooted()
             self.emit(BoardEventRecord("rebooted", None, {
                 "old_boot_id": f"{item.old_boot_id:08x}",
                 "new_boot_id": f"{item.new_boot_id:08x}", "how": item.how,

@@ -13,7 +13,9 @@ in 600 s; times passed in, from the executor's monotonic clock), as a person wou
   after it was verified — no longer counts: the power-up of a robot, or three successful
   repairs of the base on three separate days, never add up to a quarantine;
 - a verified attempt followed by a new one within ``stable_s`` *flapped*: the repair did not
-  hold (a dropout, a device that hangs again at once), and it counts until the window ends.
+  hold (a dropout, a device that hangs again at once), and it counts until the window ends;
+- a board reboot (``board_rebooted``: a brown-out, a watchdog reset) is no component's fault:
+  the repairs verified before it held, and the bring-up after it is free again.
 
 When a component has used its attempts, the executor *quarantines* it: ``Quarantine`` records
 when and why, the executor leaves it in a safe state (switched off or stopped where that is
@@ -89,6 +91,17 @@ class AttemptLimiter:
 
     def reset(self, component: str) -> None:
         self._attempts.pop(component, None)
+
+    def board_rebooted(self) -> None:
+        """The board rebooted (a brown-out, a watchdog reset): every device lost power through
+        no fault of its own. Verified repairs before it held as far as their components are
+        concerned, and each component's next verified attempt is a bring-up again (free);
+        attempts that never worked still count."""
+        self._up.clear()
+        for q in self._attempts.values():
+            kept = deque(a for a in q if a.verified_at is None)
+            q.clear()
+            q.extend(kept)
 
 
 @dataclass(frozen=True)

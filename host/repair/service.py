@@ -254,6 +254,11 @@ class RepairService:
             self._emit(Note("nodes left by an earlier run: " + "; ".join(
                 f"{n} {what}" for n, what in sorted(done.items()))))
 
+    def board_rebooted(self) -> None:
+        """The board rebooted: the devices lost power through no fault of their own, so their
+        bring-up after it spends no repair attempt (``AttemptLimiter.board_rebooted``)."""
+        self.executor.limiter.board_rebooted()
+
     def board_switched(self, channel: int, on: bool) -> None:
         """The board switched ``channel`` on or off by a command (not its protection): when this
         host did not send it, a person did — hold the device while it is off, so that the

@@ -88,3 +88,20 @@ def test_a_board_held_in_reset_is_down_and_its_reboot_is_seen(robot: RunningDaem
             and p.action in BOARD_POWER]
     assert sent == [], f"switched while the board was in reset: {sent}"
     assert tracebacks(d) == []
+
+
+def test_reboots_in_a_row_quarantine_nothing(robot: RunningDaemon) -> None:
+    """Issue 11, item 5: board reboots one after another (here four watchdog resets, each as
+    soon as the robot is healthy again) used to end with the base, the lidar and the leveling
+    mount quarantined: every bring-up after a reboot counted as a repair that did not hold."""
+    d = robot
+    mark = last_id(d)
+    for k in range(4):
+        before = last_id(d)
+        d.inject("board", "wdt_reset")
+        d.wait_journal(lambda: any(isinstance(p, BoardEvent) and p.event == "rebooted"
+                                   for _, p in since(d, before)), 30.0, f"reboot {k + 1}")
+        d.wait_for(healthy, HEAL_S, f"healthy after reboot {k + 1}")
+    assert d.status()["quarantined"] == {}
+    assert not any(isinstance(p, Note) and p.text.startswith("quarantined")
+                   for _, p in since(d, mark))

@@ -64,3 +64,28 @@ def test_reset_forgets_everything_but_the_bring_up() -> None:
     lim.record("a", 4.0)
     lim.verified("a", 5.0)  # not a bring-up any more: it counts until it held
     assert lim.count("a", 6.0) == 1
+
+
+def test_bring_ups_after_board_reboots_never_count() -> None:
+    """Issue 11, item 5: brown-outs 30 s apart quarantined the base, the lidar and the leveling
+    mount — each reboot's bring-up counted as a flapping repair of every device."""
+    lim = AttemptLimiter(3, 600.0, stable_s=60.0)
+    lim.record("jaguar", 0.0)
+    lim.verified("jaguar", 5.0)  # the robot's power-up
+    for k in range(6):  # the board reboots every 30 s; every device is brought up again
+        t = 30.0 * (k + 1)
+        lim.board_rebooted()
+        lim.record("jaguar", t + 1.0)
+        lim.verified("jaguar", t + 6.0)
+    assert lim.count("jaguar", 200.0) == 0 and not lim.exhausted("jaguar", 200.0)
+    lim.record("jaguar", 205.0)  # a fault of the device itself, 5 s after its bring-up
+    assert lim.count("jaguar", 205.0) == 1  # counts, but the bring-ups did not
+
+
+def test_a_failed_attempt_before_the_reboot_still_counts() -> None:
+    lim = AttemptLimiter(3, 600.0, stable_s=60.0)
+    lim.record("hokuyo", 0.0)
+    lim.verified("hokuyo", 5.0)
+    lim.record("hokuyo", 10.0)  # a repair that never worked
+    lim.board_rebooted()
+    assert lim.count("hokuyo", 20.0) == 1
