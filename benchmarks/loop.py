@@ -60,6 +60,7 @@ from host.diagnosis import Diagnoser, generate, load_system
 from host.diagnosis.diagnoser import UnknownLiteral
 from host.diagnosis.observations import Observation as DiagObservation
 from host.events import RepairEnded
+from host.experiment.robot import free_port
 from host.journal import (
     ActionRecord,
     DiagnosisRecord,
@@ -74,7 +75,6 @@ from tests.daemon.runner import (
     TEDUSAR,
     RunningDaemon,
     fast_copy,
-    free_port,
     healthy,
     key_file,
 )
