@@ -8,6 +8,7 @@ touches nothing.
 
 from __future__ import annotations
 
+import asyncio
 from pathlib import Path
 
 import pytest
@@ -199,3 +200,31 @@ jaguar_node: {command: [python, -c, "import time; time.sleep(30)"]}
         assert not (await rig.client.state()).channels[JAGUAR].physical
         assert rig.supervisor.pid("jaguar_node") is None and rig.starts("jaguar_node") == 0
         assert rig.actuators.switch_ons == []
+
+
+async def test_a_driver_starts_while_its_device_settles_and_ends_when_its_output_flows(
+        tmp_path: Path, endpoint: str) -> None:
+    # settle_s of 10 minutes: a step that waited it out would never end within the deadline
+    (tmp_path / "jaguar_node.py").write_text(ODOM_NODE)
+    robot = robot_dir(tmp_path, f"""\
+jaguar_node:
+  command: [python, {tmp_path / 'jaguar_node.py'}]
+  env: {{ENDPOINT: "{endpoint}", PYTHONPATH: "{TEDUSAR.parents[1]}"}}
+  settle_s: 600
+""")
+    async with Rig(robot, ["jaguar"], ["jaguar_node"], ["/odom"], endpoint) as rig:
+        await rig.until({"on(jaguar)": False, "running(jaguar_node)": False})
+        plan = rig.planner.plan({"jaguar", "jaguar_node"}, rig.diagnoser.observations.literals())
+        assert [str(s) for s in plan.steps] == ["power_up(jaguar)", "start_node(jaguar_node)"]
+        assert plan.after[1] == {0}  # the driver needs its device
+        async with asyncio.timeout(120):  # a deadline for a broken executor, not a measure
+            res = await rig.executor.execute(plan)
+        assert res.outcome is Outcome.DONE, res.reason
+        order = [(str(e.step), e.state) for e in reports(rig)]
+        # the driver started as soon as the base was switched on, before the power-up was
+        # verified (the base on and in band once settled), and its step succeeded on the
+        # first odometry seen, not after its settle time
+        assert order.index(("start_node(jaguar_node)", ActionState.STARTED)) < order.index(
+            ("power_up(jaguar)", ActionState.SUCCEEDED))
+        done = [e for e in reports(rig) if e.state is ActionState.SUCCEEDED]
+        assert "observed ok(/odom), running(jaguar_node)" in done[-1].detail
