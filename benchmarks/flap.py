@@ -28,7 +28,6 @@ import contextlib
 import json
 import os
 import platform
-import re
 import subprocess
 import sys
 import tempfile
@@ -37,12 +36,10 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from benchmarks.loop import Sample, ms, one_fault, pct
+from benchmarks.loop import Sample, ms, one_fault, pct, write_section
 from host.journal import ActionRecord, DiagnosisRecord, Observation
-from tests.daemon.runner import RunningDaemon, fast_copy, healthy, key_file
+from tests.daemon.runner import RunningDaemon, healthy_robot
 
-ROOT = Path(__file__).resolve().parents[1]
-RESULTS = ROOT / "benchmarks" / "RESULTS.md"
 HOG = "import time\nend = time.monotonic() + {s}\nwhile time.monotonic() < end:\n    pass\n"
 
 
@@ -51,6 +48,7 @@ class Phase:
     name: str
     seconds: float = 0.0
     flips: dict[str, int] = field(default_factory=dict)  # topic literal -> times it went false
+    others: dict[str, int] = field(default_factory=dict)  # any other literal -> times false
     diagnoses: int = 0  # diagnoses naming a component (a healthy robot: each one is false)
     repairs: int = 0  # repair actions started
     named: set[str] = field(default_factory=set)
@@ -87,6 +85,9 @@ def watch(d: RunningDaemon, name: str, seconds: float) -> Phase:
         p = e.payload
         if isinstance(p, Observation) and p.literal.startswith("ok(/") and p.value is False:
             ph.flips[p.literal] = ph.flips.get(p.literal, 0) + 1
+        elif isinstance(p, Observation) and p.value is not None and \
+                p.value == p.literal.startswith("tripped("):  # an abnormal reading
+            ph.others[p.literal] = ph.others.get(p.literal, 0) + 1
         elif isinstance(p, DiagnosisRecord) and any(p.diagnoses):
             ph.diagnoses += 1
             ph.named.update(c for bad in p.diagnoses for c in bad)
@@ -94,39 +95,35 @@ def watch(d: RunningDaemon, name: str, seconds: float) -> Phase:
             started.add(p.action_id)
     ph.repairs = len(started)
     print(f"  {name}: {ph.seconds:.0f} s, topic verdicts ~ok {sum(ph.flips.values())} "
-          f"{ph.flips or ''}, false diagnoses {ph.diagnoses}, repairs {ph.repairs}", flush=True)
+          f"{ph.flips or ''}, other abnormal literals {ph.others or 0}, false diagnoses "
+          f"{ph.diagnoses} naming {sorted(ph.named)}, repairs {ph.repairs}", flush=True)
     return ph
 
 
 def run(idle_s: float, hog_s: float, n_faults: int) -> tuple[list[Phase], list[Sample]]:
     phases: list[Phase] = []
     samples: list[Sample] = []
-    with tempfile.TemporaryDirectory() as tmpdir:
-        tmp = Path(tmpdir)
-        key = key_file(tmp)
-        d = RunningDaemon(tmp, fast_copy(tmp), extra_args=("--key-file", str(key)))
-        try:
-            d.wait_for(healthy, 120, "the robot up")
-            phases.append(watch(d, "idle machine", idle_s))
-            with hogs(hog_s + n_faults * 120):
-                phases.append(watch(d, f"CPU hog on {os.cpu_count()} cores", hog_s))
-                for i in range(n_faults):
-                    s = one_fault(d, "hang")
-                    samples.append(s)
-                    print(f"  fault {i + 1}/{n_faults} under the hog: diagnosis "
-                          f"{ms(s.to_diagnosis)}, healthy {ms(s.to_healthy)}", flush=True)
-        finally:
-            d.close()
+    with tempfile.TemporaryDirectory() as tmpdir, healthy_robot(Path(tmpdir), 120) as d:
+        phases.append(watch(d, "idle machine", idle_s))
+        with hogs(hog_s + n_faults * 120):
+            phases.append(watch(d, f"CPU hog on {os.cpu_count()} cores", hog_s))
+            for i in range(n_faults):
+                s = one_fault(d, "hang")
+                samples.append(s)
+                print(f"  fault {i + 1}/{n_faults} under the hog: diagnosis "
+                      f"{ms(s.to_diagnosis)}, healthy {ms(s.to_healthy)}", flush=True)
     return phases, samples
 
 
 def report(phases: list[Phase], samples: list[Sample], args: argparse.Namespace) -> str:
-    rows = ["| phase | minutes | topic verdicts ~ok (by topic) | false diagnoses | repairs |",
-            "|---|---|---|---|---|"]
+    rows = ["| phase | minutes | topic verdicts ~ok (by topic) | other abnormal literals | "
+            "false diagnoses (naming) | repairs |", "|---|---|---|---|---|---|"]
     for ph in phases:
         by = ", ".join(f"{k} {v}" for k, v in sorted(ph.flips.items())) or "none"
+        other = ", ".join(f"`{k}` {v}" for k, v in sorted(ph.others.items())) or "none"
         rows.append(f"| {ph.name} | {ph.seconds / 60:.1f} | {sum(ph.flips.values())} ({by}) | "
-                    f"{ph.diagnoses} | {ph.repairs} |")
+                    f"{other} | {ph.diagnoses} ({', '.join(sorted(ph.named)) or '-'}) | "
+                    f"{ph.repairs} |")
     diag = [s.to_diagnosis for s in samples if s.to_diagnosis is not None]
     heal = [s.to_healthy for s in samples if s.to_healthy is not None]
     hog = phases[-1]
@@ -158,14 +155,6 @@ only with its loop awake (`host/observers/topics.py`); the simulated-clock proof
 """
 
 
-def write_section(text: str) -> None:
-    old = RESULTS.read_text()
-    pat = re.compile(r"^## No flapping under load\n.*?(?=^## |\Z)", re.S | re.M)
-    new = pat.sub(lambda _: text + "\n", old) if pat.search(old) else \
-        old.rstrip("\n") + "\n\n" + text
-    RESULTS.write_text(new)
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="a fast check: 1 min, 1 fault")
@@ -182,7 +171,7 @@ def main() -> None:
     text = report(phases, samples, args)
     print(text)
     if args.write:
-        write_section(text)
+        write_section(text, "## No flapping under load")
     print(json.dumps({p.name: {"flips": sum(p.flips.values()), "diagnoses": p.diagnoses,
                                "repairs": p.repairs} for p in phases}))
 

@@ -36,15 +36,20 @@ def final(rig: Rig) -> list[tuple[str, ActionState]]:
     return [(str(e.step), e.state) for e in reports(rig) if e.state != ActionState.STARTED]
 
 
-async def test_jaguar_shut_down_is_repaired_for_real(tmp_path: Path, endpoint: str) -> None:
+def odom_robot(tmp_path: Path, endpoint: str, settle_s: float) -> Path:
+    """The robot with jaguar_node as a process publishing /odom at 20 Hz."""
     (tmp_path / "jaguar_node.py").write_text(ODOM_NODE)
-    robot = robot_dir(tmp_path, f"""\
+    return robot_dir(tmp_path, f"""\
 jaguar_node:
   command: [python, {tmp_path / 'jaguar_node.py'}]
   env: {{ENDPOINT: "{endpoint}", PYTHONPATH: "{TEDUSAR.parents[1]}"}}
-  settle_s: 1.0
+  settle_s: {settle_s}
   stop_timeout_s: 2
 """)
+
+
+async def test_jaguar_shut_down_is_repaired_for_real(tmp_path: Path, endpoint: str) -> None:
+    robot = odom_robot(tmp_path, endpoint, 1.0)
     async with Rig(robot, ["jaguar"], ["jaguar_node"], ["/odom"], endpoint) as rig:
         # the robot works: the base is on, its driver runs and publishes odometry
         await rig.client.switch(JAGUAR, True)
@@ -205,13 +210,7 @@ jaguar_node: {command: [python, -c, "import time; time.sleep(30)"]}
 async def test_a_driver_starts_while_its_device_settles_and_ends_when_its_output_flows(
         tmp_path: Path, endpoint: str) -> None:
     # settle_s of 10 minutes: a step that waited it out would never end within the deadline
-    (tmp_path / "jaguar_node.py").write_text(ODOM_NODE)
-    robot = robot_dir(tmp_path, f"""\
-jaguar_node:
-  command: [python, {tmp_path / 'jaguar_node.py'}]
-  env: {{ENDPOINT: "{endpoint}", PYTHONPATH: "{TEDUSAR.parents[1]}"}}
-  settle_s: 600
-""")
+    robot = odom_robot(tmp_path, endpoint, 600)
     async with Rig(robot, ["jaguar"], ["jaguar_node"], ["/odom"], endpoint) as rig:
         await rig.until({"on(jaguar)": False, "running(jaguar_node)": False})
         plan = rig.planner.plan({"jaguar", "jaguar_node"}, rig.diagnoser.observations.literals())
