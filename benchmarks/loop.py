@@ -60,6 +60,7 @@ from host.diagnosis import Diagnoser, generate, load_system
 from host.diagnosis.diagnoser import UnknownLiteral
 from host.diagnosis.observations import Observation as DiagObservation
 from host.events import RepairEnded
+from host.experiment.robot import free_port
 from host.journal import (
     ActionRecord,
     DiagnosisRecord,
@@ -73,10 +74,8 @@ from tests.daemon.runner import (
     KEY,
     TEDUSAR,
     RunningDaemon,
-    fast_copy,
-    free_port,
     healthy,
-    key_file,
+    healthy_robot,
 )
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -169,39 +168,32 @@ def one_fault(d: RunningDaemon, kind: str) -> Sample:
 
 
 def part_one(res: Results, n_faults: int, seed: int, quiet_s: float) -> None:
-    with tempfile.TemporaryDirectory() as tmpdir:
-        tmp = Path(tmpdir)
-        key = key_file(tmp)
-        d = RunningDaemon(tmp, fast_copy(tmp), extra_args=("--key-file", str(key)))
-        try:
-            d.wait_for(healthy, 120, "the robot up")
-            time.sleep(3.0)
-            proc = psutil.Process(d.proc.pid)
-            kids = proc.children(recursive=True)
-            size0, rows0 = journal_size(d.journal_path), len(d.journal())
-            c0, k0, t0 = cpu_of([proc]), cpu_of(kids), time.monotonic()
-            time.sleep(quiet_s)
-            c1, k1, t1 = cpu_of([proc]), cpu_of(kids), time.monotonic()
-            size1, rows1 = journal_size(d.journal_path), len(d.journal())
-            res.quiet_s = t1 - t0
-            res.daemon_cpu = (c1 - c0) / (t1 - t0)
-            res.children_cpu = (k1 - k0) / (t1 - t0)
-            res.daemon_rss_mb = proc.memory_info().rss / 2**20
-            res.journal_bytes_per_h = (size1 - size0) / (t1 - t0) * 3600
-            res.journal_rows_per_h = (rows1 - rows0) / (t1 - t0) * 3600
-            tele = [e for e in d.journal("telemetry") if isinstance(e.payload, Telemetry)]
-            assert tele, "no telemetry journaled"
-            kinds = [k for k in FAULTS for _ in range(n_faults // len(FAULTS))]
-            random.Random(seed).shuffle(kinds)
-            for i, kind in enumerate(kinds):
-                s = one_fault(d, kind)
-                res.samples.append(s)
-                print(f"  {i + 1}/{len(kinds)} {kind}: " + (
-                    f"detect {ms(s.detect)}, diagnose {ms(s.diagnose)}, healthy "
-                    f"{ms(s.to_healthy)}" if s.to_healthy is not None else "incomplete"),
-                    flush=True)
-        finally:
-            d.close()
+    with tempfile.TemporaryDirectory() as tmpdir, healthy_robot(Path(tmpdir), 120) as d:
+        time.sleep(3.0)
+        proc = psutil.Process(d.proc.pid)
+        kids = proc.children(recursive=True)
+        size0, rows0 = journal_size(d.journal_path), len(d.journal())
+        c0, k0, t0 = cpu_of([proc]), cpu_of(kids), time.monotonic()
+        time.sleep(quiet_s)
+        c1, k1, t1 = cpu_of([proc]), cpu_of(kids), time.monotonic()
+        size1, rows1 = journal_size(d.journal_path), len(d.journal())
+        res.quiet_s = t1 - t0
+        res.daemon_cpu = (c1 - c0) / (t1 - t0)
+        res.children_cpu = (k1 - k0) / (t1 - t0)
+        res.daemon_rss_mb = proc.memory_info().rss / 2**20
+        res.journal_bytes_per_h = (size1 - size0) / (t1 - t0) * 3600
+        res.journal_rows_per_h = (rows1 - rows0) / (t1 - t0) * 3600
+        tele = [e for e in d.journal("telemetry") if isinstance(e.payload, Telemetry)]
+        assert tele, "no telemetry journaled"
+        kinds = [k for k in FAULTS for _ in range(n_faults // len(FAULTS))]
+        random.Random(seed).shuffle(kinds)
+        for i, kind in enumerate(kinds):
+            s = one_fault(d, kind)
+            res.samples.append(s)
+            print(f"  {i + 1}/{len(kinds)} {kind}: " + (
+                f"detect {ms(s.detect)}, diagnose {ms(s.diagnose)}, healthy "
+                f"{ms(s.to_healthy)}" if s.to_healthy is not None else "incomplete"),
+                flush=True)
 
 
 # --- part 2: ten boards in one process ------------------------------------------------------
@@ -411,9 +403,10 @@ actions, notes) are kept — see '## Journal' for the on-disk sizes per hour and
 """
 
 
-def write_section(text: str) -> None:
+def write_section(text: str, heading: str = "## Daemon loop") -> None:
+    """Replace section ``heading`` of RESULTS.md with ``text`` (or append it)."""
     old = RESULTS.read_text()
-    pat = re.compile(r"^## Daemon loop\n.*?(?=^## |\Z)", re.S | re.M)
+    pat = re.compile(rf"^{re.escape(heading)}\n.*?(?=^## |\Z)", re.S | re.M)
     new = pat.sub(lambda _: text + "\n", old) if pat.search(old) else \
         old.rstrip("\n") + "\n\n" + text
     RESULTS.write_text(new)

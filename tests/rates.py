@@ -7,9 +7,10 @@ stream fails) and measures the rate on the *sender's own* timestamps (the emulat
 each device frame, ``t_ms``), over the whole run of messages.
 
 ``assert_rate`` accepts ``LOW``..``HIGH`` times the nominal rate: a sender at half or twice
-its rate fails, while one that skipped a frame now and then (the devices skip rather than burst
-when their loop falls behind) passes. Sequence numbers are checked where a sender numbers its
-messages: a gap is a lost message, whatever the machine's load.
+its rate fails, while one that skipped a frame now and then passes (a device whose loop fell
+behind sends the frames it missed late, stamped when they were due; a long stall loses some).
+Sequence numbers are checked where a sender numbers its messages: a gap is a lost message,
+whatever the machine's load.
 """
 
 from __future__ import annotations

@@ -20,6 +20,9 @@ for ``STALE_S`` (a few periods of the slowest input) stops the outputs that depe
     rviz                     subscribes only
     (any other N node)       every output at 10 Hz while all its inputs arrive: {"seq"}
 
+The node process (``emulator.robot.node``) adds its publisher's stamp to every message
+(``"stamp"``: its monotonic clock, seconds), as a ROS node fills in a header's stamp.
+
 Behaviours are plain objects driven by ``on_message(topic, values, now)`` and ``tick(now)``
 (seconds, monotonic), publishing through a callable: no I/O, so they are tested directly.
 """

@@ -15,6 +15,11 @@ faults it never re-implements::
     hung      powered, booted, ``hang`` injected           connections stay open, no data
     ready     ``Load.ready(now)``                          a frame every 1/rate_hz s
 
+A device runs on its own clock, not on the host's: when this loop was late (a busy machine),
+the frames it missed go out together as soon as it runs again, each stamped (``t_ms``) with
+the time it was due, as a real device's buffered frames would arrive (up to
+``MAX_CATCH_UP_MS``; a longer stall loses the older ones).
+
 A power cycle (a new ``on_since``, even one shorter than a poll) drops every connection and
 restarts the device's counters, as a real device's reboot does. A ``hang`` keeps drawing its
 current (the load's ``idle_ma``) and a non-permanent one is cured by power-cycling: both are
@@ -30,7 +35,6 @@ import json
 import logging
 import random
 import socket
-import time
 from typing import Any
 
 from emulator.robot import devices as D
@@ -42,6 +46,7 @@ log = logging.getLogger(__name__)
 MAX_LINE = 65536
 MAX_BACKLOG = 1 << 20  # bytes queued to a client that does not read: it is dropped
 POLL_S = 0.005
+MAX_CATCH_UP_MS = 2000  # frames due longer ago than this, when the loop stalled, are lost
 OFF, BOOTING, HUNG, READY = "off", "booting", "hung", "ready"
 
 
@@ -68,7 +73,7 @@ class DeviceServer:
         self.clients: set[asyncio.StreamWriter] = set()
         self.state = OFF
         self.on_since = -1
-        self.next_due = 0.0
+        self.next_due = 0.0  # the next frame's time on the emulator's clock (ms)
 
     @property
     def name(self) -> str:
@@ -123,7 +128,7 @@ class DeviceServer:
             return None
         return held
 
-    async def update(self, wall: float) -> None:
+    async def update(self) -> None:
         """Follow the electronics; send a frame if one is due."""
         state, on_since = device_state(self.emu, self.device.spec.channel)
         now = self.emu.now
@@ -144,13 +149,20 @@ class DeviceServer:
         if (state == READY) != (self.state == READY):
             log.info("%s: %s", self.name, "working" if state == READY else state)
             self.device.working(state == READY, now)
-            self.next_due = wall
+            self.next_due = float(now)
         self.state, self.on_since = state, on_since
-        if state == READY and wall >= self.next_due:
-            self.next_due += 1.0 / self.device.spec.rate_hz
-            if self.next_due < wall:  # fell behind (a stalled loop): no burst to catch up
-                self.next_due = wall + 1.0 / self.device.spec.rate_hz
-            self._send(self.device.frame(now))
+        if state != READY:
+            return
+        # a device keeps its own clock, whatever the host's load: frames come due on the
+        # emulator's clock, and those the loop was late for go out together, each stamped with
+        # the time it was due
+        period = 1000.0 / self.device.spec.rate_hz
+        if now - self.next_due > MAX_CATCH_UP_MS:  # stalled for long: those frames are lost
+            self.next_due = now - MAX_CATCH_UP_MS
+        while self.next_due <= now:
+            t_ms = int(self.next_due)
+            self.next_due += period
+            self._send(self.device.frame(t_ms))
 
     def _send(self, frame: dict[str, Any]) -> None:
         line = json.dumps(frame, separators=(",", ":")).encode() + b"\n"
@@ -215,20 +227,16 @@ class Robot:
         for s in self.servers:
             await s.bind()
         self.world.t_ms = self.emu.now
-        wall = time.monotonic()
         for s in self.servers:
-            await s.update(wall)
+            await s.update()
         self._task = asyncio.get_running_loop().create_task(self._run())
         return {s.name: s.url for s in self.servers}
 
     async def _run(self) -> None:
         while True:
-            wall = time.monotonic()
             for s in self.servers:
-                await s.update(wall)
-            due = [s.next_due for s in self.servers if s.state == READY]
-            wait = min([POLL_S, *(d - time.monotonic() for d in due)])
-            await asyncio.sleep(max(0.0, wait))
+                await s.update()
+            await asyncio.sleep(POLL_S)  # frames come due on the emulator's clock
 
     async def stop(self) -> None:
         if self._task is not None:

@@ -6,6 +6,12 @@ objects (and integer indexes through lists). Anything else (not UTF-8, not JSON,
 is still a message — it counts for a topic's frequency — but carries no values: ``value()``
 returns None. Drivers publish with ``encode`` (``host.observers.publisher``) and observers read
 with ``Message.value()``; a ROS bridge would convert messages to this form.
+
+The publisher's own time of a message (its *stamp*, ``Message.stamp``) is read, in this order,
+from ``stamp`` (seconds), ``t_ms`` (milliseconds: the virtual robot's device frames) or a ROS
+``header.stamp`` (``{"sec", "nanosec"}``). A frequency observer judges a topic's rate on these
+stamps where a message has one, so messages bunched on their way (a stalled consumer, a busy
+machine) still show the rate they were sent at.
 """
 
 from __future__ import annotations
@@ -59,6 +65,20 @@ def pick_number(obj: Mapping[str, Any] | None, key: str) -> float | None:
     return f if f == f and abs(f) != float("inf") else None
 
 
+def stamp_of(obj: Mapping[str, Any] | None) -> float | None:
+    """The publisher's stamp in ``obj`` in seconds (None when it carries none)."""
+    s = pick_number(obj, "stamp")
+    if s is not None:
+        return s
+    ms = pick_number(obj, "t_ms")
+    if ms is not None:
+        return ms / 1000.0
+    sec = pick_number(obj, "header.stamp.sec")
+    if sec is None:
+        return None
+    return sec + (pick_number(obj, "header.stamp.nanosec") or 0.0) * 1e-9
+
+
 @dataclass(frozen=True)
 class Message:
     """One message of ``topic`` received at ``time`` (host monotonic seconds)."""
@@ -74,3 +94,8 @@ class Message:
 
     def number(self, key: str) -> float | None:
         return pick_number(self.values, key)
+
+    @property
+    def stamp(self) -> float | None:
+        """The publisher's time of this message, seconds on its own clock (``stamp_of``)."""
+        return stamp_of(self.values)

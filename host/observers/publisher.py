@@ -8,7 +8,8 @@ driver is often a plain loop. Also a small command for scripts and tests::
     python -m host.observers.publisher --connect tcp/127.0.0.1:7447 --rate 20 /odom \\
         --value 'yaw_rate=0.1+0.5*t'        # t: seconds since start; repeat --value for more
 
-runs until killed, publishing at ``--rate`` Hz (``--count N`` stops after N messages).
+runs until killed, publishing at ``--rate`` Hz (``--count N`` stops after N messages); each
+message carries ``seq`` and its ``stamp`` (the publisher's monotonic clock, seconds).
 """
 
 from __future__ import annotations
@@ -77,8 +78,8 @@ def main(argv: Sequence[str] | None = None) -> None:
         n = 0
         while not args.count or n < args.count:
             t = time.monotonic() - start
-            pub.put(args.topic, {"seq": n, **{k: float(eval(c, {**env, "t": t}))
-                                              for k, c in code}})
+            values = {k: float(eval(c, {**env, "t": t})) for k, c in code}
+            pub.put(args.topic, {"seq": n, "stamp": round(start + t, 6), **values})
             n += 1
             time.sleep(max(0.0, start + n / args.rate - time.monotonic()))
 

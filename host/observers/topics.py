@@ -5,7 +5,28 @@
 ``tolerance`` sigma, Hz). ``f`` is estimated from the messages inside the window as
 (n - 1) / (t_last - t_first), which is unbiased before the window has filled. Silence is
 judged on its own: once no message came for ``silence`` periods (``silence / mu`` seconds),
-``¬ok(t)`` is emitted at that deadline.
+``¬ok(t)`` is emitted.
+
+Judged by the messages' own timing, so a busy machine is not a rate drop (no flapping):
+
+- where a message carries its publisher's stamp (``Message.stamp``: ``stamp``, ``t_ms`` or a
+  ROS ``header.stamp``) the window and ``f`` are on those stamps: a burst of messages held up
+  on its way (a stalled consumer, a descheduled transport thread) arrives bunched but still
+  shows the rate it was sent at; a stamp going backwards (the publisher restarted) starts the
+  window afresh;
+- without stamps ``f`` is on arrival times, and a message that ends a gap (more than 1.5
+  periods) may be the head of such a burst: its verdict waits for a tick at its own arrival
+  time, which the hub runs after the messages already queued, so the whole burst is counted;
+- a silence is a gap of ``silence / mu`` plus the delay on the way tolerated (``allowance``):
+  twice the worst delay seen in the last minute — on stamps, how much later than the fastest
+  message a message arrived; without, how much a gap exceeded one period — at least
+  ``JITTER_FLOOR_S`` and at most ``ω``. A quiet machine keeps detection fast; on a busy one
+  (a descheduled driver, the daemon's loop held up) the tolerance grows with what is seen;
+- the gap is *noticed* at a tick at that limit and *confirmed* at a tick ``JITTER_S`` later
+  that comes on time (at most ``JITTER_S`` late); a late tick means the loop itself was
+  stalled (messages may be queued behind it), so the confirmation starts again. However
+  stalled the loop, a gap of ``silence / mu + ω`` is judged silent at once: a silent or slow
+  publisher is found within the window.
 
 ``ResponseObserver`` is the multiple observer MObs: after a message on ``input``, a message on
 ``output`` must follow within ``within`` seconds; it emits ``ok(output)`` when one does and
@@ -13,8 +34,9 @@ judged on its own: once no message came for ``silence`` periods (``silence / mu`
 
 Detection latency (from the fault to the literal, plus the hub's scheduling delay):
 
-- topic silent: ``silence / mu`` after the last message (5 periods by default: 50 ms at 100 Hz,
-  0.5 s at 10 Hz; the original engine needed 2 s);
+- topic silent: ``silence / mu + allowance + JITTER_S`` after the last message (5 periods by
+  default; on a quiet machine 170 ms at 100 Hz, 0.62 s at 10 Hz; at most ``silence / mu + ω``;
+  the original engine needed 2 s);
 - rate wrong but not zero: one message interval once the window holds only the new regime,
   at most ``ω`` plus an interval;
 - response missing: exactly ``within`` after the unanswered input; a response: at once.
@@ -29,12 +51,41 @@ from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
 from host.observers.payload import Message
 
 DEFAULT_SILENCE = 5.0  # periods without a message before a topic counts as silent
+JITTER_S = 0.02  # a silence is confirmed this long after it was noticed, by an on-time tick
+JITTER_FLOOR_S = 0.1  # the least delay tolerated on the way from a publisher to us
+JITTER_GAIN = 2.0  # the delay tolerated: this times the worst seen lately
+JITTER_MEMORY_S = 60.0  # how long a delay seen is remembered (a busy spell)
+GAP = 1.5  # periods: a message after a longer gap may head a delayed burst
 
 
 class TopicObserver(Observer[Message]):
     """An observer fed with the messages of ``topics``."""
 
     topics: tuple[str, ...] = ()
+
+
+class _SlidingExtreme:
+    """The least (or greatest) value pushed within the last ``memory`` seconds."""
+
+    def __init__(self, memory: float, greatest: bool) -> None:
+        self.memory = memory
+        self.sign = -1.0 if greatest else 1.0
+        self._q: deque[tuple[float, float]] = deque()  # (time, sign * value), increasing
+
+    def push(self, t: float, value: float) -> None:
+        v = self.sign * value
+        q = self._q
+        while q and q[-1][1] >= v:
+            q.pop()
+        q.append((t, v))
+        while q[0][0] < t - self.memory:
+            q.popleft()
+
+    def get(self) -> float | None:
+        return None if not self._q else self.sign * self._q[0][1]
+
+    def clear(self) -> None:
+        self._q.clear()
 
 
 class FrequencyObserver(TopicObserver):
@@ -55,20 +106,62 @@ class FrequencyObserver(TopicObserver):
         self.tolerance = tolerance
         self.window = window
         self.max_gap = silence / rate
-        self._times: deque[float] = deque()
+        self._times: deque[float] = deque()  # stamps, or arrival times without stamps
+        self._stamped: bool | None = None  # which of the two ``_times`` holds
+        self._arrived: float | None = None  # the last message's arrival
         self._start: float | None = None
+        self._judge_at: float | None = None  # a verdict waiting for the rest of a burst
+        self._noticed: float | None = None  # an on-time tick saw the silence gap here
+        self._fastest = _SlidingExtreme(JITTER_MEMORY_S, greatest=False)  # arrival - stamp
+        self._delays = _SlidingExtreme(JITTER_MEMORY_S, greatest=True)  # delay beyond that
         self.frequency: float | None = None  # the last estimate, for journals and tests
 
     def atoms(self) -> list[str]:
         return [self.atom]
 
+    @property
+    def allowance(self) -> float:
+        """The delay on the way tolerated before a gap counts as silence (see the module
+        docstring): ``JITTER_GAIN`` times the worst seen lately, at least ``JITTER_FLOOR_S``,
+        at most the window."""
+        worst = self._delays.get() or 0.0
+        return min(self.window, max(JITTER_FLOOR_S, JITTER_GAIN * worst))
+
     def _feed(self, item: Message, now: float) -> None:
         if self._start is None:
             self._start = now
+        gap = None if self._arrived is None else now - self._arrived
+        self._arrived = now
+        self._noticed = None
+        stamp = item.stamp
+        stamped = stamp is not None
+        t = stamp if stamp is not None else now
         times = self._times
-        times.append(now)
-        while times[0] + self.window < now:
+        if stamped != self._stamped or (times and t < times[-1]):
+            times.clear()  # a new kind of timeline, or the publisher restarted
+            self._fastest.clear()
+            self._stamped = stamped
+        times.append(t)
+        while times[0] + self.window < t:
             times.popleft()
+        self._learn_delay(now, stamp, gap)
+        if not stamped and gap is not None and gap * self.rate > GAP:
+            self._judge_at = now  # maybe the head of a delayed burst: judge after it
+        elif self._judge_at is None:
+            self._judge(now)
+
+    def _learn_delay(self, now: float, stamp: float | None, gap: float | None) -> None:
+        """How late this message came: beyond the fastest one lately (stamped), or beyond
+        one period after the previous one (not stamped)."""
+        if stamp is not None:
+            self._fastest.push(now, now - stamp)
+            fastest = self._fastest.get()
+            self._delays.push(now, now - stamp - (fastest if fastest is not None else 0.0))
+        elif gap is not None:
+            self._delays.push(now, max(0.0, gap - 1.0 / self.rate))
+
+    def _judge(self, now: float) -> None:
+        times = self._times
         if len(times) < 2:
             return  # one message says nothing about a rate; silence is judged by _check
         span = times[-1] - times[0]
@@ -76,23 +169,40 @@ class FrequencyObserver(TopicObserver):
         self._say(self.atom, abs(self.frequency - self.rate) < self.tolerance, now)
 
     def _silent_since(self) -> float | None:
-        if self._times:
-            return self._times[-1]
-        return self._start
+        return self._arrived if self._arrived is not None else self._start
 
     def _check(self, now: float) -> None:
         if self._start is None:
             self._start = now  # the first tick starts the clock for a topic never heard
+        if self._judge_at is not None and now >= self._judge_at:
+            self._judge_at = None
+            self._judge(now)
         since = self._silent_since()
-        if since is not None and now >= since + self.max_gap:
-            self.frequency = 0.0
-            self._say(self.atom, False, now)
+        if since is None or self.asserted.get(self.atom) is False \
+                or now < since + self.max_gap + self.allowance:
+            return
+        if now >= since + self.max_gap + self.window:
+            self._silent(now)  # however stalled the loop: silent for a whole window more
+        elif self._noticed is None:
+            self._noticed = now  # the gap is long enough: confirm it a little later
+        elif now >= self._noticed + JITTER_S:
+            if now <= self._noticed + 2 * JITTER_S:
+                self._silent(now)  # the loop was awake all through: nothing is queued
+            else:
+                self._noticed = now  # the loop stalled meanwhile: confirm again
+
+    def _silent(self, now: float) -> None:
+        self._noticed = None
+        self.frequency = 0.0
+        self._say(self.atom, False, now)
 
     def _deadline(self) -> float | None:
+        times = [] if self._judge_at is None else [self._judge_at]
         since = self._silent_since()
-        if since is None or self.asserted.get(self.atom) is False:
-            return None  # already judged silent (or not started): only a message changes it
-        return since + self.max_gap
+        if since is not None and self.asserted.get(self.atom) is not False:
+            times.append(since + self.max_gap + self.allowance if self._noticed is None
+                         else self._noticed + JITTER_S)
+        return min(times) if times else None
 
 
 class ResponseObserver(TopicObserver):

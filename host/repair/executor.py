@@ -3,17 +3,25 @@
 ``Executor.execute(plan)`` runs the plan's steps as its partial order allows: every step whose
 predecessors are done starts at once, so independent steps run in parallel (the actuators
 still space switch-ons on the board); ``max_parallel=1`` runs them one at a time, in the
-plan's order (``dxboard experiment`` compares the two). Each step:
+plan's order (``dxboard experiment`` compares the two). A ``start_node`` does not wait for
+the verification of the steps that bring up what it needs (``ENABLING``: a device's power-up
+or power cycle, the start of a node publishing its inputs): it starts once they have acted
+(a power cycle's off time over), like a driver that retries while its device boots, and its
+own effect is due once theirs is, plus its settle time; it succeeds only when they are
+verified too. So the critical path is the devices' boot and the nodes' first outputs, not the
+sum of every step's settle time. Each step:
 
 1. is checked (a protected component is never switched off; an action without actuator is
    refused) and reported ``started``;
 2. runs through its actuator within ``step_timeout`` seconds (longer for a ``stop_node``
    whose process may take ``stop_timeout_s`` to stop) — else ``timeout``;
-3. waits for its intended effect (``host.repair.effects``): fresh observations, made at least
-   the component's settle time after the actuator returned, showing the expected literals,
-   within settle + ``verify_s`` seconds (``Beliefs.wait_for``) — else ``failed`` with what was
-   seen instead, and at once when the board trips the channel the step switched on; then
-   ``succeeded``.
+3. waits for its intended effect (``host.repair.effects``), ending the moment it is seen:
+   output (``ok(t)`` of the topics a started node publishes) in any observation made after
+   the step acted; a state alone (``running(n)``, ``on(d)``, ``in_band(d)``) in one made once
+   the step has settled (a process that dies at once, a device that trips while it boots do
+   not pass). The settle time is not waited out otherwise: it only sets the deadline, settle
+   + ``verify_s`` (``Beliefs.wait_for``) — after it ``failed`` with what was seen instead, and
+   at once when the board trips the channel the step switched on; then ``succeeded``.
 
 On the first failed step nothing new starts; steps already running finish, and ``execute``
 returns ``ExecutionResult(outcome=FAILED, failed=step, reason=...)`` so the caller
@@ -41,7 +49,7 @@ import asyncio
 import itertools
 import logging
 import time
-from collections.abc import Callable, Collection, Iterable, Mapping
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 
@@ -63,6 +71,10 @@ log = logging.getLogger(__name__)
 DEFAULT_STEP_TIMEOUT_S = 10.0
 DEFAULT_VERIFY_S = 5.0
 QUARANTINE_PLAN = "quarantine"
+#: steps after which a node may start before their effects are verified: what they bring up
+#: comes on by itself (a device boots, a driver's first output flows); the node retries
+ENABLING = frozenset({"power_up", "power_cycle", "start_node"})
+TRIP_MARGIN_S = 0.05  # a wait that ended this much before its deadline was ended by a trip
 
 
 class Outcome(StrEnum):
@@ -91,6 +103,29 @@ class StepReport:
 
 
 Event = StepReport | Quarantined
+
+
+class _Progress:
+    """One execution's shared state: when each started step's effect is due, and whether
+    it was verified (a future per step), for the steps that started before it was."""
+
+    def __init__(self, plan: Plan) -> None:
+        self.plan = plan
+        self.due: dict[int, float] = {}  # step id -> its effect is due by (it has acted)
+        self.verified: dict[int, asyncio.Future[bool]] = {}
+        self.changed = asyncio.Event()
+        loop = asyncio.get_running_loop()
+        for s in plan.steps:
+            self.verified[s.id] = loop.create_future()
+
+    def acted(self, step: int, due: float) -> None:
+        self.due[step] = due
+        self.changed.set()
+
+    def settled(self, step: int, ok: bool) -> None:
+        f = self.verified[step]
+        if not f.done():
+            f.set_result(ok)
 
 
 Reporter = Callable[[Event], None]
@@ -213,20 +248,27 @@ class Executor:
         started: set[int] = set()
         failure: tuple[Step, str] | None = None
         tasks: dict[asyncio.Task[str | None], Step] = {}
+        prog = _Progress(plan)
         try:
             while True:
                 if failure is None:
-                    for s in plan.ready({d.id for d in done}, started):
+                    for s in self._ready(plan, prog, {d.id for d in done}, started):
                         if self.max_parallel is not None and len(tasks) >= self.max_parallel:
                             break
                         started.add(s.id)
+                        waits = [p for p in plan.after[s.id] if p not in {d.id for d in done}]
                         task = asyncio.get_running_loop().create_task(
-                            self._step(s, plan_id), name=f"step:{s}")
+                            self._step(s, plan_id, prog, waits), name=f"step:{s}")
                         tasks[task] = s
                 if not tasks:
                     break
-                finished, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
-                for t in finished:
+                prog.changed.clear()  # no await since the ready steps were taken
+                waiter = asyncio.get_running_loop().create_task(prog.changed.wait())
+                try:
+                    await asyncio.wait([*tasks, waiter], return_when=asyncio.FIRST_COMPLETED)
+                finally:
+                    waiter.cancel()
+                for t in [t for t in tasks if t.done()]:
                     s = tasks.pop(t)
                     why = t.result()
                     if why is None:
@@ -254,6 +296,20 @@ class Executor:
                         f"attempts in {self.limiter.window_s:g} s"))
         return ExecutionResult(Outcome.FAILED, plan_id, tuple(done), step, why, tuple(q))
 
+    @staticmethod
+    def _ready(plan: Plan, prog: _Progress, done: set[int], started: set[int]) -> list[Step]:
+        """Steps that may start: every predecessor done, except that a node may start once
+        the steps that bring up what it needs have *acted* (their effects still pending)."""
+        out = []
+        for s in plan.steps:
+            if s.id in started or s.id in done:
+                continue
+            early = s.action == "start_node"
+            if all(p in done or (early and plan.steps[p].action in ENABLING and p in prog.due)
+                   for p in plan.after[s.id]):
+                out.append(s)
+        return out
+
     def _timeout(self, step: Step) -> float:
         if step.action == "stop_node" and self.actuators.supervisor is not None:
             cfg = self.actuators.supervisor.configs.get(step.args[0])
@@ -269,8 +325,20 @@ class Executor:
             settle += self.actuators.off_s
         return settle
 
-    async def _step(self, step: Step, plan_id: str) -> str | None:
+    async def _step(self, step: Step, plan_id: str, prog: _Progress | None = None,
+                    waits: Sequence[int] = ()) -> str | None:
         """Run one step; None when it worked, else why not (already reported)."""
+        ok = False
+        try:
+            why = await self._act_and_verify(step, plan_id, prog, waits)
+            ok = why is None
+            return why
+        finally:  # its dependents learn the outcome, however it ended (even cancelled)
+            if prog is not None:
+                prog.settled(step.id, ok)
+
+    async def _act_and_verify(self, step: Step, plan_id: str, prog: _Progress | None,
+                              waits: Sequence[int]) -> str | None:
         action_id = f"{plan_id}/{step.id}"
         t0 = self.clock()
         self._emit(StepReport(plan_id, action_id, step, ActionState.STARTED, t0))
@@ -296,17 +364,35 @@ class Executor:
             finish(ActionState.FAILED, str(exc))
             return str(exc)
         end = self.clock()
+        settle = self.settle_of(step)
+        acted = end
+        if step.action == "power_cycle":  # the channel is back on only after the off time
+            acted += self.actuators.off_s
+            await asyncio.sleep(max(0.0, acted - self.clock()))
+        # the effect is due once this step and what it waits for have settled
+        due = max([end, *(prog.due[p] for p in waits if prog is not None)]) + settle
+        if prog is not None:
+            prog.acted(step.id, due)
+            for p in waits:
+                if not await prog.verified[p]:
+                    why = f"not verified: {prog.plan.steps[p]} failed"
+                    finish(ActionState.FAILED, f"{detail}; {why}")
+                    return why
         expected = expected_effects(step, self.model, self.observable)
         if expected:
-            settle = self.settle_of(step)
+            # output (a topic flowing) ends the wait the moment it is seen; a state alone (a
+            # process running, a channel on) must still hold once the step has settled
+            outputs = any(a.startswith("ok(") for a in expected)
+            fresh = acted if outputs else due
+            deadline = due + self.verify_s
             abort = contradictions(step, self.observable)
-            if not await self.beliefs.wait_for(expected, end + settle, settle + self.verify_s,
+            if not await self.beliefs.wait_for(expected, fresh, deadline - self.clock(),
                                                abort=abort, abort_after=end):
-                seen = self.beliefs.missing(expected, end + settle)
-                waited = self.clock() - end
+                seen = self.beliefs.missing(expected, fresh)
                 why = "effect not observed within {:g} s: {}".format(
-                    settle + self.verify_s, "; ".join(f"{a} {v}" for a, v in seen.items()))
-                if waited < settle + self.verify_s:
+                    deadline - end, "; ".join(f"{a} {v}" for a, v in seen.items()))
+                waited = self.clock() - end
+                if waited < deadline - end - TRIP_MARGIN_S:
                     why = "the board tripped it {:.1f} s after the step: {}".format(
                         waited, "; ".join(f"{a} {v}" for a, v in seen.items()))
                 finish(ActionState.FAILED, f"{detail}; {why}")

@@ -8,6 +8,7 @@ touches nothing.
 
 from __future__ import annotations
 
+import asyncio
 from pathlib import Path
 
 import pytest
@@ -35,15 +36,20 @@ def final(rig: Rig) -> list[tuple[str, ActionState]]:
     return [(str(e.step), e.state) for e in reports(rig) if e.state != ActionState.STARTED]
 
 
-async def test_jaguar_shut_down_is_repaired_for_real(tmp_path: Path, endpoint: str) -> None:
+def odom_robot(tmp_path: Path, endpoint: str, settle_s: float) -> Path:
+    """The robot with jaguar_node as a process publishing /odom at 20 Hz."""
     (tmp_path / "jaguar_node.py").write_text(ODOM_NODE)
-    robot = robot_dir(tmp_path, f"""\
+    return robot_dir(tmp_path, f"""\
 jaguar_node:
   command: [python, {tmp_path / 'jaguar_node.py'}]
   env: {{ENDPOINT: "{endpoint}", PYTHONPATH: "{TEDUSAR.parents[1]}"}}
-  settle_s: 1.0
+  settle_s: {settle_s}
   stop_timeout_s: 2
 """)
+
+
+async def test_jaguar_shut_down_is_repaired_for_real(tmp_path: Path, endpoint: str) -> None:
+    robot = odom_robot(tmp_path, endpoint, 1.0)
     async with Rig(robot, ["jaguar"], ["jaguar_node"], ["/odom"], endpoint) as rig:
         # the robot works: the base is on, its driver runs and publishes odometry
         await rig.client.switch(JAGUAR, True)
@@ -199,3 +205,25 @@ jaguar_node: {command: [python, -c, "import time; time.sleep(30)"]}
         assert not (await rig.client.state()).channels[JAGUAR].physical
         assert rig.supervisor.pid("jaguar_node") is None and rig.starts("jaguar_node") == 0
         assert rig.actuators.switch_ons == []
+
+
+async def test_a_driver_starts_while_its_device_settles_and_ends_when_its_output_flows(
+        tmp_path: Path, endpoint: str) -> None:
+    # settle_s of 10 minutes: a step that waited it out would never end within the deadline
+    robot = odom_robot(tmp_path, endpoint, 600)
+    async with Rig(robot, ["jaguar"], ["jaguar_node"], ["/odom"], endpoint) as rig:
+        await rig.until({"on(jaguar)": False, "running(jaguar_node)": False})
+        plan = rig.planner.plan({"jaguar", "jaguar_node"}, rig.diagnoser.observations.literals())
+        assert [str(s) for s in plan.steps] == ["power_up(jaguar)", "start_node(jaguar_node)"]
+        assert plan.after[1] == {0}  # the driver needs its device
+        async with asyncio.timeout(120):  # a deadline for a broken executor, not a measure
+            res = await rig.executor.execute(plan)
+        assert res.outcome is Outcome.DONE, res.reason
+        order = [(str(e.step), e.state) for e in reports(rig)]
+        # the driver started as soon as the base was switched on, before the power-up was
+        # verified (the base on and in band once settled), and its step succeeded on the
+        # first odometry seen, not after its settle time
+        assert order.index(("start_node(jaguar_node)", ActionState.STARTED)) < order.index(
+            ("power_up(jaguar)", ActionState.SUCCEEDED))
+        done = [e for e in reports(rig) if e.state is ActionState.SUCCEEDED]
+        assert "observed ok(/odom), running(jaguar_node)" in done[-1].detail
