@@ -99,8 +99,8 @@ def test_reboots_in_a_row_quarantine_nothing(robot: RunningDaemon) -> None:
     for k in range(4):
         before = last_id(d)
         d.inject("board", "wdt_reset")
-        d.wait_journal(lambda: any(isinstance(p, BoardEvent) and p.event == "rebooted"
-                                   for _, p in since(d, before)), 30.0, f"reboot {k + 1}")
+        d.wait_journal(lambda b=before: any(isinstance(p, BoardEvent) and p.event == "rebooted"
+                                            for _, p in since(d, b)), 30.0, f"reboot {k + 1}")
         d.wait_for(healthy, HEAL_S, f"healthy after reboot {k + 1}")
     assert d.status()["quarantined"] == {}
     assert not any(isinstance(p, Note) and p.text.startswith("quarantined")
