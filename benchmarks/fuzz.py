@@ -58,6 +58,7 @@ from protocol.messages import AuthPing, Event, Hello, HelloRequest, Ping, Pong  
 FRONTS = ("tcp", "serial", "modbus", "can", "tug")
 BATCH = 250
 PROBE_S = 10.0
+CAN_PROBES = 3  # probes sent before a CAN front end counts as hung (the bus loses datagrams)
 SETTLE_S = 2.0
 KEY_HEX = os.urandom(32).hex()  # the board's: only the observer uses it, never the fuzzer
 
@@ -304,18 +305,22 @@ class CanFront:
                                             is_extended_id=False))
 
     def probe(self) -> bool:
-        while self.bus.recv(0) is not None:
-            pass
-        for can_id, data in ((0x180, struct.pack("<BBBBI", 1, 8, 0, 0, 1)),
-                             (0x181, bytes(8)), (0x182, bytes(8))):
-            self.bus.send(pycan.Message(arbitration_id=can_id, data=data,
-                                        is_extended_id=False))
-        end = time.monotonic() + PROBE_S
-        while time.monotonic() < end:
-            msg = self.bus.recv(0.2)
-            if msg is not None and msg.arbitration_id == 0x188 and bytes(msg.data[:2]) == \
-                    b"\x01\x08":
-                return struct.unpack_from("<H", msg.data, 2)[0] == 201
+        """The bus is lossy (UDP multicast drops datagrams when a reader's buffer is full, as
+        it is right after a batch on a busy machine), so the probe is sent up to
+        ``CAN_PROBES`` times: a hang is a board that answers none of them."""
+        for _ in range(CAN_PROBES):
+            while self.bus.recv(0) is not None:
+                pass
+            for can_id, data in ((0x180, struct.pack("<BBBBI", 1, 8, 0, 0, 1)),
+                                 (0x181, bytes(8)), (0x182, bytes(8))):
+                self.bus.send(pycan.Message(arbitration_id=can_id, data=data,
+                                            is_extended_id=False))
+            end = time.monotonic() + PROBE_S
+            while time.monotonic() < end:
+                msg = self.bus.recv(0.2)
+                if msg is not None and msg.arbitration_id == 0x188 and \
+                        bytes(msg.data[:2]) == b"\x01\x08":
+                    return struct.unpack_from("<H", msg.data, 2)[0] == 201
         return False
 
     def close(self) -> None:
