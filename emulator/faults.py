@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from emulator.errors import InputError
+
 # name -> (scope, {param: (type, default)}); a default of None means required
 FAULTS: dict[str, tuple[str, dict[str, tuple[type, Any]]]] = {
     # load faults (per channel)
@@ -40,7 +42,7 @@ FAULTS: dict[str, tuple[str, dict[str, tuple[type, Any]]]] = {
 LINK_FAULTS = ("link_disconnect", "link_freeze", "link_delay", "link_corrupt")
 
 
-class FaultError(ValueError):
+class FaultError(InputError):
     """A fault name, parameter or value that the emulator does not accept."""
 
 

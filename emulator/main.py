@@ -32,6 +32,7 @@ from typing import Any, TextIO
 from emulator import model as emodel
 from emulator import scenario as escenario
 from emulator.control import Background
+from emulator.errors import InputError
 from emulator.frontends import FrontEnds
 from emulator.sim import Emulator, make_config
 from firmware.hal.storage import FileStorage
@@ -42,7 +43,7 @@ STOP_TIMEOUT_S = 5.0
 URL_ORDER = ("modbus", "serial", "can", "tug")
 
 
-class StartError(Exception):
+class StartError(InputError):
     """The emulator cannot start; ``hint`` says what to do about it."""
 
     def __init__(self, message: str, hint: str = "") -> None:
@@ -109,7 +110,7 @@ def load_board_config(system: Path, n: int, key: bytes | None) -> dict[str, Any]
             board["key"] = key.hex()
     try:
         make_config(board_config, n)
-    except emodel.ModelError as exc:
+    except emodel.EmulatorModelError as exc:
         raise StartError(f"{path}: {exc}", "fix the file") from None
     return board_config
 
@@ -121,7 +122,7 @@ def _load(opts: Options) -> tuple[emodel.EmulatorModel, dict[str, Any], Any, Any
                          "give a robot directory, e.g. models/tedusar")
     try:
         model = emodel.load(system)
-    except emodel.ModelError as exc:
+    except emodel.EmulatorModelError as exc:
         raise StartError(str(exc), "fix the file") from None
     if opts.seed is not None:
         model = dataclasses.replace(model, board=dataclasses.replace(model.board, seed=opts.seed))
@@ -132,7 +133,7 @@ def _load(opts: Options) -> tuple[emodel.EmulatorModel, dict[str, Any], Any, Any
 
         try:
             devices = load_devices(system, model)
-        except emodel.ModelError as exc:
+        except emodel.EmulatorModelError as exc:
             raise StartError(str(exc), "fix the file") from None
     scen = None
     if opts.scenario is not None:

@@ -6,7 +6,7 @@ number, each with ``name``, ``nominal_ma`` (steady draw when working), ``noise_m
 deviation of the measured noise), ``inrush_peak_ma`` and ``inrush_ms`` (a linear decay from the
 peak to nominal after switch-on), ``boot_ms`` (until the device is ready) and ``idle_ma`` (what a
 hung device keeps drawing; default nominal). Missing fields take the defaults below; a wrong
-field is a ``ModelError`` naming the file, the channel and the field.
+field is an ``EmulatorModelError`` naming the file, the channel and the field.
 """
 
 from __future__ import annotations
@@ -17,10 +17,12 @@ from typing import Any
 
 import yaml
 
+from emulator.errors import InputError
+
 FILE = "emulator.yaml"
 
 
-class ModelError(ValueError):
+class EmulatorModelError(InputError):
     """The emulator model file is wrong; the message says where and how to fix it."""
 
 
@@ -53,7 +55,7 @@ class EmulatorModel:
     channels: tuple[LoadSpec, ...] = ()
 
     def index(self, name_or_number: str | int) -> int:
-        """The channel number of ``"3"``, ``3`` or ``"hokuyo"``; ``ModelError`` if none."""
+        """The channel number of ``"3"``, ``3`` or ``"hokuyo"``; ``EmulatorModelError`` if none."""
         if isinstance(name_or_number, int) or name_or_number.isdigit():
             n = int(name_or_number)
             if 0 <= n < len(self.channels):
@@ -63,7 +65,8 @@ class EmulatorModel:
                 if c.name == name_or_number:
                     return i
         names = ", ".join(c.name for c in self.channels)
-        raise ModelError(f"no channel {name_or_number!r} (0..{len(self.channels) - 1} or {names})")
+        raise EmulatorModelError(
+            f"no channel {name_or_number!r} (0..{len(self.channels) - 1} or {names})")
 
 
 def _ints(where: str, raw: dict[str, Any], allowed: set[str]) -> dict[str, Any]:
@@ -71,27 +74,28 @@ def _ints(where: str, raw: dict[str, Any], allowed: set[str]) -> dict[str, Any]:
     for key, value in raw.items():
         if key not in allowed:
             known = ", ".join(sorted(allowed))
-            raise ModelError(f"{where}: unknown field {key!r} (known: {known})")
+            raise EmulatorModelError(f"{where}: unknown field {key!r} (known: {known})")
         if key == "name":
             if not isinstance(value, str) or not value:
-                raise ModelError(f"{where}: name must be a non-empty string")
+                raise EmulatorModelError(f"{where}: name must be a non-empty string")
         elif not isinstance(value, int) or isinstance(value, bool) or value < 0:
-            raise ModelError(f"{where}: {key} must be a non-negative integer, not {value!r}")
+            raise EmulatorModelError(
+                f"{where}: {key} must be a non-negative integer, not {value!r}")
         out[key] = value
     return out
 
 
 def parse(data: Any, source: str = FILE) -> EmulatorModel:
     if not isinstance(data, dict):
-        raise ModelError(f"{source}: expected a mapping with 'board' and 'channels'")
+        raise EmulatorModelError(f"{source}: expected a mapping with 'board' and 'channels'")
     board = _ints(f"{source}: board", data.get("board") or {}, set(BoardSpec.__dataclass_fields__))
     chans = data.get("channels")
     if not isinstance(chans, list) or not chans:
-        raise ModelError(f"{source}: 'channels' must be a non-empty list")
+        raise EmulatorModelError(f"{source}: 'channels' must be a non-empty list")
     specs = []
     for i, c in enumerate(chans):
         if not isinstance(c, dict):
-            raise ModelError(f"{source}: channel {i} must be a mapping")
+            raise EmulatorModelError(f"{source}: channel {i} must be a mapping")
         fields = _ints(f"{source}: channel {i}", c, set(LoadSpec.__dataclass_fields__))
         fields.setdefault("name", f"ch{i}")
         specs.append(LoadSpec(**fields))
@@ -103,9 +107,9 @@ def load(system_dir: str | Path) -> EmulatorModel:
     try:
         text = path.read_text()
     except OSError as exc:
-        raise ModelError(f"{path}: cannot read ({exc.strerror})") from exc
+        raise EmulatorModelError(f"{path}: cannot read ({exc.strerror})") from exc
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError as exc:
-        raise ModelError(f"{path}: not valid YAML ({exc})") from exc
+        raise EmulatorModelError(f"{path}: not valid YAML ({exc})") from exc
     return parse(data, str(path))

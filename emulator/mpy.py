@@ -27,6 +27,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from emulator.errors import PartFailure
 from emulator.frontends import FrontEnds, capabilities
 from emulator.hal import SimHal
 
@@ -34,7 +35,7 @@ ROOT = Path(__file__).resolve().parents[1]
 TIMEOUT_S = 10.0
 
 
-class MicroError(RuntimeError):
+class MicroError(PartFailure):
     """The micropython process failed or broke the link protocol."""
 
 

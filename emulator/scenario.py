@@ -26,12 +26,13 @@ from typing import Any
 import yaml
 
 from emulator import faults as F
+from emulator.errors import InputError
 from emulator.sim import BOARD, Emulator
 
 SWITCH_ACTIONS = ("on", "off", "cycle", "clear")
 
 
-class ScenarioError(ValueError):
+class ScenarioError(InputError):
     """The scenario file is wrong; the message names the file and the event."""
 
 

@@ -33,7 +33,7 @@ from typing import Any
 from emulator import faults as F
 from emulator.electronics import Electronics
 from emulator.hal import SimHal
-from emulator.model import EmulatorModel, ModelError
+from emulator.model import EmulatorModel, EmulatorModelError
 from firmware import config
 from firmware.app import App
 from firmware.hal.storage import MemStorage
@@ -164,7 +164,7 @@ class Emulator:
     def channel_index(self, channel: str | int) -> int:
         try:
             return self.model.index(channel)
-        except ModelError:
+        except EmulatorModelError:
             pass
         if isinstance(channel, str):
             for i in range(len(self.model.channels)):
@@ -277,9 +277,10 @@ class Emulator:
 
 
 def make_config(board_config: dict[str, Any], n: int) -> dict[str, Any]:
-    """A full firmware configuration from a model's partial one; ``ModelError`` if invalid."""
+    """A full firmware configuration from a model's partial one; ``EmulatorModelError`` if
+    invalid."""
     cfg, bad = settings.merge(board_config, n, config.VERSION)
     if cfg is None:
-        raise ModelError(f"board config: bad field {bad}")
+        raise EmulatorModelError(f"board config: bad field {bad}")
     result: dict[str, Any] = cfg
     return result

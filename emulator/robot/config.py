@@ -4,7 +4,7 @@
 ``models/tedusar/robot.yaml``). ``kind`` is one of ``devices.KINDS``; ``channel`` (optional) names
 a channel of ``emulator.yaml`` (or gives its number) whose load powers the device; ``rate_hz``
 is the data rate of a working device. ``load_devices`` checks every field against the
-emulator model and raises ``RobotModelError`` (a ``ModelError``) naming the file, the device
+emulator model and raises ``RobotModelError`` (a ``EmulatorModelError``) naming the file, the device
 and the fix.
 
 ``load_node`` reads one component of ``system.yaml`` the way the node runner needs it (kind,
@@ -21,7 +21,7 @@ from typing import Any
 
 import yaml
 
-from emulator.model import EmulatorModel, ModelError
+from emulator.model import EmulatorModel, EmulatorModelError
 
 FILE = "robot.yaml"
 SYSTEM_FILE = "system.yaml"
@@ -29,7 +29,7 @@ KINDS = ("base", "lidar", "servo", "imu", "joystick")
 MAX_RATE_HZ = 1000.0
 
 
-class RobotModelError(ModelError):
+class RobotModelError(EmulatorModelError):
     """``robot.yaml`` or a node of ``system.yaml`` is wrong; the message says how to fix it."""
 
 
@@ -95,7 +95,7 @@ def parse_devices(data: Any, emu_model: EmulatorModel, source: str = FILE) -> li
                 raise RobotModelError(f"{where}: channel must be a channel name or number")
             try:
                 index = emu_model.index(channel)
-            except ModelError as exc:
+            except EmulatorModelError as exc:
                 raise RobotModelError(f"{where}: {exc}; fix 'channel'") from None
         out.append(DeviceSpec(name, kind, float(rate), index))
     return out

@@ -27,7 +27,8 @@ from collections.abc import Sequence
 from typing import Any
 from urllib.parse import urlsplit
 
-from emulator.model import ModelError
+from emulator.errors import InputError
+from emulator.model import EmulatorModelError
 from emulator.robot import behaviours as B
 from emulator.robot.bus import DEFAULT_ENDPOINT, Bus
 from emulator.robot.config import NodeSpec, load_node
@@ -38,7 +39,7 @@ RETRY_S = 0.5
 MAX_LINE = 65536
 
 
-class NodeError(Exception):
+class NodeError(InputError):
     """The node cannot start; the message says what to fix."""
 
 
@@ -200,7 +201,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         spec = load_node(system_dir, name)
         asyncio.run(main_async(spec, dict(os.environ)))
-    except (ModelError, NodeError) as exc:
+    except (EmulatorModelError, NodeError) as exc:
         print(f"{name}: error: {exc}", file=sys.stderr)
         return 2
     return 0

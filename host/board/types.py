@@ -32,11 +32,7 @@ from protocol.constants import (
     ST_ON,
     STATE_NAMES,
 )
-from protocol.events import describe_event
-
-
-def flag_names(mask: int, names: tuple[str, ...]) -> list[str]:
-    return [n for i, n in enumerate(names) if mask & (1 << i)]
+from protocol.events import describe_event, flag_names
 
 
 def _name(names: tuple[str, ...], i: int) -> str:

@@ -7,7 +7,7 @@ import json
 import pytest
 
 from emulator import faults as F
-from emulator.model import ModelError, parse
+from emulator.model import EmulatorModelError, parse
 from emulator.sim import Emulator
 from firmware import config
 from firmware.hal.storage import FileStorage
@@ -244,9 +244,9 @@ def test_bad_faults_are_refused_and_change_nothing(emu: Emulator, channel, fault
 
 
 def test_model_errors_name_the_field() -> None:
-    with pytest.raises(ModelError, match="channel 0: unknown field 'nominal'"):
+    with pytest.raises(EmulatorModelError, match="channel 0: unknown field 'nominal'"):
         parse({"channels": [{"nominal": 3}]})
-    with pytest.raises(ModelError, match="must be a non-negative integer"):
+    with pytest.raises(EmulatorModelError, match="must be a non-negative integer"):
         parse({"channels": [{"nominal_ma": -3}]})
     assert TEDUSAR.is_dir()
 
