@@ -305,9 +305,11 @@ class CanFront:
                                             is_extended_id=False))
 
     def probe(self) -> bool:
-        """The bus is lossy (UDP multicast drops datagrams when a reader's buffer is full, as
-        it is right after a batch on a busy machine), so the probe is sent up to
-        ``CAN_PROBES`` times: a hang is a board that answers none of them."""
+        """The probe is a command with a wrong tag, whose answer is error 201. The board may
+        still be answering the last batch (other results, other codes): those are skipped, not
+        taken for the probe's answer. The bus is lossy (UDP multicast drops datagrams when a
+        reader's buffer is full, as it is right after a batch on a busy machine), so the probe
+        is sent up to ``CAN_PROBES`` times: a hang is a board that answers none of them."""
         for _ in range(CAN_PROBES):
             while self.bus.recv(0) is not None:
                 pass
@@ -319,8 +321,9 @@ class CanFront:
             while time.monotonic() < end:
                 msg = self.bus.recv(0.2)
                 if msg is not None and msg.arbitration_id == 0x188 and \
-                        bytes(msg.data[:2]) == b"\x01\x08":
-                    return struct.unpack_from("<H", msg.data, 2)[0] == 201
+                        bytes(msg.data[:2]) == b"\x01\x08" and \
+                        struct.unpack_from("<H", msg.data, 2)[0] == 201:
+                    return True
         return False
 
     def close(self) -> None:
