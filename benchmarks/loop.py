@@ -7,9 +7,10 @@ Part 1, one board, the real daemon: ``dxboard run models/tedusar --emulate`` (a 
 as ``tests/daemon``: free ports, short device boot times, journal in a temporary folder; the
 board streams 10 channels at 100 Hz). Once the robot is up, a quiet interval measures the
 daemon process's CPU (psutil, user+system) and resident memory, and the journal's growth.
-Then faults are injected with ``dxboard inject`` in a seeded order — hokuyo ``hang`` (found
-through /scan falling silent) and laser_alignment ``overcurrent amps=5`` (a trip the board
-pushes at once; cleared once diagnosed) — and for each, from the journal's wall times:
+Then faults are injected (``--faults``, default 20 of each kind) with ``dxboard inject`` in a
+seeded order — hokuyo ``hang`` (found through /scan falling silent) and laser_alignment
+``overcurrent amps=5`` (a trip the board pushes at once; cleared once diagnosed) — and for
+each, from the journal's wall times:
 
 - detection: the inject command returned → the first observation that changed;
 - diagnosis: that observation → the first diagnosis naming the component (or its driver);
@@ -415,14 +416,15 @@ def write_section(text: str, heading: str = "## Daemon loop") -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="a fast check: few faults, short")
-    ap.add_argument("--faults", type=int, default=None, help="injections (default 20, 4)")
+    ap.add_argument("--faults", type=int, default=None,
+                    help="injections, shared by the kinds (default 40: 20 of each; quick 4)")
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--quiet-s", type=float, default=None, help="default 60 (quick 10)")
     ap.add_argument("--boards-s", type=float, default=None, help="default 30 (quick 8)")
     ap.add_argument("--boards", type=int, default=10)
     ap.add_argument("--write", action="store_true", help="write benchmarks/RESULTS.md")
     args = ap.parse_args()
-    n = args.faults or (4 if args.quick else 20)
+    n = args.faults or (4 if args.quick else 40)
     quiet = args.quiet_s or (10.0 if args.quick else 60.0)
     boards_s = args.boards_s or (8.0 if args.quick else 30.0)
     res = Results()

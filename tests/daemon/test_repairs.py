@@ -70,13 +70,13 @@ def test_power_up_brings_the_whole_robot_up(robot: tuple[RunningDaemon, Path]) -
     acts = [(a, args[0]) for a, args, _ in done]
     for dev in ("jaguar", "hokuyo", "laser_alignment"):
         assert ("power_up", dev) in acts
-    # hardware is powered before its driver starts (the end of power_up precedes the start)
+    # hardware is switched on before its driver starts (which then retries while the device
+    # boots: it does not wait for the power-up to be verified)
     records = actions_since(d, 0)
-    up_end = {r.args[0]: r.finished for r in records
-              if r.action == "power_up" and r.finished is not None}
+    up_start = {r.args[0]: r.started for r in records if r.action == "power_up"}
     node_start = {r.args[0]: r.started for r in records if r.action == "start_node"}
     for dev, node in (("jaguar", "jaguar_node"), ("hokuyo", "hokuyo_node")):
-        assert up_end[dev] is not None and node_start[node] >= up_end[dev]
+        assert node_start[node] >= up_start[dev]
 
 
 def test_device_shut_down_by_a_person_is_held_then_repaired_as_in_the_paper(
