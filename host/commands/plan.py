@@ -45,10 +45,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from host.errors import UserError
     from host.repair.errors import PlanningLimitError
-    from host.repair.planner import RepairPlanner
+    from host.repair.planner import PLANNERS, RepairPlanner
     from host.repair.policy import choose
     from host.repair.problem import to_pddl
-    from host.repair.search import PLANNERS
 
     if args.planner not in PLANNERS:
         raise UserError(f"unknown planner {args.planner!r}",

@@ -4,9 +4,9 @@ A pipeline of pure stages after pyperplan (parse -> ground -> task -> search): `
 parses ``models/<robot>/repair.pddl`` with the ``pddl`` library; ``problem`` builds paper 000
 §IV-E's I and G from a diagnosis and the observations; ``grounding`` instantiates the
 domain over the robot's components into a ``task`` of bit masks; ``protect`` removes every
-operator that would switch off a protected component; ``search`` holds the planners behind
-the ``PLANNERS`` registry (our optimal A* with relevance pruning and stubborn sets, a BFS
-reference, and Fast Downward through ``downward``); ``plan`` deorders the result into a
+operator that would switch off a protected component; ``search`` holds our planners (an optimal
+A* with relevance pruning and stubborn sets, a BFS reference) and ``downward`` runs Fast
+Downward, all behind ``planner.PLANNERS``; ``plan`` deorders the result into a
 partial order an executor can run in parallel; ``policy`` picks which of several diagnoses
 to repair and records why. ``planner.RepairPlanner`` wires the stages::
 

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 
 from host.errors import DxboardError
 from host.repair.domain import Atom, Domain, load_domain
+from host.repair.downward import fast_downward
 from host.repair.errors import NoPlanError, ProblemError
 from host.repair.grounding import ground
 from host.repair.plan import Plan, deorder
@@ -27,8 +28,10 @@ from host.repair.problem import AB, RepairModel, RepairProblem, build_problem, r
 from host.repair.protect import check_plan, enforce
 from host.repair.search import (
     DEFAULT_MAX_EXPANSIONS,
-    PLANNERS,
+    Planner,
     SearchInput,
+    astar,
+    bfs,
     relevant_ops,
 )
 from host.repair.task import GroundOp, Task, holds, lit_atom
@@ -37,6 +40,14 @@ if TYPE_CHECKING:
     from host.diagnosis.logic import Literal
 
 log = logging.getLogger(__name__)
+
+# the search engines a plan can be found with: ours (optimal A*, a BFS baseline) and Fast
+# Downward (the benchmark baseline, when installed)
+PLANNERS: dict[str, Planner] = {
+    "astar": astar,
+    "bfs": bfs,
+    "fast-downward": fast_downward,
+}
 
 
 class RepairPlanner:

@@ -283,16 +283,3 @@ def _path(parent: dict[int, tuple[int, int]], s: int, init: int) -> list[int]:
         out.append(i)
     out.reverse()
     return out
-
-
-def _fast_downward(inp: SearchInput) -> SearchResult:
-    from host.repair.downward import fast_downward
-
-    return fast_downward(inp)
-
-
-PLANNERS: dict[str, Planner] = {
-    "astar": astar,
-    "bfs": bfs,
-    "fast-downward": _fast_downward,
-}
