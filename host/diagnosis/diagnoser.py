@@ -23,9 +23,10 @@ from __future__ import annotations
 import logging
 import time
 
-from host.diagnosis.logic import Literal, Theory, parse_literal
+from host.diagnosis.logic import Literal, Theory
 from host.diagnosis.observations import Observation, ObservationSet
-from host.diagnosis.result import DiagnosisResult, prior_weights, rank
+from host.diagnosis.quota import Quota
+from host.diagnosis.result import Bound, DiagnosisResult, prior_weights, rank
 from host.diagnosis.satctx import SatContext
 from host.diagnosis.search import ALGORITHMS, DEFAULT_ALGORITHM
 
@@ -50,6 +51,7 @@ class Diagnoser:
         self._priors = {c: theory.prior(c) for c in theory.components}
         self._universe = frozenset(theory.components)
         self._weights = prior_weights(self._priors)
+        self._index_weights = [self._weights[1][c] for c in theory.components]
         self._assumed: dict[str, int] = {}  # atom -> solver literal of the current observation
         self.observations = ObservationSet()
         self._version = 0
@@ -65,7 +67,7 @@ class Diagnoser:
     ) -> bool:
         """``S := S ⊕ o``; True when the literal set changed."""
         if isinstance(obs, str):
-            obs = parse_literal(obs)
+            obs = self.theory.parse(obs)
         if isinstance(obs, Literal):
             obs = Observation(obs, now, source, validity)
         if obs.literal.atom not in self._observable:
@@ -105,10 +107,12 @@ class Diagnoser:
         time_budget_s: float | None = None,
         min_card_only: bool = False,
     ) -> DiagnosisResult:
-        """The subset-minimal diagnoses by cardinality, then probability, within the bounds.
+        """The subset-minimal diagnoses, most probable first, within the bounds.
 
-        ``min_card_only`` stops after the smallest cardinality that has diagnoses (the
-        minimal-cardinality diagnoses); ``complete`` then refers to that level.
+        ``max_count`` keeps the most probable ones (``quota.Quota``: exact, whatever order
+        the algorithm finds them in). ``min_card_only`` stops after the smallest cardinality
+        that has diagnoses (the minimal-cardinality diagnoses); ``complete`` then refers to
+        that level.
         """
         key = (self._version, max_card, max_count, time_budget_s, min_card_only)
         if self._cache is not None and self._cache[0] == key:
@@ -116,17 +120,26 @@ class Diagnoser:
         start = time.perf_counter()
         calls = self._ctx.calls
         assumptions = list(self._assumed.values())
+        quota = Quota(max_count, self._index_weights)
         self._ctx.start_budget(time_budget_s)
         try:
-            outcome = self._search(self._ctx, assumptions, max_card, max_count, min_card_only)
+            outcome = self._search(self._ctx, assumptions, max_card, quota, min_card_only)
+            if outcome.cut_by is Bound.MAX_COUNT and not min_card_only:
+                outcome.cut_by = self._count_cut(assumptions, outcome.bad_sets, max_card)
         finally:
             self._ctx.stop_budget()
         comps = self.theory.components
         bad = [frozenset(comps[i] for i in s) for s in outcome.bad_sets]
+        ranked = rank(bad, self._priors, self._universe, self._weights)
+        cut_by = outcome.cut_by
+        if max_count is not None and len(ranked) > max_count:
+            ranked = rank([d.bad for d in ranked[:max_count]], self._priors, self._universe,
+                          self._weights)  # probabilities over the diagnoses kept
+            cut_by = cut_by or Bound.MAX_COUNT
         result = DiagnosisResult(
-            diagnoses=rank(bad, self._priors, self._universe, self._weights),
-            complete=outcome.cut_by is None,
-            cut_by=outcome.cut_by,
+            diagnoses=ranked,
+            complete=cut_by is None,
+            cut_by=cut_by,
             explainable=outcome.explainable,
             elapsed_s=time.perf_counter() - start,
             stats={"sat_calls": self._ctx.calls - calls},
@@ -135,6 +148,19 @@ class Diagnoser:
                   result.elapsed_s * 1000)
         self._cache = (key, result)
         return result
+
+    def _count_cut(self, assumptions: list[int], found: list[frozenset[int]],
+                   max_card: int | None) -> Bound | None:
+        """The count was reached: which bound, if any, left a diagnosis out."""
+        within = [] if max_card is None else self._ctx.at_most(max_card)
+        more = self._ctx.more_than(assumptions + within, found)
+        if more is None:
+            return Bound.TIME_BUDGET
+        if more:
+            return Bound.MAX_COUNT
+        if within and self._ctx.more_than(assumptions, found):
+            return Bound.MAX_CARD
+        return None
 
     def close(self) -> None:
         self._ctx.close()

@@ -209,6 +209,17 @@ class SatContext:
         result = self.solver.solve_limited(assumptions=assumptions, expect_interrupt=True)
         return None if result is None else bool(result)
 
+    def more_than(self, assumptions: list[int], found: list[frozenset[int]]) -> bool | None:
+        """Is there a diagnosis under ``assumptions`` other than ``found`` (and their
+        supersets)? None when the time budget ran out."""
+        act = self.new_run()
+        try:
+            for bad in found:
+                self.solver.add_clause([-self.ab_vars[i] for i in bad] + [-act])
+            return self.solve([*assumptions, act])
+        finally:
+            self.end_run(act)
+
     def model_bad(self) -> frozenset[int]:
         """Indexes (into ``theory.components``) of the components abnormal in the model."""
         model = self.solver.get_model()

@@ -49,6 +49,7 @@ from pysat.examples.hitman import Hitman  # type: ignore[import-untyped]
 from pysat.examples.rc2 import RC2  # type: ignore[import-untyped]
 from pysat.formula import WCNF  # type: ignore[import-untyped]
 
+from host.diagnosis.quota import Quota
 from host.diagnosis.result import Bound
 from host.diagnosis.satctx import SatContext
 
@@ -60,17 +61,17 @@ class SearchOutcome:
     explainable: bool = True
 
 
-Search = Callable[[SatContext, list[int], int | None, int | None, bool], SearchOutcome]
+Search = Callable[[SatContext, list[int], int | None, Quota, bool], SearchOutcome]
 
 
 def _list_level(
-    ctx: SatContext, assumptions: list[int], act: int, out: SearchOutcome,
-    max_count: int | None,
+    ctx: SatContext, assumptions: list[int], act: int, out: SearchOutcome, quota: Quota, k: int,
 ) -> bool:
-    """Add every diagnosis the solver finds under ``assumptions`` to ``out``, each blocked
-    for the rest of the run (``act``); False when a bound (count, time) cut the listing."""
+    """Add every diagnosis (of size ``k``) the solver finds under ``assumptions`` to ``out``,
+    each blocked for the rest of the run (``act``); False when a bound (count, time) cut the
+    listing."""
     while True:
-        if max_count is not None and len(out.bad_sets) >= max_count:
+        if quota.reached(k):
             out.cut_by = Bound.MAX_COUNT
             return False
         r = ctx.solve(assumptions)
@@ -81,6 +82,7 @@ def _list_level(
             return True
         bad = ctx.model_bad()
         out.bad_sets.append(bad)
+        quota.add(bad)
         ctx.solver.add_clause([-ctx.ab_vars[i] for i in bad] + [-act])
 
 
@@ -88,7 +90,7 @@ def cardinality_search(
     ctx: SatContext,
     obs: list[int],
     max_card: int | None,
-    max_count: int | None,
+    quota: Quota,
     min_card_only: bool = False,
 ) -> SearchOutcome:
     n = len(ctx.ab_vars)
@@ -109,7 +111,7 @@ def cardinality_search(
             out.cut_by = Bound.TIME_BUDGET
             return out
         while k <= limit:
-            if not _list_level(ctx, base + ctx.at_most(k), act, out, max_count):
+            if not _list_level(ctx, base + ctx.at_most(k), act, out, quota, k):
                 return out
             k += 1
             if min_card_only and out.bad_sets:
@@ -153,7 +155,7 @@ def maxsat_search(
     ctx: SatContext,
     obs: list[int],
     max_card: int | None,
-    max_count: int | None,
+    quota: Quota,
     min_card_only: bool = False,
 ) -> SearchOutcome:
     out = SearchOutcome([])
@@ -167,7 +169,7 @@ def maxsat_search(
     n = len(ctx.ab_vars)
     with RC2(wcnf, solver="g3", adapt=True, exhaust=True, minz=True, trim=5) as rc2:
         while True:
-            if max_count is not None and len(out.bad_sets) >= max_count:
+            if quota.reached(len(out.bad_sets[-1]) if out.bad_sets else 0):
                 out.cut_by = Bound.MAX_COUNT
                 return out
             if ctx.out_of_time():
@@ -185,6 +187,7 @@ def maxsat_search(
                 return out
             bad = frozenset(i for i, x in enumerate(model[:n]) if x > 0)
             out.bad_sets.append(bad)
+            quota.add(bad)
             rc2.add_clause([-ctx.ab_vars[i] for i in bad])
 
 
@@ -192,15 +195,16 @@ def hitting_set_search(
     ctx: SatContext,
     obs: list[int],
     max_card: int | None,
-    max_count: int | None,
+    quota: Quota,
     min_card_only: bool = False,
 ) -> SearchOutcome:
     out = SearchOutcome([])
     healthy = [-v for v in ctx.ab_vars]
     hitman = Hitman(solver="g3", htype="sorted")
+    size = 0  # the candidates come by non-decreasing size
     try:
         while True:
-            if max_count is not None and len(out.bad_sets) >= max_count:
+            if quota.reached(size):
                 out.cut_by = Bound.MAX_COUNT
                 return out
             if ctx.out_of_time():
@@ -210,6 +214,7 @@ def hitting_set_search(
             if hs is None:
                 return out
             cand = frozenset(int(i) for i in hs)
+            size = len(cand)
             if min_card_only and out.bad_sets and len(cand) > len(out.bad_sets[0]):
                 return out
             r = ctx.solve(obs + [h for i, h in enumerate(healthy) if i not in cand])
@@ -221,6 +226,7 @@ def hitting_set_search(
                     out.cut_by = Bound.MAX_CARD
                     return out
                 out.bad_sets.append(cand)
+                quota.add(cand)
                 hitman.block(list(cand))
                 continue
             conflict = [ctx.index_of_ab[-lit] for lit in ctx.core() if -lit in ctx.index_of_ab]
@@ -246,14 +252,14 @@ def top_level_search(
     ctx: SatContext,
     obs: list[int],
     max_card: int | None,
-    max_count: int | None,
+    quota: Quota,
     min_card_only: bool = False,
 ) -> SearchOutcome:
     """Minimal-cardinality diagnoses: the minimum by core-guided MaxSAT over the top-level
     (undominated) components only, then the other diagnoses of that size by ``cardinality``
     enumeration over all components. Other requests go to ``cardinality_search``."""
     if not min_card_only:
-        return cardinality_search(ctx, obs, max_card, max_count, min_card_only)
+        return cardinality_search(ctx, obs, max_card, quota, min_card_only)
     out = SearchOutcome([])
     order = _top_level(ctx, obs)
     wcnf = WCNF()
@@ -287,11 +293,12 @@ def top_level_search(
     true = {lit for lit in model if lit > 0}
     first = frozenset(i for i, v in enumerate(ctx.ab_vars) if v in true)
     out.bad_sets.append(first)
+    quota.add(first)
     act = ctx.new_run()
     base = [*obs, act]
     try:
         ctx.solver.add_clause([-ctx.ab_vars[i] for i in first] + [-act])
-        _list_level(ctx, base + ctx.at_most(k), act, out, max_count)  # the others of size k
+        _list_level(ctx, base + ctx.at_most(k), act, out, quota, k)  # the others of size k
         return out
     finally:
         ctx.end_run(act)
@@ -310,21 +317,22 @@ def auto_search(
     ctx: SatContext,
     obs: list[int],
     max_card: int | None,
-    max_count: int | None,
+    quota: Quota,
     min_card_only: bool = False,
 ) -> SearchOutcome:
     """``cardinality``, except for minimal-cardinality requests on models of at least
     ``AUTO_FROM`` components that it does not answer within ``AUTO_SLICE_S``: those go on
     with ``top-level`` (the slice's work is dropped; both are exact)."""
     if not min_card_only or len(ctx.ab_vars) < AUTO_FROM:
-        return cardinality_search(ctx, obs, max_card, max_count, min_card_only)
+        return cardinality_search(ctx, obs, max_card, quota, min_card_only)
     if len(_top_level(ctx, obs)) >= TOP_LEVEL_DIRECT:
-        return top_level_search(ctx, obs, max_card, max_count, min_card_only)
+        return top_level_search(ctx, obs, max_card, quota, min_card_only)
     with ctx.sub_budget(AUTO_SLICE_S):
-        out = cardinality_search(ctx, obs, max_card, max_count, min_card_only)
+        out = cardinality_search(ctx, obs, max_card, quota, min_card_only)
     if out.cut_by is not Bound.TIME_BUDGET or ctx.out_of_time():
         return out
-    return top_level_search(ctx, obs, max_card, max_count, min_card_only)
+    quota.reset()
+    return top_level_search(ctx, obs, max_card, quota, min_card_only)
 
 
 ALGORITHMS: dict[str, Search] = {
