@@ -154,3 +154,19 @@ def test_bad_model_path_is_a_user_error(tmp_path: Path, capsys: pytest.CaptureFi
     obs.write_text("")
     assert cli.main(["diagnose", str(tmp_path / "none"), "--obs", str(obs)]) == 2
     assert "no such file" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("domain", "needle"), [
+    ("(define (domain x) (:action a :parameters (?x) :effect (and (p ?x)))",
+     "not a valid PDDL domain"),
+    ((TEDUSAR / "repair.pddl").read_text().replace("(running ?n - node)", ""),
+     "undeclared predicate(s) running"),
+])
+def test_model_check_checks_the_repair_domain(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], domain: str, needle: str
+) -> None:
+    (tmp_path / "system.yaml").write_text((TEDUSAR / "system.yaml").read_text())
+    (tmp_path / "repair.pddl").write_text(domain)
+    assert cli.main(["model", "check", str(tmp_path)]) == 1
+    err = capsys.readouterr().err
+    assert f"{tmp_path / 'repair.pddl'}" in err and needle in err
