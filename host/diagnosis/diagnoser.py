@@ -7,6 +7,8 @@ hierarchy, over any propositions)::
                             # "hitting-set"; the default "auto" picks by size (search.py)
     d.observe("~on(jaguar)", now=12.5, source="hobs", validity=3.0)   # S ⊕ o
     d.expire(now=20.0)                           # silent observers' literals become unknown
+    # lags={"ok(/map)": 6.0}: an observation judging a 6 s window is held back (unknown)
+    # while something it depends on changed less than 6 s ago (lags.py)
     result = d.diagnose(max_card=5, max_count=100, time_budget_s=0.5)
     result.diagnoses[0].bad, result.complete, result.cut_by
 
@@ -22,7 +24,9 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Mapping
 
+from host.diagnosis.lags import depends_on, held_atoms
 from host.diagnosis.logic import Literal, Theory
 from host.diagnosis.observations import Observation, ObservationSet
 from host.diagnosis.quota import Quota
@@ -39,7 +43,8 @@ class UnknownLiteral(ValueError):
 
 class Diagnoser:
     def __init__(
-        self, theory: Theory, algorithm: str = DEFAULT_ALGORITHM, solver: str = "g4"
+        self, theory: Theory, algorithm: str = DEFAULT_ALGORITHM, solver: str = "g4",
+        lags: Mapping[str, float] | None = None,
     ) -> None:
         if algorithm not in ALGORITHMS:
             raise ValueError(f"unknown algorithm {algorithm!r}; use one of {sorted(ALGORITHMS)}")
@@ -54,6 +59,9 @@ class Diagnoser:
         self._index_weights = [self._weights[1][c] for c in theory.components]
         self._assumed: dict[str, int] = {}  # atom -> solver literal of the current observation
         self.observations = ObservationSet()
+        self._lags = {a: t for a, t in (lags or {}).items() if a in self._observable and t > 0}
+        self._inputs = depends_on(theory, self._lags) if self._lags else {}
+        self._now = 0.0  # the latest time seen (observations, expiry): what lags count from
         self._version = 0
         self._cache: tuple[tuple[object, ...], DiagnosisResult] | None = None
 
@@ -74,6 +82,7 @@ class Diagnoser:
             raise UnknownLiteral(
                 f"observation {obs.literal} names {obs.literal.atom}, which no clause mentions"
             )
+        self._now = max(self._now, obs.time)
         changed = self.observations.add(obs)
         if changed:
             self._version += 1
@@ -88,6 +97,7 @@ class Diagnoser:
         return changed
 
     def expire(self, now: float) -> list[Observation]:
+        self._now = max(self._now, now)
         return self._forget(self.observations.expire(now))
 
     def drop_source(self, source: str) -> list[Observation]:
@@ -114,12 +124,14 @@ class Diagnoser:
         that has diagnoses (the minimal-cardinality diagnoses); ``complete`` then refers to
         that level.
         """
-        key = (self._version, max_card, max_count, time_budget_s, min_card_only)
+        held = (held_atoms(self._lags, self._inputs, self.observations.since, self._now)
+                if self._lags else ())
+        key = (self._version, max_card, max_count, time_budget_s, min_card_only, held)
         if self._cache is not None and self._cache[0] == key:
             return self._cache[1]
         start = time.perf_counter()
         calls = self._ctx.calls
-        assumptions = list(self._assumed.values())
+        assumptions = [x for atom, x in self._assumed.items() if atom not in held]
         quota = Quota(max_count, self._index_weights)
         self._ctx.start_budget(time_budget_s)
         try:
@@ -143,6 +155,7 @@ class Diagnoser:
             explainable=outcome.explainable,
             elapsed_s=time.perf_counter() - start,
             stats={"sat_calls": self._ctx.calls - calls},
+            held=held,
         )
         log.debug("diagnosis: %d diagnoses, complete=%s, %.3f ms", len(bad), result.complete,
                   result.elapsed_s * 1000)

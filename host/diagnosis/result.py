@@ -10,7 +10,9 @@ then by names);
 ``time_budget``) that stopped the enumeration. ``explainable`` is False when no assignment of
 health states is consistent with the observations (they contradict the model itself); then
 ``diagnoses`` is empty. The empty diagnosis (``bad = {}``) means everything is consistent with
-all components healthy.
+all components healthy. ``held`` names the observed atoms the diagnoser treated as unknown
+this time because they judge a window of time that an upstream change has not yet left
+(``lags.py``).
 """
 
 from __future__ import annotations
@@ -64,6 +66,7 @@ class DiagnosisResult:
     explainable: bool = True
     elapsed_s: float = 0.0
     stats: dict[str, int] = field(default_factory=dict)
+    held: tuple[str, ...] = ()  # observed atoms treated as unknown this time (lags.py)
 
     def bad_sets(self) -> list[frozenset[str]]:
         return [d.bad for d in self.diagnoses]
@@ -75,7 +78,18 @@ class DiagnosisResult:
             "complete": self.complete,
             "cut_by": None if self.cut_by is None else self.cut_by.value,
             "explainable": self.explainable,
+            "held": list(self.held),
         }
+
+
+@dataclass
+class SearchOutcome:
+    """What a search algorithm returns: the bad sets (component indexes), the bound that cut
+    the list, and whether any diagnosis exists at all."""
+
+    bad_sets: list[frozenset[int]]
+    cut_by: Bound | None = None
+    explainable: bool = True
 
 
 def prior_weights(priors: dict[str, float]) -> tuple[float, dict[str, float]]:

@@ -49,7 +49,7 @@ def read_tug(path: str | Path) -> Theory:
         why = exc.strerror if isinstance(exc, OSError) else "not a UTF-8 text file"
         raise UserError(f"{file}: cannot read: {why}", "give a tug model file") from exc
     try:
-        data, lines = yamlpos.load(text)
+        data, lines = yamlpos.load(text, typed=False)  # all strings
     except yamlpos.YamlSyntaxError as exc:
         raise UserError(f"{file}:{exc.line}: {exc}", "fix the YAML syntax") from exc
     return parse_tug(data, lines, file)
@@ -81,8 +81,16 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
     neg_prefixes = [str(neg)]
     components: dict[str, None] = {}
 
+    seen: dict[str, Literal] = {}  # a model repeats its literals: parse each text once
+
     def literal(text: str, path: tuple[object, ...]) -> Literal:
         s = text.strip()
+        lit = seen.get(s)
+        if lit is None:
+            lit = seen[s] = parse(s, text, path)
+        return lit
+
+    def parse(s: str, text: str, path: tuple[object, ...]) -> Literal:
         try:
             lit = parse_literal(s, neg_prefixes)
         except ValueError as exc:
@@ -137,9 +145,10 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
         if str(comp) not in components:
             raise fail(("priors", comp), f"prior for unknown component {comp!r}",
                        f"use a component named in {ab_name}(...)")
-        if not isinstance(p, int | float) or not 0 < p < 1:
+        value = _number(p)
+        if value is None or not 0 < value < 1:
             raise fail(("priors", comp), f"prior {p!r} is not in (0, 1)", "write e.g. 0.01")
-        out_priors[str(comp)] = float(p)
+        out_priors[str(comp)] = value
     notes: tuple[str, ...] = ()
     if unlisted:
         n = len(unlisted)
@@ -149,6 +158,18 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
     observables = frozenset(a for a in (*known, *unlisted) if ab_component(a) is None)
     negations = tuple(p for p in neg_prefixes if p not in ("~", "!", "-", "¬"))
     return Theory(tuple(components), tuple(clauses), out_priors, observables, negations, notes)
+
+
+def _number(value: Any) -> float | None:
+    """A prior read with or without YAML's implicit typing (``0.01`` or ``'0.01'``)."""
+    if isinstance(value, bool):
+        return None
+    if isinstance(value, int | float):
+        return float(value)
+    try:
+        return float(str(value))
+    except ValueError:
+        return None
 
 
 def _rule(clause: Clause, ab_name: str, nab_name: str, neg: str) -> str:

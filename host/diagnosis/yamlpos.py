@@ -18,10 +18,9 @@ import yaml
 
 Path = tuple[object, ...]
 
-try:  # libyaml, when PyYAML was built with it
-    _Loader: Any = yaml.CSafeLoader
-except AttributeError:  # pragma: no cover - depends on the PyYAML build
-    _Loader = yaml.SafeLoader
+# libyaml, when PyYAML was built with it; the base loader reads every scalar as a string
+_Loader: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+_PlainLoader: Any = getattr(yaml, "CBaseLoader", yaml.BaseLoader)
 
 
 class YamlSyntaxError(ValueError):
@@ -33,8 +32,9 @@ class YamlSyntaxError(ValueError):
 class Lines:
     """Line numbers of the values of a YAML document, by path (computed on first use)."""
 
-    def __init__(self, text: str = "") -> None:
+    def __init__(self, text: str = "", typed: bool = True) -> None:
         self._text = text
+        self._typed = typed
         self._lines: dict[Path, int] | None = None if text else {}
 
     def __call__(self, *path: object) -> int:
@@ -49,7 +49,9 @@ class Lines:
             self._lines = {}
             node = yaml.compose(self._text, Loader=_Loader)
             if node is not None:
-                _walk(node, (), self._lines, yaml.constructor.SafeConstructor())
+                constructor = (yaml.constructor.SafeConstructor() if self._typed
+                               else yaml.constructor.BaseConstructor())
+                _walk(node, (), self._lines, constructor)
         return self._lines
 
 
@@ -64,17 +66,20 @@ def _syntax_error(exc: yaml.YAMLError) -> YamlSyntaxError:
     return YamlSyntaxError(f"YAML syntax error: {problem}", line)
 
 
-def load(text: str) -> tuple[Any, Lines]:
-    """Parse ``text``; return ``(value, lines)``. Raises ``YamlSyntaxError``."""
+def load(text: str, typed: bool = True) -> tuple[Any, Lines]:
+    """Parse ``text``; return ``(value, lines)``. ``typed=False`` reads every scalar as a
+    string (no implicit ints, floats or booleans: half the time on a large file of
+    strings). Raises ``YamlSyntaxError``."""
     try:
-        value = yaml.load(text, Loader=_Loader)  # a safe loader (CSafeLoader or SafeLoader)
+        # safe loaders only (CSafeLoader/SafeLoader, CBaseLoader/BaseLoader)
+        value = yaml.load(text, Loader=_Loader if typed else _PlainLoader)
     except yaml.YAMLError as exc:
         raise _syntax_error(exc) from exc
-    return value, Lines(text)
+    return value, Lines(text, typed)
 
 
 def _walk(node: yaml.Node, path: Path, out: dict[Path, int],
-          constructor: yaml.constructor.SafeConstructor) -> None:
+          constructor: yaml.constructor.BaseConstructor) -> None:
     out.setdefault(path, node.start_mark.line + 1)
     if isinstance(node, yaml.MappingNode):
         for key_node, value_node in node.value:
@@ -86,7 +91,7 @@ def _walk(node: yaml.Node, path: Path, out: dict[Path, int],
             _walk(item, (*path, i), out, constructor)
 
 
-def _key(node: yaml.Node, constructor: yaml.constructor.SafeConstructor) -> Any:
+def _key(node: yaml.Node, constructor: yaml.constructor.BaseConstructor) -> Any:
     """The key as ``load`` builds it (``3`` for ``3:``, ``True`` for ``yes:``)."""
     if isinstance(node, yaml.ScalarNode):
         return constructor.construct_object(node, deep=True)
