@@ -4,7 +4,8 @@ Build one per context (the robot's hardware/software model now; later one per la
 hierarchy, over any propositions)::
 
     d = Diagnoser(theory)   # or algorithm= "cardinality" | "top-level" | "maxsat" |
-                            # "hitting-set"; the default "auto" picks by size (search.py)
+                            # "hitting-set"; the default "auto" picks by size (search.py);
+                            # min_card_only=True: diagnose() lists the smallest size only
     d.observe("~on(jaguar)", now=12.5, source="hobs", validity=3.0)   # S ⊕ o
     d.expire(now=20.0)                           # silent observers' literals become unknown
     # lags={"ok(/map)": 6.0}: an observation judging a 6 s window is held back (unknown)
@@ -44,12 +45,13 @@ class UnknownLiteral(ValueError):
 class Diagnoser:
     def __init__(
         self, theory: Theory, algorithm: str = DEFAULT_ALGORITHM, solver: str = "g4",
-        lags: Mapping[str, float] | None = None,
+        lags: Mapping[str, float] | None = None, min_card_only: bool = False,
     ) -> None:
         if algorithm not in ALGORITHMS:
             raise ValueError(f"unknown algorithm {algorithm!r}; use one of {sorted(ALGORITHMS)}")
         self.theory = theory
         self.algorithm = algorithm
+        self.min_card_only = min_card_only  # the default of diagnose(): for huge models
         self._search = ALGORITHMS[algorithm]
         self._ctx = SatContext(theory, solver)
         self._observable = theory.observable_atoms()
@@ -115,15 +117,18 @@ class Diagnoser:
         max_card: int | None = None,
         max_count: int | None = None,
         time_budget_s: float | None = None,
-        min_card_only: bool = False,
+        min_card_only: bool | None = None,
     ) -> DiagnosisResult:
         """The subset-minimal diagnoses, most probable first, within the bounds.
 
         ``max_count`` keeps the most probable ones (``quota.Quota``: exact, whatever order
         the algorithm finds them in). ``min_card_only`` stops after the smallest cardinality
         that has diagnoses (the minimal-cardinality diagnoses); ``complete`` then refers to
-        that level.
+        that level. None: the diagnoser's own setting (``Diagnoser(..., min_card_only=)``),
+        so a caller that never passes it (the daemon) can be given it at construction.
         """
+        if min_card_only is None:
+            min_card_only = self.min_card_only
         held = (held_atoms(self._lags, self._inputs, self.observations.since, self._now)
                 if self._lags else ())
         key = (self._version, max_card, max_count, time_budget_s, min_card_only, held)
