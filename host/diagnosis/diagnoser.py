@@ -30,7 +30,7 @@ from collections.abc import Mapping
 from host.diagnosis.lags import depends_on, held_atoms
 from host.diagnosis.logic import Literal, Theory
 from host.diagnosis.observations import Observation, ObservationSet
-from host.diagnosis.quota import Quota
+from host.diagnosis.quota import Quota, upper_bounds
 from host.diagnosis.result import Bound, DiagnosisResult, prior_weights, rank
 from host.diagnosis.satctx import SatContext
 from host.diagnosis.search import ALGORITHMS, DEFAULT_ALGORITHM
@@ -59,6 +59,7 @@ class Diagnoser:
         self._universe = frozenset(theory.components)
         self._weights = prior_weights(self._priors)
         self._index_weights = [self._weights[1][c] for c in theory.components]
+        self._ub = upper_bounds(self._index_weights)
         self._assumed: dict[str, int] = {}  # atom -> solver literal of the current observation
         self.observations = ObservationSet()
         self._lags = {a: t for a, t in (lags or {}).items() if a in self._observable and t > 0}
@@ -137,7 +138,7 @@ class Diagnoser:
         start = time.perf_counter()
         calls = self._ctx.calls
         assumptions = [x for atom, x in self._assumed.items() if atom not in held]
-        quota = Quota(max_count, self._index_weights)
+        quota = Quota(max_count, self._index_weights, self._ub)
         self._ctx.start_budget(time_budget_s)
         try:
             outcome = self._search(self._ctx, assumptions, max_card, quota, min_card_only)

@@ -25,20 +25,26 @@ from collections.abc import Sequence
 EPS = 1e-9  # log-prior tolerance: equal priors computed in another order are a tie
 
 
+def upper_bounds(weights: Sequence[float]) -> list[float]:
+    """``ub[k]``: the best score (sum of weights) a diagnosis of size ``k`` or more can have
+    (computed once per model: it does not depend on the observations)."""
+    sums = [0.0]
+    for w in sorted(weights, reverse=True):
+        sums.append(sums[-1] + w)
+    ub = sums[:]
+    for k in range(len(sums) - 2, -1, -1):
+        ub[k] = max(sums[k], ub[k + 1])
+    return ub
+
+
 class Quota:
     """``count`` wanted diagnoses (None: all) under per-component log-odds ``weights``."""
 
-    def __init__(self, count: int | None, weights: Sequence[float]) -> None:
+    def __init__(self, count: int | None, weights: Sequence[float],
+                 ub: Sequence[float] | None = None) -> None:
         self.count = count
-        self.weights = list(weights)
-        best = sorted(self.weights, reverse=True)
-        sums = [0.0]
-        for w in best:
-            sums.append(sums[-1] + w)
-        # ub[k] = max over j >= k of sums[j]: the best a diagnosis of size >= k can score
-        self._ub = sums[:]
-        for k in range(len(sums) - 2, -1, -1):
-            self._ub[k] = max(sums[k], self._ub[k + 1])
+        self.weights = weights
+        self._ub = upper_bounds(weights) if ub is None else ub
         self._heap: list[float] = []  # the `count` best scores, smallest first
 
     def reset(self) -> None:

@@ -79,14 +79,6 @@ def test_no_consistent_diagnosis_says_so_and_exits_1(
     assert data["explainable"] is False and data["diagnoses"] == []
 
 
-def test_contradictory_obs_file_is_bad_input(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    obs = tmp_path / "x.obs"
-    obs.write_text("on(jaguar)\n~on(jaguar)\n")
-    assert cli.main(["diagnose", str(TEDUSAR), "--obs", str(obs)]) == 2
-    captured = capsys.readouterr()
-    assert "bad:" not in captured.out and f"{obs}:2:" in captured.err
 
 
 @pytest.mark.parametrize("flag", [["--time-budget", "-1"], ["--time-budget", "nan"],
@@ -138,15 +130,20 @@ def test_diagnose_a_tug_file(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     assert json.loads(capsys.readouterr().out)["diagnoses"][0]["bad"] == ["jaguar"]
 
 
-def test_unknown_literal_is_one_line_and_exit_2(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+@pytest.mark.parametrize(("text", "line", "needle"), [
+    ("# header\nok(/scan)\nnot running(nobody)\n", 3, "running(nobody)"),  # unknown literal
+    ("on(jaguar)\n~on(jaguar)\n", 2, "line 1"),  # contradictory lines: no 'bad: jaguar'
+])
+def test_bad_obs_file_is_one_line_and_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str, line: int, needle: str
 ) -> None:
     obs = tmp_path / "x.obs"
-    obs.write_text("# header\nok(/scan)\nnot running(nobody)\n")
+    obs.write_text(text)
     assert cli.main(["diagnose", str(TEDUSAR), "--obs", str(obs)]) == 2
-    err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1
-    assert f"{obs}:3:" in err and "running(nobody)" in err and "Traceback" not in err
+    captured = capsys.readouterr()
+    err = captured.err.strip()
+    assert len(err.splitlines()) == 1 and "bad:" not in captured.out
+    assert f"{obs}:{line}:" in err and needle in err and "Traceback" not in err
 
 
 def test_bad_model_path_is_a_user_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

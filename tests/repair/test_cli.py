@@ -77,23 +77,20 @@ def test_user_errors_are_one_line_with_exit_2(
     assert needle in err and err.count("\n") == 1 and "Traceback" not in err
 
 
+
+
+@pytest.mark.parametrize(("text", "needle"), [
+    ("on(jaguar)\non(jaguar\n", "on(jaguar"),  # malformed
+    ("on(jaguar)\non(kinect)\n", "on(kinect)"),  # a literal the model does not know
+])
 def test_bad_observation_line_names_file_and_line(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str, needle: str
 ) -> None:
     obs = tmp_path / "obs.txt"
-    obs.write_text("on(jaguar)\non(jaguar\n")
-    assert host.cli.main(["plan", str(TEDUSAR), "--bad", "jaguar", "--obs", str(obs)]) == 2
-    assert f"{obs}:2" in capsys.readouterr().err
-
-
-def test_obs_with_a_literal_the_model_does_not_know(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    obs = tmp_path / "obs.txt"
-    obs.write_text("on(jaguar)\non(kinect)\n")
+    obs.write_text(text)
     assert host.cli.main(["plan", str(TEDUSAR), "--bad", "jaguar", "--obs", str(obs)]) == 2
     err = capsys.readouterr().err
-    assert f"{obs}:2:" in err and "on(kinect)" in err and err.count("\n") == 1
+    assert f"{obs}:2:" in err and needle in err and err.count("\n") == 1
 
 
 def test_a_tug_model_with_the_original_domain(capsys: pytest.CaptureFixture[str],
