@@ -51,7 +51,7 @@ from pysat.formula import WCNF  # type: ignore[import-untyped]
 from host.diagnosis.quota import Quota
 from host.diagnosis.result import Bound, SearchOutcome
 from host.diagnosis.satctx import SatContext
-from host.diagnosis.toplevel import min_card_search, top_level_order
+from host.diagnosis.toplevel import min_card_search, top_level_count
 
 Search = Callable[[SatContext, list[int], int | None, Quota, bool], SearchOutcome]
 
@@ -265,7 +265,7 @@ def auto_search(
     with ``top-level`` (the slice's work is dropped; both are exact)."""
     if not min_card_only or len(ctx.ab_vars) < AUTO_FROM:
         return cardinality_search(ctx, obs, max_card, quota, min_card_only)
-    if len(top_level_order(ctx, obs)) >= TOP_LEVEL_DIRECT:
+    if top_level_count(ctx, obs) >= TOP_LEVEL_DIRECT:
         return top_level_search(ctx, obs, max_card, quota, min_card_only)
     with ctx.sub_budget(AUTO_SLICE_S):
         out = cardinality_search(ctx, obs, max_card, quota, min_card_only)

@@ -47,6 +47,12 @@ def _regions(ctx: SatContext, obs: list[int]) -> dict[int, list[int]]:
     return structure.regions({a for a in map(ctx.atom_of, obs) if a is not None})
 
 
+def top_level_count(ctx: SatContext, obs: list[int]) -> int:
+    """How many components are top-level under these observations (cached per observed
+    set: cheap enough to decide by)."""
+    return len(_regions(ctx, obs))
+
+
 def top_level_order(ctx: SatContext, obs: list[int]) -> list[int]:
     """The top-level components under these observations (all components when the theory
     has no circuit structure), nearest the discrepancies first (module docstring)."""
