@@ -20,8 +20,10 @@ diagnoses are found in two steps:
    topological order alone (benchmarks/RESULTS.md).
 2. **Their expansions**: for a top-level diagnosis ``T``, each choice of one component from
    the region of every ``h ∈ T`` is checked with one solver call with every health variable
-   assumed (all but the chosen healthy): with all inputs observed that is propagation. By
-   the mapping above this finds every minimal-cardinality diagnosis, each once.
+   assumed (all but the chosen healthy): with all inputs observed that is propagation. When
+   the choices are many (large regions) the solver enumerates the consistent ones instead
+   (one abnormal per region, the rest healthy), skipping the others unseen. By the mapping
+   above this finds every minimal-cardinality diagnosis, each once.
 
 Without circuit structure every component is its own region and step 1 runs over all of them.
 The budget interrupts RC2; ``quota`` (quota.py) says when enough were found.
@@ -30,6 +32,7 @@ The budget interrupts RC2; ``quota`` (quota.py) says when enough were found.
 from __future__ import annotations
 
 import itertools
+import math
 
 from pysat.examples.rc2 import RC2  # type: ignore[import-untyped]
 from pysat.formula import WCNF  # type: ignore[import-untyped]
@@ -138,10 +141,23 @@ def _top_set(rc2: RC2, internal: list[tuple[int, int]]) -> list[int]:
     return [i for i, v in internal if model[v - 1] > 0]
 
 
+#: expansions of at most this many choices are checked one by one (each a propagation);
+#: larger ones (regions of dozens of gates, as in c3540) are enumerated by the solver, which
+#: skips the inconsistent choices without trying them
+CHECK_EACH_UP_TO = 64
+
+
+def _add(out: SearchOutcome, quota: Quota, bad: frozenset[int]) -> None:
+    out.bad_sets.append(bad)
+    quota.add(bad)
+
+
 def _expand(ctx: SatContext, obs: list[int], top: list[int], regions: dict[int, list[int]],
             out: SearchOutcome, quota: Quota, k: int) -> bool:
     """Add every diagnosis made of one component from each region of ``top`` to ``out``;
     False when a bound (count, time) cut the listing."""
+    if math.prod(len(regions[h]) for h in top) > CHECK_EACH_UP_TO:
+        return _expand_by_solver(ctx, obs, top, regions, out, quota, k)
     healthy = [-v for v in ctx.ab_vars]
     for choice in itertools.product(*(regions[h] for h in top)):
         if quota.reached(k):
@@ -158,6 +174,36 @@ def _expand(ctx: SatContext, obs: list[int], top: list[int], regions: dict[int, 
                 return False
             if not r:
                 continue
-        out.bad_sets.append(bad)
-        quota.add(bad)
+        _add(out, quota, bad)
     return True
+
+
+def _expand_by_solver(ctx: SatContext, obs: list[int], top: list[int],
+                      regions: dict[int, list[int]], out: SearchOutcome, quota: Quota,
+                      k: int) -> bool:
+    """``_expand`` by enumeration: at least one abnormal component in each region (so exactly
+    one, with at most ``k`` abnormal), every other component healthy, each found choice
+    blocked; all for this run only."""
+    act = ctx.new_run()
+    try:
+        inside: set[int] = set()
+        for h in top:
+            ctx.solver.add_clause([ctx.ab_vars[g] for g in regions[h]] + [-act])
+            inside.update(regions[h])
+        assumptions = [*obs, act, *ctx.at_most(k)]
+        assumptions += [-v for i, v in enumerate(ctx.ab_vars) if i not in inside]
+        while True:
+            if quota.reached(k):
+                out.cut_by = Bound.MAX_COUNT
+                return False
+            r = ctx.solve(assumptions)
+            if r is None:
+                out.cut_by = Bound.TIME_BUDGET
+                return False
+            if not r:
+                return True
+            bad = ctx.model_bad()
+            _add(out, quota, bad)
+            ctx.solver.add_clause([-ctx.ab_vars[i] for i in bad] + [-act])
+    finally:
+        ctx.end_run(act)
