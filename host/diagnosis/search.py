@@ -56,28 +56,6 @@ from host.diagnosis.toplevel import min_card_search, top_level_count
 Search = Callable[[SatContext, list[int], int | None, Quota, bool], SearchOutcome]
 
 
-def _list_level(
-    ctx: SatContext, assumptions: list[int], act: int, out: SearchOutcome, quota: Quota, k: int,
-) -> bool:
-    """Add every diagnosis (of size ``k``) the solver finds under ``assumptions`` to ``out``,
-    each blocked for the rest of the run (``act``); False when a bound (count, time) cut the
-    listing."""
-    while True:
-        if quota.reached(k):
-            out.cut_by = Bound.MAX_COUNT
-            return False
-        r = ctx.solve(assumptions)
-        if r is None:
-            out.cut_by = Bound.TIME_BUDGET
-            return False
-        if not r:
-            return True
-        bad = ctx.model_bad()
-        out.bad_sets.append(bad)
-        quota.add(bad)
-        ctx.solver.add_clause([-ctx.ab_vars[i] for i in bad] + [-act])
-
-
 def cardinality_search(
     ctx: SatContext,
     obs: list[int],
@@ -103,7 +81,7 @@ def cardinality_search(
             out.cut_by = Bound.TIME_BUDGET
             return out
         while k <= limit:
-            if not _list_level(ctx, base + ctx.at_most(k), act, out, quota, k):
+            if not ctx.list_diagnoses(base + ctx.at_most(k), act, out, quota, k):
                 return out
             k += 1
             if min_card_only and out.bad_sets:

@@ -147,11 +147,6 @@ def _top_set(rc2: RC2, internal: list[tuple[int, int]]) -> list[int]:
 CHECK_EACH_UP_TO = 64
 
 
-def _add(out: SearchOutcome, quota: Quota, bad: frozenset[int]) -> None:
-    out.bad_sets.append(bad)
-    quota.add(bad)
-
-
 def _expand(ctx: SatContext, obs: list[int], top: list[int], regions: dict[int, list[int]],
             out: SearchOutcome, quota: Quota, k: int) -> bool:
     """Add every diagnosis made of one component from each region of ``top`` to ``out``;
@@ -174,7 +169,8 @@ def _expand(ctx: SatContext, obs: list[int], top: list[int], regions: dict[int, 
                 return False
             if not r:
                 continue
-        _add(out, quota, bad)
+        out.bad_sets.append(bad)
+        quota.add(bad)
     return True
 
 
@@ -192,18 +188,6 @@ def _expand_by_solver(ctx: SatContext, obs: list[int], top: list[int],
             inside.update(regions[h])
         assumptions = [*obs, act, *ctx.at_most(k)]
         assumptions += [-v for i, v in enumerate(ctx.ab_vars) if i not in inside]
-        while True:
-            if quota.reached(k):
-                out.cut_by = Bound.MAX_COUNT
-                return False
-            r = ctx.solve(assumptions)
-            if r is None:
-                out.cut_by = Bound.TIME_BUDGET
-                return False
-            if not r:
-                return True
-            bad = ctx.model_bad()
-            _add(out, quota, bad)
-            ctx.solver.add_clause([-ctx.ab_vars[i] for i in bad] + [-act])
+        return ctx.list_diagnoses(assumptions, act, out, quota, k)
     finally:
         ctx.end_run(act)
