@@ -18,6 +18,7 @@ this time because they judge a window of time that an upstream change has not ye
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
@@ -110,11 +111,19 @@ def rank(
     scored = []
     for bad in bad_sets:
         lp = base + math.fsum(weight[c] for c in bad)
-        scored.append((-round(lp, 9), len(bad), sorted(bad), bad, lp))
-    scored.sort(key=lambda s: (s[0], s[1], s[2]))
-    top = max((s[4] for s in scored), default=0.0)
-    total = sum(math.exp(s[4] - top) for s in scored)
+        scored.append((rank_key(lp, bad), bad, lp))
+    scored.sort(key=lambda s: s[0])
+    top = max((s[2] for s in scored), default=0.0)
+    total = sum(math.exp(s[2] - top) for s in scored)
     return tuple(
         Diagnosis(bad, all_c, math.exp(lp - top) / total, lp)
-        for _, _, _, bad, lp in scored
+        for _, bad, lp in scored
     )
+
+
+def rank_key(log_p: float, bad: Iterable[str]) -> tuple[float, int, list[str]]:
+    """The order of diagnoses: most probable first (log-probabilities equal to 9 decimals
+    tie), then smaller, then by names. The repair policy ranks the diagnoser's normalised
+    probabilities by it too, so the daemon repairs in the order listed."""
+    names = sorted(bad)
+    return (-round(log_p, 9), len(names), names)
