@@ -1,7 +1,7 @@
 """Diagnosis benchmark: ISCAS-85 circuits, the whole command, and synthetic robot models.
 
-ISCAS-85 (benchmarks/iscas.py; ``../shared/data/iscas85`` beside the checkout, or
-``$DXBOARD_SHARED/data/iscas85``): a *fresh* sample the benchmark draws itself, seeded
+ISCAS-85 (benchmarks/iscas.py; ``shared/data/iscas85`` beside the checkout or a folder above
+it, or ``$DXBOARD_SHARED/data/iscas85``): a *fresh* sample the benchmark draws itself, seeded
 (``--seed``, printed), ``--per-circuit`` instances per circuit (30 by default), each with 1-5
 random gates flipped and every primary input and output observed. Per instance, with the
 diagnoser built once per circuit: the first minimal-cardinality diagnosis (``max_count`` 1) by

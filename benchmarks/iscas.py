@@ -1,13 +1,13 @@
 """ISCAS-85 circuits for the diagnosis benchmark: parsing, the weak-fault-model theory,
 simulation, seeded fault instances, and the plain RC2 reference.
 
-The circuits are ``../shared/data/iscas85/*.bench`` beside the checkout (``DXBOARD_SHARED``
-names another ``shared`` directory). Each gate is a component under the weak fault model:
-``AB(g) or out(g) = f(inputs)``. An *instance* simulates the circuit on random inputs with
-1-5 random gates' outputs flipped, kept only when an output differs, and observes every
-primary input and output. The *reference* is PySAT's RC2 on the whole model (hard: the
-clauses and the observations; soft: each gate healthy), first optimum, as an independent
-MaxSAT solver would be used.
+The circuits are ``shared/data/iscas85/*.bench`` beside the checkout or a folder above it
+(``DXBOARD_SHARED`` names another ``shared`` directory). Each gate is a component under the
+weak fault model: ``AB(g) or out(g) = f(inputs)``. An *instance* simulates the circuit on
+random inputs with 1-5 random gates' outputs flipped, kept only when an output differs, and
+observes every primary input and output. The *reference* is PySAT's RC2 on the whole model
+(hard: the clauses and the observations; soft: each gate healthy), first optimum, as an
+independent MaxSAT solver would be used.
 """
 
 from __future__ import annotations
@@ -28,7 +28,9 @@ sys.path.insert(0, str(ROOT))
 
 from host.diagnosis import Clause, Literal, Theory, ab  # noqa: E402
 
-SHARED = Path(os.environ.get("DXBOARD_SHARED", ROOT.parent / "shared"))
+SHARED = Path(os.environ.get("DXBOARD_SHARED") or next(
+    (p / "shared" for p in ROOT.parents if (p / "shared" / "data").is_dir()),
+    ROOT.parent / "shared"))
 ISCAS = SHARED / "data" / "iscas85"
 CIRCUITS = ["c17", "c432", "c499", "c880", "c1355", "c1908", "c2670", "c3540", "c5315",
             "c6288", "c7552"]

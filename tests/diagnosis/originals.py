@@ -1,8 +1,8 @@
 """Where the original TU Graz system's real files are: ``../shared/data/tug-original``.
 
 The sample of real model files and the repair domain of paper 000's system lives beside the
-checkout (GPLv3 upstream: used from there, never copied into the project). ``DXBOARD_SHARED``
-names another ``shared`` directory (a worktree whose parent has none).
+checkout, or beside a folder above it (GPLv3 upstream: used from there, never copied into the
+project). ``DXBOARD_SHARED`` names another ``shared`` directory.
 """
 
 from __future__ import annotations
@@ -11,7 +11,10 @@ import os
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-SHARED = Path(os.environ.get("DXBOARD_SHARED", ROOT.parent / "shared"))
+#: ``shared`` beside the checkout, or beside a folder above it (a worktree in /work/wt/NAME)
+SHARED = Path(os.environ.get("DXBOARD_SHARED") or next(
+    (p / "shared" for p in ROOT.parents if (p / "shared" / "data").is_dir()),
+    ROOT.parent / "shared"))
 ORIGINAL = SHARED / "data" / "tug-original"
 ISCAS = SHARED / "data" / "iscas85"
 
