@@ -1,21 +1,28 @@
-"""Diagnosis benchmark: ISCAS-85 circuits and synthetic robot models, in one run.
+"""Diagnosis benchmark: ISCAS-85 circuits, the whole command, and synthetic robot models.
 
-ISCAS-85 (``../shared/data/iscas85`` beside the checkout): each gate is a component under the
-weak fault model (``AB(g) or out(g) = f(inputs)``). Observations come from simulating the
-circuit on random inputs with 1-5 gate outputs flipped (kept only when an output differs),
-and observe every primary input and output. Measured per instance, with the solver built
-once per circuit (its build time is reported apart): the time to all minimal-cardinality
-diagnoses (cardinality <= 5), and to all subset-minimal diagnoses up to cardinality 1, 2, 3.
-The baseline, on the same instances and the same SAT oracle, is a plain Reiter HS-tree
-(breadth-first, conflicts from unsatisfiable cores, reused when they stay unhit, subset
-pruning); it has a time budget per instance, so a speedup over a cut baseline is a lower bound.
+ISCAS-85 (benchmarks/iscas.py; ``shared/data/iscas85`` beside the checkout or a folder above
+it, or ``$DXBOARD_SHARED/data/iscas85``): a *fresh* sample the benchmark draws itself, seeded
+(``--seed``, printed), ``--per-circuit`` instances per circuit (30 by default), each with 1-5
+random gates flipped and every primary input and output observed. Per instance, with the
+diagnoser built once per circuit: the first minimal-cardinality diagnosis (``max_count`` 1) by
+the default algorithm ``auto`` and by ``cardinality``; all minimal-cardinality diagnoses (up
+to 1,000) by ``auto``; and, beside them in the same run, the reference: PySAT's RC2 on the
+whole model, first optimum. Instances of minimum cardinality above 5 are counted apart. The
+table reports the mean and the *worst* instance, and how many missed 1 s / 5 s.
+
+c432, all subset-minimal diagnoses up to cardinality 1, 2, 3, against PyMBD's published
+figures and a plain Reiter HS-tree (same SAT oracle) measured here.
+
+The whole command: ``dxboard diagnose MODEL.yaml --obs FILE --json --min-card-only`` as a
+process, on circuits written as tug model files, against the engine alone on the same
+instance (``Diagnoser`` built, observations added, diagnosed: in process, the model loaded).
 
 Synthetic robots: layered robot models of 100, 1,000 and 10,000 components in system.yaml
-form, loaded and generated as usual; with every observer reporting, one observation at a time
-flips (a device loses power, a node stops, a topic goes silent) and flips back; we time each
-re-diagnosis (observe -> diagnose) and report p50/p99.
+form; with every observer reporting, one observation at a time flips and flips back; each
+re-diagnosis (observe -> diagnose) is timed, p50/p99.
 
-    .venv/bin/python benchmarks/diagnosis.py [--quick] [--write]
+    .venv/bin/python benchmarks/diagnosis.py [--quick] [--seed N] [--per-circuit N]
+        [--only iscas|command|robots] [--write]
 
 ``--write`` replaces the "## Diagnosis" section of benchmarks/RESULTS.md.
 """
@@ -23,14 +30,16 @@ re-diagnosis (observe -> diagnose) and report p50/p99.
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import platform
 import random
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
 from collections import deque
-from dataclasses import dataclass
 from pathlib import Path
 
 import yaml
@@ -38,131 +47,30 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from iscas import (  # noqa: E402
+    CIRCUITS,
+    ISCAS,
+    circuit_theory,
+    parse_bench,
+    rc2_reference,
+    sample,
+)
+
 from host.diagnosis import (  # noqa: E402
-    Clause,
     Diagnoser,
     DiagnosisResult,
     Literal,
     Theory,
-    ab,
     generate,
     load_system,
 )
 from host.diagnosis.satctx import SatContext  # noqa: E402
+from host.diagnosis.structure import infer_structure  # noqa: E402
+from host.diagnosis.tug import write_tug  # noqa: E402
 
-ISCAS = ROOT / ".." / "shared" / "data" / "iscas85"
-CIRCUITS = ["c17", "c432", "c499", "c880", "c1355", "c1908", "c2670", "c3540", "c5315",
-            "c6288", "c7552"]
 PYMBD_C432 = {1: 0.68, 2: 2.7, 3: 10.2}  # s, PyMBD's best algorithm, all min. diagnoses <= k
-
-
-# -- ISCAS-85 ----------------------------------------------------------------------------------
-@dataclass
-class Circuit:
-    name: str
-    inputs: list[str]
-    outputs: list[str]
-    gates: list[tuple[str, str, list[str]]]  # (output signal, type, inputs), topological
-
-
-def parse_bench(path: Path) -> Circuit:
-    inputs: list[str] = []
-    outputs: list[str] = []
-    defs: dict[str, tuple[str, list[str]]] = {}
-    for raw in path.read_text().splitlines():
-        line = raw.split("#", 1)[0].strip()
-        if not line:
-            continue
-        if line.upper().startswith("INPUT("):
-            inputs.append(line[6:-1].strip())
-        elif line.upper().startswith("OUTPUT("):
-            outputs.append(line[7:-1].strip())
-        else:
-            out, expr = (s.strip() for s in line.split("=", 1))
-            gtype, args = expr.split("(", 1)
-            gtype = gtype.strip().lower()
-            gtype = "buf" if gtype in ("buff", "buf") else gtype
-            defs[out] = (gtype, [a.strip() for a in args.rstrip(")").split(",")])
-    order: list[tuple[str, str, list[str]]] = []
-    done = set(inputs)
-    pending = dict(defs)
-    while pending:  # Kahn-style topological order
-        ready = [o for o, (_, ins) in pending.items() if all(i in done for i in ins)]
-        for o in ready:
-            order.append((o, *pending.pop(o)))
-            done.add(o)
-    return Circuit(path.stem, inputs, outputs, order)
-
-
-def _gate_clauses(out: str, gtype: str, ins: list[str]) -> list[list[Literal]]:
-    """CNF of out = gtype(ins), without the AB guard."""
-    def L(a: str, pos: bool = True) -> Literal:
-        return Literal(a, pos)
-
-    neg = gtype in ("nand", "nor", "not", "xnor")
-    o = L(out, not neg)  # the literal meaning "the un-negated function is true"
-    no = -o
-    if gtype in ("and", "nand"):
-        return [[no, L(i)] for i in ins] + [[o, *(L(i, False) for i in ins)]]
-    if gtype in ("or", "nor"):
-        return [[o, L(i, False)] for i in ins] + [[no, *(L(i) for i in ins)]]
-    if gtype in ("buf", "not"):
-        return [[no, L(ins[0])], [o, L(ins[0], False)]]
-    if gtype in ("xor", "xnor"):
-        cls: list[list[Literal]] = []
-        acc = L(ins[0])
-        for k, nxt in enumerate(ins[1:], start=1):
-            res = o if k == len(ins) - 1 else L(f"{out}.x{k}")
-            b = L(nxt)
-            cls += [[-res, acc, b], [-res, -acc, -b], [res, -acc, b], [res, acc, -b]]
-            acc = res
-        return cls
-    raise ValueError(f"gate type {gtype}")
-
-
-def circuit_theory(c: Circuit) -> Theory:
-    clauses = []
-    for out, gtype, ins in c.gates:
-        guard = Literal(ab(out))
-        clauses += [Clause((guard, *cl)) for cl in _gate_clauses(out, gtype, ins)]
-    return Theory(tuple(g[0] for g in c.gates), tuple(clauses))
-
-
-def simulate(c: Circuit, inputs: dict[str, bool], flipped: set[str]) -> dict[str, bool]:
-    v = dict(inputs)
-    for out, gtype, ins in c.gates:
-        xs = [v[i] for i in ins]
-        if gtype in ("and", "nand"):
-            r = all(xs)
-        elif gtype in ("or", "nor"):
-            r = any(xs)
-        elif gtype in ("xor", "xnor"):
-            r = sum(xs) % 2 == 1
-        else:
-            r = xs[0]
-        if gtype in ("nand", "nor", "not", "xnor"):
-            r = not r
-        v[out] = r != (out in flipped)
-    return v
-
-
-def instances(c: Circuit, rng: random.Random, per_fault_count: int) -> list[list[Literal]]:
-    gates = [g[0] for g in c.gates]
-    out: list[list[Literal]] = []
-    for n_faults in range(1, 6):
-        made = 0
-        while made < per_fault_count:
-            inputs = {i: rng.random() < 0.5 for i in c.inputs}
-            flips = set(rng.sample(gates, min(n_faults, len(gates))))
-            healthy = simulate(c, inputs, set())
-            faulty = simulate(c, inputs, flips)
-            if all(healthy[o] == faulty[o] for o in c.outputs):
-                continue
-            obs = [Literal(i, faulty[i]) for i in c.inputs]
-            obs += [Literal(o, faulty[o]) for o in dict.fromkeys(c.outputs)]
-            out.append(obs)
-            made += 1
-    return out
+MAX_CARD = 5
+MAX_COUNT = 1000
 
 
 # -- the baseline: a plain Reiter HS-tree ----------------------------------------------------
@@ -206,130 +114,212 @@ def timed(fn, *args, **kw):  # type: ignore[no-untyped-def]
     return time.perf_counter() - t, r
 
 
+def cpu_timed(fn, *args, **kw):  # type: ignore[no-untyped-def]
+    """Wall time, this process's CPU time (what a machine of its own would have taken, near
+    enough: the search is single-threaded) and the result."""
+    c = time.process_time()
+    t, r = timed(fn, *args, **kw)
+    return t, time.process_time() - c, r
+
+
 def fmt(s: float) -> str:
     return f"{s * 1000:.1f} ms" if s < 1 else f"{s:.2f} s"
 
 
-def card_range(cards: list[int]) -> str:
-    """``lo-hi`` of the min cards found; ``-1`` marks instances the budget cut first."""
-    found = [c for c in cards if c >= 0]
-    cut = len(cards) - len(found)
-    text = f"{min(found)}-{max(found)}" if found else "none"
-    return text + (f" ({cut} cut)" if cut else "")
+def mean_worst(xs: list[float]) -> str:
+    """Mean and worst; instances a budget cut (``inf``) are left out of the mean and make
+    the worst read ``cut``."""
+    done = [x for x in xs if x != float("inf")]
+    if not xs:
+        return "-"
+    worst = "cut" if len(done) < len(xs) else fmt(max(done))
+    return f"{fmt(statistics.fmean(done)) if done else '-'} / {worst}"
+
+
+def worst(xs: list[float]) -> str:
+    return mean_worst(xs).split(" / ")[-1]
+
+
+def first_card(r: DiagnosisResult) -> int | None:
+    return r.diagnoses[0].cardinality if r.diagnoses else None
 
 
 def bench_iscas(args: argparse.Namespace, lines: list[str]) -> None:
-    rng = random.Random(2026)
-    per = 1 if args.quick else 2
-    names = CIRCUITS[:4] if args.quick else CIRCUITS
-    base_names = {"c17", "c432", "c499", "c880"} if not args.quick else {"c17", "c432"}
-    lines.append("### ISCAS-85, weak fault model\n")
-    lines.append(f"{per} observation(s) per number of flipped gates (1-5), so {5 * per} "
-                 "instances per circuit; times per instance, solver built once per circuit. "
-                 "*min-card*: all minimal-cardinality diagnoses (cardinality <= 5, count <= "
-                 "1000; *first*: max count 1); *all <= 3*: all subset-minimal diagnoses up "
-                 "to cardinality 3 "
-                 f"(time budget {args.budget:g} s each). Baseline: plain Reiter HS-tree, "
-                 f"same SAT oracle, budget {args.base_budget:g} s per instance and task.\n")
-    lines.append("| circuit | gates | build | first min-card diag. mean / max | same, "
-                 "`cardinality` mean / max | same, `maxsat` "
-                 "mean / max | all min-card mean / max | min card | #min-card (max) | "
-                 "all <= 3 mean / max | #diag <= 3 (max) | cut by budget/count | HS-tree "
-                 "min-card mean | HS-tree all <= 3 mean | speedup vs HS-tree min-card / all <= 3 |")
+    rng = random.Random(args.seed)
+    names = CIRCUITS[:5] if args.quick else args.circuits or CIRCUITS
+    lines.append("### ISCAS-85, weak fault model: a fresh sample, worst case beside RC2\n")
+    lines.append(f"Seed {args.seed}, {args.per_circuit} instances per circuit (1-5 gates flipped, "
+                 "every input and output observed), drawn by the benchmark itself. Times per "
+                 "instance; the diagnoser is built once per circuit. *first*: the first "
+                 "minimal-cardinality diagnosis (`--min-card-only --max-count 1`); *all*: "
+                 f"every minimal-cardinality diagnosis up to {MAX_COUNT}; RC2: PySAT's RC2 on "
+                 "the whole model, first optimum, same run. Budgets: ours "
+                 f"{args.budget:g} s, `cardinality` {args.card_budget:g} s, RC2 "
+                 f"{args.ref_budget:g} s. Instances of minimum cardinality above {MAX_CARD} "
+                 "are listed apart (`>5`); *cut*: a budget stopped one (left out of the "
+                 "mean). *CPU*: this process's CPU time for the same request (the search is "
+                 "single-threaded: near what an unloaded machine takes; the budgets count "
+                 "wall time).\n")
+    lines.append("| circuit | gates | top-level | instances (>5) | min card | first, `auto` "
+                 "mean / worst | > 1 s | first, CPU worst | first, `cardinality` mean / worst | "
+                 "RC2 mean / worst | all (<= 1000), `auto` mean / worst | > 5 s | all, CPU "
+                 "worst | #diagnoses max | cut by count |")
     lines.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-    c432_levels: dict[int, list[float]] = {1: [], 2: [], 3: []}
-    c432_base: dict[int, list[float]] = {1: [], 2: [], 3: []}
-    for name in names:
+    for name in CIRCUITS:
         circuit = parse_bench(ISCAS / f"{name}.bench")
+        instances = sample(circuit, rng, args.per_circuit)  # drawn for all: same sample
+        if name not in names:
+            continue
         theory = circuit_theory(circuit)
-        build, d = timed(Diagnoser, theory)
         known = theory.observable_atoms()  # an output wired to an input may be in no clause
-        insts = [[o for o in obs if o.atom in known] for obs in instances(circuit, rng, per)]
-        mc_t, mc_card, mc_n, a3_t, a3_n, cuts = [], [], [], [], [], 0
-        first_t, first_mx, first_card = [], [], []
-        dmx = Diagnoser(theory, algorithm="maxsat")
+        structure = infer_structure(theory)
+        top = len(structure.regions(set(circuit.inputs) | set(circuit.outputs))) \
+            if structure is not None else len(theory.components)
+        d = Diagnoser(theory)
         dcard = Diagnoser(theory, algorithm="cardinality")
-        b_mc, b_a3 = [], []
-        base_cut = 0
-        for obs in insts:
+        first, card, ref, alls, cards, counts = [], [], [], [], [], []
+        first_cpu: list[float] = []
+        all_cpu: list[float] = []
+        over5 = cut_count = 0
+        for _flips, obs in instances:
+            obs = [o for o in obs if o.atom in known]
             for o in obs:
                 d.observe(o)
-                dmx.observe(o)
                 dcard.observe(o)
-            t, r = timed(d.diagnose, max_card=5, max_count=1, time_budget_s=args.budget,
-                         min_card_only=True)
-            first_t.append(t)
-            cuts += r.cut_by is not None and r.cut_by.value == "time_budget"
-            t, r = timed(dcard.diagnose, max_card=5, max_count=1, time_budget_s=args.budget,
-                         min_card_only=True)
-            first_card.append(t)
-            t, r = timed(dmx.diagnose, max_card=5, max_count=1, time_budget_s=args.budget,
-                         min_card_only=True)
-            first_mx.append(t)
-            t, r = timed(d.diagnose, max_card=5, max_count=1000, time_budget_s=args.budget,
-                         min_card_only=True)
-            mc_t.append(t)
-            mc_card.append(r.diagnoses[0].cardinality if r.diagnoses else -1)
-            mc_n.append(len(r.diagnoses))
-            cuts += not r.complete
-            t, r = timed(d.diagnose, max_card=3, max_count=100000, time_budget_s=args.budget)
-            a3_t.append(t)
-            a3_n.append(len(r.diagnoses))
-            cuts += not r.complete and r.cut_by is not None and r.cut_by.value != "max_card"
-            if name == "c432":
-                for k in (1, 2, 3):
-                    t, r = timed(d.diagnose, max_card=k, max_count=100000,
-                                 time_budget_s=args.budget)
-                    c432_levels[k].append(t)
-            if name in base_names:
-                ctx = SatContext(theory)
-                lits = [ctx.lit(o) for o in obs]
-                t, (diags, complete) = timed(hs_tree, ctx, lits, 5, True, args.base_budget)
-                b_mc.append(t)
-                base_cut += not complete
-                if complete:  # cross-check
-                    ours = {frozenset(theory.components.index(x) for x in b)
-                            for b in d.diagnose(max_card=5, max_count=1000,
-                                                time_budget_s=args.budget,
-                                                min_card_only=True).bad_sets()}
-                    assert set(diags) == ours or len(ours) >= 1000, name
-                t, (diags, complete) = timed(hs_tree, ctx, lits, 3, False, args.base_budget)
-                b_a3.append(t)
-                base_cut += not complete
-                if name == "c432":
-                    for k in (1, 2, 3):
-                        t, _ = timed(hs_tree, ctx, lits, k, False, args.base_budget)
-                        c432_base[k].append(t)
-                ctx.close()
+            t_ref, k_ref = rc2_reference(theory, obs, args.ref_budget)
+            t, cpu, r = cpu_timed(d.diagnose, min_card_only=True, max_count=1,
+                                  time_budget_s=args.budget)
+            k = first_card(r)
+            if k is not None and k_ref is not None:
+                assert k == k_ref, (name, k, k_ref)  # the reference agrees on the minimum
+            if (k if k is not None else k_ref or 0) > MAX_CARD:
+                over5 += 1
+                continue
+            first.append(t if k is not None else float("inf"))
+            first_cpu.append(cpu if k is not None else float("inf"))
+            ref.append(t_ref)
+            cards.append(k or -1)
+            t, r = timed(dcard.diagnose, min_card_only=True, max_count=1,
+                         time_budget_s=args.card_budget)
+            card.append(t)
+            t, cpu, r = cpu_timed(d.diagnose, min_card_only=True, max_count=MAX_COUNT,
+                                  time_budget_s=args.budget)
+            done = r.cut_by is None or r.cut_by.value == "max_count"
+            alls.append(t if done else float("inf"))
+            all_cpu.append(cpu if done else float("inf"))
+            counts.append(len(r.diagnoses))
+            cut_count += r.cut_by is not None and r.cut_by.value == "max_count"
         d.close()
-        dmx.close()
         dcard.close()
-        mean = statistics.fmean
-        if b_mc:
-            base_cols = (f"{fmt(mean(b_mc))} | {fmt(mean(b_a3))} | "
-                         f"{'>=' if base_cut else ''}{sum(b_mc) / sum(mc_t):.1f}x / "
-                         f"{'>=' if base_cut else ''}{sum(b_a3) / sum(a3_t):.1f}x")
-        else:
-            base_cols = "- | - | -"
+        ks = [c for c in cards if c >= 0]
         lines.append(
-            f"| {name} | {len(circuit.gates)} | {fmt(build)} | {fmt(mean(first_t))} / "
-            f"{fmt(max(first_t))} | {fmt(mean(first_card))} / {fmt(max(first_card))} | "
-            f"{fmt(mean(first_mx))} / {fmt(max(first_mx))} | "
-            f"{fmt(mean(mc_t))} / "
-            f"{fmt(max(mc_t))} | {min(mc_card)}-{max(mc_card)} | {max(mc_n)} | "
-            f"{fmt(mean(a3_t))} / {fmt(max(a3_t))} | {max(a3_n)} | {cuts} | {base_cols} |")
+            f"| {name} | {len(circuit.gates)} | {top} | {len(first)} ({over5}) | "
+            f"{min(ks) if ks else '-'}-{max(ks) if ks else '-'} | {mean_worst(first)} | "
+            f"{sum(t > 1 for t in first)} | {worst(first_cpu)} | {mean_worst(card)} | "
+            f"{mean_worst(ref)} | {mean_worst(alls)} | {sum(t > 5 for t in alls)} | "
+            f"{worst(all_cpu)} | {max(counts, default=0)} | {cut_count} |")
         print(lines[-1], flush=True)
     lines.append("")
-    lines.append("c432, all subset-minimal diagnoses up to cardinality k (mean per instance):\n")
+
+
+def bench_c432(args: argparse.Namespace, lines: list[str]) -> None:
+    rng = random.Random(args.seed)
+    circuit = parse_bench(ISCAS / "c432.bench")
+    theory = circuit_theory(circuit)
+    known = theory.observable_atoms()
+    ours: dict[int, list[float]] = {1: [], 2: [], 3: []}
+    base: dict[int, list[float]] = {1: [], 2: [], 3: []}
+    with Diagnoser(theory) as d:
+        for _flips, obs in sample(circuit, rng, 5 if args.quick else 10):
+            obs = [o for o in obs if o.atom in known]
+            for o in obs:
+                d.observe(o)
+            ctx = SatContext(theory)
+            lits = [ctx.lit(o) for o in obs]
+            for k in (1, 2, 3):
+                t, r = timed(d.diagnose, max_card=k, max_count=100000,
+                             time_budget_s=args.budget)
+                ours[k].append(t)
+                t, (diags, complete) = timed(hs_tree, ctx, lits, k, False, args.base_budget)
+                base[k].append(t)
+                if complete:  # cross-check
+                    got = {frozenset(theory.components.index(x) for x in b)
+                           for b in r.bad_sets()}
+                    assert set(diags) == got
+            ctx.close()
+    lines.append("c432, all subset-minimal diagnoses up to cardinality k (mean per instance, "
+                 "same seed):\n")
     lines.append("| k | PyMBD best (published) | dxboard | speedup vs PyMBD | HS-tree (here) | "
                  "speedup vs HS-tree |")
     lines.append("|---|---|---|---|---|---|")
     for k in (1, 2, 3):
-        ours = statistics.fmean(c432_levels[k])
-        base = statistics.fmean(c432_base[k]) if c432_base[k] else float("nan")
-        lines.append(f"| {k} | {PYMBD_C432[k]:.2f} s | {fmt(ours)} | "
-                     f"{PYMBD_C432[k] / ours:.0f}x | {fmt(base)} | {base / ours:.0f}x |")
+        o, b = statistics.fmean(ours[k]), statistics.fmean(base[k])
+        lines.append(f"| {k} | {PYMBD_C432[k]:.2f} s | {fmt(o)} | {PYMBD_C432[k] / o:.0f}x | "
+                     f"{fmt(b)} | {b / o:.1f}x |")
         print(lines[-1], flush=True)
+    lines.append("")
+
+
+def bench_command(args: argparse.Namespace, lines: list[str]) -> None:
+    """The whole ``dxboard diagnose`` process against the engine alone, same instances."""
+    rng = random.Random(args.seed + 1)
+    dxboard = Path(sys.executable).parent / "dxboard"
+    names = ["c6288"] if args.quick else ["c6288", "c7552"]
+    per = 3 if args.quick else 10
+    lines.append("### The whole command against the engine alone\n")
+    lines.append(f"`dxboard diagnose MODEL.yaml --obs FILE --json --min-card-only` (all minimal-"
+                 f"cardinality diagnoses, up to 1,000) as a process on the circuit written as a "
+                 f"tug model file, {per} instances per circuit (seed {args.seed + 1}), against "
+                 "the engine alone on the same instance (diagnoser built, observations added, "
+                 "diagnosed; in process, model loaded); the better of two runs each. "
+                 "*overhead*: what the command adds (interpreter and imports, reading the "
+                 "model, writing JSON).\n")
+    lines.append("| circuit | model file | engine, sum | command, sum | command / engine | "
+                 "overhead per run, mean / worst | JSON, largest |")
+    lines.append("|---|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory(prefix="dxboard-bench-") as tmp:
+        for name in names:
+            circuit = parse_bench(ISCAS / f"{name}.bench")
+            theory = circuit_theory(circuit)
+            known = theory.observable_atoms()
+            model = Path(tmp) / f"{name}.yaml"
+            write_tug(theory, model)
+            engine, command, overhead, size = [], [], [], 0
+            for n, (_flips, obs) in enumerate(sample(circuit, rng, per)):
+                obs = [o for o in obs if o.atom in known]
+                obs_file = Path(tmp) / f"{name}-{n}.obs"
+                obs_file.write_text("".join(f"{o}\n" for o in obs))
+
+                def engine_run(obs: list[Literal] = obs, theory: Theory = theory) -> (
+                        DiagnosisResult):
+                    with Diagnoser(theory) as d:
+                        for o in obs:
+                            d.observe(o)
+                        return d.diagnose(min_card_only=True, max_count=MAX_COUNT,
+                                          time_budget_s=args.budget)
+
+                t_engine, r = timed(engine_run)
+                t_engine = min(t_engine, timed(engine_run)[0])  # the better of two: less noise
+                t_cmd = float("inf")
+                for _ in range(2):
+                    start = time.perf_counter()
+                    proc = subprocess.run(
+                        [str(dxboard), "diagnose", str(model), "--obs", str(obs_file), "--json",
+                         "--min-card-only", "--time-budget", str(args.budget)],
+                        capture_output=True, text=True, check=False)
+                    t_cmd = min(t_cmd, time.perf_counter() - start)
+                assert proc.returncode == 0, proc.stderr
+                data = json.loads(proc.stdout)
+                assert sorted(map(tuple, (x["bad"] for x in data["diagnoses"]))) == sorted(
+                    tuple(sorted(x.bad)) for x in r.diagnoses) or r.cut_by is not None
+                engine.append(t_engine)
+                command.append(t_cmd)
+                overhead.append(t_cmd - t_engine)
+                size = max(size, len(proc.stdout))
+            lines.append(f"| {name} | {model.stat().st_size / 1e6:.1f} MB | {fmt(sum(engine))} | "
+                         f"{fmt(sum(command))} | {sum(command) / sum(engine):.2f}x | "
+                         f"{mean_worst(overhead)} | {size / 1e3:.0f} kB |")
+            print(lines[-1], flush=True)
     lines.append("")
 
 
@@ -436,19 +426,34 @@ def write_results(section: str) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="a small run (a minute)")
+    parser.add_argument("--quick", action="store_true", help="a small run (a few minutes)")
     parser.add_argument("--write", action="store_true", help="update benchmarks/RESULTS.md")
+    parser.add_argument("--seed", type=int, default=int(time.strftime("%Y%m%d")),
+                        help="the sample's seed (default: today's date)")
+    parser.add_argument("--per-circuit", type=int, default=30, help="instances per circuit")
     parser.add_argument("--budget", type=float, default=5.0, help="our time budget, s")
+    parser.add_argument("--card-budget", type=float, default=5.0,
+                        help="the `cardinality` column's budget, s")
+    parser.add_argument("--ref-budget", type=float, default=30.0, help="RC2's budget, s")
     parser.add_argument("--base-budget", type=float, default=5.0, help="HS-tree budget, s")
-    parser.add_argument("--only", choices=["iscas", "robots"], default=None)
+    parser.add_argument("--only", choices=["iscas", "command", "robots"], default=None)
+    parser.add_argument("--circuits", nargs="+", choices=CIRCUITS, metavar="NAME",
+                        help="measure these circuits only (the sample is drawn as for all)")
     args = parser.parse_args()
+    if args.quick:
+        args.per_circuit = min(args.per_circuit, 10)
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     lines = ["## Diagnosis", "",
              f"`benchmarks/diagnosis.py{' --quick' if args.quick else ''}`, "
-             f"{time.strftime('%Y-%m-%d')}, 2 cores, Python {platform.python_version()}, "
-             "PySAT Glucose 4 via python-sat (RC2 over Glucose 3 for `maxsat`/`top-level`), "
-             "default algorithm `auto`.", ""]
+             f"{time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores (load average "
+             f"{load:.1f} at the start: the machine is shared), Python "
+             f"{platform.python_version()}, PySAT Glucose 4 via python-sat (RC2 over Glucose "
+             "3 for `maxsat`/`top-level`), default algorithm `auto`.", ""]
     if args.only in (None, "iscas"):
         bench_iscas(args, lines)
+        bench_c432(args, lines)
+    if args.only in (None, "command"):
+        bench_command(args, lines)
     if args.only in (None, "robots"):
         bench_robots(args, lines)
     section = "\n".join(lines)

@@ -40,7 +40,7 @@ from host.diagnosis.logic import Literal  # noqa: E402
 from host.repair.domain import Domain, load_domain  # noqa: E402
 from host.repair.downward import DownwardRun, driver_path, run_fast_downward  # noqa: E402
 from host.repair.planner import RepairPlanner  # noqa: E402
-from host.repair.problem import RepairModel, build_problem, to_pddl  # noqa: E402
+from host.repair.problem import RepairModel  # noqa: E402
 
 DOMAIN = ROOT / "models" / "tedusar" / "repair.pddl"
 PAPER_DOMAIN = ROOT / "benchmarks" / "data" / "paper_repair.pddl"
@@ -100,11 +100,12 @@ def median_time(fn: Callable[[], object], repeats: int) -> float:
 def fd_time(domain: Domain, model: RepairModel, bad: list[str], obs: list[Literal],
             search: str, repeats: int) -> tuple[float | None, str]:
     """Median wall time of the driver, and a note: plan length, translate / search split."""
-    problem = build_problem(model, bad, obs)
+    planner = RepairPlanner(domain, model)  # the problem in the domain's own words
+    text = planner.problem_pddl(planner.problem(bad, obs))
     runs: list[DownwardRun] = []
     with tempfile.TemporaryDirectory(prefix="dxboard-bench-") as tmp:
         path = Path(tmp) / "problem.pddl"
-        path.write_text(to_pddl(problem, domain.name))
+        path.write_text(text)
         for _ in range(repeats):
             try:
                 runs.append(

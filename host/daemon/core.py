@@ -35,7 +35,7 @@ from typing import Any
 from host.board import BoardClient
 from host.board.types import BoardEvent, BoardState, LinkDown, LinkUp, Reading, Rebooted
 from host.board.view import BoardView
-from host.diagnosis import Diagnoser, generate, load_system
+from host.diagnosis import Diagnoser, generate, load_system, observation_lags
 from host.diagnosis.healthy import healthy_values
 from host.diagnosis.logic import Theory
 from host.diagnosis.model import SystemModel
@@ -130,7 +130,8 @@ class Daemon:
         self.observations = ObservationSet()
         self._known = self.theory.observable_atoms()
         self.diagnosis = DiagnosisRunner(
-            Diagnoser(self.theory, observations=self.observations), self.observations,
+            Diagnoser(self.theory, observations=self.observations,
+                      lags=observation_lags(self.observers_cfg.observers)), self.observations,
             self.emit, clock=clock, on_changed=self._diagnosis_changed,
             safety_tick_s=opts.safety_tick_s, max_card=opts.max_card, max_count=opts.max_count,
             time_budget_s=opts.time_budget_s)

@@ -3,13 +3,15 @@
 Pipeline of pure stages: a robot model (``load_system`` -> ``SystemModel``) or a tug model file
 (``read_tug``) becomes a ``Theory`` (components, general clauses, priors; ``generate``); a
 ``Diagnoser`` holds the theory in an incremental SAT solver, takes observations (``S ⊕ o``,
-with expiry) and returns a ``DiagnosisResult``: the subset-minimal diagnoses by cardinality and
-prior probability, and whether a bound cut the list. The stable public API is re-exported here.
+with expiry, and windows held back while their inputs settle: ``lags``) and returns a
+``DiagnosisResult``: the subset-minimal diagnoses most probable first (``max_count`` keeps the
+most probable), and whether a bound cut the list. The stable public API is re-exported here.
 """
 
 from host.diagnosis.diagnoser import Diagnoser, UnknownLiteral
 from host.diagnosis.files import load_theory, read_observations
 from host.diagnosis.generate import generate
+from host.diagnosis.lags import observation_lags
 from host.diagnosis.logic import Clause, Literal, Theory, ab, format_clauses, parse_literal
 from host.diagnosis.model import (
     Component,
@@ -49,6 +51,7 @@ __all__ = [
     "generate",
     "load_system",
     "load_theory",
+    "observation_lags",
     "parse_literal",
     "read_observations",
     "read_tug",

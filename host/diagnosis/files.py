@@ -1,58 +1,143 @@
-"""Files the ``model`` and ``diagnose`` commands read: a model of either format, observations.
+"""Files the ``model``, ``diagnose`` and ``plan`` commands read: a model of either format, and
+observation files.
 
-``load_theory(path)`` takes a robot directory (or its ``system.yaml``), validated and turned
-into clauses, or a tug model file. ``read_observations(path, theory)`` reads one literal a line
-(``ok(/scan)``, ``~on(jaguar)``, ``not on(jaguar)``; ``#`` starts a comment) and rejects a
-literal the model does not mention, naming the file, line and fix.
+``load_theory(path)`` takes a robot directory (or its ``system.yaml``, or a file of that form
+under any name), validated and turned into clauses, or a tug model file (the original
+system's format, ``host.diagnosis.tug``); the file is parsed once, with libyaml, and a YAML
+error names the file and line.
+
+``read_observations(path, theory)`` reads an observation file, one observation a line
+(``#`` starts a comment)::
+
+    ok(/scan)              the literal holds
+    ~on(jaguar)            negated: ``~``, ``!``, ``not ``, or the model's own prefix
+    not_on(jaguar)         (the tug format's ``neg_prefix``, e.g. ``not_``)
+    unknown ok(/map)       nothing is known about the atom (also ``?ok(/map)``)
+    ~ok(/scan) @ 12.5      observed at 12.5 s (without ``@``: at the caller's ``time``)
+
+Lines are applied in time order as paper 000's ``S ⊕ o`` (a later line about an atom replaces
+an earlier one; ``unknown`` forgets it); the result is the observations that hold at the end.
+Two lines that say different things about one atom at the same time contradict each other
+and are an error naming both lines, as are a literal the model does not mention, a malformed
+line, and a file that is not text.
 """
 
 from __future__ import annotations
 
+import re
+from dataclasses import dataclass
 from pathlib import Path
 
+from host.diagnosis import yamlpos
 from host.diagnosis.generate import generate
-from host.diagnosis.logic import Theory, parse_literal
-from host.diagnosis.model import SYSTEM_FILE, load_system
+from host.diagnosis.logic import Literal, Theory
+from host.diagnosis.model import SYSTEM_FILE, build_system, load_system
 from host.diagnosis.observations import Observation
-from host.diagnosis.tug import is_tug_file, read_tug
+from host.diagnosis.tug import looks_like_tug, parse_tug
 from host.errors import UserError
+
+_TUG = re.compile(r"^rules\s*:", re.MULTILINE)
+_TIME = re.compile(r"^(?P<body>.*?)\s*@\s*(?P<time>[-+0-9.eE]+)\s*$")
+_UNKNOWN = re.compile(r"^(?:unknown\s+|\?\s*)(?P<atom>.+)$")
 
 
 def load_theory(path: str | Path) -> Theory:
     p = Path(path)
     if p.is_dir() or p.name == SYSTEM_FILE:
         return generate(load_system(p))
-    if is_tug_file(p):
-        return read_tug(p)
     if not p.exists():
         raise UserError(f"{p}: no such file or directory",
                         "give a robot directory (with system.yaml) or a tug model file")
+    text = read_text(p, "a robot directory or a tug model file (YAML)")
+    try:  # a tug model is all strings: read it without implicit typing (twice as fast)
+        data, lines = yamlpos.load(text, typed=not _TUG.search(text))
+    except yamlpos.YamlSyntaxError as exc:
+        raise UserError(f"{p}:{exc.line}: {exc}", "fix the YAML syntax") from exc
+    if looks_like_tug(data):
+        return parse_tug(data, lines, p)
+    if isinstance(data, dict) and "components" in data:
+        return generate(build_system(data, lines, p))
     raise UserError(f"{p}: neither a robot directory nor a tug model file",
                     "give a directory holding system.yaml or a YAML file with props and rules")
 
 
-def read_observations(path: str | Path, theory: Theory, time: float = 0.0) -> list[Observation]:
-    file = Path(path)
+def read_text(file: Path, what: str) -> str:
+    """The file's text; a missing, unreadable or binary file is a ``UserError``."""
     try:
-        text = file.read_text(encoding="utf-8")
+        data = file.read_bytes()
     except OSError as exc:
-        raise UserError(f"{file}: cannot read: {exc.strerror}",
-                        "give a file with one literal a line") from exc
+        raise UserError(f"{file}: cannot read: {exc.strerror}", f"give {what}") from exc
+    try:
+        if b"\0" in data:
+            raise UnicodeDecodeError("utf-8", data, data.index(b"\0"), data.index(b"\0") + 1,
+                                     "NUL byte")
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise UserError(f"{file}: not a text file (binary data at byte {exc.start})",
+                        f"give {what}") from exc
+
+
+@dataclass(frozen=True)
+class _Line:
+    number: int
+    atom: str
+    value: bool | None  # None: unknown
+    time: float
+
+
+def read_observations(path: str | Path, theory: Theory, time: float = 0.0) -> list[Observation]:
+    """The observations that hold at the end of the file (see the module docstring)."""
+    file = Path(path)
+    text = read_text(file, "a file with one literal a line, e.g. ok(/scan) or ~on(jaguar)")
     known = theory.observable_atoms()
-    out: list[Observation] = []
-    for number, raw in enumerate(text.splitlines(), start=1):
-        line = raw.split("#", 1)[0].strip()
-        if not line:
-            continue
-        try:
-            lit = parse_literal(line)
-        except ValueError as exc:
-            raise UserError(f"{file}:{number}: {exc}",
-                            "write one literal a line, e.g. ok(/scan) or ~on(jaguar)") from exc
-        if lit.atom not in known:
-            close = sorted(a for a in known if a.split("(")[0] == lit.atom.split("(")[0])[:5]
+    parsed = [_parse_line(file, n, raw, theory, time) for n, raw in
+              enumerate(text.splitlines(), start=1)]
+    lines = [x for x in parsed if x is not None]
+    for x in lines:
+        if x.atom not in known:
+            close = sorted(a for a in known if a.split("(")[0] == x.atom.split("(")[0])[:5]
             hint = f"the model knows e.g. {', '.join(close)}" if close else "check the name"
-            raise UserError(f"{file}:{number}: {lit.atom} is mentioned by no clause of the model",
+            raise UserError(f"{file}:{x.number}: {x.atom} is mentioned by no clause of the model",
                             hint)
-        out.append(Observation(lit, time, source=str(file)))
-    return out
+    state: dict[str, _Line] = {}
+    for x in sorted(lines, key=lambda x: x.time):  # stable: file order within a time
+        old = state.get(x.atom)
+        if old is not None and old.time == x.time and old.value != x.value:
+            said = {True: "holds", False: "does not hold", None: "is unknown"}
+            raise UserError(
+                f"{file}:{x.number}: {x.atom} {said[x.value]}, but line {old.number} says it "
+                f"{said[old.value]} at the same time",
+                "keep one of the two lines, or give them times (LITERAL @ SECONDS)")
+        state[x.atom] = x
+    return [Observation(Literal(x.atom, x.value), x.time, source=str(file))
+            for x in sorted(state.values(), key=lambda x: (x.time, x.number))
+            if x.value is not None]
+
+
+def _parse_line(file: Path, number: int, raw: str, theory: Theory,
+                default_time: float) -> _Line | None:
+    line = raw.split("#", 1)[0].strip()
+    if not line:
+        return None
+    fix = "write one literal a line, e.g. ok(/scan), ~on(jaguar), unknown ok(/map) or " \
+          "ok(/scan) @ 12.5"
+    at = default_time
+    m = _TIME.match(line)
+    if m is not None:
+        line = m.group("body")
+        try:
+            at = float(m.group("time"))
+        except ValueError:
+            raise UserError(f"{file}:{number}: {m.group('time')!r} is not a time in seconds",
+                            fix) from None
+    try:
+        u = _UNKNOWN.match(line)
+        if u is not None:
+            lit = theory.parse(u.group("atom"))
+            if not lit.positive:
+                raise ValueError(f"{line!r}: unknown takes an atom, not a negated literal")
+            return _Line(number, lit.atom, None, at)
+        lit = theory.parse(line)
+    except ValueError as exc:
+        raise UserError(f"{file}:{number}: {exc}", fix) from exc
+    return _Line(number, lit.atom, lit.positive, at)

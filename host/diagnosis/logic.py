@@ -113,12 +113,17 @@ class Theory:
     ``components`` are the diagnosable ones (``AB(c)`` for each); ``priors`` maps a component
     to its prior fault probability (``DEFAULT_PRIOR`` when absent). ``observables`` are the
     atoms observers may report; empty means "every non-``AB`` atom of the clauses".
+    ``negations`` are the model's own prefixes that negate a literal (the tug format's
+    ``neg_prefix``, e.g. ``not_``), accepted in observations beside ``~`` and ``not``;
+    ``notes`` are what a person should know about how the model was read (said once).
     """
 
     components: tuple[str, ...]
     clauses: tuple[Clause, ...]
     priors: Mapping[str, float] = field(default_factory=dict)
     observables: frozenset[str] = frozenset()
+    negations: tuple[str, ...] = ()
+    notes: tuple[str, ...] = field(default=(), compare=False)
 
     def atoms(self) -> set[str]:
         out = {ab(c) for c in self.components}
@@ -133,6 +138,10 @@ class Theory:
 
     def prior(self, component: str) -> float:
         return float(self.priors.get(component, DEFAULT_PRIOR))
+
+    def parse(self, text: str) -> Literal:
+        """A literal in this model's language (its own negation prefixes included)."""
+        return parse_literal(text, self.negations)
 
 
 def horn(body: Iterable[Literal], head: Iterable[Literal], origin: str = "") -> Clause:

@@ -175,8 +175,9 @@ def read_section(
     file = system_file(path)
     try:
         text = file.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise error([Problem(file, 0, f"cannot read: {exc.strerror}",
+    except (OSError, UnicodeDecodeError) as exc:
+        why = exc.strerror if isinstance(exc, OSError) else "not a UTF-8 text file"
+        raise error([Problem(file, 0, f"cannot read: {why}",
                              "give a robot directory holding system.yaml")]) from exc
     try:
         data, lines = yamlpos.load(text)
@@ -201,14 +202,24 @@ def check_system(path: str | Path) -> list[Problem]:
 def _load(file: Path) -> tuple[SystemModel | None, list[Problem]]:
     try:
         text = file.read_text(encoding="utf-8")
-    except OSError as exc:
-        return None, [Problem(file, 0, f"cannot read the model: {exc.strerror}",
+    except (OSError, UnicodeDecodeError) as exc:
+        why = exc.strerror if isinstance(exc, OSError) else "not a UTF-8 text file"
+        return None, [Problem(file, 0, f"cannot read the model: {why}",
                               "give a robot directory holding system.yaml")]
     try:
         data, lines = yamlpos.load(text)
     except yamlpos.YamlSyntaxError as exc:
         return None, [Problem(file, exc.line, str(exc), "fix the YAML syntax")]
     return _Builder(file, lines).build(data)
+
+
+def build_system(data: Any, lines: yamlpos.Lines, file: Path) -> SystemModel:
+    """The model of already parsed ``system.yaml`` data (see ``yamlpos.load``); raises
+    ``ModelError``."""
+    model, problems = _Builder(file, lines).build(data)
+    if problems or model is None:
+        raise ModelError(problems)
+    return model
 
 
 class _Builder:

@@ -42,6 +42,7 @@ class ObservationSet:
     def __init__(self) -> None:
         self._by_atom: dict[str, Observation] = {}
         self._listeners: list[Callable[[], None]] = []
+        self._since: dict[str, float] = {}  # atom -> when its current value was first seen
 
     def listen(self, listener: Callable[[], None]) -> None:
         """Call ``listener()`` after every change of the set, refreshes included."""
@@ -53,15 +54,24 @@ class ObservationSet:
 
     def add(self, obs: Observation) -> bool:
         """``S := S ⊕ o``. True when the set of literals changed (a refresh is no change)."""
-        old = self._by_atom.get(obs.literal.atom)
+        atom = obs.literal.atom
+        old = self._by_atom.get(atom)
         if old is not None and old.time > obs.time:
             return False  # a late, older report never overrides a newer one
-        self._by_atom[obs.literal.atom] = obs
+        self._by_atom[atom] = obs
+        changed = old is None or old.literal != obs.literal
+        if changed:
+            self._since[atom] = obs.time
         self._changed()
-        return old is None or old.literal != obs.literal
+        return changed
+
+    def since(self, atom: str) -> float | None:
+        """When the atom's current value was first observed (None: unknown)."""
+        return self._since.get(atom)
 
     def retract(self, atom: str) -> bool:
         """Forget what is known about ``atom`` (it becomes unknown). True if it was known."""
+        self._since.pop(atom, None)
         known = self._by_atom.pop(atom, None) is not None
         if known:
             self._changed()
@@ -73,6 +83,7 @@ class ObservationSet:
                 if o.expires_at is not None and o.expires_at <= now]
         for o in gone:
             del self._by_atom[o.literal.atom]
+            self._since.pop(o.literal.atom, None)
         if gone:
             self._changed()
         return gone
@@ -82,6 +93,7 @@ class ObservationSet:
         gone = [o for o in self._by_atom.values() if o.source == source]
         for o in gone:
             del self._by_atom[o.literal.atom]
+            self._since.pop(o.literal.atom, None)
         if gone:
             self._changed()
         return gone

@@ -73,6 +73,7 @@ class DiagnosisRunner:
             t0 = time.perf_counter()
             result = await asyncio.get_running_loop().run_in_executor(
                 self._worker, functools.partial(self.diagnoser.diagnose, literals=literals,
+                                                now=self.clock(),
                                                 **self.bounds))  # type: ignore[arg-type]
             elapsed = time.perf_counter() - t0
             self.emit(DiagnosisRun(elapsed, trigger))

@@ -23,6 +23,8 @@ from pysat.card import ITotalizer  # type: ignore[import-untyped]
 from pysat.solvers import Solver  # type: ignore[import-untyped]
 
 from host.diagnosis.logic import Literal, Theory, ab
+from host.diagnosis.quota import Quota
+from host.diagnosis.result import Bound, SearchOutcome
 from host.diagnosis.structure import Structure, infer_structure
 
 
@@ -208,6 +210,37 @@ class SatContext:
             return None
         result = self.solver.solve_limited(assumptions=assumptions, expect_interrupt=True)
         return None if result is None else bool(result)
+
+    def more_than(self, assumptions: list[int], found: list[frozenset[int]]) -> bool | None:
+        """Is there a diagnosis under ``assumptions`` other than ``found`` (and their
+        supersets)? None when the time budget ran out."""
+        act = self.new_run()
+        try:
+            for bad in found:
+                self.solver.add_clause([-self.ab_vars[i] for i in bad] + [-act])
+            return self.solve([*assumptions, act])
+        finally:
+            self.end_run(act)
+
+    def list_diagnoses(self, assumptions: list[int], act: int, out: SearchOutcome,
+                       quota: Quota, k: int) -> bool:
+        """Add every diagnosis (of size ``k``) the solver finds under ``assumptions`` to
+        ``out``, each blocked for the rest of the run ``act``; False when a bound (count,
+        time) cut the listing."""
+        while True:
+            if quota.reached(k):
+                out.cut_by = Bound.MAX_COUNT
+                return False
+            r = self.solve(assumptions)
+            if r is None:
+                out.cut_by = Bound.TIME_BUDGET
+                return False
+            if not r:
+                return True
+            bad = self.model_bad()
+            out.bad_sets.append(bad)
+            quota.add(bad)
+            self.solver.add_clause([-self.ab_vars[i] for i in bad] + [-act])
 
     def model_bad(self) -> frozenset[int]:
         """Indexes (into ``theory.components``) of the components abnormal in the model."""

@@ -2,11 +2,12 @@
 
 A diagnosis (Reiter) is a set ``D`` of components such that ``SD + OBS + {AB(c) | c ∈ D} +
 {¬AB(c) | c ∉ D}`` is consistent; we want the subset-minimal ones, by cardinality. Every
-algorithm takes a ``SatContext``, the observation assumptions and the bounds, and returns
-``SearchOutcome`` (the bad sets as component indexes, the bound that cut the list, and whether
-any diagnosis exists at all).
+algorithm takes a ``SatContext``, the observation assumptions, the bounds and a ``Quota``
+(quota.py: when enough of the most probable were found), and returns ``SearchOutcome`` (the
+bad sets as component indexes, the bound that cut the list, and whether any diagnosis exists
+at all). All find diagnoses by non-decreasing size; the diagnoser ranks them by probability.
 
-- ``cardinality`` (default): for k = 0, 1, ... ask the solver for a model with at most k
+- ``cardinality``: for k = 0, 1, ... ask the solver for a model with at most k
   abnormal components (totalizer bound as an assumption) that is no superset of a diagnosis
   found before (blocking clauses under the run's activation literal). Every model found at
   level k is a subset-minimal diagnosis of size k, for general clauses too (no monotonicity
@@ -22,12 +23,11 @@ any diagnosis exists at all).
 
 - ``top-level`` (minimal-cardinality requests; others go to ``cardinality``): when the theory
   has circuit structure (``structure.infer_structure``: weak fault model, acyclic, total
-  component behaviours), only the *top-level* components (not dominated on their way to the
-  observed atoms) can be needed for the minimum, so RC2 (Glucose 3, ``exhaust``, soft clauses
-  in topological order, which lets the assumptions propagate forward like a simulation) finds
-  the minimum over those alone; the other diagnoses of that size come from ``cardinality``
-  enumeration over all components. Without structure, RC2 runs over all components. Each
-  call builds its RC2 afresh (observations are hard clauses); the budget interrupts it.
+  component behaviours), every minimal-cardinality diagnosis maps onto one of *top-level*
+  components (not dominated on their way to the observed atoms): RC2 enumerates those,
+  nearest the wrong outputs first, and each is expanded through the regions its components
+  stand for (``toplevel.py``). Without structure, RC2 runs over all components. Each call
+  builds its RC2 afresh (observations are hard clauses); the budget interrupts it.
 - ``auto`` (default): ``cardinality``, except minimal-cardinality requests on models of at
   least ``AUTO_FROM`` (500) components: straight to ``top-level`` when at least
   ``TOP_LEVEL_DIRECT`` (1000) components are top-level, else ``cardinality`` for
@@ -43,52 +43,24 @@ All are cross-checked against brute force in ``tests/diagnosis``.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 
 from pysat.examples.hitman import Hitman  # type: ignore[import-untyped]
 from pysat.examples.rc2 import RC2  # type: ignore[import-untyped]
 from pysat.formula import WCNF  # type: ignore[import-untyped]
 
-from host.diagnosis.result import Bound
+from host.diagnosis.quota import Quota
+from host.diagnosis.result import Bound, SearchOutcome
 from host.diagnosis.satctx import SatContext
+from host.diagnosis.toplevel import min_card_search, top_level_count
 
-
-@dataclass
-class SearchOutcome:
-    bad_sets: list[frozenset[int]]
-    cut_by: Bound | None = None
-    explainable: bool = True
-
-
-Search = Callable[[SatContext, list[int], int | None, int | None, bool], SearchOutcome]
-
-
-def _list_level(
-    ctx: SatContext, assumptions: list[int], act: int, out: SearchOutcome,
-    max_count: int | None,
-) -> bool:
-    """Add every diagnosis the solver finds under ``assumptions`` to ``out``, each blocked
-    for the rest of the run (``act``); False when a bound (count, time) cut the listing."""
-    while True:
-        if max_count is not None and len(out.bad_sets) >= max_count:
-            out.cut_by = Bound.MAX_COUNT
-            return False
-        r = ctx.solve(assumptions)
-        if r is None:
-            out.cut_by = Bound.TIME_BUDGET
-            return False
-        if not r:
-            return True
-        bad = ctx.model_bad()
-        out.bad_sets.append(bad)
-        ctx.solver.add_clause([-ctx.ab_vars[i] for i in bad] + [-act])
+Search = Callable[[SatContext, list[int], int | None, Quota, bool], SearchOutcome]
 
 
 def cardinality_search(
     ctx: SatContext,
     obs: list[int],
     max_card: int | None,
-    max_count: int | None,
+    quota: Quota,
     min_card_only: bool = False,
 ) -> SearchOutcome:
     n = len(ctx.ab_vars)
@@ -109,7 +81,7 @@ def cardinality_search(
             out.cut_by = Bound.TIME_BUDGET
             return out
         while k <= limit:
-            if not _list_level(ctx, base + ctx.at_most(k), act, out, max_count):
+            if not ctx.list_diagnoses(base + ctx.at_most(k), act, out, quota, k):
                 return out
             k += 1
             if min_card_only and out.bad_sets:
@@ -153,7 +125,7 @@ def maxsat_search(
     ctx: SatContext,
     obs: list[int],
     max_card: int | None,
-    max_count: int | None,
+    quota: Quota,
     min_card_only: bool = False,
 ) -> SearchOutcome:
     out = SearchOutcome([])
@@ -167,7 +139,7 @@ def maxsat_search(
     n = len(ctx.ab_vars)
     with RC2(wcnf, solver="g3", adapt=True, exhaust=True, minz=True, trim=5) as rc2:
         while True:
-            if max_count is not None and len(out.bad_sets) >= max_count:
+            if quota.reached(len(out.bad_sets[-1]) if out.bad_sets else 0):
                 out.cut_by = Bound.MAX_COUNT
                 return out
             if ctx.out_of_time():
@@ -185,6 +157,7 @@ def maxsat_search(
                 return out
             bad = frozenset(i for i, x in enumerate(model[:n]) if x > 0)
             out.bad_sets.append(bad)
+            quota.add(bad)
             rc2.add_clause([-ctx.ab_vars[i] for i in bad])
 
 
@@ -192,15 +165,16 @@ def hitting_set_search(
     ctx: SatContext,
     obs: list[int],
     max_card: int | None,
-    max_count: int | None,
+    quota: Quota,
     min_card_only: bool = False,
 ) -> SearchOutcome:
     out = SearchOutcome([])
     healthy = [-v for v in ctx.ab_vars]
     hitman = Hitman(solver="g3", htype="sorted")
+    size = 0  # the candidates come by non-decreasing size
     try:
         while True:
-            if max_count is not None and len(out.bad_sets) >= max_count:
+            if quota.reached(size):
                 out.cut_by = Bound.MAX_COUNT
                 return out
             if ctx.out_of_time():
@@ -210,6 +184,7 @@ def hitting_set_search(
             if hs is None:
                 return out
             cand = frozenset(int(i) for i in hs)
+            size = len(cand)
             if min_card_only and out.bad_sets and len(cand) > len(out.bad_sets[0]):
                 return out
             r = ctx.solve(obs + [h for i, h in enumerate(healthy) if i not in cand])
@@ -221,6 +196,7 @@ def hitting_set_search(
                     out.cut_by = Bound.MAX_CARD
                     return out
                 out.bad_sets.append(cand)
+                quota.add(cand)
                 hitman.block(list(cand))
                 continue
             conflict = [ctx.index_of_ab[-lit] for lit in ctx.core() if -lit in ctx.index_of_ab]
@@ -232,69 +208,18 @@ def hitting_set_search(
         hitman.delete()
 
 
-def _top_level(ctx: SatContext, obs: list[int]) -> list[int]:
-    """The top-level components under these observations (all components when the theory
-    has no circuit structure), in topological order (inputs first) if known."""
-    structure = ctx.structure()
-    if structure is None:
-        return list(range(len(ctx.ab_vars)))
-    top = structure.top_level({a for a in map(ctx.atom_of, obs) if a is not None})
-    return [c for c in structure.order if c in top]
-
-
 def top_level_search(
     ctx: SatContext,
     obs: list[int],
     max_card: int | None,
-    max_count: int | None,
+    quota: Quota,
     min_card_only: bool = False,
 ) -> SearchOutcome:
-    """Minimal-cardinality diagnoses: the minimum by core-guided MaxSAT over the top-level
-    (undominated) components only, then the other diagnoses of that size by ``cardinality``
-    enumeration over all components. Other requests go to ``cardinality_search``."""
+    """Minimal-cardinality diagnoses over the circuit's top-level components
+    (``toplevel.py``); other requests go to ``cardinality_search``."""
     if not min_card_only:
-        return cardinality_search(ctx, obs, max_card, max_count, min_card_only)
-    out = SearchOutcome([])
-    order = _top_level(ctx, obs)
-    wcnf = WCNF()
-    for clause in ctx.theory.clauses:
-        wcnf.append([ctx.lit(lit) for lit in clause.lits])
-    for lit in obs:
-        wcnf.append([lit])
-    keep = set(order)
-    for i, v in enumerate(ctx.ab_vars):
-        if i not in keep:
-            wcnf.append([-v])
-    for i in order:  # the order matters: inputs-first lets assumptions propagate forward
-        wcnf.append([-ctx.ab_vars[i]], weight=1)
-    if ctx.out_of_time():
-        out.cut_by = Bound.TIME_BUDGET
-        return out
-    with RC2(wcnf, solver="g3", exhaust=True) as rc2, ctx.interrupting(rc2):
-        ctx.calls += 1
-        model = rc2.compute(expect_interrupt=True)
-        interrupted = rc2.interrupted
-        k = rc2.cost
-    if model is None:
-        if interrupted:
-            out.cut_by = Bound.TIME_BUDGET
-        else:  # a diagnosis maps onto a top-level one: none there, none at all
-            out.explainable = False
-        return out
-    if max_card is not None and k > max_card:
-        out.cut_by = Bound.MAX_CARD
-        return out
-    true = {lit for lit in model if lit > 0}
-    first = frozenset(i for i, v in enumerate(ctx.ab_vars) if v in true)
-    out.bad_sets.append(first)
-    act = ctx.new_run()
-    base = [*obs, act]
-    try:
-        ctx.solver.add_clause([-ctx.ab_vars[i] for i in first] + [-act])
-        _list_level(ctx, base + ctx.at_most(k), act, out, max_count)  # the others of size k
-        return out
-    finally:
-        ctx.end_run(act)
+        return cardinality_search(ctx, obs, max_card, quota, min_card_only)
+    return min_card_search(ctx, obs, max_card, quota)
 
 
 #: ``auto``: from this many components, a minimal-cardinality request goes to ``top-level``
@@ -310,21 +235,22 @@ def auto_search(
     ctx: SatContext,
     obs: list[int],
     max_card: int | None,
-    max_count: int | None,
+    quota: Quota,
     min_card_only: bool = False,
 ) -> SearchOutcome:
     """``cardinality``, except for minimal-cardinality requests on models of at least
     ``AUTO_FROM`` components that it does not answer within ``AUTO_SLICE_S``: those go on
     with ``top-level`` (the slice's work is dropped; both are exact)."""
     if not min_card_only or len(ctx.ab_vars) < AUTO_FROM:
-        return cardinality_search(ctx, obs, max_card, max_count, min_card_only)
-    if len(_top_level(ctx, obs)) >= TOP_LEVEL_DIRECT:
-        return top_level_search(ctx, obs, max_card, max_count, min_card_only)
+        return cardinality_search(ctx, obs, max_card, quota, min_card_only)
+    if top_level_count(ctx, obs) >= TOP_LEVEL_DIRECT:
+        return top_level_search(ctx, obs, max_card, quota, min_card_only)
     with ctx.sub_budget(AUTO_SLICE_S):
-        out = cardinality_search(ctx, obs, max_card, max_count, min_card_only)
+        out = cardinality_search(ctx, obs, max_card, quota, min_card_only)
     if out.cut_by is not Bound.TIME_BUDGET or ctx.out_of_time():
         return out
-    return top_level_search(ctx, obs, max_card, max_count, min_card_only)
+    quota.reset()
+    return top_level_search(ctx, obs, max_card, quota, min_card_only)
 
 
 ALGORITHMS: dict[str, Search] = {

@@ -53,11 +53,19 @@ class Structure:
     order: list[int]
     written: list[frozenset[str]]
     readers: list[list[int]]
-    _top_cache: dict[frozenset[str], frozenset[int]] = field(default_factory=dict)
+    _top_cache: dict[frozenset[str], dict[int, list[int]]] = field(default_factory=dict)
+    _written_any: frozenset[str] | None = None
 
     def top_level(self, observed: Iterable[str]) -> frozenset[int]:
         """Components not dominated by another one w.r.t. the observed atoms (see module
         doc); components that reach no observed atom are left out."""
+        return frozenset(self.regions(observed))
+
+    def regions(self, observed: Iterable[str]) -> dict[int, list[int]]:
+        """Each top-level component with the components it stands for: itself and those
+        whose nearest top-level dominator it is (topological order). Every minimal-
+        cardinality diagnosis takes exactly one component from each region of a top-level
+        minimal-cardinality diagnosis (module doc)."""
         key = frozenset(observed)
         cached = self._top_cache.get(key)
         if cached is not None:
@@ -87,11 +95,41 @@ class Structure:
                         b = ipdom[b]
                 cur = a
             ipdom[c] = cur
-        top = frozenset(c for c, d in ipdom.items() if d == sink)
+        owner: dict[int, int] = {}
+        for c in reversed(self.order):  # a dominator comes after what it dominates
+            d = ipdom[c]
+            if d == sink:
+                owner[c] = c
+            elif d != dead:
+                owner[c] = owner[d]
+        regions: dict[int, list[int]] = {c: [] for c in self.order if ipdom[c] == sink}
+        for c in self.order:
+            if c in owner:
+                regions[owner[c]].append(c)
         if len(self._top_cache) > 16:
             self._top_cache.clear()
-        self._top_cache[key] = top
-        return top
+        self._top_cache[key] = regions
+        return regions
+
+    def reach(self, atoms: Iterable[str]) -> list[int]:
+        """Per component, how many of ``atoms`` it can influence (it writes them, or a
+        component it feeds, transitively, does)."""
+        bit = {a: 1 << i for i, a in enumerate(dict.fromkeys(atoms))}
+        mask = [0] * len(self.order)
+        for c in reversed(self.order):
+            m = 0
+            for a in self.written[c]:
+                m |= bit.get(a, 0)
+            for r in self.readers[c]:
+                m |= mask[r]
+            mask[c] = m
+        return [m.bit_count() for m in mask]
+
+    def writes(self, atom: str) -> bool:
+        """Does some component write ``atom`` (else it is an input of the circuit)?"""
+        if self._written_any is None:
+            self._written_any = frozenset().union(*self.written)
+        return atom in self._written_any
 
 
 def _total(clauses: list[list[tuple[str, bool]]], inputs: list[str], written: list[str]) -> bool:

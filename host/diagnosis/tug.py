@@ -13,9 +13,12 @@ The format (paper 000 §IV-D) is YAML with five keys::
 A rule is ``body -> head``: the body a comma-separated conjunction of literals, the head one
 literal. As an extension the head may be a disjunction (``a, b -> c | d``) or ``false``, and a
 rule without ``->`` is a fact (a disjunction), so any clause set can be written, circuits
-included. Components are the arguments of ``ab``/``nab`` atoms in props and rules. An optional
-``priors: {component: p}`` key carries prior fault probabilities. Every atom a rule uses must be
-listed in ``props``; errors name the file, the line, the offending value and the fix.
+included; an empty head is an error (write ``false``). Components are the arguments of
+``ab``/``nab`` atoms in props and rules. An optional ``priors: {component: p}`` key carries
+prior fault probabilities. As in the original system, a rule may use atoms ``props`` does not
+list: they are accepted, and the theory's one note names all of them. The January 2012
+prototype format, ``props`` and ``rules`` as mappings (``rule1: NAB(a) -> ok(x)``), is read in
+the file's order. Errors name the file, the line, the offending value and the fix.
 """
 
 from __future__ import annotations
@@ -32,14 +35,8 @@ from host.errors import UserError
 TUG_KEYS = {"ab", "nab", "neg_prefix", "props", "rules", "priors"}
 
 
-def is_tug_file(path: Path) -> bool:
-    """True for a file whose top-level keys are those of the tug format."""
-    if not path.is_file():
-        return False
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, yaml.YAMLError):
-        return False
+def looks_like_tug(data: Any) -> bool:
+    """True for parsed YAML whose top-level keys are those of the tug format."""
     return isinstance(data, dict) and "rules" in data and "props" in data
 
 
@@ -48,13 +45,24 @@ def read_tug(path: str | Path) -> Theory:
     file = Path(path)
     try:
         text = file.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise UserError(f"{file}: cannot read: {exc.strerror}", "give a tug model file") from exc
+    except (OSError, UnicodeDecodeError) as exc:
+        why = exc.strerror if isinstance(exc, OSError) else "not a UTF-8 text file"
+        raise UserError(f"{file}: cannot read: {why}", "give a tug model file") from exc
     try:
-        data, lines = yamlpos.load(text)
+        data, lines = yamlpos.load(text, typed=False)  # all strings
     except yamlpos.YamlSyntaxError as exc:
         raise UserError(f"{file}:{exc.line}: {exc}", "fix the YAML syntax") from exc
     return parse_tug(data, lines, file)
+
+
+def _entries(value: Any) -> list[tuple[object, Any]] | None:
+    """``(path key, item)`` of a list, or of a mapping (the January 2012 prototype format,
+    ``props: {prop1: ok(x)}``, read in the file's order); None for anything else."""
+    if isinstance(value, list):
+        return list(enumerate(value))
+    if isinstance(value, dict):
+        return list(value.items())
+    return None
 
 
 def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
@@ -73,8 +81,16 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
     neg_prefixes = [str(neg)]
     components: dict[str, None] = {}
 
+    seen: dict[str, Literal] = {}  # a model repeats its literals: parse each text once
+
     def literal(text: str, path: tuple[object, ...]) -> Literal:
         s = text.strip()
+        lit = seen.get(s)
+        if lit is None:
+            lit = seen[s] = parse(s, text, path)
+        return lit
+
+    def parse(s: str, text: str, path: tuple[object, ...]) -> Literal:
         try:
             lit = parse_literal(s, neg_prefixes)
         except ValueError as exc:
@@ -88,17 +104,18 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
                 return Literal(ab(comp), lit.positive == sign)
         return lit
 
-    props = data.get("props")
-    if not isinstance(props, list):
+    props = _entries(data.get("props"))
+    if props is None:
         raise fail(("props",), "props is not a list of propositions", "write props: [ok(/scan)]")
-    known: set[str] = set()
-    for i, p in enumerate(props):
-        known.add(literal(str(p), ("props", i)).atom)
-    rules = data.get("rules")
-    if not isinstance(rules, list):
+    known: dict[str, None] = {}
+    for i, p in props:
+        known.setdefault(literal(str(p), ("props", i)).atom)
+    rules = _entries(data.get("rules"))
+    if rules is None:
         raise fail(("rules",), "rules is not a list", "write rules: ['NAB(a) -> ok(x)']")
     clauses: list[Clause] = []
-    for i, rule in enumerate(rules):
+    unlisted: dict[str, None] = {}  # atoms rules use that props does not list
+    for i, rule in rules:
         path = ("rules", i)
         text = str(rule)
         body_text, arrow, head_text = text.partition("->")
@@ -106,17 +123,19 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
             body_text, head_text = "", text
         body = [literal(t, path) for t in body_text.split(",") if t.strip()]
         head_text = head_text.strip()
-        if head_text.lower() in ("false", ""):
+        if not head_text:
+            raise fail(path, f"rule {text!r} has an empty head",
+                       "write a literal after '->', or 'false' when the body cannot hold")
+        if head_text.lower() == "false":
             if not arrow:
-                raise fail(path, f"empty rule {text!r}", "write body -> head")
+                raise fail(path, f"rule {text!r} says only false", "write body -> false")
             head: list[Literal] = []
         else:
             head = [literal(t, path) for t in head_text.split("|")]
         clause = Clause(tuple([-b for b in body] + head))
         for lit in clause.lits:
             if lit.atom not in known and ab_component(lit.atom) is None:
-                raise fail(path, f"rule {text!r} uses {lit.atom}, which props does not list",
-                           f"add {lit.atom} to props or fix the name")
+                unlisted.setdefault(lit.atom)
         clauses.append(clause)
     priors = data.get("priors") or {}
     if not isinstance(priors, dict):
@@ -126,11 +145,31 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
         if str(comp) not in components:
             raise fail(("priors", comp), f"prior for unknown component {comp!r}",
                        f"use a component named in {ab_name}(...)")
-        if not isinstance(p, int | float) or not 0 < p < 1:
+        value = _number(p)
+        if value is None or not 0 < value < 1:
             raise fail(("priors", comp), f"prior {p!r} is not in (0, 1)", "write e.g. 0.01")
-        out_priors[str(comp)] = float(p)
-    observables = frozenset(a for a in known if ab_component(a) is None)
-    return Theory(tuple(components), tuple(clauses), out_priors, observables)
+        out_priors[str(comp)] = value
+    notes: tuple[str, ...] = ()
+    if unlisted:
+        n = len(unlisted)
+        notes = (f"{file}: rules use {n} atom{'s' if n > 1 else ''} that props does not list, "
+                 f"accepted as the original system does: {', '.join(unlisted)} (add "
+                 f"{'them' if n > 1 else 'it'} to props to silence this note)",)
+    observables = frozenset(a for a in (*known, *unlisted) if ab_component(a) is None)
+    negations = tuple(p for p in neg_prefixes if p not in ("~", "!", "-", "¬"))
+    return Theory(tuple(components), tuple(clauses), out_priors, observables, negations, notes)
+
+
+def _number(value: Any) -> float | None:
+    """A prior read with or without YAML's implicit typing (``0.01`` or ``'0.01'``)."""
+    if isinstance(value, bool):
+        return None
+    if isinstance(value, int | float):
+        return float(value)
+    try:
+        return float(str(value))
+    except ValueError:
+        return None
 
 
 def _rule(clause: Clause, ab_name: str, nab_name: str, neg: str) -> str:
@@ -163,7 +202,8 @@ def dump_tug(theory: Theory, ab_name: str = "AB", nab_name: str = "NAB", neg: st
     }
     if theory.priors:
         data["priors"] = {c: float(p) for c, p in theory.priors.items()}
-    return yaml.safe_dump(data, sort_keys=False, width=100, allow_unicode=True)
+    dumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
+    return yaml.dump(data, Dumper=dumper, sort_keys=False, width=100, allow_unicode=True)
 
 
 def write_tug(theory: Theory, path: str | Path) -> None:

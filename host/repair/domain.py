@@ -9,19 +9,22 @@ atom / forall over conditions; ``imply`` becomes ``or``) and ``Eff`` (literals, 
 :disjunctive-preconditions :universal-preconditions :conditional-effects`` (disjunctions must
 vanish once static predicates are evaluated; the grounder says so if they do not). Predicates
 that no action changes are *static* (``needs``, ``protected``); the others are *fluents*.
-Errors name the file and what to change (``DomainError``).
+The domain's words for abnormal / healthy / powered / running (``Domain.vocabulary``) are read
+from its ``; dxboard-vocabulary:`` line or inferred (``vocabulary.py``). Errors name the file
+and what to change (``DomainError``).
 """
 
 from __future__ import annotations
 
 import logging
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, NamedTuple
 
 from host.repair.errors import DomainError
+from host.repair.vocabulary import Vocabulary, infer
 
 log = logging.getLogger(__name__)
 
@@ -126,6 +129,7 @@ class Domain:
     predicates: Mapping[str, int]
     schemas: tuple[Schema, ...]
     fluents: frozenset[str]
+    vocabulary: Vocabulary = field(default_factory=Vocabulary)
 
     @property
     def statics(self) -> frozenset[str]:
@@ -181,10 +185,10 @@ def parse_domain_text(text: str, path: Path = Path("<domain>")) -> Domain:
             f"{path}: not a valid PDDL domain: {first}",
             "fix the PDDL syntax (the pddl library's message names the line and column)",
         ) from exc
-    return _convert(parsed, path)
+    return _convert(parsed, path, text)
 
 
-def _convert(parsed: Any, path: Path) -> Domain:
+def _convert(parsed: Any, path: Path, text: str) -> Domain:
     reqs = {str(r).lstrip(":") for r in parsed.requirements}
     unsupported = sorted(reqs - SUPPORTED_REQUIREMENTS)
     if unsupported:
@@ -210,8 +214,15 @@ def _convert(parsed: Any, path: Path) -> Domain:
             f"{path}: effects use undeclared predicate(s) {', '.join(unknown)}",
             "declare them in (:predicates ...)",
         )
-    log.debug("domain %s: %d actions, fluents %s", parsed.name, len(schemas), sorted(fluents))
-    return Domain(str(parsed.name), path, types, predicates, tuple(schemas), frozenset(fluents))
+    vocabulary = infer(text, predicates, str(path))
+    # what the problem layer sets from the observations varies with every diagnosis, even
+    # where no action changes it (the original's stop_node reads running, which it never
+    # sets): keep it a state atom, not a static fact of the grounding
+    fluents |= vocabulary.predicates()
+    log.debug("domain %s: %d actions, fluents %s, %s", parsed.name, len(schemas),
+              sorted(fluents), vocabulary)
+    return Domain(str(parsed.name), path, types, predicates, tuple(schemas), frozenset(fluents),
+                  vocabulary)
 
 
 def _one_type(term: Any, where: str) -> str:

@@ -1,14 +1,17 @@
 """The planning pipeline for one robot: diagnosis -> problem -> search -> partial-order plan.
 
 ``RepairPlanner(domain, model)`` grounds the domain over the model once (the task depends
-on the model only) and removes the operators that would switch off protected components;
+on the model only; each object typed as the domain can take it, ``problem.domain_type``) and
+removes the operators that would switch off protected components;
 ``plan(bad, observations)`` then builds the problem of that diagnosis (paper 000 §IV-E),
 checks by relaxed reachability that every goal can be reached at all (and says which
 component cannot be repaired, and why, when one cannot), runs a planner from the registry
 (``astar`` by default), validates the returned sequence step by step against the task (any
 planner's plan, ours or Fast Downward's), and returns it deordered into a ``Plan`` an
 executor can run in parallel where steps are independent. Nothing here acts on the robot:
-planning is a dry run by nature.
+planning is a dry run by nature. The domain's own words for abnormal / healthy / powered /
+running (``vocabulary``) shape I and G, so the original system's domain plans as well as ours.
+``for_system`` takes a robot directory or a tug model file (``theory_model``).
 """
 
 from __future__ import annotations
@@ -19,12 +22,19 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from host.errors import DxboardError
-from host.repair.domain import Atom, Domain, load_domain
+from host.repair.domain import DOMAIN_FILE, ROOT_TYPE, Atom, Domain, load_domain
 from host.repair.downward import fast_downward
-from host.repair.errors import NoPlanError, ProblemError
+from host.repair.errors import DomainError, NoPlanError, ProblemError
 from host.repair.grounding import ground
 from host.repair.plan import Plan, deorder
-from host.repair.problem import AB, RepairModel, RepairProblem, build_problem, repair_model, to_pddl
+from host.repair.problem import (
+    RepairModel,
+    RepairProblem,
+    build_problem,
+    domain_type,
+    repair_model,
+    to_pddl,
+)
 from host.repair.protect import check_plan, enforce
 from host.repair.search import (
     DEFAULT_MAX_EXPANSIONS,
@@ -35,6 +45,7 @@ from host.repair.search import (
     relevant_ops,
 )
 from host.repair.task import GroundOp, Task, holds, lit_atom
+from host.repair.vocabulary import Vocabulary
 
 if TYPE_CHECKING:
     from host.diagnosis.logic import Literal
@@ -54,8 +65,12 @@ class RepairPlanner:
     """Plans repairs for one robot model with one domain."""
 
     def __init__(self, domain: Domain, model: RepairModel) -> None:
+        domain.vocabulary.require_health(str(domain.path))
         self.domain = domain
         self.model = model
+        declared = {*domain.types, *domain.types.values(), ROOT_TYPE}
+        #: each object's type in the domain (a driver is a node where the domain has no driver)
+        self.objects = {name: domain_type(t, declared) for name, t in model.types.items()}
         self._full: Task | None = None
         self._task: Task | None = None
         self._goal: tuple[tuple[Atom, ...], tuple[int, ...]] | None = None
@@ -64,22 +79,47 @@ class RepairPlanner:
     def for_system(cls, system_dir: str | Path, domain_path: str | Path | None = None) -> (
         RepairPlanner
     ):
-        """Load ``SYSTEM_DIR/system.yaml`` and ``repair.pddl`` (or ``domain_path``)."""
-        from host.diagnosis.model import load_system
+        """Load ``SYSTEM_DIR/system.yaml`` and ``repair.pddl`` (or ``domain_path``).
+        ``system_dir`` may be a tug model file; its domain is ``domain_path`` or the
+        ``repair.pddl`` beside it."""
+        from host.diagnosis.files import load_theory
+        from host.diagnosis.model import SYSTEM_FILE, load_system
+        from host.repair.theory_model import repair_model_of
 
-        model = repair_model(load_system(system_dir))
-        return cls(load_domain(domain_path if domain_path is not None else system_dir), model)
+        path = Path(system_dir)
+        if path.is_dir() or path.name == SYSTEM_FILE:
+            model = repair_model(load_system(path))
+            return cls(load_domain(domain_path if domain_path is not None else path), model)
+        theory = load_theory(path)
+        model = repair_model_of(theory, path.stem)
+        if domain_path is None:
+            domain_path = path.parent / DOMAIN_FILE
+            if not domain_path.exists():
+                raise DomainError(f"{path}: a tug model file has no repair domain beside it",
+                                  "give the domain with --domain FILE")
+        return cls(load_domain(domain_path), model)
+
+    @property
+    def vocabulary(self) -> Vocabulary:
+        """The domain's words for abnormal / healthy / powered / running."""
+        return self.domain.vocabulary
 
     @property
     def task(self) -> Task:
         """The ground task with the protected components' switch-offs removed (cached)."""
         if self._task is None:
-            self._full = ground(self.domain, self.model.objects(), self.model.static_facts())
-            self._task = enforce(self._full, self.model.protected)
+            static = [a for a in self.model.static_facts() if a.pred in self.domain.predicates]
+            self._full = ground(self.domain, self.objects, static)
+            self._task = enforce(self._full, self.model.protected, self.vocabulary)
         return self._task
 
     def problem(self, bad: Iterable[str], observations: Iterable[Literal] = ()) -> RepairProblem:
-        return build_problem(self.model, bad, observations)
+        return build_problem(self.model, bad, observations, self.vocabulary)
+
+    def problem_pddl(self, problem: RepairProblem) -> str:
+        """``problem`` as a PDDL file of this domain."""
+        return to_pddl(problem, self.domain.name, types=self.objects,
+                       predicates=self.domain.predicates)
 
     def plan(
         self,
@@ -106,7 +146,7 @@ class RepairPlanner:
         init = task.state((a.pred, a.args) for a in problem.init)
         goal = self._goal_literals(task, problem)
         relevant = self._check_reachable(task, init, goal)
-        pddl = to_pddl(problem, self.domain.name) if planner == "fast-downward" else None
+        pddl = self.problem_pddl(problem) if planner == "fast-downward" else None
         result = search(
             SearchInput(task, init, goal, self.domain.path, pddl, max_expansions, relevant)
         )
@@ -116,8 +156,8 @@ class RepairPlanner:
                 "check the domain's preconditions against system.yaml",
             )
         ops = [task.ops[i] for i in result.ops]
-        _validate(task, init, goal, ops, planner)
-        check_plan(task, ops, self.model.protected)
+        validate(task, init, goal, ops, planner)
+        check_plan(task, ops, self.model.protected, self.vocabulary)
         notes = [f"assumed {a} (not observed)" for a in problem.assumed]
         cost = sum(op.cost for op in ops)
         log.debug("plan by %s: %d steps, stats %s", planner, len(ops), result.stats)
@@ -126,7 +166,7 @@ class RepairPlanner:
     def _goal_literals(self, task: Task, problem: RepairProblem) -> tuple[int, ...]:
         """G as literals; the goal is the same for every diagnosis, so it is cached."""
         if self._goal is None or self._goal[0] != problem.goal:
-            lits = tuple(task.literal(a.pred, a.args, False) for a in problem.goal)
+            lits = tuple(task.literal(a.pred, a.args, problem.goal_holds) for a in problem.goal)
             self._goal = (problem.goal, lits)
         return self._goal[1]
 
@@ -156,7 +196,9 @@ class RepairPlanner:
         """Why a goal literal is unreachable, or None when only what it needs is."""
         pred, args = task.atoms[lit_atom(goal_lit)]
         name = args[0] if args else task.describe(goal_lit)
-        what = f"{name} stays abnormal" if pred == AB else f"{task.describe(goal_lit)} unreachable"
+        health = (self.vocabulary.abnormal, self.vocabulary.healthy)
+        what = (f"{name} stays abnormal" if pred in health
+                else f"{task.describe(goal_lit)} unreachable")
         full = self._full if self._full is not None else task
         achievers = [full.ops[i] for i in full.achievers().get(goal_lit, ())]
         removed = {label for label, _ in task.removed}
@@ -206,7 +248,7 @@ def unreachable(
     return [x for x in goal if x not in reached]
 
 
-def _validate(
+def validate(
     task: Task, init: int, goal: tuple[int, ...], ops: list[GroundOp], planner: str
 ) -> None:
     s = init

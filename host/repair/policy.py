@@ -13,7 +13,9 @@ candidate (planning takes milliseconds) and decides:
 
 Acting first to tell diagnoses apart (a sensing action) needs observation actions in the
 domain and is not done yet. Probabilities come from the diagnoser (``Diagnosis.probability``)
-or, for hand-given candidates, from the components' priors (``prior_weight``).
+or, for hand-given candidates, from the components' priors (``prior_weight``); candidates are
+ranked as the diagnoser lists them (``host.diagnosis.result.rank_key``: most probable, then
+smaller, then by names), so the daemon repairs the diagnoser's first.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from host.diagnosis.result import rank_key
 from host.repair.errors import NoPlanError
 from host.repair.plan import Plan
 
@@ -90,7 +93,8 @@ def choose(
     """Decide which diagnosis to repair (see the module docstring)."""
     ranked = sorted(
         normalise(candidates) if candidates else [],
-        key=lambda c: (-c.probability, len(c.bad), sorted(c.bad)),
+        key=lambda c: rank_key(math.log(c.probability) if c.probability > 0 else -math.inf,
+                               c.bad),
     )
     if not ranked or not ranked[0].bad:
         empty = planner.plan((), observations, planner_name)

@@ -4,25 +4,37 @@
 (``switchable`` for SH, ``hardware`` for H, ``driver`` for SN, ``node`` for N and HN), what
 each node needs working (its hardware, the publishers of its input topics) and which objects
 are protected. ``repair_model(system)`` is the adapter from the diagnosis package's
-``SystemModel``; tests and benchmarks build a ``RepairModel`` directly. ``build_problem``
-makes the problem of one diagnosis: I = the observations + AB(c) for the bad + ~AB(c) for
-the good, G = ~AB(c) for all c. Where no observation says whether a device is powered or a
-node runs, the paper's model decides (a healthy device is on, a healthy node runs) and for a
-bad one a default that keeps the plan safe (a bad device is off: power it up; a bad node
-runs: restart it); every such assumption is listed in ``RepairProblem.assumed``.
-``to_pddl`` writes the problem file, for Fast Downward and for a person to read.
+``SystemModel`` (``theory_model.py`` builds one from a tug model); tests and benchmarks build
+a ``RepairModel`` directly. ``build_problem`` makes the problem of one diagnosis in the
+domain's own words (``vocabulary.Vocabulary``): I = the observations + AB(c) for the bad +
+~AB(c) for the good, G = ~AB(c) for all c, where "AB(c)" is ``(ab c)`` in our domain and
+``(bad c)`` / ``(good c)`` in the original's, and a false fact is either absent (closed world)
+or the domain's explicit complement (``(not_on c)``). Where no observation says whether a
+device is powered or a node runs, the paper's model decides (a healthy device is on, a
+healthy node runs) and for a bad one a default that keeps the plan safe (a bad device is off:
+power it up; a bad node runs: restart it); every such assumption is listed in
+``RepairProblem.assumed``. A model type the domain lacks falls back to the nearest one it has
+(``domain_type``: a driver is a node, a switchable device is hardware). ``to_pddl`` writes the
+problem file, for Fast Downward and for a person to read.
 """
 
 from __future__ import annotations
 
 import logging
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from host.repair.domain import Atom
+from host.repair.domain import ROOT_TYPE, Atom
 from host.repair.errors import ProblemError
+from host.repair.vocabulary import (
+    ABNORMAL,
+    POWERED,
+    ROLE_OF_OBSERVATION,
+    RUNNING,
+    Vocabulary,
+)
 
 if TYPE_CHECKING:
     from host.diagnosis.logic import Literal
@@ -30,11 +42,29 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-# the domain's vocabulary (models/*/repair.pddl)
-AB, ON, RUNNING, NEEDS, PROTECTED = "ab", "on", "running", "needs", "protected"
-SWITCHABLE, HARDWARE, DRIVER, NODE = "switchable", "hardware", "driver", "node"
+# the static predicates the problem layer writes (when the domain declares them)
+NEEDS, PROTECTED = "needs", "protected"
+SWITCHABLE, HARDWARE, DRIVER, NODE, COMPONENT = "switchable", "hardware", "driver", "node", \
+    "component"
 NODE_TYPES = frozenset({DRIVER, NODE})
 _KIND_TYPE = {"SH": SWITCHABLE, "H": HARDWARE, "SN": DRIVER, "HN": NODE, "N": NODE}
+#: a model type, then what stands for it in a domain that lacks it (``software``: the
+#: original's name for nodes)
+TYPE_FALLBACK: Mapping[str, tuple[str, ...]] = {
+    SWITCHABLE: (SWITCHABLE, HARDWARE, COMPONENT),
+    HARDWARE: (HARDWARE, COMPONENT),
+    DRIVER: (DRIVER, NODE, "software", COMPONENT),
+    NODE: (NODE, "software", COMPONENT),
+    COMPONENT: (COMPONENT,),
+}
+
+
+def domain_type(model_type: str, declared: Collection[str]) -> str:
+    """The domain's type for an object of ``model_type`` (``object`` if none fits)."""
+    for t in TYPE_FALLBACK.get(model_type, (model_type,)):
+        if t in declared:
+            return t
+    return ROOT_TYPE
 _PDDL_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_\-]*$")
 
 
@@ -89,7 +119,7 @@ def repair_model(system: SystemModel) -> RepairModel:
             inputs = list(c.subscribes)
         deps = [*c.hardware, *(p for t in inputs for p in publishers.get(t, ()))]
         needs[c.name] = tuple(d for d in dict.fromkeys(deps) if d != c.name)
-    needs = _drop_cycles(needs)
+    needs = drop_cycles(needs)
     protected = {c.name for c in system.components.values() if c.channel in system.protected}
     for ch in sorted(system.protected):
         if system.device_on_channel(ch) is None:
@@ -99,7 +129,7 @@ def repair_model(system: SystemModel) -> RepairModel:
     return RepairModel(system.name, types, needs, frozenset(protected))
 
 
-def _drop_cycles(needs: dict[str, tuple[str, ...]]) -> dict[str, tuple[str, ...]]:
+def drop_cycles(needs: dict[str, tuple[str, ...]]) -> dict[str, tuple[str, ...]]:
     """Remove the node->node dependencies that lie on a cycle (Tarjan's SCCs)."""
     index: dict[str, int] = {}
     low: dict[str, int] = {}
@@ -137,15 +167,19 @@ class RepairProblem:
     model: RepairModel
     bad: frozenset[str]
     init: frozenset[Atom]
-    goal: tuple[Atom, ...]  # each must be false: (not (ab c))
+    goal: tuple[Atom, ...]  # each must hold (goal_holds) or be false: (good c) / (not (ab c))
     assumed: tuple[str, ...] = ()
     ignored: tuple[str, ...] = ()
+    goal_holds: bool = False
 
 
 def build_problem(
-    model: RepairModel, bad: Iterable[str], observations: Iterable[Literal] = ()
+    model: RepairModel, bad: Iterable[str], observations: Iterable[Literal] = (),
+    vocabulary: Vocabulary | None = None,
 ) -> RepairProblem:
-    """The planning problem of the diagnosis ``bad`` under ``observations``."""
+    """The planning problem of the diagnosis ``bad`` under ``observations``, in the words of
+    ``vocabulary`` (default: ours, ``ab`` / ``on`` / ``running``)."""
+    words = Vocabulary() if vocabulary is None else vocabulary
     bad_set = frozenset(bad)
     unknown = sorted(bad_set - set(model.types))
     if unknown:
@@ -157,9 +191,10 @@ def build_problem(
     ignored: list[str] = []
     for o in observations:
         pred, args = split_atom(o.atom)
-        if pred in (ON, RUNNING) and len(args) == 1 and args[0] in model.types:
-            observed[(pred, args[0])] = o.positive
-        elif pred.lower() == AB:
+        role = ROLE_OF_OBSERVATION.get(pred)
+        if role is not None and len(args) == 1 and args[0] in model.types:
+            observed[(role, args[0])] = o.positive
+        elif pred.lower() == "ab":
             raise ProblemError(
                 f"the observation {o} states a health atom",
                 "health comes from the diagnosis (--bad), not from observations",
@@ -170,24 +205,25 @@ def build_problem(
     assumed: list[str] = []
     for name, typ in model.types.items():
         is_bad = name in bad_set
-        if is_bad:
-            init.add(Atom(AB, (name,)))
-        fluent = ON if typ == SWITCHABLE else RUNNING if typ in NODE_TYPES else None
-        if fluent is None:
+        init.update(Atom(p, (o,)) for p, o in words.facts(ABNORMAL, name, is_bad))
+        role = POWERED if typ == SWITCHABLE else RUNNING if typ in NODE_TYPES else None
+        if role is None:
             continue
-        value = observed.get((fluent, name))
+        value = observed.get((role, name))
         if value is None:
             # healthy: the model's clauses say on / running; bad: off (power it up) for a
             # device, running (restart it: safe either way) for a node
-            value = not is_bad if fluent == ON else True
+            value = not is_bad if role == POWERED else True
             if is_bad:
-                assumed.append(f"{'' if value else '~'}{fluent}({name})")
-        if value:
-            init.add(Atom(fluent, (name,)))
-    goal = tuple(Atom(AB, (name,)) for name in model.types)
+                word = "on" if role == POWERED else "running"
+                assumed.append(f"{'' if value else '~'}{word}({name})")
+        init.update(Atom(p, (o,)) for p, o in words.facts(role, name, value))
+    pred, holds = words.goal()
+    goal = tuple(Atom(pred, (name,)) for name in model.types)
     if ignored:
         log.debug("observations not in the repair domain, ignored: %s", ignored)
-    return RepairProblem(model, bad_set, frozenset(init), goal, tuple(assumed), tuple(ignored))
+    return RepairProblem(model, bad_set, frozenset(init), goal, tuple(assumed), tuple(ignored),
+                         holds)
 
 
 def split_atom(atom: str) -> tuple[str, tuple[str, ...]]:
@@ -199,8 +235,12 @@ def split_atom(atom: str) -> tuple[str, tuple[str, ...]]:
     return pred, tuple(a.strip() for a in inner.split(",") if a.strip())
 
 
-def to_pddl(problem: RepairProblem, domain_name: str, name: str = "repair") -> str:
-    """The problem as a PDDL file (objects by type, I, G)."""
+def to_pddl(problem: RepairProblem, domain_name: str, name: str = "repair",
+            types: Mapping[str, str] | None = None,
+            predicates: Collection[str] | None = None) -> str:
+    """The problem as a PDDL file (objects by type, I, G). ``types``: each object's type in
+    the domain (default: the model's); ``predicates``: the domain's (static facts of other
+    predicates are left out)."""
     bad_names = [n for n in problem.model.types if not _PDDL_NAME.match(n)]
     if bad_names:
         raise ProblemError(
@@ -208,16 +248,19 @@ def to_pddl(problem: RepairProblem, domain_name: str, name: str = "repair") -> s
             "use letters, digits, '_' and '-', starting with a letter",
         )
     by_type: dict[str, list[str]] = {}
-    for obj, typ in problem.model.types.items():
+    for obj, typ in (problem.model.types if types is None else types).items():
         by_type.setdefault(typ, []).append(obj)
     lines = [f"(define (problem {name})", f"  (:domain {domain_name})", "  (:objects"]
     for typ, objs in by_type.items():
         lines.append(f"    {' '.join(objs)} - {typ}")
     lines.append("  )")
     lines.append("  (:init")
-    facts = [*problem.model.static_facts(), *sorted(problem.init, key=str)]
+    statics = [a for a in problem.model.static_facts()
+               if predicates is None or a.pred in predicates]
+    facts = [*statics, *sorted(problem.init, key=str)]
     lines.extend(f"    ({a.pred} {' '.join(a.args)})" for a in facts)
     lines.append("  )")
-    goals = " ".join(f"(not ({a.pred} {' '.join(a.args)}))" for a in problem.goal)
+    fmt = "({}{})" if problem.goal_holds else "(not ({}{}))"
+    goals = " ".join(fmt.format(a.pred, "".join(" " + x for x in a.args)) for a in problem.goal)
     lines.append(f"  (:goal (and {goals})))")
     return "\n".join(lines) + "\n"

@@ -6,6 +6,9 @@
 ;   (needs ?n ?c)    static: node ?n works only while ?c works (its hardware, the publishers
 ;                    of its input topics); generated from system.yaml
 ;   (protected ?c)   static: ?c is never switched off (the board's protected channels)
+; The planner's words for the roles it fills from a diagnosis (host/repair/vocabulary.py; the
+; original system's domain says bad/good/not_on instead, and is read by the same conventions):
+; dxboard-vocabulary: abnormal=ab powered=on running=running
 ; Beyond the paper's power_up, shutdown, start_node and stop_node: power_cycle (one board
 ; command, off then on), a driver cannot start before the hardware it needs is healthy, and
 ; switching a device's power while its driver runs leaves the driver abnormal (it lost its

@@ -53,20 +53,72 @@ def test_model_clauses(capsys: pytest.CaptureFixture[str]) -> None:
     assert "~AB(jaguar) -> on(jaguar)" in out
 
 
-def test_diagnose_json(capsys: pytest.CaptureFixture[str]) -> None:
+def test_diagnose_json_lists_what_is_bad(capsys: pytest.CaptureFixture[str]) -> None:
     obs = SCENARIOS / "device-shut-down.obs"
     assert cli.main(["diagnose", str(TEDUSAR), "--obs", str(obs), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert data["complete"] is True
+    assert data["complete"] is True and data["order"] == "probability"
     assert [d["bad"] for d in data["diagnoses"]] == [["jaguar"]]
+    assert "good" not in data["diagnoses"][0]
+    assert cli.main(["diagnose", str(TEDUSAR), "--obs", str(obs), "--json", "--good"]) == 0
+    data = json.loads(capsys.readouterr().out)
     assert "jaguar_node" in data["diagnoses"][0]["good"]
     assert len(data["diagnoses"][0]["good"]) == 14
 
 
+def test_no_consistent_diagnosis_says_so_and_exits_1(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    obs = tmp_path / "x.obs"  # a value cannot rise and fall at once, whatever is broken
+    obs.write_text("~on(jaguar)\ninc(odom_yaw_rate)\ndec(odom_yaw_rate)\n")
+    assert cli.main(["diagnose", str(TEDUSAR), "--obs", str(obs)]) == 1
+    out = capsys.readouterr().out
+    assert "no consistent diagnosis" in out and "bad:" not in out
+    assert cli.main(["diagnose", str(TEDUSAR), "--obs", str(obs), "--json"]) == 1
+    data = json.loads(capsys.readouterr().out)
+    assert data["explainable"] is False and data["diagnoses"] == []
+
+
+
+
+@pytest.mark.parametrize("flag", [["--time-budget", "-1"], ["--time-budget", "nan"],
+                                  ["--max-count", "0"], ["--max-card", "-2"]])
+def test_bad_bounds_are_refused(flag: list[str], capsys: pytest.CaptureFixture[str]) -> None:
+    obs = SCENARIOS / "device-shut-down.obs"
+    with pytest.raises(SystemExit) as info:
+        cli.main(["diagnose", str(TEDUSAR), "--obs", str(obs), *flag])
+    assert info.value.code == 2
+    assert flag[0] in capsys.readouterr().err
+
+
+def test_help_states_the_order_and_every_algorithm(capsys: pytest.CaptureFixture[str]) -> None:
+    from host.commands import diagnose
+    from host.diagnosis import ALGORITHMS
+    from host.diagnosis.search import DEFAULT_ALGORITHM
+
+    assert set(diagnose.ALGORITHMS) == set(ALGORITHMS)
+    assert diagnose.DEFAULT_ALGORITHM == DEFAULT_ALGORITHM
+    with pytest.raises(SystemExit):
+        cli.main(["diagnose", "--help"])
+    out = " ".join(capsys.readouterr().out.split())
+    assert "most probable first" in out and "(default: auto)" in out
+    for name in ALGORITHMS:
+        assert f"{name}:" in out
+
+
+def test_minimal_cardinality_only(capsys: pytest.CaptureFixture[str]) -> None:
+    obs = SCENARIOS / "power-up.obs"
+    assert cli.main(["diagnose", str(TEDUSAR), "--obs", str(obs), "--min-card-only",
+                     "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert [len(d["bad"]) for d in data["diagnoses"]] == [11]
+
+
 def test_diagnose_text_with_cut(capsys: pytest.CaptureFixture[str]) -> None:
     obs = SCENARIOS / "power-up.obs"
-    assert cli.main(["diagnose", str(TEDUSAR), "--obs", str(obs), "--max-card", "3"]) == 0
+    assert cli.main(["diagnose", str(TEDUSAR), "--obs", str(obs), "--max-card", "3"]) == 1
     out = capsys.readouterr().out
+    assert "no diagnosis found within the bounds" in out
     assert "incomplete: the max_card bound cut the list" in out
 
 
@@ -78,15 +130,20 @@ def test_diagnose_a_tug_file(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     assert json.loads(capsys.readouterr().out)["diagnoses"][0]["bad"] == ["jaguar"]
 
 
-def test_unknown_literal_is_one_line_and_exit_2(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+@pytest.mark.parametrize(("text", "line", "needle"), [
+    ("# header\nok(/scan)\nnot running(nobody)\n", 3, "running(nobody)"),  # unknown literal
+    ("on(jaguar)\n~on(jaguar)\n", 2, "line 1"),  # contradictory lines: no 'bad: jaguar'
+])
+def test_bad_obs_file_is_one_line_and_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str, line: int, needle: str
 ) -> None:
     obs = tmp_path / "x.obs"
-    obs.write_text("# header\nok(/scan)\nnot running(nobody)\n")
+    obs.write_text(text)
     assert cli.main(["diagnose", str(TEDUSAR), "--obs", str(obs)]) == 2
-    err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1
-    assert f"{obs}:3:" in err and "running(nobody)" in err and "Traceback" not in err
+    captured = capsys.readouterr()
+    err = captured.err.strip()
+    assert len(err.splitlines()) == 1 and "bad:" not in captured.out
+    assert f"{obs}:{line}:" in err and needle in err and "Traceback" not in err
 
 
 def test_bad_model_path_is_a_user_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -94,3 +151,19 @@ def test_bad_model_path_is_a_user_error(tmp_path: Path, capsys: pytest.CaptureFi
     obs.write_text("")
     assert cli.main(["diagnose", str(tmp_path / "none"), "--obs", str(obs)]) == 2
     assert "no such file" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("domain", "needle"), [
+    ("(define (domain x) (:action a :parameters (?x) :effect (and (p ?x)))",
+     "not a valid PDDL domain"),
+    ((TEDUSAR / "repair.pddl").read_text().replace("(running ?n - node)", ""),
+     "undeclared predicate(s) running"),
+])
+def test_model_check_checks_the_repair_domain(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], domain: str, needle: str
+) -> None:
+    (tmp_path / "system.yaml").write_text((TEDUSAR / "system.yaml").read_text())
+    (tmp_path / "repair.pddl").write_text(domain)
+    assert cli.main(["model", "check", str(tmp_path)]) == 1
+    err = capsys.readouterr().err
+    assert f"{tmp_path / 'repair.pddl'}" in err and needle in err

@@ -25,7 +25,8 @@ def test_cross_check_against_brute_force(algorithm: str) -> None:
         assert result.explainable == bool(expected)
         got = result.bad_sets()
         assert sorted(got, key=sorted) == sorted(expected, key=sorted)
-        assert [len(b) for b in got] == sorted(len(b) for b in got)  # by cardinality
+        lp = [d.log_prior for d in result.diagnoses]
+        assert lp == sorted(lp, reverse=True)  # most probable first
         checked += bool(expected)
     assert checked > 150  # most random instances do have diagnoses
 
@@ -132,3 +133,18 @@ def test_contradictory_observations_are_unexplainable() -> None:
 def test_unknown_algorithm() -> None:
     with pytest.raises(ValueError, match="hitting-set"):
         Diagnoser(_chain(1), algorithm="magic")
+
+
+def test_minimal_cardinality_only_as_the_diagnosers_default() -> None:
+    # a caller that never passes min_card_only (the daemon) gets it from the construction
+    theory = Theory(("a", "b", "c"), (  # conflicts {a, b} and {a, c}: {a} and {b, c}
+        Clause((Literal(ab("a")), Literal(ab("b")), Literal("ok(x)"))),
+        Clause((Literal(ab("a")), Literal(ab("c")), Literal("ok(x)"))),
+    ))
+    with Diagnoser(theory, min_card_only=True) as d:
+        d.observe("~ok(x)")
+        assert d.diagnose().bad_sets() == [frozenset({"a"})]
+        assert len(d.diagnose(min_card_only=False).bad_sets()) == 2
+    with Diagnoser(theory) as d:
+        d.observe("~ok(x)")
+        assert len(d.diagnose().bad_sets()) == 2

@@ -7,7 +7,7 @@ import random
 
 import pytest
 
-from host.diagnosis import Bound, Clause, Diagnoser, Literal, Theory, ab
+from host.diagnosis import Bound, Clause, Diagnoser, Literal, Theory, ab, toplevel
 from host.diagnosis import search as search_mod
 from host.diagnosis.structure import infer_structure
 from tests.diagnosis.bruteforce import minimal_diagnoses
@@ -90,13 +90,16 @@ def test_unstructured_theories_are_recognised() -> None:
     assert s is None or not (s.written[0] & s.written[1])
 
 
-@pytest.mark.parametrize("algorithm", ["top-level", "auto", "cardinality"])
+@pytest.mark.parametrize("algorithm", ["top-level", "auto", "cardinality", "top-level/solver"])
 def test_min_card_on_random_circuits_against_brute_force(
     algorithm: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     # force auto onto its slice-then-top-level path, with a slice that settles nothing
     monkeypatch.setattr(search_mod, "AUTO_FROM", 0)
     monkeypatch.setattr(search_mod, "AUTO_SLICE_S", 0.0)
+    if algorithm == "top-level/solver":  # every region expanded by the solver's enumeration
+        monkeypatch.setattr(toplevel, "CHECK_EACH_UP_TO", 0)
+        algorithm = "top-level"
     rng = random.Random(85)
     structured = 0
     for _ in range(250):

@@ -83,7 +83,7 @@ def test_extensions_disjunction_false_and_facts(tmp_path: Path) -> None:
     ("text", "line", "needle"),
     [
         ("ab: AB\nnab: NAB\nneg_prefix: '!'\nprops: [a]\nrules:\n  - NAB(g) -> a\n"
-         "  - NAB(g) -> zz\n", 7, "zz"),
+         "priors:\n  zz: 0.1\n", 8, "zz"),
         ("ab: AB\nnab: NAB\nprops: [a]\nrules: [NAB(g) -> a]\nextra: 1\n", 5, "extra"),
         ("ab: AB\nprops: [a]\nrules:\n  - NAB(g) -> 3a\n", 4, "3a"),
     ],

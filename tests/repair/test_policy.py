@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from host.diagnosis import Clause, Diagnoser, Literal, Theory, ab
 from host.diagnosis.logic import parse_literal
 from host.repair.errors import NoPlanError
 from host.repair.planner import RepairPlanner
@@ -51,3 +52,37 @@ def test_prior_weight_prefers_likelier_and_smaller_diagnoses() -> None:
     priors = {"a": 0.2, "b": 0.01}
     assert prior_weight({"a"}, priors) > prior_weight({"b"}, priors)
     assert prior_weight({"b"}, priors) > prior_weight({"a", "b"}, priors)
+
+
+def _two_conflicts(priors: dict[str, float]) -> Theory:
+    """Conflicts {jaguar, hokuyo} and {jaguar, hokuyo_node}: the minimal diagnoses are
+    {jaguar} and {hokuyo, hokuyo_node} (the issue 17 example in the robot's names)."""
+    def rule(x: str, out: str) -> Clause:
+        return Clause((Literal(ab("jaguar")), Literal(ab(x)), Literal(f"ok({out})")))
+
+    return Theory(("hokuyo", "hokuyo_node", "jaguar"), (rule("hokuyo", "x"),
+                                                       rule("hokuyo_node", "y")), priors)
+
+
+@pytest.mark.parametrize(("priors", "first"), [
+    # the pair is 1000x likelier than the single component: most probable, not smallest
+    ({"hokuyo": 0.5, "hokuyo_node": 0.5, "jaguar": 0.001}, {"hokuyo", "hokuyo_node"}),
+    # the single one is likelier
+    ({"hokuyo": 0.01, "hokuyo_node": 0.01, "jaguar": 0.2}, {"jaguar"}),
+    # an exact tie of the priors (odds 1/81 = (1/9)^2): the smaller diagnosis, as listed
+    ({"hokuyo": 0.1, "hokuyo_node": 0.1, "jaguar": 1 / 82}, {"jaguar"}),
+])
+def test_the_daemon_repairs_the_diagnosers_first(tedusar: RepairPlanner, priors: dict[str, float],
+                                                 first: set[str]) -> None:
+    """Item 3 of issue 17: the daemon's candidates (built as host/daemon/repairs.py does) from
+    the diagnoser's result, most probable first, and the policy repairs that first one."""
+    with Diagnoser(_two_conflicts(priors)) as d:
+        d.observe("~ok(x)")
+        d.observe("~ok(y)")
+        result = d.diagnose()
+    assert result.bad_sets()[0] == first
+    cands = [Candidate(frozenset(x.bad), x.probability) for x in result.diagnoses]
+    for order in (cands, cands[::-1]):
+        choice = choose(tedusar, order)
+        assert choice.strategy == "most-probable"
+        assert choice.bad == first
