@@ -20,12 +20,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from host.plandiag.errors import PlanModelError
-
-if TYPE_CHECKING:
-    from host.plandiag.model import FaultKind
 
 _ANNOTATION = re.compile(r"@([A-Za-z][\w-]*)(.*)$")
 _ACTION = re.compile(r"\(\s*:action\s+([^\s()]+)", re.IGNORECASE)
@@ -37,7 +33,7 @@ _LATER = (":functions", ":constraints", ":action", ":durative-action", ":derived
 
 @dataclass(frozen=True)
 class Annotation:
-    kind: FaultKind
+    kind: str  # "mode" or "event" (model.FaultKind's values)
     prior: float
     mode_of: str | None
     components: tuple[str, ...]
@@ -73,14 +69,11 @@ def read_annotations(text: str, path: Path) -> dict[str, Annotation]:
 
 
 def _parse(word: str, tokens: list[str], path: Path, n: int) -> Annotation:
-    from host.plandiag.model import FaultKind
-
     where = f"{path}:{n}"
     if word not in ("mode", "event"):
         raise PlanModelError(f"{where}: unknown annotation @{word}", _HINT)
-    kind = FaultKind(word)
     mode_of = None
-    if kind is FaultKind.MODE:
+    if word == "mode":
         if not tokens or "=" in tokens[0]:
             raise PlanModelError(f"{where}: @mode needs the action it is a mode of",
                                  "write '; @mode ACTION prior=P', e.g. @mode navigate prior=0.05")
@@ -103,7 +96,7 @@ def _parse(word: str, tokens: list[str], path: Path, n: int) -> Annotation:
         raise PlanModelError(f"{where}: prior={fields['prior']} is not a probability "
                              "between 0 and 1", "give 0 < P < 1, e.g. prior=0.05")
     components = tuple(c for c in fields.get("components", "").split(",") if c)
-    return Annotation(kind, prior, mode_of, components, n)
+    return Annotation(word, prior, mode_of, components, n)
 
 
 # -- borrowing sections ----------------------------------------------------------------------

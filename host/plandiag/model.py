@@ -170,7 +170,7 @@ def _fault_schema(
     if s.name in actions:
         raise PlanModelError(f"{where}: the name is already a mission action",
                              "give the fault mode or event a name of its own")
-    if note.kind is FaultKind.EVENT:
+    if note.kind == FaultKind.EVENT:
         return FaultSchema(s, FaultKind.EVENT, note.prior, None, note.components)
     assert note.mode_of is not None
     action = actions.get(note.mode_of)
