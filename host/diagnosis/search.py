@@ -42,7 +42,7 @@ All are cross-checked against brute force in ``tests/diagnosis``.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 from pysat.examples.hitman import Hitman  # type: ignore[import-untyped]
@@ -61,14 +61,19 @@ class SearchOutcome:
 
 
 Search = Callable[[SatContext, list[int], int | None, int | None, bool], SearchOutcome]
+#: more diagnoses of the same size known without the solver, given one it found
+#: (plan diagnosis: the same event in another gap, checked by simulation)
+Expand = Callable[[frozenset[int]], Iterable[frozenset[int]]]
 
 
 def _list_level(
     ctx: SatContext, assumptions: list[int], act: int, out: SearchOutcome,
-    max_count: int | None,
+    max_count: int | None, expand: Expand | None = None,
 ) -> bool:
     """Add every diagnosis the solver finds under ``assumptions`` to ``out``, each blocked
-    for the rest of the run (``act``); False when a bound (count, time) cut the listing."""
+    for the rest of the run (``act``); False when a bound (count, time) cut the listing.
+    ``expand`` may name more of the same size for each: those that are no superset of one
+    listed are listed and blocked too, and the solver need not find them."""
     while True:
         if max_count is not None and len(out.bad_sets) >= max_count:
             out.cut_by = Bound.MAX_COUNT
@@ -79,9 +84,17 @@ def _list_level(
             return False
         if not r:
             return True
-        bad = ctx.model_bad()
-        out.bad_sets.append(bad)
-        ctx.solver.add_clause([-ctx.ab_vars[i] for i in bad] + [-act])
+        found = [ctx.model_bad()]
+        if expand is not None:
+            found += expand(found[0])
+        for bad in found:
+            if len(found) > 1 and any(d <= bad for d in out.bad_sets):
+                continue
+            if max_count is not None and len(out.bad_sets) >= max_count:
+                out.cut_by = Bound.MAX_COUNT
+                return False
+            out.bad_sets.append(bad)
+            ctx.solver.add_clause([-ctx.ab_vars[i] for i in bad] + [-act])
 
 
 def cardinality_search(
@@ -90,6 +103,7 @@ def cardinality_search(
     max_card: int | None,
     max_count: int | None,
     min_card_only: bool = False,
+    expand: Expand | None = None,
 ) -> SearchOutcome:
     n = len(ctx.ab_vars)
     act = ctx.new_run()
@@ -109,7 +123,7 @@ def cardinality_search(
             out.cut_by = Bound.TIME_BUDGET
             return out
         while k <= limit:
-            if not _list_level(ctx, base + ctx.at_most(k), act, out, max_count):
+            if not _list_level(ctx, base + ctx.at_most(k), act, out, max_count, expand):
                 return out
             k += 1
             if min_card_only and out.bad_sets:

@@ -21,7 +21,7 @@ is one. ``simulate`` runs a fault set and says where it fails.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 
@@ -104,6 +104,16 @@ class Problem:
         return None
 
 
+def bits(mask: int) -> list[int]:
+    """The atoms (bit positions) set in ``mask``, lowest first."""
+    out = []
+    while mask:
+        low = mask & -mask
+        out.append(low.bit_length() - 1)
+        mask ^= low
+    return out
+
+
 def op_label(op: GroundOp) -> str:
     return f"{op.name}({','.join(op.args)})"
 
@@ -136,6 +146,50 @@ def conflict(a: GroundOp, b: GroundOp) -> bool:
     return bool((a.add & effective_delete(b)) or (b.add & effective_delete(a)))
 
 
+def live_atoms(problem: Problem, allowed: Callable[[int], bool]) -> list[int]:
+    """``live[p]``: the atoms whose value at point ``p`` may still matter — read later by an
+    observation or by the precondition of a variant or event that may run (the faults
+    ``allowed``), before every variant that may run overwrites it alike. An event that writes
+    no live atom after its gap is in no minimal diagnosis: without it, the history differs
+    only in atoms nothing reads before they are overwritten, so it stays consistent."""
+    last = problem.last_point
+    live = [0] * (last + 1)
+
+    def seen(q: int) -> int:
+        t, f = problem.obs.get(q, (0, 0))
+        return t | f
+
+    gap_reads: dict[tuple[int, ...], int] = {}
+    cur = live[last] = seen(last)
+    for q in range(last, 0, -1):
+        if q % 2:  # the gap that ends at q
+            gap = tuple(f for f in problem.gaps[q // 2] if allowed(f))
+            read = gap_reads.get(gap)
+            if read is None:
+                read = 0
+                for f in gap:
+                    op = problem.faults[f].op
+                    read |= op.pre_t | op.pre_f
+                gap_reads[gap] = read
+            cur |= read
+        else:  # the step that ends at q
+            spec = problem.steps[q // 2 - 1]
+            ops = [problem.faults[f].op for f in spec.modes if allowed(f)]
+            if spec.nominal is not None:
+                ops.append(spec.nominal)
+            kill_add = kill_del = -1
+            read = 0
+            for op in ops:
+                kill_add &= op.add
+                kill_del &= effective_delete(op)
+                read |= op.pre_t | op.pre_f
+            kill = (kill_add | kill_del) if ops else 0
+            cur = (cur & ~kill) | read
+        cur |= seen(q - 1)
+        live[q - 1] = cur
+    return live
+
+
 @dataclass
 class Run:
     """A simulated history: the state at every point reached, and where it failed (if so)."""
@@ -150,8 +204,15 @@ class Run:
         return self.stop is None
 
 
-def simulate(problem: Problem, faults: Iterable[int]) -> Run:
-    """Run the history with the fault set ``faults``."""
+def simulate(problem: Problem, faults: Iterable[int], start: int = 1,
+             rejoin: Sequence[int] | None = None, rejoin_at: int = 0) -> Run:
+    """Run the history with the fault set ``faults``.
+
+    ``rejoin`` (the states of a consistent run, point by point) lets a caller check a fault
+    set that differs from that run's only from step ``start`` on: the run starts from
+    ``rejoin``'s state before gap ``start``, and ends as consistent at the first point from
+    ``rejoin_at`` on where its state is the one ``rejoin`` had there (the rest is the same).
+    """
     modes: dict[int, Fault] = {}
     events: dict[int, list[GroundOp]] = {}
     for fid in faults:
@@ -163,11 +224,11 @@ def simulate(problem: Problem, faults: Iterable[int]) -> Run:
             modes[f.at] = f
         else:
             events.setdefault(f.at, []).append(f.op)
-    state = problem.init
+    state = problem.init if rejoin is None else rejoin[2 * start - 2]
     run = Run([state])
-    if not problem.obs_ok(0, state):
+    if start == 1 and not problem.obs_ok(0, state):
         return _fail(run, problem, 0, Stop.OBSERVATION)
-    for spec in problem.steps:
+    for spec in problem.steps[start - 1 :]:
         i = spec.index
         nxt = apply_events(state, events.get(i, ()))
         if nxt is None:
@@ -179,6 +240,8 @@ def simulate(problem: Problem, faults: Iterable[int]) -> Run:
             return _fail(run, problem, 2 * i - 1, Stop.OBSERVATION)
         if not spec.executed:
             break
+        if rejoin is not None and 2 * i - 1 >= rejoin_at and rejoin[2 * i - 1] == state:
+            return run
         op = modes[i].op if i in modes else spec.nominal
         if op is None:
             run.states.append(state)
@@ -190,6 +253,8 @@ def simulate(problem: Problem, faults: Iterable[int]) -> Run:
         run.states.append(state)
         if not problem.obs_ok(2 * i, state):
             return _fail(run, problem, 2 * i, Stop.OBSERVATION)
+        if rejoin is not None and 2 * i >= rejoin_at and rejoin[2 * i] == state:
+            return run
     return run
 
 

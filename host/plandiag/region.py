@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 from host.plandiag.context import Context
 from host.plandiag.interpret import Symptom
-from host.plandiag.problem import Problem, effective_delete, writes
+from host.plandiag.problem import Problem, bits, effective_delete, writes
 from host.repair.task import GroundOp
 
 
@@ -85,18 +85,26 @@ def fault_region(ctx: Context, symptoms: list[Symptom]) -> Region:
             steps.add(sym.step)
             for fid in p.steps[sym.step - 1].modes:
                 suspect(fid, 2 * sym.step - 1)
+    # the gaps share one list of ground events: index their writers by atom once
+    writers: dict[int, list[int]] = {}
+    for j, fid in enumerate(p.gaps[0] if p.gaps else ()):
+        for a in bits(writes(p.faults[fid].op)):
+            writers.setdefault(a, []).append(j)
+    walked: dict[int, set[int]] = {}  # atom -> points whose transition was followed for it
     while work:
         a, point = work.pop()
         if (a, point) in seen:
             continue
         seen.add((a, point))
+        done = walked.setdefault(a, set())
         q = point
-        while q > 0:
+        while q > 0 and q not in done:  # a walk that met an earlier one goes on as it did
+            done.add(q)
             points.add(q)
             if q % 2:  # the gap that ends at q
-                for fid in p.gaps[q // 2]:
-                    if (writes(p.faults[fid].op) >> a) & 1:
-                        suspect(fid, q - 1)
+                gap = p.gaps[q // 2]
+                for j in writers.get(a, ()):
+                    suspect(gap[j], q - 1)
             else:  # the step that ends at q
                 spec = p.steps[q // 2 - 1]
                 steps.add(spec.index)

@@ -36,17 +36,17 @@ from host.diagnosis.result import Bound
 from host.diagnosis.satctx import SatContext
 from host.diagnosis.search import cardinality_search
 from host.plandiag.limits import Deadline, Limits, Order, Outcome
-from host.plandiag.problem import Problem, effective_delete
+from host.plandiag.model import FaultKind
+from host.plandiag.problem import (
+    Problem,
+    bits,
+    conflict,
+    effective_delete,
+    live_atoms,
+    simulate,
+    writes,
+)
 from host.repair.task import GroundOp
-
-
-def _bits(mask: int) -> list[int]:
-    out = []
-    while mask:
-        low = mask & -mask
-        out.append(low.bit_length() - 1)
-        mask ^= low
-    return out
 
 
 class Encoding:
@@ -54,10 +54,20 @@ class Encoding:
 
     def __init__(self, problem: Problem, universe: frozenset[int] | None) -> None:
         self.p = problem
-        ids = [f.id for f in problem.faults if universe is None or f.id in universe]
+        allowed = (lambda f: True) if universe is None else universe.__contains__
+        live = live_atoms(problem, allowed)
+        ids = [f.id for f in problem.faults if allowed(f.id) and (
+            f.kind is FaultKind.MODE or writes(f.op) & live[2 * f.at - 1])]
         self.fault_ids = ids
         self.ctx = SatContext(Theory(tuple(str(f) for f in ids), ()))
         self.fvar = dict(zip(ids, self.ctx.ab_vars, strict=True))
+        self.index = {f: i for i, f in enumerate(ids)}  # fault id -> its health-variable index
+        # an event's place in its gap's list (the same ground events in every gap), and
+        # the places of the events each conflicts with (decided once for all gaps)
+        self.event_slot = {f: j for gap in problem.gaps for j, f in enumerate(gap)}
+        slots = [problem.faults[f].op for f in problem.gaps[0]] if problem.gaps else []
+        self.conflicts = [[k for k in range(j + 1, len(slots)) if conflict(op, slots[k])]
+                          for j, op in enumerate(slots)]
         self.hard: list[list[int]] = []
         self.true = self.ctx.new_var()
         self._add([self.true])
@@ -85,9 +95,9 @@ class Encoding:
 
     def _observe(self, point: int) -> None:
         t, f = self.p.obs.get(point, (0, 0))
-        for a in _bits(t):
+        for a in bits(t):
             self._add([self.cur[a]])
-        for a in _bits(f):
+        for a in bits(f):
             self._add([-self.cur[a]])
 
     def _holds(self, guard: int, op: GroundOp) -> bool:
@@ -110,15 +120,15 @@ class Encoding:
         for _, op in variants:
             written |= op.add | op.delete
         nxt: dict[int, int] = {}
-        for a in _bits(written):
+        for a in bits(written):
             nxt[a] = self.ctx.new_var()
         adders: dict[int, list[int]] = {a: [] for a in nxt}
         deleters: dict[int, list[int]] = {a: [] for a in nxt}
         for g, op in variants:
-            for a in _bits(op.add):
+            for a in bits(op.add):
                 self._add([-g, nxt[a]])
                 adders[a].append(g)
-            for a in _bits(effective_delete(op)):
+            for a in bits(effective_delete(op)):
                 self._add([-g, -nxt[a]])
                 deleters[a].append(g)
         for a, v in nxt.items():
@@ -128,22 +138,22 @@ class Encoding:
             self.cur[a] = v
 
     def _gap(self, gap: int) -> None:
-        live: list[tuple[int, GroundOp]] = []
-        for fid in self.p.gaps[gap - 1]:
+        live: dict[int, tuple[int, GroundOp]] = {}  # slot -> (variable, event)
+        for j, fid in enumerate(self.p.gaps[gap - 1]):
             v = self.fvar.get(fid)
             if v is None:
                 continue
             op = self.p.faults[fid].op
             if self._holds(v, op):
-                live.append((v, op))
+                live[j] = (v, op)
             else:
                 self._add([-v])
-        for i, (v1, o1) in enumerate(live):
-            for v2, o2 in live[i + 1 :]:
-                if (o1.add & effective_delete(o2)) or (o2.add & effective_delete(o1)):
-                    self._add([-v1, -v2])
+        for j, (v1, _) in live.items():
+            for k in self.conflicts[j]:
+                if k in live:
+                    self._add([-v1, -live[k][0]])
         if live:
-            self._transition(live)
+            self._transition(list(live.values()))
 
     def _step(self, index: int) -> None:
         spec = self.p.steps[index - 1]
@@ -153,9 +163,9 @@ class Encoding:
             if op is None or not self._holds(self.true, op):
                 self._add([-self.true])  # no variant can run here: no diagnosis at all
                 return
-            for a in _bits(op.add):
+            for a in bits(op.add):
                 self.cur[a] = self.true
-            for a in _bits(effective_delete(op)):
+            for a in bits(effective_delete(op)):
                 self.cur[a] = -self.true
             return
         variants: list[tuple[int, GroundOp]] = []
@@ -188,12 +198,41 @@ class Encoding:
             self.ctx.start_budget(limits.time_budget_s)
             calls = self.ctx.calls
             try:
-                found = cardinality_search(self.ctx, [], limits.max_card, limits.max_count)
+                found = cardinality_search(self.ctx, [], limits.max_card, limits.max_count,
+                                           expand=self._siblings)
             finally:
                 self.ctx.stop_budget()
             out = Outcome([frozenset(self.fault_ids[i] for i in bad) for bad in found.bad_sets],
                           found.cut_by, found.explainable, self.ctx.calls - calls)
         out.elapsed_s = time.perf_counter() - start
+        return out
+
+    def _siblings(self, found: frozenset[int]) -> list[frozenset[int]]:
+        """The same diagnosis with one of its events in another gap, where that is consistent
+        too (checked by simulation from the gap moved from or to until the history rejoins
+        the one found): an event nobody saw for a while may have happened in any gap of the
+        while, and one solver call per gap would cost far more."""
+        p = self.p
+        d = frozenset(self.fault_ids[i] for i in found)
+        ref = simulate(p, d)
+        out: list[frozenset[int]] = []
+        if not ref.consistent:  # pragma: no cover - the solver's model is a diagnosis
+            return out
+        for e in d:
+            j = self.event_slot.get(e)
+            if j is None:
+                continue
+            g = p.faults[e].at
+            for g2, gap in enumerate(p.gaps, start=1):
+                other = gap[j]
+                if g2 == g or other not in self.index or other in d:
+                    continue
+                if self.ctx.out_of_time():
+                    return out
+                moved = (d - {e}) | {other}
+                lo, hi = min(g, g2), max(g, g2)
+                if simulate(p, moved, start=lo, rejoin=ref.states, rejoin_at=2 * hi - 1).consistent:
+                    out.append(frozenset(self.index[f] for f in moved))
         return out
 
     def _by_probability(self, limits: Limits) -> Outcome:

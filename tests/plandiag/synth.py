@@ -1,10 +1,12 @@
 """Random domains and histories for the engines' cross-check and for benchmarks/plandiag.py.
 
 ``synthetic_domain(seed, modes, events)`` writes a mission domain (``mission.pddl`` text) of
-``ACTIONS`` actions over ``thing`` objects and ``PREDICATES`` unary predicates plus a static
-``near`` relation, each action with ``modes`` fault modes (no effect, half its effects, its
-effect on a neighbour of the target: an extra parameter), and ``events`` exogenous event types
-(a predicate turns on or off by itself), as ``faults.pddl`` text with annotations.
+``ACTIONS`` actions over ``thing`` objects, ``PREDICATES`` unary predicates (kinds of token)
+and a static ``near`` relation: each action turns a token of one kind on a thing into one of
+the next kind (in a random cycle) on a near thing, so missions can go on for hundreds of steps.
+Each action has ``modes`` fault modes (no effect; the token lost; the new token on another
+neighbour: an extra parameter), and there are ``events`` exogenous event types (a token
+appears or vanishes by itself), as ``faults.pddl`` text with annotations.
 
 ``synthetic_history(model, steps, objects, seed, ...)`` runs a *true* world beside the
 dispatcher's knowledge base: the dispatcher picks actions whose preconditions its KB holds
@@ -32,12 +34,13 @@ from host.repair.grounding import Grounder
 from host.repair.task import GroundOp
 
 ACTIONS = 4
-PREDICATES = 5
+PREDICATES = 4
 
 
 def synthetic_domain(seed: int, modes: int = 2, events: int = 2) -> tuple[str, str]:
     rng = random.Random(seed)
     preds = [f"p{i}" for i in range(PREDICATES)]
+    cycle = rng.sample(preds, len(preds))
     decl = " ".join(f"({p} ?x - thing)" for p in preds) + " (near ?x - thing ?y - thing)"
     head = ("(:requirements :strips :typing :negative-preconditions :equality)\n"
             "  (:types thing)\n"
@@ -45,17 +48,17 @@ def synthetic_domain(seed: int, modes: int = 2, events: int = 2) -> tuple[str, s
     mission = [f"(define (domain synth{seed})\n  {head}"]
     faults = [f"(define (domain synth{seed}-faults)\n"
               "  (:requirements :strips :typing :negative-preconditions :equality)\n"]
-    for k in range(ACTIONS):
-        a, b, c = rng.sample(preds, 3)
+    for k in range(ACTIONS):  # a token of kind a on ?x becomes one of kind b on ?y
+        a, b = cycle[k % len(cycle)], cycle[(k + 1) % len(cycle)]
         pre = f"(and ({a} ?x) (not ({b} ?y)) (near ?x ?y))"
-        eff_full = [f"({b} ?y)", f"(not ({c} ?x))"]
+        eff_full = [f"({b} ?y)", f"(not ({a} ?x))"]
         mission.append(f"  (:action act{k} :parameters (?x - thing ?y - thing)\n"
                        f"    :precondition {pre}\n    :effect (and {' '.join(eff_full)}))\n")
         variants = [
             ("noop", "(?x - thing ?y - thing)", f"({a} ?x)", "(and)"),
             ("partial", "(?x - thing ?y - thing)", f"({a} ?x)", f"(and {eff_full[1]})"),
             ("wrong", "(?x - thing ?y - thing ?z - thing)",
-             "(and (near ?x ?z) (not (= ?z ?y)))", f"(and ({b} ?z) {eff_full[1]})"),
+             f"(and ({a} ?x) (near ?x ?z) (not (= ?z ?y)))", f"(and ({b} ?z) {eff_full[1]})"),
         ]
         for name, params, mpre, meff in variants[:modes]:
             prior = round(rng.uniform(0.01, 0.1), 3)
@@ -95,14 +98,17 @@ def _atom(task_atom: tuple[str, tuple[str, ...]]) -> Atom:
 def synthetic_history(model: PlanModel, steps: int, objects: int, seed: int,
                       fault_rate: float = 0.08, event_rate: float = 0.03,
                       obs_rate: float = 0.5, max_faults: int = 2, realistic: bool = True,
+                      token_rate: float = 0.25,
                       final_obs: int = 6) -> Generated:
     rng = random.Random(seed)
     names = {f"t{i}": "thing" for i in range(objects)}
     things = sorted(names)
-    near = [(x, y) for x in things for y in things if x != y and rng.random() < 0.35]
+    ring = {(things[i], things[(i + 1) % objects]) for i in range(objects)}
+    ring |= {(x, y) for x in things for y in things if x < y and rng.random() < 0.2}
+    near = sorted(ring | {(y, x) for x, y in ring} - {(x, x) for x in things})
     init_atoms = {Atom("near", xy) for xy in near}
     init_atoms |= {Atom(f"p{i}", (x,)) for i in range(PREDICATES) for x in things
-                   if rng.random() < 0.5}
+                   if rng.random() < token_rate}
     g = Grounder(model.domain, names, [PAtom(a.predicate, a.args) for a in init_atoms
                                        if a.predicate == "near"])
     task = g.task
@@ -159,11 +165,11 @@ def synthetic_history(model: PlanModel, steps: int, objects: int, seed: int,
             alarm = Alarm(i, Where.PRE, atoms=tuple((o.atom, o.value) for o in obs[-1:]))
             break
         failed = variant is not op and rng.random() < 0.5
-        truth_state = variant.apply(truth_state)
-        kb = kb if failed else op.apply(kb)
-        for o in obs:
+        for o in obs:  # the precondition check overrides the KB, then the step runs
             a = task.index[(o.atom.predicate, o.atom.args)]
             kb = kb | (1 << a) if o.value else kb & ~(1 << a)
+        truth_state = variant.apply(truth_state)
+        kb = kb if failed else op.apply(kb)
         post = []
         for x in op.eff:
             if rng.random() < obs_rate:
