@@ -77,6 +77,8 @@ class ContextTree:
                     return self._done()
                 for k in range(limit + 1):
                     self._dfs(0, p.init, (), k, _Mode.RECORD)
+                    if frozenset() in self.found:  # nothing went wrong: the only diagnosis
+                        return self._done()
                 if limit == total:
                     out.explainable = bool(self.found)
                 elif self._probe(limit + 1):
@@ -104,6 +106,8 @@ class ContextTree:
         return any(d <= s for d in self.found)
 
     def _leaf(self, chosen: tuple[int, ...], mode: _Mode) -> None:
+        if self._blocked(chosen):  # found before (the fault-free path at every level)
+            return
         if mode is _Mode.PROBE:
             raise _Hit
         limits = self.limits

@@ -69,6 +69,9 @@ def test_the_engines_agree_on_random_histories() -> None:
         for universe in (None, region.suspects):
             found = {name: ENGINES[name](ctx.problem, universe, limits) for name in ENGINES}
             sets = {name: set(o.diagnoses) for name, o in found.items()}
+            for name, o in found.items():  # each listed once, and no bound claimed idly
+                assert len(o.diagnoses) == len(sets[name]), f"seed {seed}: {name} repeats"
+                assert o.cut_by is None or sets[name] != {frozenset()}, f"seed {seed}: {name}"
             assert sets["sat"] == sets["tree"] == sets["naive"], f"seed {seed}"
             for d in sets["sat"]:
                 assert simulate(ctx.problem, d).consistent, f"seed {seed}: {sorted(d)}"
