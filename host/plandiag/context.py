@@ -199,13 +199,8 @@ def _check_args(model: PlanModel, history: History, params: tuple[tuple[str, str
                            f"{len(params)}", "give one argument per parameter, in order: "
                            + " ".join(f"{v} - {t}" for v, t in params))
     for (var, want), arg in zip(params, args, strict=True):
-        t = history.objects.get(arg)
-        if t is None:
-            raise HistoryError(f"{place}.args: unknown object {arg!r}",
-                               "list every object with its type under \"objects\"")
-        if not _is_a(model, t, want):
-            raise HistoryError(f"{place}.args: {arg} is a {t}, {var} must be a {want}",
-                               "pass an object of the parameter's type")
+        _check_object(model, history, arg, want, f"{place}.args",
+                      f"{var} must be a {want}", "pass an object of the parameter's type")
 
 
 def _check_atom(model: PlanModel, history: History, a: Atom, place: str) -> None:
@@ -217,13 +212,19 @@ def _check_atom(model: PlanModel, history: History, a: Atom, place: str) -> None
                            "use the mission domain's predicates: " + ", ".join(
                                f"{p}/{n}" for p, n in sorted(model.domain.predicates.items())))
     for want, arg in zip(sig, a.args, strict=True):
-        t = history.objects.get(arg)
-        if t is None:
-            raise HistoryError(f"{place}: {a}: unknown object {arg!r}",
-                               "list every object with its type under \"objects\"")
-        if not _is_a(model, t, want):
-            raise HistoryError(f"{place}: {a}: {arg} is a {t}, not a {want}",
-                               "use objects of the predicate's types")
+        _check_object(model, history, arg, want, f"{place}: {a}", f"not a {want}",
+                      "use objects of the predicate's types")
+
+
+def _check_object(model: PlanModel, history: History, arg: str, want: str, where: str,
+                  wrong: str, fix: str) -> None:
+    """``arg`` is a listed object of type ``want`` (or a subtype), or one line says not."""
+    t = history.objects.get(arg)
+    if t is None:
+        raise HistoryError(f"{where}: unknown object {arg!r}",
+                           "list every object with its type under \"objects\"")
+    if not _is_a(model, t, want):
+        raise HistoryError(f"{where}: {arg} is a {t}, {wrong}", fix)
 
 
 def state_atoms(task: Task, state: int) -> list[str]:
