@@ -39,6 +39,7 @@ from host.plandiag.limits import Deadline, Limits, Order, Outcome
 from host.plandiag.model import FaultKind
 from host.plandiag.problem import (
     Problem,
+    apply_events,
     bits,
     conflict,
     effective_delete,
@@ -209,27 +210,49 @@ class Encoding:
 
     def _siblings(self, found: frozenset[int]) -> list[frozenset[int]]:
         """The same diagnosis with one of its events in another gap, where that is consistent
-        too (checked by simulation from the gap moved from or to until the history rejoins
-        the one found): an event nobody saw for a while may have happened in any gap of the
-        while, and one solver call per gap would cost far more."""
+        too: an event nobody saw for a while may have happened in any gap of the while, and
+        one solver call per gap would cost far more.
+
+        An earlier gap is checked by simulation from there until the history rejoins the one
+        found. For the later gaps one run without the event (from its gap on) serves them
+        all: the event moved to gap ``g2`` sees that run's state before ``g2``, and if the
+        state after ``g2`` is the found history's, the rest is too; once that run has
+        contradicted an observation, the event moved any later contradicts it as well."""
         p = self.p
         d = frozenset(self.fault_ids[i] for i in found)
         ref = simulate(p, d)
         out: list[frozenset[int]] = []
         if not ref.consistent:  # pragma: no cover - the solver's model is a diagnosis
             return out
+        events_in: dict[int, list[int]] = {}
+        for f in d:
+            if f in self.event_slot:
+                events_in.setdefault(p.faults[f].at, []).append(f)
         for e in d:
             j = self.event_slot.get(e)
             if j is None:
                 continue
             g = p.faults[e].at
+            without = simulate(p, d - {e}, start=g, rejoin=ref.states, rejoin_at=len(ref.states))
+            reach = len(ref.states) if without.consistent else without.stop_point
             for g2, gap in enumerate(p.gaps, start=1):
                 other = gap[j]
                 if g2 == g or other not in self.index or other in d:
                     continue
+                if g2 > g and 2 * g2 - 1 > reach:
+                    break  # a contradiction before g2 that only the event could mend
                 if self.ctx.out_of_time():
                     return out
                 moved = (d - {e}) | {other}
+                if g2 > g:
+                    before = without.states[2 * g2 - 2 - (2 * g - 2)]
+                    ops = [p.faults[f].op for f in events_in.get(g2, ())] + [p.faults[other].op]
+                    after = apply_events(before, ops)
+                    if after is None:
+                        continue
+                    if after == ref.states[2 * g2 - 1]:
+                        out.append(frozenset(self.index[f] for f in moved))
+                        continue
                 lo, hi = min(g, g2), max(g, g2)
                 if simulate(p, moved, start=lo, rejoin=ref.states, rejoin_at=2 * hi - 1).consistent:
                     out.append(frozenset(self.index[f] for f in moved))
