@@ -54,6 +54,7 @@ bench: $(BENCH_STAMP)
 	$(BIN)/python benchmarks/diagnosis.py --quick
 	$(BIN)/python benchmarks/planning.py --quick
 	$(BIN)/python benchmarks/journal.py
+	$(BIN)/python benchmarks/plandiag.py --quick
 
 clean:
 	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache

@@ -32,6 +32,7 @@ COMMANDS: dict[str, str] = {
     "model": "host.commands.model",
     "diagnose": "host.commands.diagnose",
     "plan": "host.commands.plan",
+    "explain": "host.commands.explain",
     "inject": "host.commands.inject",
     "quarantine": "host.commands.quarantine",
     "hold": "host.commands.hold",

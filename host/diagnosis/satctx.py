@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
@@ -223,10 +223,14 @@ class SatContext:
             self.end_run(act)
 
     def list_diagnoses(self, assumptions: list[int], act: int, out: SearchOutcome,
-                       quota: Quota, k: int) -> bool:
+                       quota: Quota, k: int,
+                       expand: Callable[[frozenset[int]], Iterable[frozenset[int]]] | None
+                       = None) -> bool:
         """Add every diagnosis (of size ``k``) the solver finds under ``assumptions`` to
         ``out``, each blocked for the rest of the run ``act``; False when a bound (count,
-        time) cut the listing."""
+        time) cut the listing. ``expand`` may name more of the same size for each one found
+        (plan diagnosis: the same event in another gap): those that are no superset of one
+        listed are listed and blocked too, and the solver need not find them."""
         while True:
             if quota.reached(k):
                 out.cut_by = Bound.MAX_COUNT
@@ -237,10 +241,18 @@ class SatContext:
                 return False
             if not r:
                 return True
-            bad = self.model_bad()
-            out.bad_sets.append(bad)
-            quota.add(bad)
-            self.solver.add_clause([-self.ab_vars[i] for i in bad] + [-act])
+            found = [self.model_bad()]
+            if expand is not None:
+                found += expand(found[0])
+            for bad in found:
+                if len(found) > 1 and any(d <= bad for d in out.bad_sets):
+                    continue
+                if quota.reached(k):
+                    out.cut_by = Bound.MAX_COUNT
+                    return False
+                out.bad_sets.append(bad)
+                quota.add(bad)
+                self.solver.add_clause([-self.ab_vars[i] for i in bad] + [-act])
 
     def model_bad(self) -> frozenset[int]:
         """Indexes (into ``theory.components``) of the components abnormal in the model."""

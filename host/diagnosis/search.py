@@ -42,7 +42,7 @@ All are cross-checked against brute force in ``tests/diagnosis``.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 
 from pysat.examples.hitman import Hitman  # type: ignore[import-untyped]
 from pysat.examples.rc2 import RC2  # type: ignore[import-untyped]
@@ -54,6 +54,9 @@ from host.diagnosis.satctx import SatContext
 from host.diagnosis.toplevel import min_card_search, top_level_count
 
 Search = Callable[[SatContext, list[int], int | None, Quota, bool], SearchOutcome]
+#: more diagnoses of the same size known without the solver, given one it found
+#: (plan diagnosis: the same event in another gap, checked by simulation)
+Expand = Callable[[frozenset[int]], Iterable[frozenset[int]]]
 
 
 def cardinality_search(
@@ -62,6 +65,7 @@ def cardinality_search(
     max_card: int | None,
     quota: Quota,
     min_card_only: bool = False,
+    expand: Expand | None = None,
 ) -> SearchOutcome:
     n = len(ctx.ab_vars)
     act = ctx.new_run()
@@ -81,7 +85,7 @@ def cardinality_search(
             out.cut_by = Bound.TIME_BUDGET
             return out
         while k <= limit:
-            if not ctx.list_diagnoses(base + ctx.at_most(k), act, out, quota, k):
+            if not ctx.list_diagnoses(base + ctx.at_most(k), act, out, quota, k, expand):
                 return out
             k += 1
             if min_card_only and out.bad_sets:

@@ -33,6 +33,7 @@ from host.repair.domain import (
     EForall,
     ELit,
     EWhen,
+    Schema,
 )
 from host.repair.errors import DomainError
 from host.repair.task import CondEffect, GroundOp, Task, lit
@@ -89,27 +90,31 @@ class Grounder:
 
     def ground(self) -> Task:
         for schema in self.domain.schemas:
-            names = [v for v, _ in schema.parameters]
             pools = [self.of_type(t) for _, t in schema.parameters]
             for values in itertools.product(*pools):
-                b = dict(zip(names, values, strict=True))
-                try:
-                    pre = self.cond(schema.precondition, b, False)
-                    if pre is _FALSE:
-                        continue
-                    eff: list[int] = []
-                    conds: list[CondEffect] = []
-                    self.effect(schema.effect, b, [], eff, conds)
-                except _Unsupported as exc:
-                    raise DomainError(
-                        f"{self.domain.path}: action {schema.name}: {exc}",
-                        "keep disjunctions and existentials over static predicates only",
-                    ) from exc
-                self.task.ops.append(
-                    GroundOp.make(schema.name, tuple(values), _dedup(pre), _dedup(eff), conds)
-                )
+                op = self.instantiate(schema, tuple(values))
+                if op is not None:
+                    self.task.ops.append(op)
         log.debug("grounded %d operators over %d atoms", len(self.task.ops), len(self.task.atoms))
         return self.task
+
+    def instantiate(self, schema: Schema, values: tuple[str, ...]) -> GroundOp | None:
+        """``schema`` with its parameters bound to ``values`` (in order), or None when a static
+        precondition is false. Fluent atoms it mentions are numbered in ``self.task``."""
+        b = dict(zip([v for v, _ in schema.parameters], values, strict=True))
+        try:
+            pre = self.cond(schema.precondition, b, False)
+            if pre is _FALSE:
+                return None
+            eff: list[int] = []
+            conds: list[CondEffect] = []
+            self.effect(schema.effect, b, [], eff, conds)
+        except _Unsupported as exc:
+            raise DomainError(
+                f"{self.domain.path}: action {schema.name}: {exc}",
+                "keep disjunctions and existentials over static predicates only",
+            ) from exc
+        return GroundOp.make(schema.name, values, _dedup(pre), _dedup(eff), conds)
 
     # -- conditions -------------------------------------------------------------------------
     @staticmethod

@@ -1,0 +1,169 @@
+"""Plan-execution diagnosis: SAT against the context tree, naive enumeration and K*, in one run.
+
+Random mission domains (``tests/plandiag/synth.py``: 4 actions, 1-3 fault modes each, 1-5
+exogenous event types) and histories of 10-500 executed actions on 8 objects in which one or
+two faults really happened and the last step's expected-state check saw the world; the first
+seed whose history needs at least one fault to be explained is used. Per history:
+
+* ``sat``: every minimal diagnosis (up to 3 faults, no count limit) of the whole history by
+  the SAT engine, including what it costs to get there from the journal's history (alarm
+  handler, context & plan interpreter, symptoms, fault region): the figure the targets are
+  about. Median of 3 runs.
+* ``tree`` and ``naive``: the same search by the context tree and by naive enumeration (every
+  fault set by size, each simulated), once, cut at ``BUDGET`` seconds (">" then); naive up to
+  50 steps only.
+* ``k*``: diagnosis as planning (``plandiag_kstar.py``): the history as a planning task for the
+  top-quality planner K* (``kstar-planner``), all plans of least cost = the minimum-cardinality
+  diagnoses only (less than the engines list); wall time of encoding and the subprocess.
+* the fault region's pruning: context-tree nodes expanded in the region's universe against
+  the whole history's (the same diagnoses: the tests check the region's are among them).
+
+The ratio columns are the baseline's time over SAT's in the same run. Run:
+``.venv/bin/python benchmarks/plandiag.py [--quick]`` (K* needs ``.[bench]``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from plandiag_kstar import minimum_diagnoses  # noqa: E402
+
+from host.diagnosis.result import Bound  # noqa: E402
+from host.plandiag.context import Context, interpret_context  # noqa: E402
+from host.plandiag.engines import ENGINES  # noqa: E402
+from host.plandiag.history import History  # noqa: E402
+from host.plandiag.interpret import (  # noqa: E402
+    handle_alarm,
+    identify_symptoms,
+    sensor_interpreter,
+)
+from host.plandiag.limits import Limits, Outcome  # noqa: E402
+from host.plandiag.model import PlanModel  # noqa: E402
+from host.plandiag.region import Region, fault_region  # noqa: E402
+from tests.plandiag.synth import synthetic_history, synthetic_model  # noqa: E402
+
+BUDGET = 20.0
+KSTAR_TIMEOUT = 300
+CONFIGS = [(1, 1), (2, 3), (3, 5)]  # (fault modes per action, event types)
+
+
+@dataclass
+class Case:
+    modes: int
+    events: int
+    steps: int
+    history: History
+    model: PlanModel
+
+
+def compile_history(model: PlanModel, history: History) -> tuple[Context, Region]:
+    h, _ = handle_alarm(history)
+    ctx = interpret_context(model, h, sensor_interpreter(model, h.components))
+    return ctx, fault_region(ctx, identify_symptoms(ctx, h))
+
+
+def find_case(modes: int, events: int, steps: int) -> Case:
+    model = synthetic_model(11, modes=modes, events=events)
+    for seed in range(200):
+        gen = synthetic_history(model, steps=steps, objects=8, seed=1000 * steps + seed,
+                                fault_rate=0.05, event_rate=0.01, realistic=False,
+                                final_obs=20)
+        if len(gen.history.steps) != steps:
+            continue
+        ctx, _ = compile_history(model, gen.history)
+        out = ENGINES["sat"](ctx.problem, None, Limits(max_card=1, max_count=1))
+        if out.diagnoses and out.diagnoses[0]:
+            return Case(modes, events, steps, gen.history, model)
+    raise SystemExit(f"no history of {steps} steps needing a fault ({modes}, {events})")
+
+
+def timed(engine: str, ctx: Context, universe: frozenset[int] | None,
+          limits: Limits) -> tuple[Outcome, float]:
+    start = time.perf_counter()
+    out = ENGINES[engine](ctx.problem, universe, limits)
+    return out, time.perf_counter() - start
+
+
+def fmt(seconds: float | None, cut: bool = False) -> str:
+    if seconds is None:
+        return "-"
+    text = f"{seconds * 1000:.1f} ms" if seconds < 1 else f"{seconds:.2f} s"
+    return "> " + text if cut else text
+
+
+def ratio(base: float | None, ours: float, cut: bool = False) -> str:
+    if base is None:
+        return "-"
+    return f"{'> ' if cut else ''}{base / ours:.0f}x"
+
+
+def run_case(case: Case, with_planner: bool) -> dict[str, str]:
+    limits = Limits(max_card=3, max_count=None, time_budget_s=BUDGET)
+    sat_times = []
+    for _ in range(3):
+        start = time.perf_counter()
+        ctx, region = compile_history(case.model, case.history)
+        sat, _ = timed("sat", ctx, None, limits)
+        sat_times.append(time.perf_counter() - start)
+    t_sat = statistics.median(sat_times)
+    row = {"history": f"{case.steps} steps, {case.modes} modes, {case.events} events",
+           "faults": str(len(ctx.problem.faults)), "diagnoses": str(len(sat.diagnoses)),
+           "sat": fmt(t_sat)}
+    tree, t_tree = timed("tree", ctx, None, limits)
+    late = tree.cut_by is Bound.TIME_BUDGET
+    row["tree"] = fmt(t_tree, late)
+    row["tree/sat"] = ratio(t_tree, t_sat, late)
+    agree = late or set(tree.diagnoses) == set(sat.diagnoses)
+    if case.steps <= 50:
+        naive, t_naive = timed("naive", ctx, None, limits)
+        late = naive.cut_by is Bound.TIME_BUDGET
+        row["naive/sat"] = ratio(t_naive, t_sat, late)
+        agree &= late or set(naive.diagnoses) == set(sat.diagnoses)
+    else:
+        row["naive/sat"] = "-"
+    if with_planner:
+        k = min(map(len, sat.diagnoses))
+        plans = minimum_diagnoses(ctx.problem, KSTAR_TIMEOUT)
+        row["k*"] = fmt(plans.seconds, plans.timed_out)
+        row["k*/sat"] = ratio(plans.seconds, t_sat, plans.timed_out)
+        agree &= plans.timed_out or plans.diagnoses == {d for d in sat.diagnoses if len(d) == k}
+    else:
+        row["k*"] = row["k*/sat"] = "-"
+    in_region, _ = timed("tree", ctx, region.suspects, limits)
+    row["nodes: region / all"] = f"{in_region.nodes} / {tree.nodes}"
+    row["agree"] = "yes" if agree else "NO"
+    return row
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="10 and 50 steps only")
+    parser.add_argument("--no-planner", action="store_true", help="leave K* out")
+    args = parser.parse_args()
+    sizes = [10, 50] if args.quick else [10, 50, 100, 500]
+    rows = []
+    for steps in sizes:
+        for modes, events in CONFIGS:
+            case = find_case(modes, events, steps)
+            row = run_case(case, not args.no_planner and steps <= 50)
+            rows.append(row)
+            print(" | ".join(row.values()), file=sys.stderr, flush=True)
+    cols = list(rows[0])
+    print("| " + " | ".join(cols) + " |")
+    print("|" + "---|" * len(cols))
+    for row in rows:
+        print("| " + " | ".join(row[c] for c in cols) + " |")
+    return 0 if all(r["agree"] == "yes" for r in rows) else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
