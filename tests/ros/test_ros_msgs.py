@@ -77,3 +77,45 @@ def test_the_robot_setting_selects_ros2_and_a_bad_override_is_one_line(tmp_path:
     assert p.returncode == 2
     assert p.stderr.strip().splitlines() == [
         "rviz: error: DXBOARD_MIDDLEWARE='dds': use one of zenoh, ros2"], p.stderr
+
+
+def test_any_message_reads_by_path_and_diagnostics_by_status_name() -> None:
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+    from nav_msgs.msg import Odometry
+
+    from host.ros.message import RosMessage
+
+    odom = Odometry()
+    odom.twist.twist.angular.z = -0.25
+    msg = RosMessage(1.0, "/odom", serialize_message(odom), "nav_msgs/msg/Odometry")
+    assert msg.number("twist.twist.angular.z") == -0.25
+    assert msg.values is not None and msg.values["child_frame_id"] == ""
+    diag = DiagnosticArray(status=[DiagnosticStatus(
+        level=DiagnosticStatus.WARN, name="jaguar_node: jaguar", hardware_id="jaguar",
+        values=[KeyValue(key="temp", value="81.5"), KeyValue(key="mode", value="auto")])])
+    d = RosMessage(1.0, "/diagnostics", serialize_message(diag),
+                   "diagnostic_msgs/msg/DiagnosticArray")
+    assert d.number("jaguar_node: jaguar.level") == 1
+    assert d.number("jaguar_node: jaguar.temp") == 81.5
+    assert d.values is not None and d.values["jaguar_node: jaguar"]["mode"] == "auto"
+    assert d.values["status"][0]["values"] == [{"key": "temp", "value": "81.5"},
+                                               {"key": "mode", "value": "auto"}]
+    garbage = RosMessage(1.0, "/odom", b"\x00\x01", "nav_msgs/msg/Odometry")
+    assert garbage.values is None  # still a message: it counts for the frequency
+
+
+def test_a_ros2_source_with_a_bad_domain_or_type_is_named_in_the_file(tmp_path: Path) -> None:
+    from host.observers.config import ObserverConfigError, load_observers
+
+    (tmp_path / "system.yaml").write_text(
+        "observers:\n  source: {kind: ros2, domain: 300, types: {/scan: LaserScan}}\n")
+    with pytest.raises(ObserverConfigError) as err:
+        load_observers(tmp_path)
+    text = "\n".join(str(p) for p in err.value.problems)
+    assert "system.yaml:2: domain 300 is not a ROS 2 domain id" in text
+    assert "types: {/scan: sensor_msgs/msg/LaserScan}" in text
+    (tmp_path / "system.yaml").write_text(
+        "observers:\n  source: {kind: ros2, domain: 7}\n"
+        "  topics: {/scan: {rate: 40, tolerance: 10, window: 0.5}}\n")
+    spec = load_observers(tmp_path).source
+    assert (spec.kind, spec.domain, spec.types) == ("ros2", 7, ())
