@@ -154,6 +154,7 @@ class Daemon:
         self._stop = asyncio.Event()
         self._tasks: list[asyncio.Task[Any]] = []
         self._telemetry = TelemetryDownsampler(period_s=1.0)
+        self.ros_out: Any = None  # the ROS 2 publisher, with a ros2 source
 
     @property
     def result(self) -> Any:
@@ -190,6 +191,10 @@ class Daemon:
                 f"{str(exc).split(' at /')[0]}",
                 "is another dxboard run using it? give --zenoh tcp/127.0.0.1:PORT",
             ) from None
+        if spec.kind == "ros2":  # the daemon reports through ROS 2 too (host.ros.publisher)
+            from host.ros.publisher import RosPublisher
+            self.ros_out = RosPublisher(list(self.model.components), spec.domain)
+            self.stream.subscribe(self.ros_out)
         await self.hub.start(self.source, self.observers_cfg.processes,
                              poll=self.observers_cfg.poll)
         await self.repairs.adopt()
@@ -247,6 +252,8 @@ class Daemon:
         await self.hub.close()
         with contextlib.suppress(Exception):
             self.source.close()
+        if self.ros_out is not None:
+            self.ros_out.close()
         if self.web is not None:
             await self.web.close()
             self.web = None

@@ -9,8 +9,10 @@ serialized CDR bytes, stamped with the source's clock on the executor's thread a
 the asyncio loop with ``call_soon_threadsafe`` as a ``host.ros.message.RosMessage``. A
 frequency observer only counts them; value and diagnostic observers decode them on demand.
 
-QoS: best effort, keep last 10 (``qos_profile_sensor_data``'s reliability): it matches
-reliable and best-effort publishers alike, as an observer must.
+QoS adapts to the publishers, as ``ros2 bag record`` does: keep last 10, reliable when every
+publisher of the topic the graph shows is reliable (a large message, such as a 4 MB map, is
+then never lost to a dropped fragment), best effort otherwise (which matches any publisher);
+a topic subscribed through ``types`` before its publishers are known gets best effort.
 
 ``GRAPH`` (``/_graph/nodes``) is not a DDS topic: subscribing it delivers, every
 ``discovery_s``, a message whose values are ``{"nodes": [names...]}`` from the ROS 2 graph,
@@ -36,8 +38,10 @@ from host.ros.node import RosNode
 
 log = logging.getLogger(__name__)
 
-QOS = QoSProfile(history=QoSHistoryPolicy.KEEP_LAST, depth=10,
-                 reliability=QoSReliabilityPolicy.BEST_EFFORT)
+BEST_EFFORT = QoSProfile(history=QoSHistoryPolicy.KEEP_LAST, depth=10,
+                         reliability=QoSReliabilityPolicy.BEST_EFFORT)
+RELIABLE = QoSProfile(history=QoSHistoryPolicy.KEEP_LAST, depth=10,
+                      reliability=QoSReliabilityPolicy.RELIABLE)
 
 
 class _RosSubscription(Subscription):
@@ -106,8 +110,13 @@ class Ros2Source(TopicSource):
         def on_raw(data: bytes) -> None:  # on the executor's thread
             sub.deliver(RosMessage(clock(), topic, data, type_name))
 
-        sub.sub = self.ros.node.create_subscription(msg_type, topic, on_raw, QOS, raw=True)
-        log.info("observing %s (%s)", topic, type_name)
+        pubs = self.ros.node.get_publishers_info_by_topic(topic)
+        reliable = bool(pubs) and all(
+            p.qos_profile.reliability == QoSReliabilityPolicy.RELIABLE for p in pubs)
+        qos = RELIABLE if reliable else BEST_EFFORT
+        sub.sub = self.ros.node.create_subscription(msg_type, topic, on_raw, qos, raw=True)
+        log.info("observing %s (%s, %s)", topic, type_name,
+                 "reliable" if reliable else "best effort")
 
     def _drop(self, sub: _RosSubscription) -> None:
         if sub in self._subs:
