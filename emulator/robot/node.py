@@ -14,7 +14,9 @@
 
 In ROS 2 mode (``emulator.robot.ros_bus``) the node is an rclpy node named ``NAME`` publishing
 standard messages (``emulator.robot.ros_msgs``), and a driver also publishes its health on
-``/diagnostics`` once a second (``emulator.robot.driver_status``).
+``/diagnostics`` once a second (``emulator.robot.driver_status``). ``--managed`` makes a driver
+a ROS 2 managed (lifecycle) node in ROS 2 mode (``emulator.robot.managed``); in Zenoh mode,
+which has no lifecycle, it is ignored.
 
 It logs to stderr, runs until SIGTERM or SIGINT and then exits 0. A wrong name, directory or
 environment is one line on stderr and exit code 2.
@@ -136,7 +138,7 @@ async def _drive(spec: NodeSpec, bus: TopicBus, topic: str, device: str,
         if in_topic not in B.COMMANDS:
             log.warning("%s: no device command for %s; ignoring it", spec.name, in_topic)
         bus.subscribe(in_topic, command)
-    reading = asyncio.ensure_future(_read(reader, bus, topic, status))
+    reading = asyncio.ensure_future(read_frames(reader, bus.publish, topic, status))
     stopping = asyncio.ensure_future(stop.wait())
     await asyncio.wait([reading, stopping], return_when=asyncio.FIRST_COMPLETED)
     connected = False
@@ -152,8 +154,8 @@ async def _drive(spec: NodeSpec, bus: TopicBus, topic: str, device: str,
     writer.transport.abort()
 
 
-async def _read(reader: asyncio.StreamReader, bus: TopicBus, topic: str,
-                status: DriverStatus | None = None) -> str:
+async def read_frames(reader: asyncio.StreamReader, publish: B.Publish, topic: str,
+                      status: DriverStatus | None = None) -> str:
     """Publish every frame until the connection ends; returns why it ended."""
     while True:
         try:
@@ -170,7 +172,7 @@ async def _read(reader: asyncio.StreamReader, bus: TopicBus, topic: str,
             log.warning("not a JSON line from the device: %r", line[:80])
             continue
         if isinstance(frame, dict) and "error" not in frame:
-            bus.publish(topic, frame)
+            publish(topic, frame)
             if status is not None:
                 status.frame(time.monotonic())
         elif isinstance(frame, dict):
@@ -195,12 +197,17 @@ async def run_node(spec: NodeSpec, bus: TopicBus, stop: asyncio.Event) -> None:
                 next_tick = now + behaviour.tick_s
 
 
+def middleware(spec: NodeSpec, env: dict[str, str]) -> str:
+    """zenoh or ros2: the robot's setting, or ``$DXBOARD_MIDDLEWARE``."""
+    chosen = env.get("DXBOARD_MIDDLEWARE") or spec.middleware
+    if chosen not in MIDDLEWARES:
+        raise NodeError(f"DXBOARD_MIDDLEWARE={chosen!r}: use one of {', '.join(MIDDLEWARES)}")
+    return chosen
+
+
 def open_bus(spec: NodeSpec, env: dict[str, str]) -> TopicBus:
     """The node's bus: a zenoh peer, or a ROS 2 node (the robot's setting or the override)."""
-    middleware = env.get("DXBOARD_MIDDLEWARE") or spec.middleware
-    if middleware not in MIDDLEWARES:
-        raise NodeError(f"DXBOARD_MIDDLEWARE={middleware!r}: use one of {', '.join(MIDDLEWARES)}")
-    if middleware == "ros2":
+    if middleware(spec, env) == "ros2":
         from emulator.robot.ros_bus import RosBus
         log.info("ROS 2 node %s on domain %s", spec.name, env.get("ROS_DOMAIN_ID", "0"))
         return RosBus(spec.name)
@@ -213,13 +220,40 @@ def open_bus(spec: NodeSpec, env: dict[str, str]) -> TopicBus:
     return bus
 
 
-async def main_async(spec: NodeSpec, env: dict[str, str]) -> None:
+async def run_managed(spec: NodeSpec, device: str, address: tuple[str, int],
+                      stop: asyncio.Event) -> None:
+    """ROS 2 mode with ``--managed``: the driver as a lifecycle node (``managed``)."""
+    from emulator.robot.managed import ManagedDriver
+    topics = list(spec.publishes)
+    if len(topics) != 1:
+        raise NodeError(f"{spec.name}: a driver publishes exactly one topic, not {topics}")
+    status = DriverStatus(spec.name, device)
+    driver = ManagedDriver(spec.name, topics[0], device, address, spec.subscribes, status,
+                           asyncio.get_running_loop(), read_frames)
+    log.info("ROS 2 managed node %s", spec.name)
+    reporting = asyncio.ensure_future(_report(driver.bus, status, stop))
+    try:
+        await driver.run(stop)
+    finally:
+        reporting.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await reporting
+        driver.close()
+
+
+async def main_async(spec: NodeSpec, env: dict[str, str], managed: bool = False) -> None:
     driver = spec.kind in ("SN", "HN")
+    if managed and not driver:
+        raise NodeError(f"{spec.name} is not a driver: only drivers are managed nodes")
     device, address = device_address(spec, env) if driver else ("", ("", 0))
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
     for sig in (signal.SIGTERM, signal.SIGINT):
         loop.add_signal_handler(sig, stop.set)
+    if managed and middleware(spec, env) == "ros2":
+        await run_managed(spec, device, address, stop)
+        log.info("stopped")
+        return
     bus = open_bus(spec, env)
     try:
         if driver:
@@ -233,18 +267,20 @@ async def main_async(spec: NodeSpec, env: dict[str, str]) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
+    managed = "--managed" in args
+    args = [a for a in args if a != "--managed"]
     if len(args) == 1 and os.environ.get("DXBOARD_ROBOT"):
         args.append(os.environ["DXBOARD_ROBOT"])
     if len(args) != 2 or args[0].startswith("-"):
-        print("usage: python -m emulator.robot.node NAME SYSTEM_DIR (or $DXBOARD_ROBOT)",
-              file=sys.stderr)
+        print("usage: python -m emulator.robot.node NAME [SYSTEM_DIR] [--managed] "
+              "(SYSTEM_DIR defaults to $DXBOARD_ROBOT)", file=sys.stderr)
         return 2
     name, system_dir = args
     logging.basicConfig(stream=sys.stderr, level=logging.INFO,
                         format=f"%(asctime)s {name}[%(process)d] %(levelname)s %(message)s")
     try:
         spec = load_node(system_dir, name)
-        asyncio.run(main_async(spec, dict(os.environ)))
+        asyncio.run(main_async(spec, dict(os.environ), managed))
     except (ModelError, NodeError) as exc:
         print(f"{name}: error: {exc}", file=sys.stderr)
         return 2

@@ -177,3 +177,10 @@ def ros_nodes(robot_dir: Path, robot: Robot, env: dict[str, str]) -> Iterator[Ro
     n = RosNodes(robot_dir, robot, env)
     yield n
     n.stop_all()
+
+
+def start_managed(nodes: RosNodes, name: str) -> None:
+    """Start driver ``name`` as a managed (lifecycle) node."""
+    nodes.procs[name] = subprocess.Popen(
+        [sys.executable, "-m", "emulator.robot.node", name, str(nodes.system_dir), "--managed"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=nodes.env, cwd=ROOT)

@@ -1,0 +1,67 @@
+"""The Hokuyo driver as a managed (lifecycle) node, repaired by lifecycle transitions after its
+device was power-cycled: deactivate, cleanup, configure, activate, through the standard
+``/hokuyo_node/change_state`` service, verified by its state and its ``/scan``."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+
+import pytest
+from sensor_msgs.msg import LaserScan
+
+from host.ros.lifecycle import LifecycleClient, LifecycleError
+from host.ros.node import RosNode
+from tests.robot.conftest import Robot, serving
+from tests.ros.conftest import Peer, RosNodes, start_managed
+from tests.wait import wait_until_async
+
+
+async def test_a_lifecycle_repair_brings_the_hokuyo_driver_back_after_a_power_cycle(
+        domain: int, robot: Robot, peer: Peer, ros_nodes: RosNodes) -> None:
+    peer.listen("/scan", LaserScan)
+    robot.board("on", "hokuyo")
+    start_managed(ros_nodes, "hokuyo_node")
+    ros = RosNode("dxboard_repair", domain)
+    lifecycle = LifecycleClient(ros, timeout_s=60.0)
+    try:
+        await wait_until_async(lambda: lifecycle.state("hokuyo_node"), 60.0,
+                               "hokuyo_node's lifecycle services")
+        await wait_until_async(
+            lambda: _is(lifecycle, "hokuyo_node", "active"), 60.0, "autostart to active")
+        await wait_until_async(lambda: len(peer.messages("/scan")) >= 40, 60.0, "scans")
+
+        robot.board("cycle", "hokuyo")  # the device reboots: the driver's connection drops
+        await wait_until_async(lambda: _silent(peer, 1.0), 60.0, "/scan silent")
+        quiet_since = len(peer.messages("/scan"))
+        assert await lifecycle.state("hokuyo_node") == "active"  # active, but blind
+        await asyncio.to_thread(lambda: serving(robot, "hokuyo", 60.0).close())
+        assert len(peer.messages("/scan")) == quiet_since  # the device sends; its driver not
+
+        steps = await lifecycle.reconfigure("hokuyo_node")
+        assert steps == ["deactivate", "cleanup", "configure", "activate"]
+        assert await lifecycle.state("hokuyo_node") == "active"
+        n = len(peer.messages("/scan"))
+        await wait_until_async(lambda: len(peer.messages("/scan")) >= n + 40, 60.0,
+                               "scans after the lifecycle repair")
+        assert ros_nodes.procs["hokuyo_node"].poll() is None  # the same process
+
+        robot.board("off", "hokuyo")  # configure cannot connect: the transition fails
+        await wait_until_async(lambda: _silent(peer, 1.0), 60.0, "/scan silent")
+        with pytest.raises(LifecycleError, match="transition configure failed; the node is "
+                                                 "unconfigured"):
+            await lifecycle.reconfigure("hokuyo_node")
+    finally:
+        ros.close()
+
+
+async def _is(lifecycle: LifecycleClient, node: str, state: str) -> bool:
+    return await lifecycle.state(node) == state
+
+
+def _silent(peer: Peer, quiet_s: float) -> bool:
+    with peer.lock:
+        last = max((t for t, k, _ in peer.seen if k == "/scan"), default=0.0)
+    return time.monotonic() - last >= quiet_s
+
+
