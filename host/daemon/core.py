@@ -75,6 +75,7 @@ class DaemonOptions:
     dry_run: bool = False
     rate_hz: int = 100
     zenoh_listen: list[str] | None = None
+    middleware: str | None = None  # zenoh or ros2 instead of the model's source kind
     safety_tick_s: float = 2.0
     repair_debounce_s: float = 0.5
     max_card: int | None = None  # no bound: a power-up has every component abnormal
@@ -97,7 +98,8 @@ class RobotFiles:
     planner: RepairPlanner
 
 
-def load_robot(system_dir: Path, zenoh_listen: list[str] | None = None) -> RobotFiles:
+def load_robot(system_dir: Path, zenoh_listen: list[str] | None = None,
+               middleware: str | None = None) -> RobotFiles:
     """Load and check the robot directory (``system.yaml``, ``repair.pddl``): a ``UserError``
     naming the file, the line and the fix before anything is started."""
     model = load_system(system_dir)
@@ -110,6 +112,8 @@ def load_robot(system_dir: Path, zenoh_listen: list[str] | None = None) -> Robot
                         "remove those observers or extend the model")
     if zenoh_listen is not None:
         observers.source = dataclasses.replace(observers.source, listen=tuple(zenoh_listen))
+    if middleware is not None:
+        observers.source = dataclasses.replace(observers.source, kind=middleware)
     return RobotFiles(model, theory, observers, load_processes(system_dir, model),
                       RepairPlanner.for_system(system_dir))
 
@@ -119,7 +123,7 @@ class Daemon:
                  wall: Callable[[], float] = time.time, files: RobotFiles | None = None) -> None:
         self.opts = opts
         self.clock = clock
-        robot = files or load_robot(opts.system_dir, opts.zenoh_listen)
+        robot = files or load_robot(opts.system_dir, opts.zenoh_listen, opts.middleware)
         self.model, self.theory, self.observers_cfg = robot.model, robot.theory, robot.observers
         self.stream = EventStream(clock, wall)
         self.emit = self.stream.emit
@@ -141,6 +145,8 @@ class Daemon:
             diagnose=lambda: self.diagnosis.run("repair"), emit=self.emit,
             logs_dir=journal.parent / (journal.stem + "-logs"),
             env={"DXBOARD_ZENOH": self.observers_cfg.source.listen[0],
+                 "DXBOARD_MIDDLEWARE": "ros2" if self.observers_cfg.source.kind == "ros2"
+                 else "zenoh",
                  "DXBOARD_ROBOT": str(opts.system_dir.resolve()), **opts.node_env},
             device_boot_s=opts.device_boot_s, on_start=self._started, dry_run=opts.dry_run,
             clock=clock, max_parallel=opts.max_parallel_steps,

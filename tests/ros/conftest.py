@@ -17,7 +17,6 @@ import contextlib
 import fcntl
 import json
 import os
-import signal
 import subprocess
 import sys
 import threading
@@ -34,7 +33,7 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from tests.robot import conftest as robot_fixtures
-from tests.robot.conftest import ROOT, Robot
+from tests.robot.conftest import ROOT, Nodes, Robot
 from tests.wait import wait_until
 
 robot_dir = robot_fixtures.robot_dir  # the virtual robot's fixtures, shared
@@ -140,7 +139,7 @@ def stamp_ms(msg: Any) -> float:
     return float(msg.header.stamp.sec * 1000 + msg.header.stamp.nanosec / 1e6)
 
 
-class RosNodes:
+class RosNodes(Nodes):
     """The virtual robot's node processes in ROS 2 mode, on the test's domain."""
 
     def __init__(self, system_dir: Path, robot: Robot, env: dict[str, str]) -> None:
@@ -149,27 +148,12 @@ class RosNodes:
                     "DXBOARD_DEVICES": json.dumps(robot.devices), "PYTHONPATH": str(ROOT)}
         self.procs: dict[str, subprocess.Popen[str]] = {}
 
-    def start(self, *names: str) -> None:
-        for name in names:
-            self.procs[name] = subprocess.Popen(
-                [sys.executable, "-m", "emulator.robot.node", name, str(self.system_dir)],
-                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=self.env,
-                cwd=ROOT)
-
-    def stop(self, name: str) -> int:
-        p = self.procs[name]
-        if p.poll() is None:
-            p.send_signal(signal.SIGTERM)
-            try:
-                p.wait(15)
-            except subprocess.TimeoutExpired:
-                p.kill()
-                p.wait(10)
-        return p.returncode
-
-    def stop_all(self) -> None:
-        for name in self.procs:
-            self.stop(name)
+    def start_managed(self, name: str) -> None:
+        """Start driver ``name`` as a managed (lifecycle) node."""
+        self.procs[name] = subprocess.Popen(
+            [sys.executable, "-m", "emulator.robot.node", name, str(self.system_dir),
+             "--managed"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+            env=self.env, cwd=ROOT)
 
 
 @pytest.fixture
@@ -178,9 +162,3 @@ def ros_nodes(robot_dir: Path, robot: Robot, env: dict[str, str]) -> Iterator[Ro
     yield n
     n.stop_all()
 
-
-def start_managed(nodes: RosNodes, name: str) -> None:
-    """Start driver ``name`` as a managed (lifecycle) node."""
-    nodes.procs[name] = subprocess.Popen(
-        [sys.executable, "-m", "emulator.robot.node", name, str(nodes.system_dir), "--managed"],
-        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=nodes.env, cwd=ROOT)

@@ -13,7 +13,7 @@ from sensor_msgs.msg import LaserScan
 from host.ros.lifecycle import LifecycleClient, LifecycleError
 from host.ros.node import RosNode
 from tests.robot.conftest import Robot, serving
-from tests.ros.conftest import Peer, RosNodes, start_managed
+from tests.ros.conftest import Peer, RosNodes
 from tests.wait import wait_until_async
 
 
@@ -21,7 +21,7 @@ async def test_a_lifecycle_repair_brings_the_hokuyo_driver_back_after_a_power_cy
         domain: int, robot: Robot, peer: Peer, ros_nodes: RosNodes) -> None:
     peer.listen("/scan", LaserScan)
     robot.board("on", "hokuyo")
-    start_managed(ros_nodes, "hokuyo_node")
+    ros_nodes.start_managed("hokuyo_node")
     ros = RosNode("dxboard_repair", domain)
     lifecycle = LifecycleClient(ros, timeout_s=60.0)
     try:

@@ -119,3 +119,16 @@ def test_a_ros2_source_with_a_bad_domain_or_type_is_named_in_the_file(tmp_path: 
         "  topics: {/scan: {rate: 40, tolerance: 10, window: 0.5}}\n")
     spec = load_observers(tmp_path).source
     assert (spec.kind, spec.domain, spec.types) == ("ros2", 7, ())
+
+
+def test_the_daemon_takes_the_middleware_from_the_command_line() -> None:
+    from host.daemon.core import load_robot
+
+    tedusar = ROOT / "models" / "tedusar"
+    assert load_robot(tedusar).observers.source.kind == "zenoh"  # the model's setting
+    assert load_robot(tedusar, middleware="ros2").observers.source.kind == "ros2"
+    p = subprocess.run([sys.executable, "-m", "host.cli", "run", str(tedusar), "--emulate",
+                        "--middleware", "dds"], capture_output=True, text=True, timeout=60,
+                       cwd=ROOT)
+    assert p.returncode == 2
+    assert "--middleware: invalid choice: 'dds'" in p.stderr
