@@ -57,13 +57,14 @@ class RosPublisher:
         self._diagnosis = node.create_publisher(DiagnosticArray, "/diagnosis", LATCHED)
         self._measurements = node.create_publisher(Float32MultiArray, "/board_measurements", 10)
         self._battery = node.create_publisher(BatteryState, "/battery_state", 10)
+        self._closed = False
         self._last: tuple[Status, ...] = tuple(self.fold.statuses())
         self._publish_statuses()
         self._timer = node.create_timer(PERIOD_S, self._publish_statuses)  # on rclpy's thread
 
     def __call__(self, stamped: Stamped) -> None:
         """A reader of the event stream (on the daemon's loop thread)."""
-        if not self.fold.feed(stamped):
+        if self._closed or not self.fold.feed(stamped):
             return
         event = stamped.event
         if isinstance(event, DiagnosisRecord):
@@ -117,6 +118,8 @@ class RosPublisher:
         return msg
 
     def close(self) -> None:
+        """Stop publishing (idempotent); events after this are ignored."""
+        self._closed = True
         self.ros.close()
 
 
