@@ -48,7 +48,7 @@ from host.journal import Journal, TelemetryDownsampler
 from host.journal.summary import Replay
 from host.observers import ObserverHub, check_atoms, load_observers
 from host.observers.base import Update
-from host.observers.config import ObserversConfig
+from host.observers.config import ObserversConfig, SourceSpec
 from host.operator.server import OperatorServer
 from host.repair import service
 from host.repair.planner import RepairPlanner
@@ -118,6 +118,14 @@ def load_robot(system_dir: Path, zenoh_listen: list[str] | None = None,
                       RepairPlanner.for_system(system_dir))
 
 
+def _middleware_env(source: SourceSpec) -> dict[str, str]:
+    """What the nodes the daemon starts need to use its middleware (and ROS 2 domain)."""
+    env = {"DXBOARD_MIDDLEWARE": "ros2" if source.kind == "ros2" else "zenoh"}
+    if source.kind == "ros2" and source.domain is not None:
+        env["ROS_DOMAIN_ID"] = str(source.domain)
+    return env
+
+
 class Daemon:
     def __init__(self, opts: DaemonOptions, clock: Callable[[], float] = time.monotonic,
                  wall: Callable[[], float] = time.time, files: RobotFiles | None = None) -> None:
@@ -145,8 +153,7 @@ class Daemon:
             diagnose=lambda: self.diagnosis.run("repair"), emit=self.emit,
             logs_dir=journal.parent / (journal.stem + "-logs"),
             env={"DXBOARD_ZENOH": self.observers_cfg.source.listen[0],
-                 "DXBOARD_MIDDLEWARE": "ros2" if self.observers_cfg.source.kind == "ros2"
-                 else "zenoh",
+                 **_middleware_env(self.observers_cfg.source),
                  "DXBOARD_ROBOT": str(opts.system_dir.resolve()), **opts.node_env},
             device_boot_s=opts.device_boot_s, on_start=self._started, dry_run=opts.dry_run,
             clock=clock, max_parallel=opts.max_parallel_steps,

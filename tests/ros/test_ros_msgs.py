@@ -127,6 +127,11 @@ def test_the_daemon_takes_the_middleware_from_the_command_line() -> None:
     tedusar = ROOT / "models" / "tedusar"
     assert load_robot(tedusar).observers.source.kind == "zenoh"  # the model's setting
     assert load_robot(tedusar, middleware="ros2").observers.source.kind == "ros2"
+    from host.daemon.core import _middleware_env
+    from host.observers.config import SourceSpec
+    assert _middleware_env(SourceSpec()) == {"DXBOARD_MIDDLEWARE": "zenoh"}
+    assert _middleware_env(SourceSpec("ros2", domain=7)) == {  # the nodes it starts follow it
+        "DXBOARD_MIDDLEWARE": "ros2", "ROS_DOMAIN_ID": "7"}
     p = subprocess.run([sys.executable, "-m", "host.cli", "run", str(tedusar), "--emulate",
                         "--middleware", "dds"], capture_output=True, text=True, timeout=60,
                        cwd=ROOT)
