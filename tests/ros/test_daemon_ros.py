@@ -43,12 +43,6 @@ def repair_of(peer: Peer, component: str) -> str:
                  if kv.key == "repair"), "")
 
 
-def healthy(peer: Peer) -> bool:
-    """The latest /diagnosis says: nothing is broken (one diagnosis, the empty one)."""
-    msgs = peer.messages("/diagnosis")
-    return bool(msgs) and [s.message for s in msgs[-1].status] == ["all healthy"]
-
-
 def ros_robot(tmp: Path) -> Path:
     d = fast_copy(tmp)
     text = (d / "system.yaml").read_text()
@@ -65,16 +59,22 @@ def test_an_independent_subscriber_sees_the_hokuyo_go_error_on_a_hang_and_ok_aft
         peer.listen(topic, kind)
     daemon = RunningDaemon(tmp_path, ros_robot(tmp_path))
     try:
-        # the power-up: everything starts off, the daemon brings the robot up by itself
-        peer.wait_for(lambda: healthy(peer) and latest(peer, "dxboard: hokuyo") == OK
-                      and latest(peer, "dxboard board") == OK, "a healthy robot", WAIT_S)
+        # the power-up: everything starts off, the daemon brings the robot up by itself (only
+        # the Hokuyo, its driver and the board matter here: on a loaded machine another
+        # component may flap meanwhile)
+        peer.wait_for(lambda: latest(peer, "dxboard: hokuyo") == OK
+                      and latest(peer, "dxboard: hokuyo_node") == OK
+                      and latest(peer, "dxboard board") == OK, "the Hokuyo up", WAIT_S)
         assert "hokuyo_node" in peer.nodes()  # the driver is a ROS 2 node
         board = peer.collect("/board_measurements", 3)[-1]
         assert len(board.data) == 10 and board.layout.dim[0].label == "channel"
         assert 0.2 <= board.data[3] <= 1.2  # the Hokuyo's channel, in its band (A)
         battery = peer.collect("/battery_state", 1)[-1]
         assert battery.current < 0 and battery.present  # discharging
-        assert peer.messages("/diagnosis")[-1].status[0].level == b"\x00"  # OK
+        # the power-up's diagnoses (everything was off) name the Hokuyo's driver abnormal
+        assert any(s.name.startswith("dxboard diagnosis ") and s.level == b"\x02"
+                   and "hokuyo_node" in s.message.split(", ")
+                   for m in peer.messages("/diagnosis") for s in m.status)
 
         daemon.inject("hokuyo", "hang")
         peer.wait_for(lambda: latest(peer, "dxboard: hokuyo") == ERROR,
