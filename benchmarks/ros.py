@@ -12,6 +12,12 @@ seconds and the messages it received; then, ``--cycles`` times, the IMU driver i
 and the time from the last ``/imu_data`` message to ``¬ok(/imu_data)`` is taken (the silence
 rule is 5 periods, 50 ms at 100 Hz; the rest is scheduling). Figures go to RESULTS.md by hand;
 the CPU ratio ros2/zenoh is the result, the absolute numbers depend on the machine and its load.
+
+Replay speed (``--replay``, or ``--replay-only``): the same drivers on ROS 2 are recorded by
+``dxboard record`` for ``--seconds``; then, in this process, the bag is read three times: only
+reading its messages (rosbags, the baseline), and ``dxboard replay``'s work (the model's
+topic observers and the diagnoser on the bag's clock, journaled) — bag seconds per wall
+second for each, and the ratio of the two.
 """
 
 from __future__ import annotations
@@ -20,6 +26,7 @@ import argparse
 import asyncio
 import json
 import os
+import shutil
 import signal
 import socket
 import statistics
@@ -178,6 +185,51 @@ def run_one(middleware: str, system_dir: Path, devices: dict[str, str], seconds:
     return out
 
 
+def replay_speed(system_dir: Path, devices: dict[str, str], seconds: float,
+                 tmp: Path) -> dict[str, float]:
+    from host.journal import Journal
+    from host.ros.bag import Bag
+    from host.ros.bagrun import load_ros_robot, replay
+
+    ros_dir = tmp / "tedusar-ros2"
+    shutil.copytree(system_dir, ros_dir)
+    f = ros_dir / "system.yaml"
+    f.write_text(f.read_text().replace("observers:\n", "observers:\n  source: {kind: ros2}\n", 1))
+    env = {**os.environ, "DXBOARD_MIDDLEWARE": "ros2", "DXBOARD_DEVICES": json.dumps(devices),
+           "PYTHONPATH": str(ROOT), "ROS_DOMAIN_ID": str(1 + (os.getpid() + 50) % 100),
+           "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    nodes = [subprocess.Popen([sys.executable, "-m", "emulator.robot.node", n, str(ros_dir)],
+                              stderr=subprocess.DEVNULL, env=env, cwd=ROOT) for n in DRIVERS]
+    bag_path = tmp / "bench-bag"
+    try:
+        subprocess.run([sys.executable, "-m", "host.cli", "record", str(ros_dir), str(bag_path),
+                        "--duration", str(seconds)], check=True, env=env, cwd=ROOT,
+                       capture_output=True)
+    finally:
+        for p in nodes:
+            stop(p)
+    robot = load_ros_robot(ros_dir)
+    out: dict[str, float] = {}
+    for trial in range(3):
+        bag = Bag(bag_path)
+        t0 = time.perf_counter()
+        n = sum(1 for _ in bag.messages())
+        read_s = time.perf_counter() - t0
+        bag.close()
+        bag = Bag(bag_path)
+        journal = Journal(tmp / f"replay-{trial}.sqlite", sync="normal")
+        stats = replay(robot, bag, journal)
+        journal.flush_blocking()
+        journal.close()
+        bag.close()
+        span = bag.end - bag.start
+        out = {"messages": n, "bag_s": span, "read_x": max(out.get("read_x", 0.0), span / read_s),
+               "replay_x": max(out.get("replay_x", 0.0), span / stats.wall_s),
+               "diagnoses": stats.diagnoses}
+    out["ratio"] = out["replay_x"] / out["read_x"]
+    return out
+
+
 def main() -> None:
     if len(sys.argv) > 1 and sys.argv[1] == "--observe":
         mw, endpoint, seconds, cycles = sys.argv[2:6]
@@ -186,16 +238,30 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seconds", type=float, default=20.0)
     ap.add_argument("--cycles", type=int, default=10)
+    ap.add_argument("--replay", action="store_true", help="also measure the replay speed")
+    ap.add_argument("--replay-only", action="store_true", help="only the replay speed")
     args = ap.parse_args()
     from host.experiment.robot import fast_model
+    results: dict[str, dict[str, Any]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         system_dir = fast_model(ROOT / "models" / "tedusar", Path(tmp))
         robot, devices, _ = start_robot(system_dir)
         try:
-            results = {mw: run_one(mw, system_dir, devices, args.seconds, args.cycles)
-                       for mw in ("zenoh", "ros2")}
+            if not args.replay_only:
+                results = {mw: run_one(mw, system_dir, devices, args.seconds, args.cycles)
+                           for mw in ("zenoh", "ros2")}
+            speed = (replay_speed(system_dir, devices, args.seconds, Path(tmp))
+                     if args.replay or args.replay_only else None)
         finally:
             stop(robot)
+    if speed is not None:
+        print(f"bag: {speed['messages']:.0f} messages, {speed['bag_s']:.1f} s; "
+              f"{speed['diagnoses']:.0f} diagnosis changes on replay")
+        print(f"reading only: {speed['read_x']:.0f} bag s / wall s; replay (observers, "
+              f"diagnoser, journal): {speed['replay_x']:.0f} bag s / wall s; "
+              f"replay / reading: {speed['ratio']:.2f}")
+    if not results:
+        return
     print("| middleware | messages/s | observer CPU (% of a core) | CPU µs/message "
           "| silence → ¬ok p50 | p99 (max) |")
     print("|---|---|---|---|---|---|")
