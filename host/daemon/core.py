@@ -114,8 +114,11 @@ def load_robot(system_dir: Path, zenoh_listen: list[str] | None = None,
         observers.source = dataclasses.replace(observers.source, listen=tuple(zenoh_listen))
     if middleware is not None:
         observers.source = dataclasses.replace(observers.source, kind=middleware)
-    return RobotFiles(model, theory, observers, load_processes(system_dir, model),
-                      RepairPlanner.for_system(system_dir))
+    processes = load_processes(system_dir, model)
+    managed = ([n for n, p in processes.items() if p.lifecycle]
+               if observers.source.kind == "ros2" else [])  # lifecycle needs ROS 2
+    return RobotFiles(model, theory, observers, processes,
+                      RepairPlanner.for_system(system_dir, managed=managed))
 
 
 def _middleware_env(source: SourceSpec) -> dict[str, str]:
@@ -168,6 +171,7 @@ class Daemon:
         self._tasks: list[asyncio.Task[Any]] = []
         self._telemetry = TelemetryDownsampler(period_s=1.0)
         self.ros_out: Any = None  # the ROS 2 publisher, with a ros2 source
+        self.lifecycle: Any = None  # the lifecycle actuator, with a ros2 source
 
     @property
     def result(self) -> Any:
@@ -205,9 +209,13 @@ class Daemon:
                 "is another dxboard run using it? give --zenoh tcp/127.0.0.1:PORT",
             ) from None
         if spec.kind == "ros2":  # the daemon reports through ROS 2 too (host.ros.publisher)
+            from host.ros.lifecycle import LifecycleActuator
             from host.ros.publisher import RosPublisher
             self.ros_out = RosPublisher(list(self.model.components), spec.domain)
             self.stream.subscribe(self.ros_out)
+            self.lifecycle = LifecycleActuator(spec.domain)  # reconfigure_node(n)
+            self.repairs.executor.actuators.add("reconfigure_node",
+                                                self.lifecycle.reconfigure_node)
         await self.hub.start(self.source, self.observers_cfg.processes,
                              poll=self.observers_cfg.poll)
         await self.repairs.adopt()
@@ -267,6 +275,8 @@ class Daemon:
             self.source.close()
         if self.ros_out is not None:
             self.ros_out.close()
+        if self.lifecycle is not None:
+            self.lifecycle.close()
         if self.web is not None:
             await self.web.close()
             self.web = None

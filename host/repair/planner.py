@@ -50,14 +50,16 @@ class RepairPlanner:
         self._goal: tuple[tuple[Atom, ...], tuple[int, ...]] | None = None
 
     @classmethod
-    def for_system(cls, system_dir: str | Path, domain_path: str | Path | None = None) -> (
-        RepairPlanner
-    ):
-        """Load ``SYSTEM_DIR/system.yaml`` and ``repair.pddl`` (or ``domain_path``)."""
+    def for_system(cls, system_dir: str | Path, domain_path: str | Path | None = None,
+                   managed: Iterable[str] = ()) -> RepairPlanner:
+        """Load ``SYSTEM_DIR/system.yaml`` and ``repair.pddl`` (or ``domain_path``);
+        ``managed``: its ROS 2 managed nodes (used when the domain has ``managed``)."""
         from host.diagnosis.model import load_system
 
-        model = repair_model(load_system(system_dir))
-        return cls(load_domain(domain_path if domain_path is not None else system_dir), model)
+        domain = load_domain(domain_path if domain_path is not None else system_dir)
+        if "managed" not in domain.predicates:
+            managed = ()
+        return cls(domain, repair_model(load_system(system_dir), managed))
 
     @property
     def task(self) -> Task:

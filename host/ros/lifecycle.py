@@ -14,6 +14,9 @@ the node is, the shortest way back to *active* through a fresh connection::
 A refused transition, a missing service or a node that is not *active* at the end raises
 ``LifecycleError`` naming the node, the transition and the state it was left in; the caller
 (the repair executor) verifies the effect by the node's topics as for any repair.
+
+``LifecycleActuator(domain_id)`` is the repair domain's ``reconfigure_node(n)`` for the
+executor's ``Actuators``: its own ROS 2 node (``dxboard_lifecycle``), made at the first repair.
 """
 
 from __future__ import annotations
@@ -110,3 +113,24 @@ class LifecycleClient:
             raise LifecycleError(f"{node} is {end} after {', '.join(steps)}",
                                  "restart its process")
         return list(steps)
+
+
+class LifecycleActuator:
+    def __init__(self, domain_id: int | None = None, timeout_s: float = TIMEOUT_S) -> None:
+        self.domain_id = domain_id
+        self.timeout_s = timeout_s
+        self._ros: RosNode | None = None
+        self._client: LifecycleClient | None = None
+
+    async def reconfigure_node(self, node: str) -> str:
+        if self._client is None:
+            self._ros = RosNode("dxboard_lifecycle", self.domain_id)
+            self._client = LifecycleClient(self._ros, self.timeout_s)
+        steps = await self._client.reconfigure(node)
+        return f"{node} {', '.join(steps)}: active"
+
+    def close(self) -> None:
+        if self._ros is not None:
+            self._ros.close()
+            self._ros = None
+            self._client = None

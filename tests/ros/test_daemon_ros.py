@@ -5,7 +5,9 @@
 observes them over DDS and publishes its state on ``/diagnostics``, ``/diagnosis``,
 ``/board_measurements`` and ``/battery_state``. The peer (plain rclpy and the standard message
 packages, in this test's own DDS domain) sees the Hokuyo go ERROR when it hangs and OK once
-the daemon has repaired it, and finds nothing on the daemon's node it could switch power with.
+the daemon has repaired it (a power cycle, then its managed driver reconfigured by lifecycle
+transitions: ``reconfigure_node``), and finds nothing on the daemon's node it could switch
+power with.
 """
 
 from __future__ import annotations
@@ -65,7 +67,8 @@ def test_an_independent_subscriber_sees_the_hokuyo_go_error_on_a_hang_and_ok_aft
         peer.wait_for(lambda: latest(peer, "dxboard: hokuyo") == OK
                       and latest(peer, "dxboard: hokuyo_node") == OK
                       and latest(peer, "dxboard board") == OK, "the Hokuyo up", WAIT_S)
-        assert "hokuyo_node" in peer.nodes()  # the driver is a ROS 2 node
+        peer.wait_for(lambda: "hokuyo_node" in peer.nodes(),  # the driver is a ROS 2 node
+                      "hokuyo_node in the peer's graph", WAIT_S)  # (discovery may lag)
         board = peer.collect("/board_measurements", 3)[-1]
         assert len(board.data) == 10 and board.layout.dim[0].label == "channel"
         assert 0.2 <= board.data[3] <= 1.2  # the Hokuyo's channel, in its band (A)
@@ -90,6 +93,11 @@ def test_an_independent_subscriber_sees_the_hokuyo_go_error_on_a_hang_and_ok_aft
                       and repair_of(peer, "hokuyo").endswith("succeeded"),
                       "the Hokuyo OK after a successful repair", WAIT_S)
         assert repair_of(peer, "hokuyo").startswith("power_cycle(hokuyo)")
+        # its managed driver lost the device: repaired by lifecycle transitions, not restarted
+        peer.wait_for(lambda: repair_of(peer, "hokuyo_node").endswith("succeeded"),
+                      "the Hokuyo driver's repair verified", WAIT_S)
+        assert repair_of(peer, "hokuyo_node").startswith("reconfigure_node(hokuyo_node)")
+        assert latest(peer, "dxboard: hokuyo_node") == OK
 
         # nothing that switches power is reachable from ROS 2: no subscription, no service
         # but rclpy's own parameter and type-description services
