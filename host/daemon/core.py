@@ -38,11 +38,10 @@ from host.board.view import BoardView
 from host.diagnosis import Diagnoser, generate, load_system
 from host.diagnosis.logic import Theory
 from host.diagnosis.model import SystemModel
-from host.diagnosis.observations import Observation as Seen
 from host.diagnosis.observations import ObservationSet
-from host.diagnosis.runner import DiagnosisRunner
+from host.diagnosis.runner import DiagnosisRunner, fold_updates
 from host.errors import RemoteError, UserError
-from host.events import JOURNALED, Event, LinkChange, Note, Observation, Stamped
+from host.events import JOURNALED, Event, LinkChange, Note, Stamped
 from host.events import BoardEvent as BoardEventRecord
 from host.journal import Journal, TelemetryDownsampler
 from host.journal.summary import Replay
@@ -297,19 +296,7 @@ class Daemon:
     # --- observations and diagnoses -----------------------------------------------------
 
     def _on_updates(self, updates: list[Update]) -> None:
-        changed = False
-        for u in updates:
-            if isinstance(u, Seen):
-                if u.literal.atom not in self._known:
-                    log.warning("observation %s is not in the model; ignored", u.literal)
-                    continue
-                if self.observations.add(u):
-                    self.emit(Observation(u.literal.atom, u.literal.positive, u.source))
-                    changed = True
-            elif self.observations.retract(u.atom):
-                self.emit(Observation(u.atom, None, u.source))
-                changed = True
-        if changed:
+        if fold_updates(updates, self.observations, self._known, self.emit):
             self.diagnosis.poke()
 
     def _diagnosis_changed(self, result: Any) -> None:

@@ -7,7 +7,10 @@ the plain dict the observers read by path, and names types (``sensor_msgs/msg/La
 for values; ``graph`` reads node presence from the ROS 2 graph; ``status`` folds the
 daemon's event stream into ``diagnostic_msgs`` statuses and ``publisher`` publishes them
 with ``/diagnosis``, ``/board_measurements`` and ``/battery_state``; ``lifecycle`` drives a
-managed node through ``ChangeState``/``GetState``. The observation source is
-``host.observers.sources.ros2``. Every module but ``graph`` and ``status`` needs the ``ros``
-extra (rclpy).
+managed node through ``ChangeState``/``GetState`` (``LifecycleActuator``: the repair domain's
+``reconfigure_node``); ``bag`` writes and reads rosbag2 (MCAP) files, ``offline`` runs the
+observers and the diagnosis on a clock the caller drives and ``bagrun`` records and replays
+bags with them (``dxboard record``/``replay``). The observation source is
+``host.observers.sources.ros2``. Every module but ``graph``, ``status`` and ``offline`` needs
+the ``ros`` extra (rclpy, rosbags).
 """

@@ -29,8 +29,8 @@ from typing import Any
 
 from host.diagnosis import Diagnoser
 from host.diagnosis.logic import Theory
-from host.diagnosis.observations import Observation as Seen
 from host.diagnosis.observations import ObservationSet
+from host.diagnosis.runner import fold_updates
 from host.events import DiagnosisRecord, Event, Observation
 from host.observers.base import Observer, Update
 from host.observers.payload import Message
@@ -123,18 +123,7 @@ class Diagnosing:
         self._last: list[frozenset[str]] | None = None
 
     def apply(self, updates: list[Update], now: float) -> None:
-        changed = False
-        for u in updates:
-            if isinstance(u, Seen):
-                if u.literal.atom not in self.known:
-                    log.warning("observation %s is not in the model; ignored", u.literal)
-                elif self.observations.add(u):
-                    self.emit(Observation(u.literal.atom, u.literal.positive, u.source))
-                    changed = True
-            elif self.observations.retract(u.atom):
-                self.emit(Observation(u.atom, None, u.source))
-                changed = True
-        if changed:
+        if fold_updates(updates, self.observations, self.known, self.emit):
             self.diagnose(now, "observation")
 
     def diagnose(self, now: float, trigger: str) -> None:
