@@ -11,7 +11,7 @@ STAMP  := $(VENV)/.installed
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[test]'
+	$(BIN)/python -m pip install --quiet -e '.[test,ros]'
 	touch $(STAMP)
 
 # The main job on the emulated board: the daemon keeps the virtual TEDUSAR robot healthy.
@@ -43,7 +43,7 @@ mpytest: $(STAMP)
 
 BENCH_STAMP := $(VENV)/.bench-installed
 $(BENCH_STAMP): $(STAMP)
-	$(BIN)/python -m pip install --quiet -e '.[test,bench]'
+	$(BIN)/python -m pip install --quiet -e '.[test,ros,bench]'
 	touch $(BENCH_STAMP)
 
 # Every benchmark, in turn (several minutes); figures go to benchmarks/RESULTS.md by hand.

@@ -38,6 +38,8 @@ COMMANDS: dict[str, str] = {
     "hold": "host.commands.hold",
     "journal": "host.commands.journal",
     "report": "host.commands.report",
+    "record": "host.commands.record",
+    "replay": "host.commands.replay",
     "board": "host.commands.board",
     "flash": "host.commands.flash",
     "emulate": "host.commands.emulate",

@@ -16,7 +16,7 @@ import asyncio
 import contextlib
 import json
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol
 
 import zenoh
 
@@ -24,6 +24,17 @@ DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 LISTEN = "tcp/127.0.0.1:0"
 
 Handler = Callable[[str, dict[str, Any]], None]
+
+
+class TopicBus(Protocol):
+    """What a node publishes and subscribes through: ``Bus`` (zenoh) or
+    ``emulator.robot.ros_bus.RosBus`` (ROS 2)."""
+
+    def publish(self, topic: str, values: dict[str, Any]) -> None: ...
+
+    def subscribe(self, topic: str, handler: Handler) -> None: ...
+
+    def close(self) -> None: ...
 
 
 def key_of(topic: str) -> str:

@@ -8,7 +8,8 @@ emulator model and raises ``RobotModelError`` (a ``EmulatorModelError``) naming 
 and the fix.
 
 ``load_node`` reads one component of ``system.yaml`` the way the node runner needs it (kind,
-hardware, published topics with their inputs, subscribed topics). The emulator does not import
+hardware, published topics with their inputs, subscribed topics, and the robot's middleware:
+``ros2`` when ``observers: source: {kind: ros2}``, else ``zenoh``). The emulator does not import
 the host, so this is a small reader of its own; ``dxboard model check`` is what validates the
 whole model.
 """
@@ -26,6 +27,7 @@ from emulator.model import EmulatorModel, EmulatorModelError
 FILE = "robot.yaml"
 SYSTEM_FILE = "system.yaml"
 KINDS = ("base", "lidar", "servo", "imu", "joystick")
+MIDDLEWARES = ("zenoh", "ros2")  # observers: source: kind: of system.yaml ("memory" is zenoh)
 MAX_RATE_HZ = 1000.0
 
 
@@ -48,6 +50,7 @@ class NodeSpec:
     hardware: tuple[str, ...] = ()
     publishes: dict[str, tuple[str, ...]] = field(default_factory=dict)
     subscribes: tuple[str, ...] = ()
+    middleware: str = "zenoh"  # zenoh or ros2
 
 
 def _read_yaml(path: Path) -> Any:
@@ -136,4 +139,12 @@ def load_node(system_dir: str | Path, name: str) -> NodeSpec:
     if not isinstance(hardware, list) or not all(isinstance(h, str) for h in hardware):
         raise RobotModelError(f"{where}: hardware must be a list of component names")
     return NodeSpec(name, str(raw["kind"]), tuple(hardware), pubs,
-                    _topics(f"{where}: subscribes", raw.get("subscribes")))
+                    _topics(f"{where}: subscribes", raw.get("subscribes")), _middleware(data))
+
+
+def _middleware(data: dict[str, Any]) -> str:
+    """The robot's middleware: ros2 when ``observers: source: kind:`` says so, else zenoh."""
+    obs = data.get("observers")
+    source = obs.get("source") if isinstance(obs, dict) else None
+    kind = source.get("kind") if isinstance(source, dict) else None
+    return "ros2" if kind == "ros2" else "zenoh"

@@ -6,8 +6,17 @@
     DXBOARD_ROBOT    the robot directory when DIR is not given (the daemon sets it for every
                      process it starts)
     DXBOARD_ZENOH    the zenoh endpoint to connect to (default tcp/127.0.0.1:7447: the daemon)
+    DXBOARD_MIDDLEWARE  zenoh or ros2: overrides the robot's setting (``observers: source:
+                     kind:`` of system.yaml; ros2 there makes the nodes ROS 2 nodes)
+    ROS_DOMAIN_ID    ROS 2 mode: the DDS domain (rclpy reads it)
     DXBOARD_DEVICES  drivers only: a JSON object device name -> tcp://HOST:PORT, as
                      ``dxboard emulate SYSTEM_DIR --robot`` prints them
+
+In ROS 2 mode (``emulator.robot.ros_bus``) the node is an rclpy node named ``NAME`` publishing
+standard messages (``emulator.robot.ros_msgs``), and a driver also publishes its health on
+``/diagnostics`` once a second (``emulator.robot.driver_status``). ``--managed`` makes a driver
+a ROS 2 managed (lifecycle) node in ROS 2 mode (``emulator.robot.managed``); in Zenoh mode,
+which has no lifecycle, it is ignored.
 
 It logs to stderr, runs until SIGTERM or SIGINT and then exits 0. A wrong name, directory or
 environment is one line on stderr and exit code 2.
@@ -30,8 +39,9 @@ from urllib.parse import urlsplit
 from emulator.errors import InputError
 from emulator.model import EmulatorModelError
 from emulator.robot import behaviours as B
-from emulator.robot.bus import DEFAULT_ENDPOINT, Bus
-from emulator.robot.config import NodeSpec, load_node
+from emulator.robot.bus import DEFAULT_ENDPOINT, Bus, TopicBus
+from emulator.robot.config import MIDDLEWARES, NodeSpec, load_node
+from emulator.robot.driver_status import PERIOD_S, DriverStatus
 
 log = logging.getLogger("emulator.robot.node")
 
@@ -71,12 +81,33 @@ def device_address(spec: NodeSpec, env: dict[str, str]) -> tuple[str, tuple[str,
     return device, (parts.hostname, port)
 
 
-async def run_driver(spec: NodeSpec, bus: Bus, device: str, address: tuple[str, int],
+async def run_driver(spec: NodeSpec, bus: TopicBus, device: str, address: tuple[str, int],
                      stop: asyncio.Event) -> None:
     topics = list(spec.publishes)
     if len(topics) != 1:
         raise NodeError(f"{spec.name}: a driver publishes exactly one topic, not {topics}")
-    topic = topics[0]
+    status = DriverStatus(spec.name, device) if getattr(bus, "ros", False) else None
+    reporting = asyncio.ensure_future(_report(bus, status, stop)) if status else None
+    try:
+        await _drive(spec, bus, topics[0], device, address, stop, status)
+    finally:
+        if reporting is not None:
+            reporting.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await reporting
+
+
+async def _report(bus: TopicBus, status: DriverStatus, stop: asyncio.Event) -> None:
+    """ROS 2 mode: the driver's ``/diagnostics`` once a second."""
+    while not stop.is_set():
+        bus.publish("/diagnostics", status.report(time.monotonic()))
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(stop.wait(), PERIOD_S)
+
+
+async def _drive(spec: NodeSpec, bus: TopicBus, topic: str, device: str,
+                 address: tuple[str, int], stop: asyncio.Event,
+                 status: DriverStatus | None) -> None:
     reader: asyncio.StreamReader | None = None
     writer: asyncio.StreamWriter | None = None
     waited = False
@@ -95,6 +126,8 @@ async def run_driver(spec: NodeSpec, bus: Bus, device: str, address: tuple[str, 
         return
     log.info("connected to %s at %s:%d; publishing %s", device, *address, topic)
     connected = True
+    if status is not None:
+        status.connected = True
 
     def command(in_topic: str, values: dict[str, Any]) -> None:
         cmd = B.device_command(in_topic, values)
@@ -106,10 +139,12 @@ async def run_driver(spec: NodeSpec, bus: Bus, device: str, address: tuple[str, 
         if in_topic not in B.COMMANDS:
             log.warning("%s: no device command for %s; ignoring it", spec.name, in_topic)
         bus.subscribe(in_topic, command)
-    reading = asyncio.ensure_future(_read(reader, bus, topic))
+    reading = asyncio.ensure_future(read_frames(reader, bus.publish, topic, status))
     stopping = asyncio.ensure_future(stop.wait())
     await asyncio.wait([reading, stopping], return_when=asyncio.FIRST_COMPLETED)
     connected = False
+    if status is not None:
+        status.connected = False
     if reading.done():
         log.warning("lost the connection to %s (%s); publishing nothing until restarted",
                     device, reading.result())
@@ -120,7 +155,8 @@ async def run_driver(spec: NodeSpec, bus: Bus, device: str, address: tuple[str, 
     writer.transport.abort()
 
 
-async def _read(reader: asyncio.StreamReader, bus: Bus, topic: str) -> str:
+async def read_frames(reader: asyncio.StreamReader, publish: B.Publish, topic: str,
+                      status: DriverStatus | None = None) -> str:
     """Publish every frame until the connection ends; returns why it ended."""
     while True:
         try:
@@ -137,12 +173,14 @@ async def _read(reader: asyncio.StreamReader, bus: Bus, topic: str) -> str:
             log.warning("not a JSON line from the device: %r", line[:80])
             continue
         if isinstance(frame, dict) and "error" not in frame:
-            bus.publish(topic, frame)
+            publish(topic, frame)
+            if status is not None:
+                status.frame(time.monotonic())
         elif isinstance(frame, dict):
             log.warning("device says: %s", frame["error"])
 
 
-async def run_node(spec: NodeSpec, bus: Bus, stop: asyncio.Event) -> None:
+async def run_node(spec: NodeSpec, bus: TopicBus, stop: asyncio.Event) -> None:
     def publish(topic: str, values: dict[str, Any]) -> None:
         # the publisher's stamp (host.observers.payload): observers judge the rate by it
         bus.publish(topic, {**values, "stamp": round(time.monotonic(), 6)})
@@ -164,19 +202,64 @@ async def run_node(spec: NodeSpec, bus: Bus, stop: asyncio.Event) -> None:
                 next_tick = now + behaviour.tick_s
 
 
-async def main_async(spec: NodeSpec, env: dict[str, str]) -> None:
-    driver = spec.kind in ("SN", "HN")
-    device, address = device_address(spec, env) if driver else ("", ("", 0))
-    loop = asyncio.get_running_loop()
-    stop = asyncio.Event()
-    for sig in (signal.SIGTERM, signal.SIGINT):
-        loop.add_signal_handler(sig, stop.set)
+def middleware(spec: NodeSpec, env: dict[str, str]) -> str:
+    """zenoh or ros2: the robot's setting, or ``$DXBOARD_MIDDLEWARE``."""
+    chosen = env.get("DXBOARD_MIDDLEWARE") or spec.middleware
+    if chosen not in MIDDLEWARES:
+        raise NodeError(f"DXBOARD_MIDDLEWARE={chosen!r}: use one of {', '.join(MIDDLEWARES)}")
+    return chosen
+
+
+def open_bus(spec: NodeSpec, env: dict[str, str]) -> TopicBus:
+    """The node's bus: a zenoh peer, or a ROS 2 node (the robot's setting or the override)."""
+    if middleware(spec, env) == "ros2":
+        from emulator.robot.ros_bus import RosBus
+        log.info("ROS 2 node %s on domain %s", spec.name, env.get("ROS_DOMAIN_ID", "0"))
+        return RosBus(spec.name)
     endpoint = env.get("DXBOARD_ZENOH") or DEFAULT_ENDPOINT
     try:
         bus = Bus(endpoint)
     except Exception as exc:  # zenoh.ZError: a malformed endpoint
         raise NodeError(f"DXBOARD_ZENOH={endpoint!r}: {exc}") from None
     log.info("zenoh peer connecting to %s", endpoint)
+    return bus
+
+
+async def run_managed(spec: NodeSpec, device: str, address: tuple[str, int],
+                      stop: asyncio.Event) -> None:
+    """ROS 2 mode with ``--managed``: the driver as a lifecycle node (``managed``)."""
+    from emulator.robot.managed import ManagedDriver
+    topics = list(spec.publishes)
+    if len(topics) != 1:
+        raise NodeError(f"{spec.name}: a driver publishes exactly one topic, not {topics}")
+    status = DriverStatus(spec.name, device)
+    driver = ManagedDriver(spec.name, topics[0], device, address, spec.subscribes, status,
+                           asyncio.get_running_loop(), read_frames)
+    log.info("ROS 2 managed node %s", spec.name)
+    reporting = asyncio.ensure_future(_report(driver.bus, status, stop))
+    try:
+        await driver.run(stop)
+    finally:
+        reporting.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await reporting
+        driver.close()
+
+
+async def main_async(spec: NodeSpec, env: dict[str, str], managed: bool = False) -> None:
+    driver = spec.kind in ("SN", "HN")
+    if managed and not driver:
+        raise NodeError(f"{spec.name} is not a driver: only drivers are managed nodes")
+    device, address = device_address(spec, env) if driver else ("", ("", 0))
+    loop = asyncio.get_running_loop()
+    stop = asyncio.Event()
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        loop.add_signal_handler(sig, stop.set)
+    if managed and middleware(spec, env) == "ros2":
+        await run_managed(spec, device, address, stop)
+        log.info("stopped")
+        return
+    bus = open_bus(spec, env)
     try:
         if driver:
             await run_driver(spec, bus, device, address, stop)
@@ -189,18 +272,20 @@ async def main_async(spec: NodeSpec, env: dict[str, str]) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
+    managed = "--managed" in args
+    args = [a for a in args if a != "--managed"]
     if len(args) == 1 and os.environ.get("DXBOARD_ROBOT"):
         args.append(os.environ["DXBOARD_ROBOT"])
     if len(args) != 2 or args[0].startswith("-"):
-        print("usage: python -m emulator.robot.node NAME SYSTEM_DIR (or $DXBOARD_ROBOT)",
-              file=sys.stderr)
+        print("usage: python -m emulator.robot.node NAME [SYSTEM_DIR] [--managed] "
+              "(SYSTEM_DIR defaults to $DXBOARD_ROBOT)", file=sys.stderr)
         return 2
     name, system_dir = args
     logging.basicConfig(stream=sys.stderr, level=logging.INFO,
                         format=f"%(asctime)s {name}[%(process)d] %(levelname)s %(message)s")
     try:
         spec = load_node(system_dir, name)
-        asyncio.run(main_async(spec, dict(os.environ)))
+        asyncio.run(main_async(spec, dict(os.environ), managed))
     except (EmulatorModelError, NodeError) as exc:
         print(f"{name}: error: {exc}", file=sys.stderr)
         return 2

@@ -25,6 +25,7 @@ import argparse
 import asyncio
 import contextlib
 import logging
+import os
 import signal
 import sys
 from pathlib import Path
@@ -59,6 +60,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-q", "--quiet", action="store_true",
                         help="print only the URLs, not a line per diagnosis, plan, step result "
                              "and quarantine")
+    parser.add_argument("--middleware", choices=("zenoh", "ros2"),
+                        default=os.environ.get("DXBOARD_MIDDLEWARE") or None,
+                        help="the robot's topics on zenoh or ROS 2, for the daemon and the nodes "
+                             "it starts (default: $DXBOARD_MIDDLEWARE, else the model's "
+                             "observers: source: kind:)")
     parser.add_argument("--zenoh", metavar="ENDPOINT", action="append",
                         help="zenoh endpoint the daemon listens on for topics "
                              "(default: the model's, tcp/127.0.0.1:7447)")
@@ -95,6 +101,7 @@ async def _main(args: argparse.Namespace, system_dir: Path, web: tuple[str, int]
         opts = DaemonOptions(system_dir=system_dir, board_url=args.board or "", web=web,
                              journal=journal, dry_run=args.dry_run,
                              rate_hz=args.rate, zenoh_listen=args.zenoh,
+                             middleware=args.middleware,
                              operator=args.operator or default_socket(journal))
         launch = Launch(system_dir, None if args.emulate else args.board, key,
                         control=args.control, daemon=opts)

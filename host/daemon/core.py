@@ -39,18 +39,17 @@ from host.diagnosis import Diagnoser, generate, load_system, observation_lags
 from host.diagnosis.healthy import healthy_values
 from host.diagnosis.logic import Theory
 from host.diagnosis.model import SystemModel
-from host.diagnosis.observations import Observation as Seen
 from host.diagnosis.observations import ObservationSet
-from host.diagnosis.runner import DiagnosisRunner
+from host.diagnosis.runner import DiagnosisRunner, fold_updates
 from host.errors import RemoteError, UserError
-from host.events import JOURNALED, Event, LinkChange, Note, Observation, RunStarted, Stamped
+from host.events import JOURNALED, Event, LinkChange, Note, RunStarted, Stamped
 from host.events import BoardEvent as BoardEventRecord
 from host.journal import Journal, TelemetryDownsampler
 from host.journal.runs import Run, list_runs, new_run_id
 from host.journal.summary import Replay
 from host.observers import ObserverHub, check_atoms, load_observers
 from host.observers.base import Update
-from host.observers.config import ObserversConfig
+from host.observers.config import ObserversConfig, SourceSpec
 from host.operator.server import OperatorServer
 from host.repair import service
 from host.repair.planner import RepairPlanner
@@ -77,6 +76,7 @@ class DaemonOptions:
     dry_run: bool = False
     rate_hz: int = 100
     zenoh_listen: list[str] | None = None
+    middleware: str | None = None  # zenoh or ros2 instead of the model's source kind
     safety_tick_s: float = 2.0
     repair_debounce_s: float = 0.5
     max_card: int | None = None  # no bound: a power-up has every component abnormal
@@ -99,7 +99,8 @@ class RobotFiles:
     planner: RepairPlanner
 
 
-def load_robot(system_dir: Path, zenoh_listen: list[str] | None = None) -> RobotFiles:
+def load_robot(system_dir: Path, zenoh_listen: list[str] | None = None,
+               middleware: str | None = None) -> RobotFiles:
     """Load and check the robot directory (``system.yaml``, ``repair.pddl``): a ``UserError``
     naming the file, the line and the fix before anything is started."""
     model = load_system(system_dir)
@@ -112,8 +113,21 @@ def load_robot(system_dir: Path, zenoh_listen: list[str] | None = None) -> Robot
                         "remove those observers or extend the model")
     if zenoh_listen is not None:
         observers.source = dataclasses.replace(observers.source, listen=tuple(zenoh_listen))
-    return RobotFiles(model, theory, observers, load_processes(system_dir, model),
-                      RepairPlanner.for_system(system_dir))
+    if middleware is not None:
+        observers.source = dataclasses.replace(observers.source, kind=middleware)
+    processes = load_processes(system_dir, model)
+    managed = ([n for n, p in processes.items() if p.lifecycle]
+               if observers.source.kind == "ros2" else [])  # lifecycle needs ROS 2
+    return RobotFiles(model, theory, observers, processes,
+                      RepairPlanner.for_system(system_dir, managed=managed))
+
+
+def _middleware_env(source: SourceSpec) -> dict[str, str]:
+    """What the nodes the daemon starts need to use its middleware (and ROS 2 domain)."""
+    env = {"DXBOARD_MIDDLEWARE": "ros2" if source.kind == "ros2" else "zenoh"}
+    if source.kind == "ros2" and source.domain is not None:
+        env["ROS_DOMAIN_ID"] = str(source.domain)
+    return env
 
 
 class Daemon:
@@ -121,7 +135,7 @@ class Daemon:
                  wall: Callable[[], float] = time.time, files: RobotFiles | None = None) -> None:
         self.opts = opts
         self.clock = clock
-        robot = files or load_robot(opts.system_dir, opts.zenoh_listen)
+        robot = files or load_robot(opts.system_dir, opts.zenoh_listen, opts.middleware)
         self.model, self.theory, self.observers_cfg = robot.model, robot.theory, robot.observers
         self.stream = EventStream(clock, wall)
         self.emit = self.stream.emit
@@ -144,6 +158,7 @@ class Daemon:
             diagnose=lambda: self.diagnosis.run("repair"), emit=self.emit,
             logs_dir=journal.parent / (journal.stem + "-logs"),
             env={"DXBOARD_ZENOH": self.observers_cfg.source.listen[0],
+                 **_middleware_env(self.observers_cfg.source),
                  "DXBOARD_ROBOT": str(opts.system_dir.resolve()), **opts.node_env},
             device_boot_s=opts.device_boot_s, on_start=self._started, dry_run=opts.dry_run,
             clock=clock, max_parallel=opts.max_parallel_steps,
@@ -158,6 +173,8 @@ class Daemon:
         self._stop = asyncio.Event()
         self._tasks: list[asyncio.Task[Any]] = []
         self._telemetry = TelemetryDownsampler(period_s=1.0)
+        self.ros_out: Any = None  # the ROS 2 publisher, with a ros2 source
+        self.lifecycle: Any = None  # the lifecycle actuator, with a ros2 source
 
     @property
     def result(self) -> Any:
@@ -198,6 +215,14 @@ class Daemon:
                 f"{str(exc).split(' at /')[0]}",
                 "is another dxboard run using it? give --zenoh tcp/127.0.0.1:PORT",
             ) from None
+        if spec.kind == "ros2":  # the daemon reports through ROS 2 too (host.ros.publisher)
+            from host.ros.lifecycle import LifecycleActuator
+            from host.ros.publisher import RosPublisher
+            self.ros_out = RosPublisher(list(self.model.components), spec.domain)
+            self.stream.subscribe(self.ros_out)
+            self.lifecycle = LifecycleActuator(spec.domain)  # reconfigure_node(n)
+            self.repairs.executor.actuators.add("reconfigure_node",
+                                                self.lifecycle.reconfigure_node)
         await self.hub.start(self.source, self.observers_cfg.processes,
                              poll=self.observers_cfg.poll)
         await self.repairs.adopt()
@@ -258,6 +283,10 @@ class Daemon:
         await self.hub.close()
         with contextlib.suppress(Exception):
             self.source.close()
+        if self.ros_out is not None:
+            self.ros_out.close()
+        if self.lifecycle is not None:
+            self.lifecycle.close()
         if self.web is not None:
             await self.web.close()
             self.web = None
@@ -278,19 +307,7 @@ class Daemon:
     # --- observations and diagnoses -----------------------------------------------------
 
     def _on_updates(self, updates: list[Update]) -> None:
-        changed = False
-        for u in updates:
-            if isinstance(u, Seen):
-                if u.literal.atom not in self._known:
-                    log.warning("observation %s is not in the model; ignored", u.literal)
-                    continue
-                if self.observations.add(u):
-                    self.emit(Observation(u.literal.atom, u.literal.positive, u.source))
-                    changed = True
-            elif self.observations.retract(u.atom):
-                self.emit(Observation(u.atom, None, u.source))
-                changed = True
-        if changed:
+        if fold_updates(updates, self.observations, self._known, self.emit):
             self.diagnosis.poke()
 
     def _diagnosis_changed(self, result: Any) -> None:

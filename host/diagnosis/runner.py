@@ -10,6 +10,8 @@ loop's thread and searches in a worker thread, so a long diagnosis (a large mode
 observation set) never stalls the loop that reads the board link — the diagnoser's own time
 budget bounds it as before. Every run emits ``DiagnosisRun`` (its cost); a run whose bad sets
 differ from the last one's emits ``DiagnosisRecord`` and calls ``on_changed(result)``.
+``fold_updates`` folds the observers' updates into the set, for the daemon and for
+``dxboard record``/``replay``.
 """
 
 from __future__ import annotations
@@ -18,15 +20,40 @@ import asyncio
 import functools
 import logging
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Set
 from concurrent.futures import ThreadPoolExecutor
+from typing import TYPE_CHECKING
 
 from host.diagnosis.diagnoser import Diagnoser
+from host.diagnosis.observations import Observation as Seen
 from host.diagnosis.observations import ObservationSet
 from host.diagnosis.result import DiagnosisResult
 from host.events import DiagnosisRecord, DiagnosisRun, Event, Observation
 
+if TYPE_CHECKING:
+    from host.observers.base import Update
+
 log = logging.getLogger(__name__)
+
+
+def fold_updates(updates: Iterable[Update], observations: ObservationSet, known: Set[str],
+                 emit: Callable[[Event], None]) -> bool:
+    """Fold observers' updates into the set (``S ⊕ o``), emitting each change as an
+    ``Observation`` event; literals of atoms not in ``known`` (the model) are ignored. True when
+    the set's literals changed (then it needs a diagnosis)."""
+    changed = False
+    for u in updates:
+        if isinstance(u, Seen):
+            if u.literal.atom not in known:
+                log.warning("observation %s is not in the model; ignored", u.literal)
+                continue
+            if observations.add(u):
+                emit(Observation(u.literal.atom, u.literal.positive, u.source))
+                changed = True
+        elif observations.retract(u.atom):
+            emit(Observation(u.atom, None, u.source))
+            changed = True
+    return changed
 
 
 class DiagnosisRunner:

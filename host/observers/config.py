@@ -7,10 +7,13 @@
       validity: 3.0           # s a literal stays true without fresh evidence (> refresh)
       poll: 0.5               # s between process scans and CPU/memory samples
       source: {kind: zenoh, listen: [tcp/127.0.0.1:7447], connect: [], prefix: ""}
+      # or ROS 2 (host.observers.sources.ros2); domain defaults to $ROS_DOMAIN_ID, types
+      # (topic -> pkg/msg/Type) to what the ROS 2 graph says: source: {kind: ros2, domain: 7}
       hardware: {link_timeout: 0.25, settle: 3, link: link(board)}   # devices: SH components
       nodes:                  # node observer: running(n); exactly one of pid, match, supervised
         hector_mapping: {match: 'hector_mapping'}     # regex on the command line (pgrep -f)
         jaguar_node: {supervised: true}               # the daemon starts it and tracks its pid
+        hokuyo_node: {graph: true}                    # ROS 2 source: present in the ROS 2 graph
       topics:                 # general observer: ok(/t) iff |f - rate| < tolerance over window
         /odom: {rate: 10, tolerance: 3, window: 1.0, silence: 5}   # silence in periods
       trends:                 # qualitative observer: inc/dec/const(v), slope b per second
@@ -61,6 +64,7 @@ from host.observers.values import (
     ValueRef,
 )
 from host.observers.watcher import DEFAULT_POLL, ProcessSpec
+from host.ros.graph import GraphObserver
 
 SECTION = "observers"
 _TOP = {"refresh", "validity", "poll", "source", "hardware", "nodes", "topics", "trends",
@@ -83,12 +87,17 @@ class SourceSpec:
     listen: tuple[str, ...] = ("tcp/127.0.0.1:7447",)
     connect: tuple[str, ...] = ()
     prefix: str = ""
+    domain: int | None = None  # ros2: the DDS domain (None: $ROS_DOMAIN_ID)
+    types: tuple[tuple[str, str], ...] = ()  # ros2: topic -> message type, where given
 
     def open(self) -> TopicSource:
         """The topic source (a zenoh session opens here; call inside the event loop)."""
         if self.kind == "memory":
             from host.observers.sources.memory import MemorySource
             return MemorySource()
+        if self.kind == "ros2":
+            from host.observers.sources.ros2 import Ros2Source
+            return Ros2Source(self.domain, dict(self.types))
         from host.observers.sources.zenoh_peer import ZenohSource
         return ZenohSource(self.listen, self.connect, self.prefix)
 
@@ -208,14 +217,27 @@ class _Builder:
         return config
 
     def _source(self, value: Any) -> SourceSpec:
-        spec = self.mapping(("source",), value, {"kind", "listen", "connect", "prefix"},
+        spec = self.mapping(("source",), value,
+                            {"kind", "listen", "connect", "prefix", "domain", "types"},
                             "source: {kind: zenoh, listen: [tcp/127.0.0.1:7447]}")
         if not spec:
             return SourceSpec()
         kind = spec.get("kind", "zenoh")
-        if kind not in ("zenoh", "memory"):
+        if kind not in ("zenoh", "memory", "ros2"):
             self.err(("source", "kind"), f"source kind {kind!r} is unknown",
-                     "use zenoh (the robot's topics) or memory (in-process)")
+                     "use zenoh (the robot's topics), ros2 (ROS 2 topics) or memory")
+        domain, types = spec.get("domain"), spec.get("types") or {}
+        if domain is not None and (not isinstance(domain, int) or isinstance(domain, bool)
+                                   or not 0 <= domain <= 232):
+            self.err(("source", "domain"), f"domain {domain!r} is not a ROS 2 domain id",
+                     "give an integer 0..232 (or leave it out for $ROS_DOMAIN_ID)")
+            domain = None
+        if not isinstance(types, dict) or not all(
+                isinstance(t, str) and isinstance(m, str) and m.count("/") == 2
+                for t, m in types.items()):
+            self.err(("source", "types"), f"types {types!r} is not a mapping of topics to types",
+                     "write types: {/scan: sensor_msgs/msg/LaserScan}")
+            types = {}
         ends: dict[str, tuple[str, ...]] = {}
         for key, default in (("listen", SourceSpec.listen), ("connect", ())):
             v = spec.get(key, list(default))
@@ -224,7 +246,8 @@ class _Builder:
                          f"write {key}: [tcp/127.0.0.1:7447]")
                 v = list(default)
             ends[key] = tuple(v)
-        return SourceSpec(str(kind), ends["listen"], ends["connect"], str(spec.get("prefix", "")))
+        return SourceSpec(str(kind), ends["listen"], ends["connect"], str(spec.get("prefix", "")),
+                          domain, tuple(sorted(types.items())))
 
     def _hardware(self, value: Any) -> list[Observer[Any]]:
         p: tuple[object, ...] = ("hardware",)
@@ -284,15 +307,19 @@ class _Builder:
         out: list[Observer[Any]] = []
         for name, spec in (nodes or {}).items():
             p = ("nodes", name)
-            s = self.mapping(p, spec, {"pid", "match", "supervised", *_TIMING},
+            s = self.mapping(p, spec, {"pid", "match", "supervised", "graph", *_TIMING},
                              "{match: 'regex'} or {pid: 1234} or {supervised: true}")
             if s is None or not self.node(p, str(name)):
                 continue
-            given = [k for k in ("pid", "match", "supervised") if s.get(k) not in (None, False)]
+            given = [k for k in ("pid", "match", "supervised", "graph")
+                     if s.get(k) not in (None, False)]
             if len(given) != 1:
-                self.err(p, f"node {name!r} gives {given or 'none'} of pid, match, supervised",
-                         "give exactly one: {match: 'hector_mapping'}, {pid: N} or "
-                         "{supervised: true}")
+                self.err(p, f"node {name!r} gives {given or 'none'} of pid, match, supervised, "
+                         "graph", "give exactly one: {match: 'hector_mapping'}, {pid: N}, "
+                         "{supervised: true} or {graph: true} (ROS 2)")
+                continue
+            if given == ["graph"]:
+                out.append(GraphObserver(str(name), **self.timing(p, s)))
                 continue
             pid, match = s.get("pid"), s.get("match")
             if pid is not None and (not isinstance(pid, int) or isinstance(pid, bool) or pid < 1):

@@ -11,7 +11,9 @@ actuator the host has:
   on-edge of a power cycle) are spaced at least ``spacing_s`` apart, whichever steps run in
   parallel, so inrush currents never add up (the board spaces its own power-up queue the same
   way, ``powerup_spacing_ms``);
-- processes: ``start_node(n)`` and ``stop_node(n)`` through the ``ProcessSupervisor``.
+- processes: ``start_node(n)`` and ``stop_node(n)`` through the ``ProcessSupervisor``;
+- further actuators a middleware brings, registered with ``add(action, fn)`` (with ROS 2:
+  ``reconfigure_node(n)``, ``host.ros.lifecycle``).
 
 Protected components — the devices on the board's protected channels, the planner's
 ``channelN`` objects for protected channels without a device, and any component listed in
@@ -98,6 +100,10 @@ class Actuators:
             "power_cycle": self.power_cycle, "start_node": self.start_node,
             "stop_node": self.stop_node,
         }
+
+    def add(self, action: str, fn: Callable[[str], Awaitable[str]]) -> None:
+        """Carry out ``action`` with ``fn(arg)`` (returns a one-line description)."""
+        self._actions[action] = fn
 
     @property
     def actions(self) -> frozenset[str]:

@@ -9,6 +9,7 @@ observation literals that must hold once it has worked:
 ``power_cycle(d)``  the same, after the off time
 ``shutdown(d)``     ``~on(d)``
 ``start_node(n)``   ``running(n)``, and ``ok(t)`` for every topic ``t`` that ``n`` publishes
+``reconfigure_n…``  the same (``reconfigure_node(n)``: a managed node's lifecycle transitions)
 ``stop_node(n)``    ``~running(n)``
 ==================  ==========================================================================
 
@@ -55,7 +56,7 @@ def expected_effects(step: Step, model: SystemModel,
             out[str(A.in_band(name))] = True
     elif step.action == "shutdown":
         out[str(A.on(name))] = False
-    elif step.action == "start_node":
+    elif step.action in ("start_node", "reconfigure_node"):
         out[str(A.running(name))] = True
         if comp is not None:
             for topic in comp.publishes:

@@ -76,20 +76,22 @@ class RepairPlanner:
         self._goal: tuple[tuple[Atom, ...], tuple[int, ...]] | None = None
 
     @classmethod
-    def for_system(cls, system_dir: str | Path, domain_path: str | Path | None = None) -> (
-        RepairPlanner
-    ):
+    def for_system(cls, system_dir: str | Path, domain_path: str | Path | None = None,
+                   managed: Iterable[str] = ()) -> RepairPlanner:
         """Load ``SYSTEM_DIR/system.yaml`` and ``repair.pddl`` (or ``domain_path``).
         ``system_dir`` may be a tug model file; its domain is ``domain_path`` or the
-        ``repair.pddl`` beside it."""
+        ``repair.pddl`` beside it. ``managed``: the robot's ROS 2 managed nodes (used when
+        the domain has ``managed``)."""
         from host.diagnosis.files import load_theory
         from host.diagnosis.model import SYSTEM_FILE, load_system
         from host.repair.theory_model import repair_model_of
 
         path = Path(system_dir)
         if path.is_dir() or path.name == SYSTEM_FILE:
-            model = repair_model(load_system(path))
-            return cls(load_domain(domain_path if domain_path is not None else path), model)
+            domain = load_domain(domain_path if domain_path is not None else path)
+            if "managed" not in domain.predicates:
+                managed = ()
+            return cls(domain, repair_model(load_system(path), managed))
         theory = load_theory(path)
         model = repair_model_of(theory, path.stem)
         if domain_path is None:

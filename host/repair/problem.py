@@ -44,6 +44,7 @@ log = logging.getLogger(__name__)
 
 # the static predicates the problem layer writes (when the domain declares them)
 NEEDS, PROTECTED = "needs", "protected"
+MANAGED = "managed"  # static: a ROS 2 managed (lifecycle) node, repaired by reconfigure_node
 SWITCHABLE, HARDWARE, DRIVER, NODE, COMPONENT = "switchable", "hardware", "driver", "node", \
     "component"
 NODE_TYPES = frozenset({DRIVER, NODE})
@@ -76,6 +77,7 @@ class RepairModel:
     types: Mapping[str, str]
     needs: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     protected: frozenset[str] = frozenset()
+    managed: frozenset[str] = frozenset()
 
     def objects(self) -> dict[str, str]:
         return dict(self.types)
@@ -83,6 +85,7 @@ class RepairModel:
     def static_facts(self) -> list[Atom]:
         out = [Atom(NEEDS, (n, c)) for n, cs in self.needs.items() for c in cs]
         out += [Atom(PROTECTED, (c,)) for c in sorted(self.protected)]
+        out += [Atom(MANAGED, (n,)) for n in sorted(self.managed)]
         return out
 
     def is_node(self, name: str) -> bool:
@@ -93,8 +96,9 @@ def protected_channel_object(channel: int) -> str:
     return f"channel{channel}"
 
 
-def repair_model(system: SystemModel) -> RepairModel:
-    """Adapter from ``host.diagnosis.model.SystemModel``.
+def repair_model(system: SystemModel, managed: Iterable[str] = ()) -> RepairModel:
+    """Adapter from ``host.diagnosis.model.SystemModel``; ``managed``: the nodes that are ROS 2
+    managed (lifecycle) nodes on this robot (``(managed n)``, for ``reconfigure_node``).
 
     A node needs its hardware and the publishers of the topics its outputs depend on (of the
     topics it reads, if it publishes nothing). Nodes that need each
@@ -126,7 +130,8 @@ def repair_model(system: SystemModel) -> RepairModel:
             name = protected_channel_object(ch)
             types[name] = SWITCHABLE
             protected.add(name)
-    return RepairModel(system.name, types, needs, frozenset(protected))
+    return RepairModel(system.name, types, needs, frozenset(protected),
+                       frozenset(n for n in managed if types.get(n) in NODE_TYPES))
 
 
 def drop_cycles(needs: dict[str, tuple[str, ...]]) -> dict[str, tuple[str, ...]]:

@@ -9,6 +9,8 @@ How the repair executor starts and stops each software node (``start_node``/``st
         cwd: drivers                     # default: the project root
         settle_s: 2.0                    # after a start, its outputs are ok within this time
         stop_timeout_s: 5.0              # SIGTERM, then SIGKILL after this long
+        lifecycle: true                  # a ROS 2 managed node: with a ros2 source the
+                                         # planner may repair it by reconfigure_node
       hector_mapping:
         systemd: hector-mapping.service  # a unit: systemctl start/stop
         settle_s: 3.0
@@ -43,8 +45,8 @@ from host.diagnosis.model import ModelError, Problem, SystemModel, read_section
 SECTION = "processes"
 DEFAULT_SETTLE_S = 2.0
 DEFAULT_STOP_TIMEOUT_S = 5.0
-_COMMAND_KEYS = {"command", "env", "cwd", "settle_s", "stop_timeout_s"}
-_SYSTEMD_KEYS = {"systemd", "settle_s", "stop_timeout_s"}
+_COMMAND_KEYS = {"command", "env", "cwd", "settle_s", "stop_timeout_s", "lifecycle"}
+_SYSTEMD_KEYS = {"systemd", "settle_s", "stop_timeout_s", "lifecycle"}
 _ROOT_MARKERS = ("pyproject.toml", ".git")
 
 
@@ -64,6 +66,7 @@ class ProcessConfig:
     settle_s: float = DEFAULT_SETTLE_S
     stop_timeout_s: float = DEFAULT_STOP_TIMEOUT_S
     line: int = 0
+    lifecycle: bool = False  # a ROS 2 managed (lifecycle) node
 
     @property
     def is_systemd(self) -> bool:
@@ -140,13 +143,19 @@ class _Builder:
         stop = self.seconds((*p, "stop_timeout_s"), spec.get("stop_timeout_s"),
                             DEFAULT_STOP_TIMEOUT_S)
         line = self.lines(SECTION, name)
+        lifecycle = spec.get("lifecycle", False)
+        if not isinstance(lifecycle, bool):
+            self.err((*p, "lifecycle"), f"{name}: lifecycle {lifecycle!r} is not true or false",
+                     "write lifecycle: true for a ROS 2 managed node, or leave it out")
+            lifecycle = False
         if "systemd" in spec:
             unit = spec["systemd"]
             if not isinstance(unit, str) or not unit or unit.startswith("-") or " " in unit:
                 self.err((*p, "systemd"), f"{name}: systemd unit {unit!r} is not a unit name",
                          "write systemd: hector-mapping.service")
                 return None
-            return ProcessConfig(name, unit=unit, settle_s=settle, stop_timeout_s=stop, line=line)
+            return ProcessConfig(name, unit=unit, settle_s=settle, stop_timeout_s=stop, line=line,
+                                 lifecycle=lifecycle)
         argv = self.command((*p, "command"), spec["command"])
         env = self.env((*p, "env"), spec.get("env"))
         cwd = self.root
@@ -163,7 +172,7 @@ class _Builder:
         if argv is None:
             return None
         return ProcessConfig(name, argv=argv, env=env, cwd=cwd, settle_s=settle,
-                             stop_timeout_s=stop, line=line)
+                             stop_timeout_s=stop, line=line, lifecycle=lifecycle)
 
     def command(self, p: tuple[object, ...], value: Any) -> tuple[str, ...] | None:
         if not isinstance(value, list) or not value or not all(

@@ -77,7 +77,7 @@ RUNNING = "running"  # the outcome of an action whose end the journal does not h
 _HARDWARE_LITERALS = {"on", "in_band", "tripped", "link"}
 _NODE_LITERALS = {"running"}
 _HARDWARE_ACTIONS = {"power_up", "shutdown", "power_cycle", "power_down"}
-_NODE_ACTIONS = {"start_node", "stop_node", "restart_node"}
+_NODE_ACTIONS = {"start_node", "stop_node", "restart_node", "reconfigure_node"}
 _LITERAL = re.compile(r"^~?\s*(\w+)\s*\(\s*([^(),\s]+)\s*\)$")
 
 

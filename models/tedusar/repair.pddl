@@ -6,13 +6,18 @@
 ;   (needs ?n ?c)    static: node ?n works only while ?c works (its hardware, the publishers
 ;                    of its input topics); generated from system.yaml
 ;   (protected ?c)   static: ?c is never switched off (the board's protected channels)
+;   (managed ?n)     static: ?n is a ROS 2 managed (lifecycle) node (processes: lifecycle: true,
+;                    with a ros2 source)
+;   (lost ?n)        running node ?n lost its device to a power switch of this plan (never in
+;                    the initial state: a node found abnormal is restarted, not reconfigured)
 ; The planner's words for the roles it fills from a diagnosis (host/repair/vocabulary.py; the
 ; original system's domain says bad/good/not_on instead, and is read by the same conventions):
 ; dxboard-vocabulary: abnormal=ab powered=on running=running
 ; Beyond the paper's power_up, shutdown, start_node and stop_node: power_cycle (one board
-; command, off then on), a driver cannot start before the hardware it needs is healthy, and
-; switching a device's power while its driver runs leaves the driver abnormal (it lost its
-; device: the jaguar scenario's stop_node + start_node).
+; command, off then on), reconfigure_node (lifecycle transitions of a ROS 2 managed node
+; instead of restarting its process), a driver cannot start before the hardware it needs is
+; healthy, and switching a device's power while its driver runs leaves the driver abnormal
+; (it lost its device: the jaguar scenario's stop_node + start_node).
 (define (domain dxboard-repair)
   (:requirements :strips :typing :negative-preconditions :disjunctive-preconditions
                  :universal-preconditions :conditional-effects)
@@ -23,7 +28,9 @@
                (on ?h - switchable)
                (running ?n - node)
                (needs ?n - node ?c - component)
-               (protected ?c - component))
+               (protected ?c - component)
+               (managed ?n - node)
+               (lost ?n - node))
 
   ; power a switched-off faulty device; its running drivers lose it
   (:action power_up
@@ -31,7 +38,7 @@
     :precondition (and (not (on ?h)) (ab ?h))
     :effect (and (on ?h) (not (ab ?h))
                  (forall (?n - node)
-                   (when (and (needs ?n ?h) (running ?n)) (ab ?n)))))
+                   (when (and (needs ?n ?h) (running ?n)) (and (ab ?n) (lost ?n))))))
 
   ; switch a device off (never a protected one); it is abnormal while off
   (:action shutdown
@@ -39,7 +46,7 @@
     :precondition (and (on ?h) (not (protected ?h)))
     :effect (and (not (on ?h)) (ab ?h)
                  (forall (?n - node)
-                   (when (and (needs ?n ?h) (running ?n)) (ab ?n)))))
+                   (when (and (needs ?n ?h) (running ?n)) (and (ab ?n) (lost ?n))))))
 
   ; off and on again in one board command: repairs a hung, powered device
   (:action power_cycle
@@ -47,7 +54,7 @@
     :precondition (and (on ?h) (ab ?h) (not (protected ?h)))
     :effect (and (not (ab ?h))
                  (forall (?n - node)
-                   (when (and (needs ?n ?h) (running ?n)) (ab ?n)))))
+                   (when (and (needs ?n ?h) (running ?n)) (and (ab ?n) (lost ?n))))))
 
   ; start a node once everything it needs works
   (:action start_node
@@ -55,6 +62,15 @@
     :precondition (and (not (running ?n))
                        (forall (?c - component) (imply (needs ?n ?c) (not (ab ?c)))))
     :effect (and (running ?n) (not (ab ?n))))
+
+  ; a running managed (lifecycle) node that lost its device to a power switch: deactivate,
+  ; cleanup, configure, activate (a fresh connection, the same process), once everything it
+  ; needs works
+  (:action reconfigure_node
+    :parameters (?n - node)
+    :precondition (and (running ?n) (managed ?n) (lost ?n)
+                       (forall (?c - component) (imply (needs ?n ?c) (not (ab ?c)))))
+    :effect (and (not (ab ?n)) (not (lost ?n))))
 
   ; stop a running node (never a protected one); a stopped node is abnormal
   (:action stop_node

@@ -15,9 +15,10 @@ from .conftest import TEDUSAR
 def test_tedusar_domain_has_the_papers_actions_and_more() -> None:
     d = load_domain(TEDUSAR)
     names = {s.name for s in d.schemas}
-    assert {"power_up", "shutdown", "start_node", "stop_node", "power_cycle"} <= names
-    assert d.statics == {"needs", "protected"}
-    assert d.fluents == {"ab", "on", "running"}
+    assert {"power_up", "shutdown", "start_node", "stop_node", "power_cycle",
+            "reconfigure_node"} <= names
+    assert d.statics == {"needs", "protected", "managed"}
+    assert d.fluents == {"ab", "on", "running", "lost"}
     assert d.supertypes("switchable") == ["switchable", "hardware", "component"]
     assert d.supertypes("driver") == ["driver", "node", "component"]
 

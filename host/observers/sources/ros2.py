@@ -1,0 +1,130 @@
+"""The ROS 2 topic source: the robot's topics over DDS through rclpy, counted without decoding.
+
+``Ros2Source(domain_id)`` is one rclpy node (``dxboard_observer``) in a thread of its own
+(``host.ros.node``). ``subscribe("/scan", cb)`` needs the topic's type: given in ``types``
+(``{"/scan": "sensor_msgs/msg/LaserScan"}``), or else learnt from the ROS 2 graph, which
+the source reads every ``discovery_s`` until a publisher of the topic shows up (so the
+observers may start before the robot's nodes). Subscriptions are *raw*: rclpy hands over the
+serialized CDR bytes, stamped with the source's clock on the executor's thread and passed to
+the asyncio loop with ``call_soon_threadsafe`` as a ``host.ros.message.RosMessage``. A
+frequency observer only counts them; value and diagnostic observers decode them on demand.
+
+QoS adapts to the publishers, as ``ros2 bag record`` does: keep last 10, reliable when every
+publisher of the topic the graph shows is reliable (a large message, such as a 4 MB map, is
+then never lost to a dropped fragment), best effort otherwise (which matches any publisher);
+a topic subscribed through ``types`` before its publishers are known gets best effort.
+
+``GRAPH`` (``/_graph/nodes``) is not a DDS topic: subscribing it delivers, every
+``discovery_s``, a message whose values are ``{"nodes": [names...]}`` from the ROS 2 graph,
+for ``host.ros.graph.GraphObserver`` (node presence).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from collections.abc import Mapping
+from typing import Any
+
+from rclpy.qos import QoSHistoryPolicy, QoSProfile, QoSReliabilityPolicy
+
+from host.observers.payload import Message, encode
+from host.observers.sources.base import Callback, Subscription, TopicSource, check_topic
+from host.ros.convert import message_type
+from host.ros.graph import GRAPH
+from host.ros.message import RosMessage
+from host.ros.node import RosNode
+
+log = logging.getLogger(__name__)
+
+BEST_EFFORT = QoSProfile(history=QoSHistoryPolicy.KEEP_LAST, depth=10,
+                         reliability=QoSReliabilityPolicy.BEST_EFFORT)
+RELIABLE = QoSProfile(history=QoSHistoryPolicy.KEEP_LAST, depth=10,
+                      reliability=QoSReliabilityPolicy.RELIABLE)
+
+
+class _RosSubscription(Subscription):
+    def __init__(self, source: Ros2Source, topic: str, callback: Callback,
+                 loop: asyncio.AbstractEventLoop) -> None:
+        self.source = source
+        self.topic = topic
+        self.callback = callback
+        self.loop = loop
+        self.sub: Any = None  # the rclpy subscription once the type is known
+        self.open = True
+
+    def deliver(self, msg: Message) -> None:  # on the executor's thread
+        if self.open:
+            with contextlib.suppress(RuntimeError):  # the loop closed meanwhile
+                self.loop.call_soon_threadsafe(self.callback, msg)
+
+    def close(self) -> None:
+        if self.open:
+            self.open = False
+            self.source._drop(self)
+
+
+class Ros2Source(TopicSource):
+    def __init__(self, domain_id: int | None = None, types: Mapping[str, str] | None = None,
+                 discovery_s: float = 0.5, name: str = "dxboard_observer",
+                 **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self.types = dict(types or {})
+        self.ros = RosNode(name, domain_id)
+        self._subs: list[_RosSubscription] = []
+        self._timer = self.ros.node.create_timer(discovery_s, self._discover)
+
+    def subscribe(self, topic: str, callback: Callback) -> Subscription:
+        sub = _RosSubscription(self, check_topic(topic), callback, asyncio.get_running_loop())
+        self._subs.append(sub)
+        if topic != GRAPH and topic in self.types:
+            self._attach(sub, self.types[topic])
+        return sub
+
+    def nodes(self) -> list[str]:
+        """The nodes in the ROS 2 graph now (names, without namespaces)."""
+        return sorted({n for n, _ in self.ros.node.get_node_names_and_namespaces()})
+
+    def _discover(self) -> None:  # on the executor's thread, every discovery_s
+        graph = None
+        for sub in list(self._subs):
+            if sub.topic == GRAPH:
+                sub.deliver(Message(self.clock(), GRAPH, encode({"nodes": self.nodes()})))
+            elif sub.sub is None:
+                if graph is None:
+                    graph = dict(self.ros.node.get_topic_names_and_types())
+                found = graph.get(sub.topic)
+                if found:
+                    self._attach(sub, found[0])
+
+    def _attach(self, sub: _RosSubscription, type_name: str) -> None:
+        try:
+            msg_type = message_type(type_name)
+        except TypeError as exc:
+            log.error("%s: %s; not observed", sub.topic, exc)
+            sub.sub = False
+            return
+        clock, topic = self.clock, sub.topic
+
+        def on_raw(data: bytes) -> None:  # on the executor's thread
+            sub.deliver(RosMessage(clock(), topic, data, type_name))
+
+        pubs = self.ros.node.get_publishers_info_by_topic(topic)
+        reliable = bool(pubs) and all(
+            p.qos_profile.reliability == QoSReliabilityPolicy.RELIABLE for p in pubs)
+        qos = RELIABLE if reliable else BEST_EFFORT
+        sub.sub = self.ros.node.create_subscription(msg_type, topic, on_raw, qos, raw=True)
+        log.info("observing %s (%s, %s)", topic, type_name,
+                 "reliable" if reliable else "best effort")
+
+    def _drop(self, sub: _RosSubscription) -> None:
+        if sub in self._subs:
+            self._subs.remove(sub)
+        if sub.sub:
+            self.ros.node.destroy_subscription(sub.sub)
+
+    def _close(self) -> None:
+        for sub in list(self._subs):
+            sub.close()
+        self.ros.close()

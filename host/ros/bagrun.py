@@ -1,0 +1,160 @@
+"""Record a robot's ROS 2 topics into a bag while diagnosing them; diagnose a bag again later.
+
+``record(robot, bag, journal, stop)`` subscribes, through the ROS 2 source (``host.ros``), the
+topics the robot's topic observers watch plus ``/diagnostics`` (the drivers' and dxboard's own),
+each once: every message is written to the bag (``BagWriter``) and fed to the observers, so
+what is diagnosed live is exactly what the bag holds. The observers run on ``ClockedObservers``
+on the source's (wall) clock: a timer advances them ``GRACE_S`` behind the clock, so a message
+still queued between DDS and the loop is fed before the deadlines that follow it. With a
+journal, the diagnoses (``Diagnosing``) are journaled as the daemon journals them.
+
+``replay(robot, bag, journal)`` runs the same observers and the same diagnosis over a bag on
+the bag's clock: from the recording's start, every message at its time, every deadline at its
+time, up to the recording's end, as fast as the bag can be read (no sleeping); the journal it
+writes has the bag's times, so ``dxboard report`` draws the timeline of the recorded failure.
+Given the same messages, the deadlines fire at the same times: the replay gives the diagnoses
+the recording gave.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from host.daemon.core import RobotFiles
+from host.daemon.stream import EventStream
+from host.errors import UserError
+from host.events import JOURNALED, Note, Stamped
+from host.journal import Journal
+from host.observers.base import Update
+from host.ros.bag import Bag, BagWriter
+from host.ros.message import RosMessage
+from host.ros.offline import ClockedObservers, Diagnosing, bag_observers
+
+log = logging.getLogger(__name__)
+
+GRACE_S = 0.5  # how far the live observers run behind the clock
+DIAGNOSTICS = "/diagnostics"
+
+
+@dataclass
+class RunStats:
+    messages: int
+    bag_s: float  # the span of bag time covered
+    wall_s: float  # the wall time it took
+    diagnoses: int  # diagnosis records (changes of the bad sets)
+
+
+def load_ros_robot(system_dir: Path) -> RobotFiles:
+    """The robot directory, checked: a bag holds ROS 2 topics, so it must observe through
+    ROS 2 (``observers: source: {kind: ros2}``)."""
+    from host.daemon.core import load_robot
+
+    if not (system_dir / "system.yaml").is_file():
+        raise UserError(f"{system_dir}: no system.yaml here",
+                        "give a robot directory, e.g. models/tedusar")
+    robot = load_robot(system_dir)
+    if robot.observers.source.kind != "ros2":
+        raise UserError(f"{system_dir}/system.yaml: the robot observes through "
+                        f"{robot.observers.source.kind}, not ROS 2",
+                        "set observers: source: {kind: ros2} in its system.yaml")
+    return robot
+
+
+def _journaled(journal: Journal | None) -> Callable[[Stamped], None]:
+    def record(s: Stamped) -> None:
+        if journal is not None and s.event.kind in JOURNALED:
+            journal.record(s.event, wall=s.wall, mono=s.mono)
+    return record
+
+
+async def record(robot: RobotFiles, bag_path: Path, journal: Journal | None,
+                 stop: asyncio.Event, clock: Callable[[], float] = time.time) -> RunStats:
+    """Record until ``stop`` is set; the bag is complete when this returns."""
+    from host.observers.sources.ros2 import Ros2Source
+
+    spec = robot.observers.source
+    stream = EventStream(clock, clock)
+    stream.subscribe(_journaled(journal))
+    diagnosing = Diagnosing(robot.theory, stream.emit)
+    observers = ClockedObservers(bag_observers(robot.observers.observers), diagnosing.apply)
+    writer = BagWriter(bag_path)
+    source = Ros2Source(spec.domain, dict(spec.types), clock=clock, name="dxboard_recorder")
+    loop = asyncio.get_running_loop()
+    timer: list[asyncio.TimerHandle] = []
+
+    def arm() -> None:
+        for handle in timer:
+            handle.cancel()
+        timer.clear()
+        due = observers.next_deadline()
+        if due is not None:
+            timer.append(loop.call_later(max(0.0, due + GRACE_S - clock()), tick))
+
+    def tick() -> None:
+        observers.advance(clock() - GRACE_S)
+        arm()
+
+    def on_message(msg: object) -> None:
+        assert isinstance(msg, RosMessage)
+        writer.write(msg)
+        observers.feed(msg)
+        arm()
+
+    start = clock()
+    t0 = time.perf_counter()
+    stream.emit(Note(f"dxboard record {bag_path}: {robot.model.name}"))
+    observers.start(start)
+    subs = [source.subscribe(t, on_message)
+            for t in sorted({*observers.topics, DIAGNOSTICS})]
+    arm()
+    try:
+        await stop.wait()
+    finally:
+        for s in subs:
+            s.close()
+        source.close()
+        for handle in timer:
+            handle.cancel()
+        end = observers.now if observers.now is not None else start
+        observers.stop()
+        stream.emit(Note("dxboard record stopped"))
+        writer.close(start, end)
+        diagnosing.close()
+    return RunStats(writer.count, end - start, time.perf_counter() - t0,
+                    len(diagnosing.records))
+
+
+def replay(robot: RobotFiles, bag: Bag, journal: Journal | None) -> RunStats:
+    """Diagnose the bag on its own clock; the journal gets the bag's times."""
+    now = [bag.start]
+    stream = EventStream(lambda: now[0], lambda: now[0])
+    stream.subscribe(_journaled(journal))
+    diagnosing = Diagnosing(robot.theory, stream.emit)
+
+    def apply(updates: list[Update], t: float) -> None:
+        now[0] = t
+        diagnosing.apply(updates, t)
+
+    observers = ClockedObservers(bag_observers(robot.observers.observers), apply)
+    t0 = time.perf_counter()
+    stream.emit(Note(f"dxboard replay {bag.path}: {robot.model.name}"))
+    observers.start(bag.start)
+    count = 0
+    try:
+        for msg in bag.messages():
+            if msg.topic in observers.topics:
+                observers.feed(msg)
+            count += 1
+        observers.advance(bag.end)
+        now[0] = bag.end
+        observers.stop()
+        stream.emit(Note("dxboard replay ended"))
+    finally:
+        diagnosing.close()
+    return RunStats(count, bag.end - bag.start, time.perf_counter() - t0,
+                    len(diagnosing.records))

@@ -1,0 +1,148 @@
+"""Observers and diagnosis on a clock the caller drives: the same for a live recording and a replay.
+
+``ClockedObservers(observers, sink)`` runs topic observers without timers of their own: the
+caller says how far time has come (``advance(t)``) and feeds messages (``feed(msg)``, which
+first advances to the message's time). Every observer deadline up to ``t`` fires *at its
+deadline* (not when a timer happened to run), earliest first, so the same messages give the
+same updates however fast or slow they are driven: as fast as a bag can be read in
+``dxboard replay``, or on the wall clock in ``dxboard record``.
+
+``Diagnosing(theory, emit)`` is the daemon's observation set and diagnoser without its loop:
+``apply(updates, now)`` folds the updates into the set (``S ⊕ o``), emits each change as an
+``Observation`` event and, when the literals changed, diagnoses at once (no debounce, no time
+budget: every change gets its diagnosis, so a replay is deterministic) and emits a
+``DiagnosisRecord`` when the bad sets differ from the last ones. The diagnoses are ranked as
+the diagnoser ranks them (cardinality, then probability) and ties by name, so that two runs
+(whose solvers may find tied diagnoses in any order) journal the same list.
+
+``bag_observers`` picks what a bag can feed: the topic observers of the robot's ``observers:``
+section, without node presence from the graph (not a topic; not in a bag), process or hardware
+observers (the supervisor and the board are not in a bag).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from host.diagnosis import Diagnoser
+from host.diagnosis.logic import Theory
+from host.diagnosis.observations import ObservationSet
+from host.diagnosis.runner import fold_updates
+from host.events import DiagnosisRecord, Event, Observation
+from host.observers.base import Observer, Update
+from host.observers.payload import Message
+from host.observers.topics import TopicObserver
+from host.ros.graph import GRAPH
+
+log = logging.getLogger(__name__)
+
+Sink = Callable[[list[Update], float], None]
+MIN_STEP_S = 0.001  # a deadline that does not move after its tick is retried this much later
+
+
+def bag_observers(observers: Sequence[Observer[Any]]) -> list[TopicObserver]:
+    """The observers a bag can feed: topic observers of real topics."""
+    return [o for o in observers
+            if isinstance(o, TopicObserver) and GRAPH not in o.topics]
+
+
+class ClockedObservers:
+    def __init__(self, observers: Sequence[TopicObserver], sink: Sink) -> None:
+        self.observers = list(observers)
+        self.sink = sink
+        self.now: float | None = None
+        self._by_topic: dict[str, list[TopicObserver]] = {}
+        for o in self.observers:
+            for t in o.topics:
+                self._by_topic.setdefault(t, []).append(o)
+        self._fired: dict[int, float] = {}
+
+    @property
+    def topics(self) -> list[str]:
+        return sorted(self._by_topic)
+
+    def start(self, t: float) -> None:
+        """Time starts at ``t``: every observer's first tick."""
+        self.now = t
+        for o in self.observers:
+            self._out(o.tick(t), t)
+
+    def next_deadline(self) -> float | None:
+        """The earliest deadline of any observer (None: only messages can change anything)."""
+        times = [self._due(o) for o in self.observers]
+        return min((t for t in times if t is not None), default=None)
+
+    def advance(self, t: float) -> None:
+        """Fire every deadline up to ``t``, each at its own time, earliest first."""
+        while True:
+            due = self.next_deadline()
+            if due is None or due > t:
+                break
+            for o in self.observers:
+                if self._due(o) == due:
+                    self._fired[id(o)] = due
+                    self._out(o.tick(due), due)
+        self.now = t if self.now is None else max(self.now, t)
+
+    def feed(self, msg: Message) -> None:
+        """One message, at its own time (deadlines before it fire first)."""
+        self.advance(msg.time)
+        for o in self._by_topic.get(msg.topic, ()):
+            self._out(o.feed(msg, msg.time), msg.time)
+
+    def stop(self) -> None:
+        """Retract what every observer asserted (the recording or the replay ends)."""
+        t = self.now if self.now is not None else 0.0
+        for o in self.observers:
+            self._out(o.stop(t), t)
+
+    def _due(self, o: Observer[Any]) -> float | None:
+        deadline = o.next_deadline()
+        fired = self._fired.get(id(o))
+        if deadline is not None and fired is not None and deadline <= fired:
+            return fired + MIN_STEP_S  # never spin on a deadline that did not move
+        return deadline
+
+    def _out(self, updates: list[Update], t: float) -> None:
+        if updates:
+            self.sink(updates, t)
+
+
+class Diagnosing:
+    def __init__(self, theory: Theory, emit: Callable[[Event], None],
+                 max_card: int | None = None, max_count: int | None = 20) -> None:
+        self.emit = emit
+        self.observations = ObservationSet()
+        self.known = theory.observable_atoms()
+        self.diagnoser = Diagnoser(theory, observations=self.observations)
+        self.bounds = {"max_card": max_card, "max_count": max_count}
+        self.records: list[DiagnosisRecord] = []
+        self._last: list[frozenset[str]] | None = None
+
+    def apply(self, updates: list[Update], now: float) -> None:
+        if fold_updates(updates, self.observations, self.known, self.emit):
+            self.diagnose(now, "observation")
+
+    def diagnose(self, now: float, trigger: str) -> None:
+        for gone in self.observations.expire(now):
+            self.emit(Observation(gone.literal.atom, None, "expired"))
+        t0 = time.perf_counter()
+        result = self.diagnoser.diagnose(literals=self.observations.literals(),
+                                         **self.bounds)  # type: ignore[arg-type]
+        ranked = sorted(result.diagnoses, key=lambda d: (
+            len(d.bad), -round(d.probability, 9), sorted(d.bad)))
+        bad = [d.bad for d in ranked]
+        if bad != self._last:
+            self._last = bad
+            record = DiagnosisRecord.of(
+                bad, complete=result.complete, trigger=trigger,
+                elapsed_s=time.perf_counter() - t0,
+                probabilities=[d.probability for d in ranked])
+            self.records.append(record)
+            self.emit(record)
+
+    def close(self) -> None:
+        self.diagnoser.close()

@@ -1,0 +1,144 @@
+"""The daemon's state in ``diagnostic_msgs`` terms: a fold of its event stream into statuses.
+
+``StatusFold(components)`` reads ``Stamped`` events (``host.events``) and keeps what a ROS 2
+robot monitor shows; it is pure (no rclpy, no clock), so it is tested on its own and the
+publisher (``host.ros.publisher``) only turns its ``Status`` values into messages. One status
+per component of the model, named ``dxboard: COMPONENT`` (``hardware_id`` the component)::
+
+    level   when
+    STALE   no diagnosis yet
+    ERROR   abnormal in the best (first) minimal diagnosis, or quarantined
+    WARN    abnormal only in other minimal diagnoses (a suspect)
+    OK      normal in every minimal diagnosis
+
+with the reason as the message and the key/values ``diagnoses`` (in how many minimal
+diagnoses it is abnormal, of how many), ``repair`` (its latest repair action and that action's
+state), ``quarantined`` and ``held``. One status per board channel, ``dxboard board: NAME``
+(ERROR when tripped, latched or faulted; STALE while the link is down; key/values state, on,
+current_a, last_event), and one for the board, ``dxboard board`` (OK while the link is up,
+else ERROR with the reason). ``diagnoses`` and ``currents_a`` are the latest minimal diagnoses
+and channel currents, for ``/diagnosis`` and ``/board_measurements``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+from host.events import (
+    ActionRecord,
+    BoardEvent,
+    ChannelSample,
+    DiagnosisRecord,
+    HoldChange,
+    LinkChange,
+    QuarantineChange,
+    Stamped,
+)
+
+OK, WARN, ERROR, STALE = 0, 1, 2, 3
+BAD_STATES = ("tripped", "latched", "faulted")
+
+
+@dataclass(frozen=True)
+class Status:
+    level: int
+    name: str
+    message: str
+    hardware_id: str
+    values: tuple[tuple[str, str], ...] = ()
+
+
+@dataclass
+class _Component:
+    repair: str = "none"
+    quarantined: str = ""  # the reason, when quarantined
+    held: bool = False
+
+
+@dataclass
+class StatusFold:
+    components: Sequence[str]
+    diagnosis: DiagnosisRecord | None = None
+    channels: ChannelSample | None = None
+    link_up: bool = False
+    link_reason: str = "not connected yet"
+    _comp: dict[str, _Component] = field(default_factory=dict)
+    _last_event: dict[int, str] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self._comp = {c: _Component() for c in self.components}
+
+    def feed(self, stamped: Stamped) -> bool:
+        """Take one event; True when the statuses may have changed."""
+        e = stamped.event
+        match e:
+            case DiagnosisRecord():
+                self.diagnosis = e
+            case ChannelSample():
+                self.channels = e
+            case LinkChange():
+                self.link_up, self.link_reason = e.up, e.reason
+            case ActionRecord():
+                for arg in e.args:
+                    if arg in self._comp:
+                        self._comp[arg].repair = f"{e.action}({', '.join(e.args)}) {e.state}"
+            case QuarantineChange() if e.component in self._comp:
+                self._comp[e.component].quarantined = (e.reason or "quarantined"
+                                                       if e.quarantined else "")
+            case HoldChange() if e.component in self._comp:
+                self._comp[e.component].held = e.held
+            case BoardEvent() if e.channel is not None:
+                self._last_event[e.channel] = e.event
+            case _:
+                return False
+        return True
+
+    @property
+    def diagnoses(self) -> tuple[tuple[str, ...], ...]:
+        return self.diagnosis.diagnoses if self.diagnosis is not None else ()
+
+    @property
+    def currents_a(self) -> list[float]:
+        """Every channel's current (A), in channel order; empty before the first sample."""
+        return [c.current_ma / 1000.0 for c in self.channels.channels] if self.channels else []
+
+    def statuses(self) -> list[Status]:
+        return [*(self._component(c) for c in self.components), *self._board()]
+
+    def _component(self, name: str) -> Status:
+        comp = self._comp[name]
+        diags = self.diagnoses
+        inside = sum(1 for d in diags if name in d)
+        if self.diagnosis is None:
+            level, message = STALE, "not diagnosed yet"
+        elif diags and name in diags[0]:
+            level, message = ERROR, "abnormal in the best diagnosis {" + ", ".join(diags[0]) + "}"
+        elif inside:
+            level, message = WARN, f"abnormal in {inside} of {len(diags)} minimal diagnoses"
+        else:
+            level, message = OK, "normal in every minimal diagnosis"
+        if comp.quarantined:
+            level, message = ERROR, f"{message}; quarantined: {comp.quarantined}"
+        return Status(level, f"dxboard: {name}", message, name, (
+            ("diagnoses", f"{inside} of {len(diags)}"), ("repair", comp.repair),
+            ("quarantined", "true" if comp.quarantined else "false"),
+            ("held", "true" if comp.held else "false")))
+
+    def _board(self) -> list[Status]:
+        out = [Status(OK if self.link_up else ERROR, "dxboard board",
+                      "link up" if self.link_up else f"link down: {self.link_reason}", "board",
+                      (("link", "up" if self.link_up else "down"),
+                       ("total_current_a", f"{sum(self.currents_a):.3f}")))]
+        for c in self.channels.channels if self.channels else ():
+            if not self.link_up:
+                level, message = STALE, "board link down"
+            elif c.state in BAD_STATES:
+                level, message = ERROR, c.state
+            else:
+                level, message = OK, c.state
+            out.append(Status(level, f"dxboard board: {c.name}", message, f"channel {c.id}", (
+                ("channel", str(c.id)), ("state", c.state), ("on", str(c.on).lower()),
+                ("current_a", f"{c.current_ma / 1000.0:.3f}"),
+                ("last_event", self._last_event.get(c.id, "none")))))
+        return out

@@ -1,0 +1,100 @@
+"""The Hokuyo driver as a managed (lifecycle) node, repaired by lifecycle transitions after its
+device was power-cycled: deactivate, cleanup, configure, activate, through the standard
+``/hokuyo_node/change_state`` service, verified by its state and its ``/scan``; and the
+planner's ``reconfigure_node`` (the repair domain's action for it), chosen on ROS 2 only, after
+a power switch of the plan (the daemon's end-to-end test runs it: ``test_daemon_ros``)."""
+
+from __future__ import annotations
+
+import asyncio
+import shutil
+import time
+from pathlib import Path
+
+import pytest
+from sensor_msgs.msg import LaserScan
+
+from host.daemon.core import load_robot
+from host.diagnosis.logic import parse_literal
+from host.errors import UserError
+from host.ros.lifecycle import LifecycleClient, LifecycleError
+from host.ros.node import RosNode
+from tests.robot.conftest import TEDUSAR, Robot, serving
+from tests.ros.conftest import Peer, RosNodes
+from tests.wait import wait_until_async
+
+
+async def test_a_lifecycle_repair_brings_the_hokuyo_driver_back_after_a_power_cycle(
+        domain: int, robot: Robot, peer: Peer, ros_nodes: RosNodes) -> None:
+    peer.listen("/scan", LaserScan)
+    robot.board("on", "hokuyo")
+    ros_nodes.start_managed("hokuyo_node")
+    ros = RosNode("dxboard_repair", domain)
+    lifecycle = LifecycleClient(ros, timeout_s=60.0)
+    try:
+        await wait_until_async(lambda: lifecycle.state("hokuyo_node"), 60.0,
+                               "hokuyo_node's lifecycle services")
+        await wait_until_async(
+            lambda: _is(lifecycle, "hokuyo_node", "active"), 60.0, "autostart to active")
+        await wait_until_async(lambda: len(peer.messages("/scan")) >= 40, 60.0, "scans")
+
+        robot.board("cycle", "hokuyo")  # the device reboots: the driver's connection drops
+        await wait_until_async(lambda: _silent(peer, 1.0), 60.0, "/scan silent")
+        quiet_since = len(peer.messages("/scan"))
+        assert await lifecycle.state("hokuyo_node") == "active"  # active, but blind
+        await asyncio.to_thread(lambda: serving(robot, "hokuyo", 60.0).close())
+        assert len(peer.messages("/scan")) == quiet_since  # the device sends; its driver not
+
+        steps = await lifecycle.reconfigure("hokuyo_node")
+        assert steps == ["deactivate", "cleanup", "configure", "activate"]
+        assert await lifecycle.state("hokuyo_node") == "active"
+        n = len(peer.messages("/scan"))
+        await wait_until_async(lambda: len(peer.messages("/scan")) >= n + 40, 60.0,
+                               "scans after the lifecycle repair")
+        assert ros_nodes.procs["hokuyo_node"].poll() is None  # the same process
+
+        robot.board("off", "hokuyo")  # configure cannot connect: the transition fails
+        await wait_until_async(lambda: _silent(peer, 1.0), 60.0, "/scan silent")
+        with pytest.raises(LifecycleError, match="transition configure failed; the node is "
+                                                 "unconfigured"):
+            await lifecycle.reconfigure("hokuyo_node")
+    finally:
+        ros.close()
+
+
+async def _is(lifecycle: LifecycleClient, node: str, state: str) -> bool:
+    return await lifecycle.state(node) == state
+
+
+def _silent(peer: Peer, quiet_s: float) -> bool:
+    with peer.lock:
+        last = max((t for t, k, _ in peer.seen if k == "/scan"), default=0.0)
+    return time.monotonic() - last >= quiet_s
+
+
+
+
+def test_the_planner_reconfigures_a_managed_driver_only_on_ros2_and_after_a_power_switch(
+        tmp_path: Path) -> None:
+    d = tmp_path / "tedusar"
+    shutil.copytree(TEDUSAR, d)
+    seen = [parse_literal(x) for x in ("running(hokuyo_node)", "on(hokuyo)")]
+
+    def plan(middleware: str, bad: set[str]) -> list[str]:
+        robot = load_robot(d, middleware=middleware)
+        return [str(s) for s in robot.planner.plan(bad, seen).steps]
+
+    # a hung Hokuyo: power-cycled; its managed driver lost the device and is reconfigured
+    assert plan("ros2", {"hokuyo"}) == ["power_cycle(hokuyo)", "reconfigure_node(hokuyo_node)"]
+    assert plan("ros2", {"hokuyo", "hokuyo_node"}) == [
+        "power_cycle(hokuyo)", "reconfigure_node(hokuyo_node)"]
+    # a driver found abnormal by itself is restarted (its lifecycle services may hang too)
+    assert plan("ros2", {"hokuyo_node"}) == ["stop_node(hokuyo_node)", "start_node(hokuyo_node)"]
+    # Zenoh has no lifecycle: restarted
+    assert plan("zenoh", {"hokuyo"}) == [
+        "power_cycle(hokuyo)", "stop_node(hokuyo_node)", "start_node(hokuyo_node)"]
+
+    f = d / "system.yaml"
+    f.write_text(f.read_text().replace("lifecycle: true", "lifecycle: yes please"))
+    with pytest.raises(UserError, match="lifecycle 'yes please' is not true or false"):
+        load_robot(d, middleware="ros2")

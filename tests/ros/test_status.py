@@ -1,0 +1,64 @@
+"""The fold of the daemon's events into diagnostic statuses (pure: no rclpy, no clock)."""
+
+from __future__ import annotations
+
+from host.events import (
+    ActionRecord,
+    ActionState,
+    BoardEvent,
+    ChannelReading,
+    ChannelSample,
+    DiagnosisRecord,
+    LinkChange,
+    Note,
+    QuarantineChange,
+    Stamped,
+)
+from host.ros.status import ERROR, OK, STALE, WARN, StatusFold
+
+
+def feed(fold: StatusFold, *events: object) -> None:
+    for e in events:
+        fold.feed(Stamped(0.0, 0.0, e))  # type: ignore[arg-type]
+
+
+def by_name(fold: StatusFold) -> dict[str, tuple[int, str, dict[str, str]]]:
+    return {s.name: (s.level, s.message, dict(s.values)) for s in fold.statuses()}
+
+
+def test_components_follow_the_diagnoses_repairs_and_quarantine() -> None:
+    fold = StatusFold(["hokuyo", "hokuyo_node", "jaguar"])
+    assert by_name(fold)["dxboard: hokuyo"][0] == STALE  # nothing diagnosed yet
+    assert not fold.feed(Stamped(0.0, 0.0, Note("hello")))  # changes nothing
+    feed(fold, DiagnosisRecord.of([["hokuyo"], ["hokuyo_node"]]))
+    s = by_name(fold)
+    assert s["dxboard: hokuyo"][:2] == (ERROR, "abnormal in the best diagnosis {hokuyo}")
+    assert s["dxboard: hokuyo_node"][:2] == (WARN, "abnormal in 1 of 2 minimal diagnoses")
+    assert s["dxboard: jaguar"][:2] == (OK, "normal in every minimal diagnosis")
+    assert s["dxboard: hokuyo"][2]["diagnoses"] == "1 of 2"
+    feed(fold, ActionRecord("a1", "power_cycle", ("hokuyo",), ActionState.STARTED, 1.0))
+    assert by_name(fold)["dxboard: hokuyo"][2]["repair"] == "power_cycle(hokuyo) started"
+    feed(fold, DiagnosisRecord.of([[]]), QuarantineChange("jaguar", True, "3 attempts"))
+    s = by_name(fold)
+    assert s["dxboard: hokuyo"][0] == OK
+    assert s["dxboard: jaguar"][0] == ERROR
+    assert s["dxboard: jaguar"][1].endswith("quarantined: 3 attempts")
+    assert s["dxboard: jaguar"][2]["quarantined"] == "true"
+
+
+def test_board_and_channels() -> None:
+    fold = StatusFold([])
+    assert by_name(fold)["dxboard board"][:2] == (ERROR, "link down: not connected yet")
+    sample = ChannelSample((ChannelReading(0, "sensor_head", True, "on", 250.0),
+                            ChannelReading(3, "hokuyo", False, "tripped", 0.0)))
+    feed(fold, LinkChange(True, "connected"), sample, BoardEvent("trip", 3))
+    s = by_name(fold)
+    assert s["dxboard board"][0] == OK
+    assert s["dxboard board: sensor_head"][0] == OK
+    assert s["dxboard board: hokuyo"][:2] == (ERROR, "tripped")
+    assert s["dxboard board: hokuyo"][2]["last_event"] == "trip"
+    assert fold.currents_a == [0.25, 0.0]
+    feed(fold, LinkChange(False, "timeout"))
+    s = by_name(fold)
+    assert s["dxboard board"][:2] == (ERROR, "link down: timeout")
+    assert s["dxboard board: sensor_head"][0] == STALE
