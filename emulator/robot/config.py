@@ -25,7 +25,7 @@ from emulator.model import EmulatorModel, ModelError
 
 FILE = "robot.yaml"
 SYSTEM_FILE = "system.yaml"
-KINDS = ("base", "lidar", "servo", "imu", "joystick")
+KINDS = ("base", "lidar", "servo", "imu", "joystick", "camera")
 MAX_RATE_HZ = 1000.0
 
 

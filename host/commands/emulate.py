@@ -2,10 +2,10 @@
 
 ``dxboard emulate SYSTEM_DIR [--listen H:P] [--control H:P] [--modbus H:P] [--serial]
 [--can INTERFACE:CHANNEL] [--tug H:P [--tug-switch]] [--runtime cpython|micropython]
-[--scenario FILE] [--seed N] [--key-file FILE] [--robot]`` loads ``SYSTEM_DIR/emulator.yaml``
-(the loads) and ``board.json`` (the board configuration, written to the emulated flash on first
-boot), boots the firmware, starts its front ends and prints one URL a line, then runs on the
-wall clock until SIGINT/SIGTERM::
+[--scenario FILE] [--seed N] [--key-file FILE] [--robot [--world]]`` loads
+``SYSTEM_DIR/emulator.yaml`` (the loads) and ``board.json`` (the board configuration, written to
+the emulated flash on first boot), boots the firmware, starts its front ends and prints one URL a
+line, then runs on the wall clock until SIGINT/SIGTERM::
 
     board: tcp://127.0.0.1:7000
     control: control://127.0.0.1:7001
@@ -14,6 +14,7 @@ wall clock until SIGINT/SIGTERM::
     can: can://virtual/dxboard              (with --can virtual:dxboard)
     tug: tug://127.0.0.1:5000               (with --tug 127.0.0.1:5000)
     device: hokuyo tcp://127.0.0.1:40321    (with --robot: one line per device)
+    world: tcp://127.0.0.1:40400            (with --world: the arena's skill servers)
 
 Port 0 (the default) picks a free port; the URL shows the real one. The actuation key is
 provisioned from ``--key-file`` or ``$DXBOARD_KEY`` (hex), as ``dxboard board`` reads it;
@@ -24,7 +25,10 @@ authentication: read-only unless ``--tug-switch`` is given, and even then it nev
 protected channel off.
 ``--robot`` also serves the virtual robot's devices of ``SYSTEM_DIR/robot.yaml`` (each on a
 free TCP port, powered by its channel: ``emulator.robot``) for the nodes of
-``python -m emulator.robot.node NAME SYSTEM_DIR`` to read.
+``python -m emulator.robot.node NAME SYSTEM_DIR`` to read. ``--world`` also serves the world the
+robot acts in (``SYSTEM_DIR/arena/world.yaml``, a pyrobosim arena: ``emulator.robot.world``):
+its skill servers (navigate, detect, mark, open, level) move and sense only as the board, the
+devices and their drivers allow.
 """
 
 from __future__ import annotations
@@ -66,6 +70,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="actuation key (hex); default $DXBOARD_KEY")
     parser.add_argument("--robot", action="store_true",
                         help="also serve the virtual robot's devices (SYSTEM_DIR/robot.yaml)")
+    parser.add_argument("--world", action="store_true",
+                        help="with --robot: also serve the arena's skill servers "
+                             "(SYSTEM_DIR/arena/world.yaml)")
 
 
 def parse_address(text: str, option: str) -> tuple[str, int]:
@@ -104,6 +111,8 @@ def run(args: argparse.Namespace) -> int:
     tug_at = parse_address(args.tug, "--tug") if args.tug else None
     if args.tug_switch and tug_at is None:
         raise UserError("--tug-switch needs --tug H:P", "add --tug 127.0.0.1:5000, say")
+    if args.world and not args.robot:
+        raise UserError("--world needs --robot", "add --robot: the world moves the robot's devices")
     key = load_key(args.key_file)
     system = Path(args.system_dir)
     if not system.is_dir():
@@ -121,10 +130,15 @@ def run(args: argparse.Namespace) -> int:
             board_config.setdefault("board", {})["key"] = key.hex()
         make_config(board_config, len(model.channels))  # checks it: a ModelError names the field
         device_specs = None
+        arena = None
         if args.robot:
             from emulator.robot.config import load_devices
 
             device_specs = load_devices(system, model)
+        if args.world:
+            from emulator.robot.world.arena import load_arena
+
+            arena = load_arena(system)
     except emodel.ModelError as exc:
         raise UserError(str(exc), "fix the file") from None
     except (OSError, ValueError) as exc:
@@ -181,7 +195,7 @@ def run(args: argparse.Namespace) -> int:
     if device_specs is not None:
         from emulator.robot.server import Robot
 
-        robot = Robot(emu, device_specs)
+        robot = Robot(emu, device_specs, arena=arena)
         try:
             devices = bg.run(robot.start())
         except OSError as exc:
@@ -197,6 +211,8 @@ def run(args: argparse.Namespace) -> int:
     if robot is not None:
         for name, url in devices.items():
             print(f"device: {name} {url}")
+        if robot.world_url is not None:
+            print(f"world: {robot.world_url}")
     sys.stdout.flush()
 
     done = threading.Event()
