@@ -203,6 +203,14 @@ def run(args: argparse.Namespace) -> int:
             bg.stop()
             raise UserError(f"--robot: cannot listen for the devices: {exc}",
                             "free some ports") from None
+    # the handlers first: whoever reads the URLs may send SIGTERM at once
+    done = threading.Event()
+
+    def stop(signum: int, frame: object) -> None:
+        done.set()
+
+    signal.signal(signal.SIGINT, stop)
+    signal.signal(signal.SIGTERM, stop)
     print(f"board: {urls['board']}")
     print(f"control: {bg.url}")
     for name in ("modbus", "serial", "can", "tug"):
@@ -215,13 +223,6 @@ def run(args: argparse.Namespace) -> int:
             print(f"world: {robot.world_url}")
     sys.stdout.flush()
 
-    done = threading.Event()
-
-    def stop(signum: int, frame: object) -> None:
-        done.set()
-
-    signal.signal(signal.SIGINT, stop)
-    signal.signal(signal.SIGTERM, stop)
     while not done.wait(0.5):
         pass
     try:

@@ -24,7 +24,7 @@ def only_diagnosis_commands(monkeypatch: pytest.MonkeyPatch) -> None:
 def test_model_check_ok(capsys: pytest.CaptureFixture[str]) -> None:
     assert cli.main(["model", "check", str(TEDUSAR)]) == 0
     out = capsys.readouterr().out
-    assert "ok (15 components" in out and "2 scenario file(s)" in out
+    assert "ok (17 components" in out and "2 scenario file(s)" in out
 
 
 def test_model_check_reports_problems(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -60,7 +60,7 @@ def test_diagnose_json(capsys: pytest.CaptureFixture[str]) -> None:
     assert data["complete"] is True
     assert [d["bad"] for d in data["diagnoses"]] == [["jaguar"]]
     assert "jaguar_node" in data["diagnoses"][0]["good"]
-    assert len(data["diagnoses"][0]["good"]) == 14
+    assert len(data["diagnoses"][0]["good"]) == 16  # 14 of the paper's model, and the camera
 
 
 def test_diagnose_text_with_cut(capsys: pytest.CaptureFixture[str]) -> None:
