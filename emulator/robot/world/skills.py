@@ -141,9 +141,10 @@ class Detect(Goal):
     work_ms = 2000
 
     def finish(self) -> Progress:
-        seen = self.arena.in_view()
+        place = self.arena.place()  # walls stop the camera: only this room's victims
+        seen = [v for v in self.arena.in_view() if self.arena.room_of(v) == place]
         return Progress(1.0, done=True, success=True,
-                        data={"victims": seen, "place": self.arena.place()})
+                        data={"victims": seen, "place": place})
 
 
 class Mark(Goal):

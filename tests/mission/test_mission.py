@@ -1,0 +1,103 @@
+"""Layer 3, the mission (``host.mission``), over layers 1-2 and the real world: the dispatcher
+refuses an action whose precondition the KB lacks, observations override the KB, a fault-free
+mission completes, a lidar hang repaired by layer 0 is absorbed below the mission layer, and a
+quarantined lidar makes the mission stop with an explanation naming it."""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import AsyncIterator
+
+import pytest
+
+from host.events import Dispatch, KbChange, LayerResult, MissionState, TreeChange
+from host.layers import EXECUTIVE, MISSION
+from host.mission.dispatcher import Outcome
+from host.mission.planner import Scheduled, ground
+from tests.mission.harness import Harness, until
+
+
+@pytest.fixture
+async def h() -> AsyncIterator[Harness]:
+    harness = Harness()
+    await harness.start()
+    yield harness
+    await harness.close()
+
+
+def step(h: Harness, name: str, *args: str) -> Scheduled:
+    prob = h.files.problem
+    g = next(g for g in ground(h.files.domain, prob) if g.name == name and g.args == args)
+    return Scheduled(g, 0.0)
+
+
+async def test_dispatch_with_a_failed_precondition_is_refused_and_nothing_runs(
+        h: Harness) -> None:
+    runner = h.runner()
+    runner.kb.change([(a, True) for a in h.files.problem.init], "init")
+    done = await runner.dispatcher.dispatch(step(h, "navigate", "corridor", "office",
+                                                 "door_office"), 0)
+    assert done.outcome is Outcome.REFUSED and not done.result.success
+    d, = h.of(Dispatch)
+    assert not d.ok and "(at entrance)" in d.kb
+    assert [(c.atom, c.when) for c in d.failed_checks] == [("(at corridor)", "start"),
+                                                            ("(level)", "start")]
+    assert not [e for e in h.of(LayerResult) if e.layer == EXECUTIVE]  # never dispatched
+    assert h.world.arena.place() == "entrance"
+    r, = h.of(LayerResult)
+    assert r.layer == MISSION
+    assert "refused: (at corridor), (level) does not hold" in r.explanation[0].what
+
+
+async def test_an_observation_overrides_the_knowledge_base(h: Harness) -> None:
+    runner = h.runner()
+    runner.kb.change([(a, True) for a in h.files.problem.init], "init")
+    assert ("open", "door_lab") in runner.kb.atoms  # the problem believes it open
+    overridden = await runner.dispatcher.sense(None, "at the start")
+    assert overridden == [(("open", "door_lab"), False)]  # the world shows it closed
+    change = h.of(KbChange)[-1]
+    assert change.source == "sensing" and change.removed == ("(open door_lab)",)
+    assert ("open", "door_lab") not in runner.kb.atoms
+
+
+async def test_a_fault_free_mission_completes_and_marks_every_victim(h: Harness) -> None:
+    outcome = await asyncio.wait_for(h.runner().run(), 240)
+    assert outcome.completed, outcome.detail
+    assert sorted(h.world.arena.marked) == ["victim_1", "victim_2"]
+    states = [e.state for e in h.of(MissionState)]
+    assert states[0] == "started" and states[-1] == "completed" and "planned" in states
+    assert all(e.success for e in h.of(LayerResult))
+    assert all(d.ok for d in h.of(Dispatch))
+
+
+async def test_a_lidar_hang_repaired_by_layer_0_is_handled_below_the_mission(
+        h: Harness) -> None:
+    mission = asyncio.ensure_future(h.runner().run())
+
+    def driving() -> bool:
+        act = h.world.active
+        return act is not None and act.goal.skill == "navigate" and act.goal.fraction() > 0.2
+
+    await until(driving, "the robot driving", 120)
+    h.truth.blocked_by["lidar"] = "no laser scans"  # the Hokuyo hangs
+    h.repairing("hokuyo")
+    await until(lambda: any(e.detail.startswith("holding: layer 0: hokuyo")
+                            for e in h.of(TreeChange)), "the guard holding", 60)
+    await asyncio.sleep(1.0)
+    del h.truth.blocked_by["lidar"]  # power-cycled, its driver restarted
+    h.repaired()
+    outcome = await asyncio.wait_for(mission, 240)
+    assert outcome.completed, outcome.detail
+    assert all(e.success for e in h.of(LayerResult) if e.layer in (EXECUTIVE, MISSION))
+    assert not [e for e in h.of(MissionState) if e.state == "replanning"
+                and "hokuyo" in e.detail]
+
+
+async def test_a_quarantined_lidar_stops_the_mission_naming_it(h: Harness) -> None:
+    h.quarantine("hokuyo")
+    outcome = await asyncio.wait_for(h.runner().run(), 60)
+    assert not outcome.completed and outcome.components == ["hokuyo"]
+    assert "navigate unavailable (hokuyo is quarantined" in outcome.detail
+    last = h.of(MissionState)[-1]
+    assert last.state == "stopped" and last.components == ("hokuyo",)
+    assert h.world.arena.place() == "entrance"

@@ -1,0 +1,71 @@
+"""Layer 1, the skills (``host.skills``): a goal of the real world's skill servers, monitored
+(progress, stall, timeout, resources) and explained with layer 0's words."""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import AsyncIterator
+
+import pytest
+
+from host.layers import SKILLS, Command
+from host.skills import Skill, SkillSpec
+from tests.mission.harness import Harness, until
+
+NAV = SkillSpec("navigate", ("jaguar", "jaguar_node", "hokuyo", "hokuyo_node", "/scan"),
+                timeout_s=120, stall_s=1.0)
+TO_OFFICE = Command(SKILLS, "navigate", ("office",), {"to": "office"})
+
+
+@pytest.fixture
+async def h() -> AsyncIterator[Harness]:
+    harness = Harness()
+    await harness.start()
+    yield harness
+    await harness.close()
+
+
+def skill(h: Harness, flat: bool = False) -> Skill:
+    assert h.client is not None
+    return Skill(NAV, h.client, h.layer0, h.clock, flat=flat)
+
+
+async def test_a_quarantined_component_makes_the_skill_unavailable_without_a_goal(
+        h: Harness) -> None:
+    h.quarantine("hokuyo")
+    result = await skill(h).execute(TO_OFFICE)
+    assert not result.success and result.components() == ["hokuyo"]
+    assert "navigate is unavailable: hokuyo is quarantined" in result.describe()
+    assert h.world.active is None and h.world.arena.place() == "entrance"  # nothing was sent
+
+
+async def test_a_stall_while_layer_0_repairs_is_not_a_failure_and_the_skill_resumes(
+        h: Harness) -> None:
+    h.truth.blocked_by["lidar"] = "no laser scans"
+    h.repairing("hokuyo")
+    task = asyncio.ensure_future(skill(h).execute(TO_OFFICE))
+    await until(lambda: h.world.active is not None, "the goal in the world")
+    await asyncio.sleep(NAV.stall_s * 3)  # three stall periods without progress: held
+    assert not task.done()
+    del h.truth.blocked_by["lidar"]
+    h.repaired()
+    result = await asyncio.wait_for(task, 60)
+    assert result.success and result.data["place"] == "office"
+
+
+async def test_a_flat_skill_aborts_on_the_stall_and_blames_what_layer_0_diagnosed(
+        h: Harness) -> None:
+    h.truth.blocked_by["lidar"] = "no laser scans"
+    h.repairing("hokuyo")
+    result = await asyncio.wait_for(skill(h, flat=True).execute(TO_OFFICE), 60)
+    assert not result.success and result.components() == ["hokuyo"]
+    assert "navigate stalled" in result.describe() and "no laser scans" in result.describe()
+    await until(lambda: h.world.active is None, "the goal canceled in the world")
+
+
+async def test_a_failure_with_every_component_working_is_blamed_on_the_world(
+        h: Harness) -> None:
+    result = await skill(h).execute(Command(SKILLS, "navigate", ("lab",), {"to": "lab"}))
+    assert not result.success and result.components() == []
+    assert "no path from entrance to lab (closed: door_lab)" in result.describe()
+    assert "layer 0 finds every component it needs working" in result.describe()
