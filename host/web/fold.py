@@ -6,8 +6,9 @@
 observed literals (``Observation``), the current diagnoses (``DiagnosisRecord``), the repair
 actions of the recent plans (``ActionRecord``, their times turned into wall time with the
 event's own stamp), the board link (``LinkChange``), quarantines and holds, and the running
-counters that ``/metrics`` exports (``DiagnosisRun``, ``RepairEnded``, changes). Nothing else
-feeds the page: what the page shows is what the stream said, folded.
+counters that ``/metrics`` exports (``DiagnosisRun``, ``RepairEnded``, changes), and the mission
+of paper 001's layers (``host.web.mission``: plan, current action, tree status, KB changes).
+Nothing else feeds the page: what the page shows is what the stream said, folded.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from host.events import (
     RepairEnded,
     Stamped,
 )
+from host.web.mission import MissionFold
 from host.web.status import (
     ChannelStatus,
     DiagnosisStatus,
@@ -46,6 +48,7 @@ class StatusFold:
         self._actions: dict[str, RepairStatus] = {}  # by action id, oldest first
         self._outcomes: Counter[str] = Counter()
         self._observations: dict[str, bool | None] = {}
+        self._mission = MissionFold()
 
     def __call__(self, stamped: Stamped) -> None:
         e = stamped.event
@@ -83,6 +86,8 @@ class StatusFold:
             if e.held:
                 h[e.component] = e.reason
             changes["held"] = h
+        elif (mission := self._mission(e)) is not None:
+            changes["mission"] = mission.to_json()
         else:
             return
         self.source.set(dataclasses.replace(status, updated=stamped.wall, **changes))

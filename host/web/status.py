@@ -88,6 +88,7 @@ class Status:
     # held by a person for maintenance)
     quarantined: Mapping[str, str] = field(default_factory=dict)
     held: Mapping[str, str] = field(default_factory=dict)
+    mission: Mapping[str, Any] = field(default_factory=dict)  # host.web.mission, as JSON
     version: int = 0
 
     def to_json(self) -> dict[str, Any]:
@@ -103,6 +104,7 @@ class Status:
             "repairs": [r.to_json() for r in self.repairs],
             "quarantined": dict(sorted(self.quarantined.items())),
             "held": dict(sorted(self.held.items())),
+            "mission": dict(self.mission),
             "counters": {
                 "observation_changes": self.observation_changes,
                 "diagnosis_runs": self.diagnosis_runs,

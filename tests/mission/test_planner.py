@@ -102,3 +102,11 @@ def test_a_problem_naming_an_unknown_object_is_refused() -> None:
     dom = parse_domain(DOMAIN)
     with pytest.raises(PddlError, match="z is not an object"):
         parse_problem(PROBLEM.replace("(at y)", "(at z)"), dom)
+
+
+def test_the_pddl_library_of_the_repair_planner_cannot_read_the_temporal_domain() -> None:
+    """Why the mission layer has its own reader: ``pddl`` stops at ``:durative-actions``."""
+    import pddl
+
+    with pytest.raises(Exception, match="durative-actions"):
+        pddl.parse_domain(TEDUSAR / "domain.pddl")
