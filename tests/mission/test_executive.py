@@ -5,23 +5,12 @@ failure that goes up with its subtask and explanation, and the tick trace."""
 from __future__ import annotations
 
 import asyncio
-from collections.abc import AsyncIterator
-
-import pytest
 
 from host.events import LayerResult, TreeChange
 from host.executive import Executive
 from host.layers import EXECUTIVE, SKILLS, Command
 from host.skills import Skill
 from tests.mission.harness import Harness, until
-
-
-@pytest.fixture
-async def h() -> AsyncIterator[Harness]:
-    harness = Harness()
-    await harness.start()
-    yield harness
-    await harness.close()
 
 
 def executive(h: Harness, flat: bool = False, max_hold_s: float = 120.0) -> Executive:

@@ -6,23 +6,12 @@ quarantined lidar makes the mission stop with an explanation naming it."""
 from __future__ import annotations
 
 import asyncio
-from collections.abc import AsyncIterator
-
-import pytest
 
 from host.events import Dispatch, KbChange, LayerResult, MissionState, TreeChange
 from host.layers import EXECUTIVE, MISSION
 from host.mission.dispatcher import Outcome
 from host.mission.planner import Scheduled, ground
 from tests.mission.harness import Harness, until
-
-
-@pytest.fixture
-async def h() -> AsyncIterator[Harness]:
-    harness = Harness()
-    await harness.start()
-    yield harness
-    await harness.close()
 
 
 def step(h: Harness, name: str, *args: str) -> Scheduled:

@@ -4,9 +4,6 @@
 from __future__ import annotations
 
 import asyncio
-from collections.abc import AsyncIterator
-
-import pytest
 
 from host.layers import SKILLS, Command
 from host.skills import Skill, SkillSpec
@@ -15,14 +12,6 @@ from tests.mission.harness import Harness, until
 NAV = SkillSpec("navigate", ("jaguar", "jaguar_node", "hokuyo", "hokuyo_node", "/scan"),
                 timeout_s=120, stall_s=1.0)
 TO_OFFICE = Command(SKILLS, "navigate", ("office",), {"to": "office"})
-
-
-@pytest.fixture
-async def h() -> AsyncIterator[Harness]:
-    harness = Harness()
-    await harness.start()
-    yield harness
-    await harness.close()
 
 
 def skill(h: Harness, flat: bool = False) -> Skill:
