@@ -7,7 +7,8 @@ over-all conditions hold once its start effects are applied; its end effects the
 state (the "temporally simple" reading of PDDL 2.1: no plan here needs two actions at once).
 
 ``ground(domain, problem)`` instantiates every action over the typed objects, pruning with the
-static atoms (predicates no action changes, e.g. which door connects which rooms). ``plan``
+static atoms (predicates no action changes, e.g. which door connects which rooms); the static
+conditions stay in the ground action, so that a dispatch checks and records them too. ``plan``
 is A* on states (frozen sets of true atoms; closed world), the cost of an action its duration,
 with an admissible heuristic (goal literals unmet, divided by the most any one action achieves,
 times the shortest duration). ``allowed`` drops ground actions a layer below cannot carry out
@@ -117,8 +118,6 @@ def ground(domain: Domain, problem: Problem, objects: dict[str, str] | None = No
             fixed = [lit for lits in cond.values() for lit in lits if lit[0][0] in static]
             if not holds(init, fixed):
                 continue
-            cond = {k: tuple(lit for lit in v if lit[0][0] not in static)
-                    for k, v in cond.items()}
             out.append(Ground(act, tuple(values), cond, {k: sub(v) for k, v in act.eff.items()}))
     return out
 

@@ -31,6 +31,8 @@ async def test_dispatch_with_a_failed_precondition_is_refused_and_nothing_runs(
     assert not d.ok and "(at entrance)" in d.kb
     assert [(c.atom, c.when) for c in d.failed_checks] == [("(at corridor)", "start"),
                                                             ("(level)", "start")]
+    assert ("(connects door_office corridor office)", "start") in [
+        (c.atom, c.when) for c in d.checks if c.held]  # static conditions are checked too
     assert not [e for e in h.of(LayerResult) if e.layer == EXECUTIVE]  # never dispatched
     assert h.world.arena.place() == "entrance"
     r, = h.of(LayerResult)
@@ -90,3 +92,26 @@ async def test_a_quarantined_lidar_stops_the_mission_naming_it(h: Harness) -> No
     last = h.of(MissionState)[-1]
     assert last.state == "stopped" and last.components == ("hokuyo",)
     assert h.world.arena.place() == "entrance"
+
+
+async def test_every_dispatch_leaves_the_history_plan_execution_diagnosis_replays(
+        h: Harness) -> None:
+    """Issue 16 reads the journal: per dispatch the ground action, the KB before, each checked
+    condition and its outcome, start and end, the result, the observations that overrode the
+    KB, and the KB after — all joined by the dispatch id."""
+    outcome = await asyncio.wait_for(h.runner().run(), 240)
+    assert outcome.completed, outcome.detail
+    results = {e.dispatch_id: e for e in h.of(LayerResult) if e.layer == MISSION}
+    for d in h.of(Dispatch):
+        assert d.ok and all(c.held for c in d.checks)
+        assert d.checks or d.action == "level_laser"  # the one action without conditions
+        r = results[d.dispatch_id]
+        assert (r.command, r.args) == (d.action, d.args) and r.started <= r.finished
+        assert (r.kb and r.kb != d.kb) or d.action == "search_room"
+    search = next(d for d in h.of(Dispatch) if d.action == "search_room"
+                  and d.args == ("office",))
+    sensed = [e for e in h.of(KbChange) if e.dispatch_id == search.dispatch_id
+              and e.source == "sensing"]
+    assert sensed and "(victim-in victim_1 office)" in sensed[0].added
+    assert "(victim-in victim_1 office)" in results[search.dispatch_id].kb
+    assert "(victim-in victim_1 office)" not in search.kb
