@@ -12,7 +12,9 @@ Dispatching & Monitoring):
    behind them;
 4. dispatching the plan step by step (``host.mission.dispatcher``); after a refused or failed
    action, a success the world does not show, or a goal that grew, the KB is as sensed and the
-   mission replans (at most ``max_replans`` times, then it *fails*).
+   mission replans (at most ``max_replans`` times, then it *fails*); an action that failed
+   with no component to blame (the world did not let it work) is not planned again from the
+   same knowledge base, so the plan goes around it or the mission stops, saying so.
 
 It emits ``MissionState`` events (started, planned with its schedule, replanning, completed,
 stopped, failed) and returns a ``MissionOutcome``: completed or not, why, the components blamed.
@@ -79,6 +81,9 @@ class MissionRunner:
         self.emit = emit
         self.mission_id = mission_id
         self.max_replans = max_replans
+        # ground actions that failed, with nothing to blame below, from a KB state: not planned
+        # again from that state (the world will not let them work there)
+        self.failed: dict[tuple[str, tuple[str, ...], frozenset[Atom]], str] = {}
 
     def goal(self) -> tuple[Literal, ...]:
         extra = [g for rule in self.rules for g in rule.goals(self.kb.atoms)]
@@ -91,6 +96,8 @@ class MissionRunner:
                                tuple(components)))
 
     def _allowed(self, g: Ground) -> bool:
+        if (g.name, g.args, self.kb.state()) in self.failed:
+            return False
         return self.layer0 is None or \
             self.layer0.availability(self.needs_of.get(g.name, ())).state is not State.UNAVAILABLE
 
@@ -114,10 +121,14 @@ class MissionRunner:
             self._state("planned", plan_=steps)
             why = ""
             for i, step in enumerate(schedule):
+                before = self.kb.state()
                 done = await self.dispatcher.dispatch(step, i)
                 actions += 1
                 if done.outcome is not Outcome.DONE:
                     why = f"{step.ground}: {done.outcome}: {done.result.describe()}"
+                    if done.outcome is Outcome.FAILED and not done.result.components():
+                        g = step.ground
+                        self.failed[(g.name, g.args, before)] = done.result.describe()
                     break
                 if self.goal() != goal:
                     why = "the goal grew: " + ", ".join(
@@ -142,12 +153,15 @@ class MissionRunner:
                 if avail.state is State.UNAVAILABLE:
                     blocked[name] = (avail.why, avail.components)
         unmet = ", ".join(spell(a) for a, pos in goal if (a in self.kb.atoms) != pos)
-        if blocked and plan(grounds, self.kb.state(), goal) is not None:
+        here = [f"{g}: {why}" for g in grounds
+                if (why := self.failed.get((g.name, g.args, self.kb.state()))) is not None]
+        comps: list[str] = []
+        if (blocked or here) and plan(grounds, self.kb.state(), goal) is not None:
             comps = sorted({c for _, cs in blocked.values() for c in cs})
-            detail = (f"cannot reach {unmet}: " + "; ".join(
-                f"{a} unavailable ({why})" for a, (why, _) in blocked.items()))
+            detail = f"cannot reach {unmet}: " + "; ".join(
+                [f"{a} unavailable ({why})" for a, (why, _) in blocked.items()]
+                + [f"failed from here: {h}" for h in here])
         else:
-            comps = []
             detail = f"no plan reaches {unmet} from what the robot knows"
         result = Result.fail(MISSION, detail, comps)
         self._state("stopped", result.describe(), components=comps)

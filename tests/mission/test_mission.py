@@ -115,3 +115,16 @@ async def test_every_dispatch_leaves_the_history_plan_execution_diagnosis_replay
     assert sensed and "(victim-in victim_1 office)" in sensed[0].added
     assert "(victim-in victim_1 office)" in results[search.dispatch_id].kb
     assert "(victim-in victim_1 office)" not in search.kb
+
+
+async def test_an_action_the_world_defeats_is_not_replanned_and_the_stop_says_why(
+        h: Harness) -> None:
+    h.world.arena.robot.action_execution_options["open"].success_probability = 0.0
+    outcome = await asyncio.wait_for(h.runner().run(), 240)
+    assert not outcome.completed and outcome.components == []
+    assert "cannot reach" in outcome.detail and "(searched lab)" in outcome.detail
+    assert "failed from here: open_door(door_lab, corridor, lab)" in outcome.detail
+    assert "simulated open failure" in outcome.detail
+    opened = [d for d in h.of(Dispatch) if d.action == "open_door"]
+    assert len(opened) == 1  # tried (three times, by the tree), then planned around: no way
+    assert h.of(MissionState)[-1].state == "stopped"
