@@ -17,7 +17,7 @@ power_up, stop_node, start_node).
 the robot's mission (``dxboard mission``) three times, each on a freshly started robot with its
 world: fault-free; with the Hokuyo hanging during the first navigation, the layered robot
 (layer 0 repairs it while the behaviour tree's guard holds the navigation, the mission layer
-never sees a failure); and the same fault on the flat system (the skill aborts on the stall,
+never sees a failure); and the same fault on the flat system (the skill aborts once its inputs stop,
 the action fails, the mission replans). It reports each run's duration, actions, replans, the
 fault and layer 0's repair, the failures that reached the mission layer, and the delays
 against the fault-free run. The journals (``--journal FILE``: FILE for the layered run,

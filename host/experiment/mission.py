@@ -8,7 +8,7 @@ layer 0 has brought the robot up (all-normal), wires layers 1-3 to the daemon
 journal. With ``fault`` the Hokuyo hangs (``dxboard inject hokuyo hang``) ``FAULT_DELAY_S`` into the
 mission's first navigation: layer 0 diagnoses and repairs it while the tree's guard
 holds the navigation. With ``flat`` the mission runs without the layers' hand-over (skills
-that abort on a stall, trees without guards or retries, a planner blind to layer 0), the
+that abort once their inputs stop, trees without guards or retries, a planner blind to layer 0), the
 baseline that aborts the action and replans. ``on_event`` sees every stamped event (the
 terminal's lines).
 
@@ -94,8 +94,9 @@ class _Watch:
             case TreeChange(status="RUNNING") if e.node.startswith("navigate(") \
                     and self.t0 is not None:
                 self.driving.set()
-            case TreeChange(status="RUNNING") if e.detail.startswith("holding"):
-                run.holds += 1
+            case TreeChange(status="RUNNING") if e.detail.startswith("holding") \
+                    and e.previous != "RUNNING":
+                run.holds += 1  # a hold begins
             case PlanRecord() if self.t0 is not None and run.repair_start_s is None:
                 run.repair_start_s = s.mono - self.t0
             case RepairEnded() if run.repair_start_s is not None and run.repair_end_s is None:
@@ -181,6 +182,7 @@ def mission_fault_text(robot: str, fast: bool, runs: dict[str, MissionRun]) -> s
     for name, r in runs.items():
         state = "completed" if r.completed else f"did not complete: {r.detail}"
         delay = ("" if base is None or r.duration_s is None or name == "fault-free"
+                 or not r.completed
                  else f", delay {r.duration_s - base:+.1f} s against fault-free")
         lines.append(f"{name:10} {state}: {r.duration_s or 0:.1f} s, {r.actions} actions, "
                      f"{r.replans} replans{delay}")
@@ -193,6 +195,7 @@ def mission_fault_text(robot: str, fast: bool, runs: dict[str, MissionRun]) -> s
                          f"{', '.join(r.mission_failures) or 'none'}")
         lines.append(f"{'':10} journal: {r.journal} (from entry {r.journal_from})")
     lay, flat = runs["layered"].duration_s, runs["flat"].duration_s
-    if lay is not None and flat is not None:
+    if lay is not None and flat is not None and runs["layered"].completed \
+            and runs["flat"].completed:
         lines += ["", f"the layered robot finished {flat - lay:.1f} s before the flat system"]
     return "\n".join(lines)

@@ -67,6 +67,8 @@ class RobotSession:
     async def __aexit__(self, exc_type: type[BaseException] | None,
                         exc: BaseException | None, tb: TracebackType | None) -> None:
         if self._runner is not None:
+            self.daemon.stop()  # its wait() ends by itself, leaving no task behind
+            await asyncio.wait([self._runner], timeout=5.0)
             self._runner.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await self._runner

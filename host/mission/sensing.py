@@ -9,8 +9,9 @@ by the predicate names of the ``sensing:`` section of ``mission.yaml``::
     sensing: {place: at, doors: open, found: victim-in, seen: seen, marked: marked,
               level: level, victim_type: victim, room_type: room, door_type: door}
 
-``(at R)`` is true for the room the robot is in and false for every other room (in a doorway:
-false for all); ``(open D)`` as each door is; a victim seen becomes an object (type
+``(at R)`` is true for the room the robot is in and false for every other room (in a doorway,
+where a navigation halted half-way leaves it, the nearer of the door's rooms: the world's
+``room``); ``(open D)`` as each door is; a victim seen becomes an object (type
 ``victim_type``) with ``(found V R)`` and ``(seen V)``; ``(marked V)`` for every marker. These
 are observations: where they contradict the KB, they override it (paper 001 §III-C).
 """
@@ -48,8 +49,9 @@ class Sensing:
         new: dict[str, str] = {}
         rooms = [o for o, t in objects.items() if t == self.room_type]
         place = state.get("place")
-        if isinstance(place, str):
-            lits += [((self.place, r), r == place) for r in rooms]
+        room = state.get("room", place)  # in a doorway: the nearer room
+        if isinstance(room, str):
+            lits += [((self.place, r), r == room) for r in rooms]
         doors = state.get("doors")
         if isinstance(doors, dict):
             lits += [((self.doors, d), bool(v)) for d, v in doors.items()

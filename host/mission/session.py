@@ -13,9 +13,11 @@ and wires, as the daemon wires everything, with the daemon's clock and its one e
 
 Every event of the layers goes onto the daemon's stream (``daemon.emit``), so the journal, the
 web page and the terminal show the mission beside the components. ``flat=True`` builds the
-baseline without the layers' hand-over: skills that abort on any stall, trees without guards or
-retries, a planner that does not know what layer 0 has taken away (``dxboard experiment
-mission-fault``). ``run()`` runs the mission once; ``close()`` disconnects.
+baseline without the layers' hand-over: skills that abort once their inputs stop, trees without
+guards or retries, a planner that does not know what layer 0 has taken away (``dxboard experiment
+mission-fault``). ``run()`` runs the mission once; ``close()`` disconnects. ``wire`` builds
+layers 1-3 over any world client, layer-0 view, clock and stream (the tests use it with a world
+in their own process).
 """
 
 from __future__ import annotations

@@ -16,7 +16,9 @@ needs, and its monitor's limits: ``timeout_s`` for the whole goal, ``stall_s`` w
 A stall is not a failure while layer 0 is repairing what the skill needs: the stall clock is
 held then (the executive's guard decides whether to wait, ``host.executive``) — unless the skill
 is ``flat`` (a system without the layers' hand-over, the baseline of ``dxboard experiment
-mission-fault``), whose monitor aborts on any stall. Cancelling the
+mission-fault``), whose monitor aborts as soon as the skill has waited ``FLAT_WAIT_S`` for
+its inputs (a navigation without laser scans), as a navigation stack without a layer below
+that repairs would. Cancelling the
 task (the executive halting the skill) cancels the goal in the world. Time comes from ``clock``.
 """
 
@@ -36,6 +38,7 @@ from host.skills.layer0 import Layer0View, State
 log = logging.getLogger(__name__)
 
 POLL_S = 0.25
+FLAT_WAIT_S = 1.0  # the flat system aborts a skill whose inputs stopped this long
 
 
 @dataclass(frozen=True)
@@ -70,6 +73,7 @@ class Skill:
         t0 = last_t = self.clock()
         progress = 0.0
         waiting: list[str] = []
+        waiting_since: float | None = None
         try:
             while True:
                 msg = await handle.next(POLL_S)
@@ -85,6 +89,13 @@ class Skill:
                     return self._result(msg, waiting)
                 if not self.flat and self.layer0.availability(spec.needs).state is State.HOLD:
                     last_t = now  # layer 0 is on it: not a stall of this skill
+                waiting_since = (None if not waiting else
+                                 now if waiting_since is None else waiting_since)
+                if self.flat and waiting_since is not None and \
+                        now - waiting_since > FLAT_WAIT_S:
+                    await handle.cancel()
+                    return self._failed(f"{spec.name} aborted at {progress:.0%}: its inputs "
+                                        "stopped" + self._waiting(waiting))
                 if now - last_t > spec.stall_s:
                     await handle.cancel()
                     return self._failed(f"{spec.name} stalled for {now - last_t:.0f} s at "

@@ -3,7 +3,8 @@ emulated board, devices, driver nodes and the pyrobosim world in the emulator; t
 the mission's layers in the command), ``--fast`` boot times. A fault-free mission completes;
 M1's lidar hang is repaired by layer 0 while the tree holds, so no failure reaches the mission
 layer, while the flat system's action fails and it replans; the journal holds every layer's
-events; bad input is one line and exit code 2. No assertion is about speed."""
+events and draws as a timeline of all layers; bad input is one line and exit code 2. No
+assertion is about speed."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from typing import Any
 
 from host.events import Dispatch, KbChange, LayerResult, MissionState, PlanRecord, TreeChange
 from host.journal import JournalReader
+from host.report.source import load_timeline
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -66,6 +68,15 @@ def test_m1_the_lidar_hang_is_handled_below_the_mission_layer(tmp_path: Path) ->
                    for e in events)
     assert (tmp_path / "m1-flat.sqlite").is_file()
     assert (tmp_path / "m1-fault-free.sqlite").is_file()
+    # its timeline shows all layers: the mission's three lanes with the hold, and layer 0's
+    # repair of the lidar below them
+    timeline = load_timeline(journal)
+    assert {s.layer for s in timeline.mission} == {1, 2, 3}
+    assert any(s.held and "hokuyo" in s.why for s in timeline.mission)
+    assert any("hokuyo" in a.args for a in timeline.actions)
+    png = tmp_path / "m1.png"
+    assert dxboard("report", str(journal), "-o", str(png), timeout=120).returncode == 0
+    assert png.stat().st_size > 10_000
 
 
 def test_bad_input_is_one_line_and_exit_code_2(tmp_path: Path) -> None:

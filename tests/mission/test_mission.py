@@ -128,3 +128,28 @@ async def test_an_action_the_world_defeats_is_not_replanned_and_the_stop_says_wh
     opened = [d for d in h.of(Dispatch) if d.action == "open_door"]
     assert len(opened) == 1  # tried (three times, by the tree), then planned around: no way
     assert h.of(MissionState)[-1].state == "stopped"
+
+
+async def test_the_flat_system_aborts_the_action_and_replans_from_where_it_stopped(
+        h: Harness) -> None:
+    mission = asyncio.ensure_future(h.runner(flat=True).run())
+
+    def driving() -> bool:
+        act = h.world.active
+        return act is not None and act.goal.skill == "navigate" and act.goal.fraction() > 0.2
+
+    await until(driving, "the robot driving", 120)
+    h.truth.blocked_by["lidar"] = "no laser scans"
+    h.repairing("hokuyo")
+    await until(lambda: any(e.layer == MISSION and not e.success for e in h.of(LayerResult)),
+                "the action failing at the mission layer", 60)
+    del h.truth.blocked_by["lidar"]
+    h.repaired()
+    outcome = await asyncio.wait_for(mission, 240)
+    assert outcome.completed, outcome.detail
+    failed = [e for e in h.of(LayerResult) if e.layer == MISSION and not e.success]
+    assert failed[0].command == "navigate" and "hokuyo" in failed[0].explanation[-1].components
+    assert "its inputs stopped (waiting: no laser scans)" in failed[0].explanation[-1].what
+    assert any(e.state == "replanning" and "hokuyo" in e.detail for e in h.of(MissionState))
+    assert not any(isinstance(e, TreeChange) and e.detail.startswith("holding")
+                   for e in h.events)  # no guards in the flat system

@@ -14,9 +14,9 @@ NAV = SkillSpec("navigate", ("jaguar", "jaguar_node", "hokuyo", "hokuyo_node", "
 TO_OFFICE = Command(SKILLS, "navigate", ("office",), {"to": "office"})
 
 
-def skill(h: Harness, flat: bool = False) -> Skill:
+def skill(h: Harness, flat: bool = False, spec: SkillSpec = NAV) -> Skill:
     assert h.client is not None
-    return Skill(NAV, h.client, h.layer0, h.clock, flat=flat)
+    return Skill(spec, h.client, h.layer0, h.clock, flat=flat)
 
 
 async def test_a_quarantined_component_makes_the_skill_unavailable_without_a_goal(
@@ -42,13 +42,15 @@ async def test_a_stall_while_layer_0_repairs_is_not_a_failure_and_the_skill_resu
     assert result.success and result.data["place"] == "office"
 
 
-async def test_a_flat_skill_aborts_on_the_stall_and_blames_what_layer_0_diagnosed(
+async def test_a_flat_skill_aborts_when_its_inputs_stop_and_blames_what_layer_0_diagnosed(
         h: Harness) -> None:
     h.truth.blocked_by["lidar"] = "no laser scans"
     h.repairing("hokuyo")
-    result = await asyncio.wait_for(skill(h, flat=True).execute(TO_OFFICE), 60)
+    patient = SkillSpec(NAV.name, NAV.needs, timeout_s=120, stall_s=60)
+    result = await asyncio.wait_for(skill(h, True, patient).execute(TO_OFFICE), 60)
     assert not result.success and result.components() == ["hokuyo"]
-    assert "navigate stalled" in result.describe() and "no laser scans" in result.describe()
+    assert "navigate aborted at 0%: its inputs stopped (waiting: no laser scans)" in \
+        result.describe()
     await until(lambda: h.world.active is None, "the goal canceled in the world")
 
 

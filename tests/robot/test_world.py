@@ -222,3 +222,12 @@ def test_one_physical_truth_with_the_board_devices_and_drivers(
     finally:
         w.close()
         nodes.stop_all()
+
+
+def test_in_a_doorway_the_robot_is_in_the_nearer_room(arena_factory: Any) -> None:
+    arena: Arena = arena_factory()
+    arena.set_pose(2.0, 0.0, 0.0)  # in door_entrance, nearer the entrance than the corridor
+    assert arena.place() == "door_entrance" and arena.room() == "entrance"
+    assert arena.state()["room"] == "entrance"
+    arena.set_pose(3.6, 0.0, 0.0)
+    assert arena.place() == "corridor" and arena.room() == "corridor"

@@ -123,6 +123,17 @@ class Arena:
             loc = getattr(loc, "parent", None)
         return None if loc is None else str(loc.name)
 
+    def room(self) -> str | None:
+        """The room the robot is in; in a doorway, the nearer of the door's two rooms (a
+        navigation stopped half-way through a door leaves the robot there)."""
+        place = self.place()
+        if place is None or place in self.rooms():
+            return place
+        x, y, _ = self.pose()
+        rooms = [self.world.get_room_by_name(r) for r in self.door_rooms(place)]
+        near = min(rooms, key=lambda r: (r.centroid[0] - x) ** 2 + (r.centroid[1] - y) ** 2)
+        return str(near.name)
+
     def room_of(self, name: str) -> str | None:
         """The room an object (a victim) lies in."""
         obj = self.world.get_object_by_name(name)
@@ -196,6 +207,7 @@ class Arena:
     def state(self) -> dict[str, Any]:
         x, y, a = self.pose()
         return {"pose": [round(x, 3), round(y, 3), round(a, 3)], "place": self.place(),
+                "room": self.room(),
                 "doors": self.doors(), "marked": list(self.marked)}
 
     def _door(self, door: str) -> Any:

@@ -14,8 +14,9 @@ Protocol (like a ROS action server, one JSON object per line each way, UTF-8, at
                                                    "error": "..." when it could not}
        (an exogenous event: a door opens or closes without the robot; for experiments)
 
-``STATE`` is ``{"t_ms", "pose": [x, y, yaw], "place": room or door, "doors": {name: open},
-"marked": [victim, ...]}``. The robot does one skill at a time: a new goal preempts the active
+``STATE`` is ``{"t_ms", "pose": [x, y, yaw], "place": room or door, "room": the room, or in a
+doorway the nearer of its two rooms, "doors": {name: open}, "marked": [victim, ...]}``.
+The robot does one skill at a time: a new goal preempts the active
 one (its result: "canceled"). A bad line gets ``{"event": "error", "error": "..."}`` and
 changes nothing. Results and feedback go to the connection that sent the goal; a goal whose
 connection closes is canceled. Planning runs in a worker thread, so the emulator's loop (which
