@@ -7,8 +7,10 @@ the daemon's one stream (``host.events``) — never by reading the board or the 
 
 - ``suspects``: the components in any minimal diagnosis of the latest ``DiagnosisRecord``;
 - ``quarantined`` and ``held`` (``QuarantineChange``, ``HoldChange``), with their reasons;
-- ``repairing``: the components a running repair's plans touch (``PlanRecord`` until
-  ``RepairEnded``);
+- ``repairing``: the components a repair action is working on now (an ``ActionRecord`` from
+  its start to its end; all cleared by ``RepairEnded``) — not every component of the plan, so
+  that a skill goes on as soon as what it needs is diagnosed normal and left alone, while the
+  repair carries on elsewhere;
 - ``bad_topics``: topics observed not ``ok`` (``Observation`` of ``ok(/t)`` false).
 
 ``availability(needs)`` is the skills' and guards' question: ``ok``; ``hold`` while layer 0 is
@@ -27,10 +29,11 @@ from enum import StrEnum
 
 from host.atoms import Atom
 from host.events import (
+    ActionRecord,
+    ActionState,
     DiagnosisRecord,
     HoldChange,
     Observation,
-    PlanRecord,
     QuarantineChange,
     RepairEnded,
     Stamped,
@@ -83,9 +86,10 @@ class Layer0View:
                 self.held[event.component] = event.reason or f"held by {event.by}"
             case HoldChange():
                 self.held.pop(event.component, None)
-            case PlanRecord():
-                self.repairing |= set(event.repairs)
-                self.repairing |= {a for s in event.steps for a in s.args}
+            case ActionRecord(state=ActionState.STARTED):
+                self.repairing |= set(event.args)
+            case ActionRecord():
+                self.repairing -= set(event.args)
             case RepairEnded():
                 self.repairing.clear()
             case Observation() if event.literal.startswith("ok("):

@@ -20,6 +20,8 @@ from typing import Any
 from emulator.robot.world.arena import load_arena
 from emulator.robot.world.server import WorldServer
 from host.events import (
+    ActionRecord,
+    ActionState,
     DiagnosisRecord,
     Event,
     PlanRecord,
@@ -85,8 +87,12 @@ class Harness:
     def repairing(self, component: str) -> None:
         self.say(DiagnosisRecord(((component,),)))
         self.say(PlanRecord("p1", (PlanStep("power_cycle", (component,)),), (component,)))
+        self.say(ActionRecord("a1", "power_cycle", (component,), ActionState.STARTED,
+                              self.clock()))
 
     def repaired(self) -> None:
+        self.say(ActionRecord("a1", "power_cycle", (), ActionState.SUCCEEDED, self.clock(),
+                              self.clock()))
         self.say(RepairEnded("repaired", 1))
         self.say(DiagnosisRecord(((),)))
 
