@@ -318,8 +318,9 @@ def _draw_mission(mis: Axes, t: Timeline, mis_h: float, axw: float, sec_per_in: 
                                     edgecolor=HOLD_COLOR, hatch="////", lw=1.0, zorder=4))
             continue
         color = MISSION_OK if s.ok else OUTCOME_COLORS["failed"]
-        mis.add_patch(Rectangle((s.start, yc - 0.07), width, 0.14,
-                                facecolor=color if s.ok else "white", edgecolor=color,
+        mis.add_patch(Rectangle((s.start, yc - 0.07), width, 0.14,  # white edges part steps
+                                facecolor=color if s.ok else "white",
+                                edgecolor="white" if s.ok else color,
                                 hatch=None if s.ok else OUTCOME_HATCH["failed"], lw=0.8,
                                 zorder=3))
         if s.layer == LANES[0]:
