@@ -14,7 +14,8 @@ terminal's lines).
 
 ``MissionRun`` says how it went: completed or not and why, its duration from the first
 dispatch to the end, the actions dispatched, replans, when the fault came and when layer 0's
-repair began and ended (seconds since the mission started), the failures that reached the
+repair of the lidar began and ended (seconds since the mission started; a busy machine may
+make layer 0 repair other things too, which the journal shows), the failures that reached the
 mission layer, and the journal's range.
 """
 
@@ -97,8 +98,9 @@ class _Watch:
             case TreeChange(status="RUNNING") if e.detail.startswith("holding") \
                     and e.previous != "RUNNING":
                 run.holds += 1  # a hold begins
-            case PlanRecord() if self.t0 is not None and run.repair_start_s is None:
-                run.repair_start_s = s.mono - self.t0
+            case PlanRecord() if self.t0 is not None and run.repair_start_s is None \
+                    and FAULT_DEVICE in {a for st in e.steps for a in st.args}:
+                run.repair_start_s = s.mono - self.t0  # layer 0 repairs the lidar
             case RepairEnded() if run.repair_start_s is not None and run.repair_end_s is None:
                 run.repair_end_s = s.mono - (self.t0 or s.mono)
             case LayerResult(layer=layer, success=False) if layer == MISSION:
