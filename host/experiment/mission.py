@@ -199,5 +199,7 @@ def mission_fault_text(robot: str, fast: bool, runs: dict[str, MissionRun]) -> s
     lay, flat = runs["layered"].duration_s, runs["flat"].duration_s
     if lay is not None and flat is not None and runs["layered"].completed \
             and runs["flat"].completed:
-        lines += ["", f"the layered robot finished {flat - lay:.1f} s before the flat system"]
+        when = "before" if flat >= lay else "after"
+        lines += ["", f"the layered robot finished {abs(flat - lay):.1f} s {when} the flat "
+                      "system"]
     return "\n".join(lines)

@@ -90,3 +90,22 @@ def test_bad_input_is_one_line_and_exit_code_2(tmp_path: Path) -> None:
     out = dxboard("mission", str(robot), timeout=60)
     assert out.returncode == 2 and "max_hold_s must be a number above 0" in out.stderr
     assert len(out.stderr.strip().splitlines()) == 1
+
+
+def test_the_m1_text_compares_only_completed_runs_and_says_which_was_first() -> None:
+    from host.experiment.mission import MissionRun, mission_fault_text
+
+    runs = {"fault-free": MissionRun("fault-free", True, duration_s=40.0),
+            "layered": MissionRun("layered", True, duration_s=55.0, fault_s=2.0,
+                                  repair_start_s=3.0, repair_end_s=10.0, holds=2),
+            "flat": MissionRun("flat", True, duration_s=45.0, fault_s=2.0,
+                               mission_failures=["navigate(a, b, d)"])}
+    text = mission_fault_text("tedusar", True, runs)
+    assert "delay +15.0 s against fault-free" in text and "delay +5.0 s" in text
+    assert "layer 0 repaired from 3.0 s to 10.0 s; guard holds: 2" in text
+    assert "failures at the mission layer: navigate(a, b, d)" in text
+    assert text.endswith("the layered robot finished 10.0 s after the flat system")
+    runs["flat"] = MissionRun("flat", False, "no plan reaches (searched lab)", duration_s=4.0)
+    text = mission_fault_text("tedusar", True, runs)
+    assert "flat       did not complete: no plan reaches (searched lab)" in text
+    assert "-36" not in text and "finished" not in text.splitlines()[-1]
