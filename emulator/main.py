@@ -40,7 +40,7 @@ from firmware.hal.storage import FileStorage
 log = logging.getLogger(__name__)
 
 STOP_TIMEOUT_S = 5.0
-URL_ORDER = ("modbus", "serial", "can", "tug")
+URL_ORDER = ("modbus", "serial", "can", "tug")  # then the devices, then "world"
 
 
 class StartError(InputError):
@@ -69,6 +69,7 @@ class Options:
     seed: int | None = None
     key: bytes | None = None
     robot: bool = False
+    world: bool = False  # with robot: the arena's skill servers (emulator.robot.world)
     flash: Path | None = None
 
 
@@ -115,7 +116,7 @@ def load_board_config(system: Path, n: int, key: bytes | None) -> dict[str, Any]
     return board_config
 
 
-def _load(opts: Options) -> tuple[emodel.EmulatorModel, dict[str, Any], Any, Any]:
+def _load(opts: Options) -> tuple[emodel.EmulatorModel, dict[str, Any], Any, Any, Any]:
     system = opts.system_dir
     if not system.is_dir():
         raise StartError(f"{system}: not a directory",
@@ -135,13 +136,21 @@ def _load(opts: Options) -> tuple[emodel.EmulatorModel, dict[str, Any], Any, Any
             devices = load_devices(system, model)
         except emodel.EmulatorModelError as exc:
             raise StartError(str(exc), "fix the file") from None
+    arena = None
+    if opts.world:
+        from emulator.robot.world.arena import load_arena
+
+        try:
+            arena = load_arena(system)
+        except emodel.EmulatorModelError as exc:
+            raise StartError(str(exc), "fix the file") from None
     scen = None
     if opts.scenario is not None:
         try:
             scen = escenario.load(opts.scenario)
         except escenario.ScenarioError as exc:
             raise StartError(str(exc), "fix the scenario file") from None
-    return model, board_config, devices, scen
+    return model, board_config, devices, scen, arena
 
 
 def _storage(opts: Options) -> Any:
@@ -157,7 +166,7 @@ def _storage(opts: Options) -> Any:
 
 def start(opts: Options, stack: contextlib.ExitStack) -> dict[str, str]:
     """Boot the emulator and its front ends; every clean-up goes on ``stack``. The URLs."""
-    model, board_config, devices, scen = _load(opts)
+    model, board_config, devices, scen, arena = _load(opts)
     storage = _storage(opts)
     mpy: Any = None
     factory: Callable[[Any], Any] | None = None
@@ -204,11 +213,13 @@ def start(opts: Options, stack: contextlib.ExitStack) -> dict[str, str]:
     if devices is not None:
         from emulator.robot.server import Robot
 
-        robot = Robot(emu, devices)
+        robot = Robot(emu, devices, arena=arena)
         stack.callback(lambda: bg.run(robot.stop(), timeout=STOP_TIMEOUT_S))
         try:
             for name, url in bg.run(robot.start()).items():
                 urls[f"device {name}"] = url
+            if robot.world_url is not None:
+                urls["world"] = robot.world_url
         except OSError as exc:
             raise StartError(f"--robot: cannot listen for the devices: {exc}",
                              "free some ports") from None
@@ -221,6 +232,8 @@ def url_lines(urls: dict[str, str]) -> list[str]:
     lines += [f"{name}: {urls[name]}" for name in URL_ORDER if name in urls]
     lines += [f"device: {name[7:]} {url}" for name, url in urls.items()
               if name.startswith("device ")]
+    if "world" in urls:
+        lines.append(f"world: {urls['world']}")
     return lines
 
 

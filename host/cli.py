@@ -44,6 +44,7 @@ COMMANDS: dict[str, str] = {
     "flash": "host.commands.flash",
     "emulate": "host.commands.emulate",
     "experiment": "host.commands.experiment",
+    "mission": "host.commands.mission",
 }
 
 

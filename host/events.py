@@ -15,7 +15,18 @@ connecting); ``LinkChange`` the board link going up or down; ``ChannelSample`` t
 states and currents a few times a second (for the page; not journaled); ``Telemetry`` a
 downsampled summary of the channel currents over one period (never raw samples; stored as
 compact ``[channel, samples, mean, min, max, last]`` rows in mA); ``RunStarted`` the start of
-one daemon run (its id numbers the journal's runs); ``Note`` free text. Every event has a
+one daemon run (its id numbers the journal's runs); ``Note`` free text.
+
+The mission's layers (paper 001; ``host.layers``) add theirs, enough to replay the history of a
+mission (``host.plandiag`` reads it): ``MissionState`` the mission started, planned (its temporal
+plan, each step with its start and duration), replanned, completed, failed or stopped, and why;
+``Dispatch`` one mission action about to be dispatched, with the knowledge base before it, each
+start and over-all condition checked against it, and whether it was dispatched or refused;
+``TreeChange`` a node of the action's behaviour tree changing status (its tick trace);
+``LayerResult`` the result ⟨s, Δ⟩ of a command at any layer above 0 (a skill, a tree, a mission
+action with the knowledge base after it), with its start and end; ``KbChange`` atoms added to or
+removed from the knowledge base, by an action's start or end effects, by sensing (an observation
+overriding the knowledge base) or by the goal reasoner. Every event has a
 ``kind`` and serialises to plain JSON (``to_json``) and back (``event_from_json``), so the
 journal file can be read by anything that reads SQLite + JSON and a history can be replayed
 entry by entry; ``describe()`` is its one line for a person.
@@ -28,6 +39,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any, ClassVar
+
+from host.layers import Cause
 
 JSON = dict[str, Any]
 
@@ -45,6 +58,11 @@ class Kind(StrEnum):
     QUARANTINE = "quarantine"
     HOLD = "hold"
     RUN = "run"
+    MISSION = "mission"
+    DISPATCH = "dispatch"
+    TREE = "tree"
+    RESULT = "result"
+    KB = "kb"
     # not journaled (for live readers only)
     DIAGNOSIS_RUN = "diagnosis_run"
     CHANNELS = "channels"
@@ -343,9 +361,171 @@ class ChannelSample:
         return cls(tuple(ChannelReading(**c) for c in data["channels"]))
 
 
+@dataclass(frozen=True)
+class MissionStep:
+    """One step of a temporal plan: ⟨a, t_a, d_a⟩ (start and duration in plan seconds)."""
+
+    action: str
+    args: tuple[str, ...]
+    start: float
+    duration: float
+
+    def __str__(self) -> str:
+        return f"{self.action}({', '.join(self.args)})"
+
+
+@dataclass(frozen=True)
+class MissionState:
+    """The mission's state: ``started``, ``planned`` (``plan``), ``completed``, ``failed`` or
+    ``stopped`` (``detail`` says why, naming the components to blame)."""
+
+    mission_id: str
+    state: str
+    detail: str = ""
+    goal: tuple[str, ...] = ()
+    plan: tuple[MissionStep, ...] = ()
+    components: tuple[str, ...] = ()
+    kind: ClassVar[Kind] = Kind.MISSION
+
+    def to_json(self) -> JSON:
+        return {"mission_id": self.mission_id, "state": self.state, "detail": self.detail,
+                "goal": list(self.goal), "components": list(self.components),
+                "plan": [{"action": s.action, "args": list(s.args), "start": s.start,
+                          "duration": s.duration} for s in self.plan]}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> MissionState:
+        return cls(str(data["mission_id"]), str(data["state"]), str(data.get("detail", "")),
+                   tuple(str(g) for g in data.get("goal", ())),
+                   tuple(MissionStep(str(s["action"]), tuple(str(a) for a in s["args"]),
+                                     float(s["start"]), float(s["duration"]))
+                         for s in data.get("plan", ())),
+                   tuple(str(c) for c in data.get("components", ())))
+
+
+@dataclass(frozen=True)
+class ConditionCheck:
+    """One condition of an action checked against the knowledge base: ``atom`` expected
+    ``expected`` (False: a negative condition) ``when`` (``start``, ``over all``, ``end``)."""
+
+    atom: str
+    when: str
+    expected: bool
+    held: bool
+
+
+@dataclass(frozen=True)
+class Dispatch:
+    """A mission action about to run: the KB before it (sorted atoms), its start and over-all
+    conditions checked against that KB, and whether it was dispatched (``ok``) or refused."""
+
+    dispatch_id: str
+    mission_id: str
+    step: int
+    action: str
+    args: tuple[str, ...]
+    kb: tuple[str, ...]
+    checks: tuple[ConditionCheck, ...]
+    ok: bool
+    at: float
+    kind: ClassVar[Kind] = Kind.DISPATCH
+
+    def to_json(self) -> JSON:
+        return {"dispatch_id": self.dispatch_id, "mission_id": self.mission_id,
+                "step": self.step, "action": self.action, "args": list(self.args),
+                "kb": list(self.kb), "ok": self.ok, "at": self.at,
+                "checks": [dataclasses.asdict(c) for c in self.checks]}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> Dispatch:
+        return cls(str(data["dispatch_id"]), str(data["mission_id"]), int(data["step"]),
+                   str(data["action"]), tuple(str(a) for a in data["args"]),
+                   tuple(str(a) for a in data["kb"]),
+                   tuple(ConditionCheck(str(c["atom"]), str(c["when"]), bool(c["expected"]),
+                                        bool(c["held"])) for c in data["checks"]),
+                   bool(data["ok"]), float(data["at"]))
+
+    @property
+    def failed_checks(self) -> tuple[ConditionCheck, ...]:
+        return tuple(c for c in self.checks if not c.held)
+
+
+@dataclass(frozen=True)
+class TreeChange(_Plain):
+    """A node of the behaviour tree refining dispatch ``dispatch_id`` changed status, at tick
+    ``tick`` (its trace); ``detail`` is what the node said (a guard's reason to hold)."""
+
+    dispatch_id: str
+    node: str
+    status: str
+    previous: str = ""
+    tick: int = 0
+    detail: str = ""
+    kind: ClassVar[Kind] = Kind.TREE
+
+
+@dataclass(frozen=True)
+class LayerResult:
+    """The result ⟨s, Δ⟩ of ``command(args)`` at ``layer`` (1 skill, 2 tree, 3 mission action),
+    from ``started`` to ``finished`` (the daemon's clock); for a mission action ``kb`` is the
+    knowledge base after it, effects applied and observations sensed."""
+
+    layer: int
+    command: str
+    args: tuple[str, ...]
+    success: bool
+    explanation: tuple[Cause, ...]
+    started: float
+    finished: float
+    dispatch_id: str = ""
+    kb: tuple[str, ...] = ()
+    data: Mapping[str, Any] = field(default_factory=dict)
+    kind: ClassVar[Kind] = Kind.RESULT
+
+    def to_json(self) -> JSON:
+        return {"layer": self.layer, "command": self.command, "args": list(self.args),
+                "success": self.success, "explanation": [c.to_json() for c in self.explanation],
+                "started": self.started, "finished": self.finished,
+                "dispatch_id": self.dispatch_id, "kb": list(self.kb), "data": dict(self.data)}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> LayerResult:
+        return cls(int(data["layer"]), str(data["command"]), tuple(str(a) for a in data["args"]),
+                   bool(data["success"]),
+                   tuple(Cause.from_json(c) for c in data.get("explanation", ())),
+                   float(data["started"]), float(data["finished"]),
+                   str(data.get("dispatch_id", "")), tuple(str(a) for a in data.get("kb", ())),
+                   dict(data.get("data", {})))
+
+
+@dataclass(frozen=True)
+class KbChange:
+    """Atoms added to and removed from the knowledge base; ``source`` is ``effect`` (an
+    action's start or end effects), ``sensing`` (an observation overrode the KB), ``goal`` or
+    ``init``; ``cause`` says which (``end of navigate(corridor, office, door_office)``)."""
+
+    added: tuple[str, ...]
+    removed: tuple[str, ...]
+    source: str
+    cause: str = ""
+    dispatch_id: str = ""
+    kind: ClassVar[Kind] = Kind.KB
+
+    def to_json(self) -> JSON:
+        return {"added": list(self.added), "removed": list(self.removed), "source": self.source,
+                "cause": self.cause, "dispatch_id": self.dispatch_id}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> KbChange:
+        return cls(tuple(str(a) for a in data["added"]), tuple(str(a) for a in data["removed"]),
+                   str(data["source"]), str(data.get("cause", "")),
+                   str(data.get("dispatch_id", "")))
+
+
 Event = (Observation | DiagnosisRecord | PlanRecord | ActionRecord | BoardEvent | Telemetry
          | Note | LinkChange | RepairEnded | QuarantineChange | HoldChange | RunStarted
-         | DiagnosisRun | ChannelSample)
+         | DiagnosisRun | ChannelSample | MissionState | Dispatch | TreeChange | LayerResult
+         | KbChange)
 Payload = Event  # what the journal stores: the journaled events
 
 
@@ -375,6 +555,11 @@ _DECODERS: dict[Kind, Any] = {
     Kind.RUN: RunStarted.from_json,
     Kind.DIAGNOSIS_RUN: DiagnosisRun.from_json,
     Kind.CHANNELS: ChannelSample.from_json,
+    Kind.MISSION: MissionState.from_json,
+    Kind.DISPATCH: Dispatch.from_json,
+    Kind.TREE: TreeChange.from_json,
+    Kind.RESULT: LayerResult.from_json,
+    Kind.KB: KbChange.from_json,
 }
 
 
@@ -456,4 +641,27 @@ def describe(event: Event) -> str:
             return f"diagnosed in {event.elapsed_s * 1000:.1f} ms [{event.trigger}]"
         case ChannelSample():
             return ", ".join(f"{c.name} {c.state} {c.current_ma:.0f} mA" for c in event.channels)
+        case MissionState():
+            text = f"mission {event.mission_id} {event.state}"
+            if event.plan:
+                text += ": " + "; ".join(f"{s.start:g}s {s}" for s in event.plan)
+            return text + (f" ({event.detail})" if event.detail else "")
+        case Dispatch():
+            call = f"{event.action}({', '.join(event.args)})"
+            if event.ok:
+                return f"dispatch {event.dispatch_id}: {call}"
+            bad = ", ".join(("" if c.expected else "not ") + c.atom for c in event.failed_checks)
+            return f"dispatch {event.dispatch_id}: {call} refused: {bad} does not hold"
+        case TreeChange():
+            why = f": {event.detail}" if event.detail else ""
+            return f"tree {event.dispatch_id}: {event.node} {event.status}{why}"
+        case LayerResult():
+            call = f"{event.command}({', '.join(event.args)})"
+            how = "succeeded" if event.success else "failed: " + "; because ".join(
+                str(c) for c in event.explanation)
+            return f"layer {event.layer} {call} {how} after {event.finished - event.started:.1f} s"
+        case KbChange():
+            parts = [f"+{a}" for a in event.added] + [f"-{a}" for a in event.removed]
+            why = f" ({event.cause})" if event.cause else ""
+            return f"kb {event.source}: {' '.join(parts) or 'no change'}{why}"
     raise TypeError(f"not an event: {event!r}")

@@ -26,7 +26,7 @@ from emulator.model import EmulatorModel, EmulatorModelError
 
 FILE = "robot.yaml"
 SYSTEM_FILE = "system.yaml"
-KINDS = ("base", "lidar", "servo", "imu", "joystick")
+KINDS = ("base", "lidar", "servo", "imu", "joystick", "camera")
 MIDDLEWARES = ("zenoh", "ros2")  # observers: source: kind: of system.yaml ("memory" is zenoh)
 MAX_RATE_HZ = 1000.0
 

@@ -14,6 +14,8 @@ says ``_mm``::
               <- {"cmd": "angle", "roll": rad, "pitch": rad}                (clamped to +-0.5)
     imu       -> {"seq", "t_ms", "roll", "pitch", "yaw", "yaw_rate", "acc": [x, y, z]}
     joystick  -> {"seq", "t_ms", "axes": [turn, forward], "buttons": [0, 0]}
+    camera    -> {"seq", "t_ms", "width", "height", "min_c", "max_c"}          (a thermal image's
+                                                                             size and range)
 
 A bad command line gets ``{"error": "..."}`` back and changes nothing; a device that is booting
 or hung ignores commands silently (it is not listening). Power, boot and hang are not decided
@@ -176,6 +178,7 @@ class Servo(Device):
         self.angles = [0.0, 0.0]
         self.target = [0.0, 0.0]
         self.t_ms = 0
+        self.cmd_ms = -COMMAND_HOLD_MS  # the last command (the world's leveling checks it)
 
     def reset(self, now_ms: int) -> None:
         super().reset(now_ms)
@@ -200,6 +203,7 @@ class Servo(Device):
         roll, pitch = _number(msg, "roll"), _number(msg, "pitch")
         self._move(now_ms)
         self.target = [_clamp(roll, SERVO_LIMIT), _clamp(pitch, SERVO_LIMIT)]
+        self.cmd_ms = now_ms
 
 
 class Imu(Device):
@@ -228,8 +232,19 @@ class Joystick(Device):
         return {"axes": [round(turn, 3), round(forward, 3)], "buttons": [0, 0]}
 
 
+class Camera(Device):
+    """A thermal camera (FLIR PathFindIR class, 160x120): the image's temperature range; what
+    it shows of the arena is the world's business (``emulator.robot.world``)."""
+
+    def data(self, now_ms: int) -> dict[str, Any]:
+        return {"width": 160, "height": 120,
+                "min_c": round(18.0 + self.rng.gauss(0, 0.3), 2),
+                "max_c": round(24.0 + self.rng.gauss(0, 0.3), 2)}
+
+
 CLASSES: dict[str, type[Device]] = {
     "base": Base, "lidar": Lidar, "servo": Servo, "imu": Imu, "joystick": Joystick,
+    "camera": Camera,
 }
 
 

@@ -35,11 +35,15 @@ import json
 import logging
 import random
 import socket
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from emulator.robot import devices as D
 from emulator.robot.config import DeviceSpec
 from emulator.sim import Emulator
+
+if TYPE_CHECKING:
+    from emulator.robot.world.arena import Arena
+    from emulator.robot.world.server import WorldServer
 
 log = logging.getLogger(__name__)
 
@@ -212,14 +216,18 @@ class DeviceServer:
 
 
 class Robot:
-    """Every device of the robot, served while the emulator runs."""
+    """Every device of the robot, served while the emulator runs; with an ``arena``, also the
+    world's skill servers (``emulator.robot.world``), bound by one truth to these devices."""
 
-    def __init__(self, emu: Emulator, specs: list[DeviceSpec], host: str = "127.0.0.1") -> None:
+    def __init__(self, emu: Emulator, specs: list[DeviceSpec], host: str = "127.0.0.1",
+                 arena: Arena | None = None) -> None:
         self.emu = emu
         self.world = D.World()
         seed = emu.model.board.seed
         self.servers = [DeviceServer(D.make(s, self.world, random.Random(f"{seed}:{s.name}")),
                                      emu, host) for s in specs]
+        self.arena = arena
+        self.world_server: WorldServer | None = None
         self._task: asyncio.Task[None] | None = None
 
     async def start(self) -> dict[str, str]:
@@ -230,7 +238,18 @@ class Robot:
         for s in self.servers:
             await s.update()
         self._task = asyncio.get_running_loop().create_task(self._run())
+        if self.arena is not None:
+            from emulator.robot.world.server import WorldServer
+            from emulator.robot.world.truth import BoardTruth
+
+            truth = BoardTruth({s.name: s for s in self.servers}, lambda: self.emu.now)
+            self.world_server = WorldServer(self.arena, truth, lambda: self.emu.now)
+            await self.world_server.start()
         return {s.name: s.url for s in self.servers}
+
+    @property
+    def world_url(self) -> str | None:
+        return None if self.world_server is None else self.world_server.url
 
     async def _run(self) -> None:
         while True:
@@ -239,6 +258,9 @@ class Robot:
             await asyncio.sleep(POLL_S)  # frames come due on the emulator's clock
 
     async def stop(self) -> None:
+        if self.world_server is not None:
+            await self.world_server.stop()
+            self.world_server = None
         if self._task is not None:
             self._task.cancel()
             with contextlib.suppress(asyncio.CancelledError):

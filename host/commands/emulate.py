@@ -2,7 +2,7 @@
 
 ``dxboard emulate SYSTEM_DIR [--listen H:P] [--control H:P] [--modbus H:P] [--serial]
 [--can INTERFACE:CHANNEL] [--tug H:P [--tug-switch]] [--runtime cpython|micropython]
-[--scenario FILE] [--seed N] [--key-file FILE] [--robot] [--flash DIR]`` loads
+[--scenario FILE] [--seed N] [--key-file FILE] [--robot [--world]] [--flash DIR]`` loads
 ``SYSTEM_DIR/emulator.yaml`` (the loads) and ``board.json`` (the board configuration, written
 to the emulated flash on first boot; ``--flash DIR`` keeps that flash in a directory, so that
 ``config save`` survives a restart), boots the firmware, starts its front ends and prints one
@@ -15,6 +15,7 @@ URL a line, then runs on the wall clock until SIGINT/SIGTERM::
     can: can://virtual/dxboard              (with --can virtual:dxboard)
     tug: tug://127.0.0.1:5000               (with --tug 127.0.0.1:5000)
     device: hokuyo tcp://127.0.0.1:40321    (with --robot: one line per device)
+    world: tcp://127.0.0.1:40400            (with --world: the arena's skill servers)
 
 Port 0 (the default) picks a free port; the URL shows the real one. The actuation key is
 provisioned from ``--key-file`` or ``$DXBOARD_KEY`` (hex), as ``dxboard board`` reads it;
@@ -27,7 +28,10 @@ authentication: read-only unless ``--tug-switch`` is given, and even then it nev
 protected channel off.
 ``--robot`` also serves the virtual robot's devices of ``SYSTEM_DIR/robot.yaml`` (each on a
 free TCP port, powered by its channel: ``emulator.robot``) for the nodes of
-``python -m emulator.robot.node NAME SYSTEM_DIR`` to read.
+``python -m emulator.robot.node NAME SYSTEM_DIR`` to read. ``--world`` also serves the world the
+robot acts in (``SYSTEM_DIR/arena/world.yaml``, a pyrobosim arena: ``emulator.robot.world``):
+its skill servers (navigate, detect, mark, open, level) move and sense only as the board, the
+devices and their drivers allow.
 
 This module only reads the command line and the key; the emulator itself is
 ``emulator.main.run``, which installs its SIGTERM/SIGINT handlers before it prints anything.
@@ -74,6 +78,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--flash", metavar="DIR",
                         help="keep the board's flash (saved configuration, boot record) in "
                              "this directory, so that it survives a restart; default: memory")
+    parser.add_argument("--world", action="store_true",
+                        help="with --robot: also serve the arena's skill servers "
+                             "(SYSTEM_DIR/arena/world.yaml)")
 
 
 def parse_address(text: str, option: str) -> tuple[str, int]:
@@ -100,6 +107,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.tug_switch and not args.tug:
         raise UserError("--tug-switch needs --tug H:P", "add --tug 127.0.0.1:5000, say")
+    if args.world and not args.robot:
+        raise UserError("--world needs --robot", "add --robot: the world moves the robot's devices")
     opts = Options(
         system_dir=Path(args.system_dir),
         listen=parse_address(args.listen, "--listen"),
@@ -114,6 +123,7 @@ def run(args: argparse.Namespace) -> int:
         seed=args.seed,
         key=load_key(args.key_file),
         robot=args.robot,
+        world=args.world,
         flash=Path(args.flash) if args.flash else None,
     )
     try:

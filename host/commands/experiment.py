@@ -4,13 +4,25 @@
 and the PC; the daemon diagnoses, plans and brings it up by itself. It runs twice, each time
 on a freshly started robot: independent steps in parallel (the daemon's way), then one step
 at a time. It reports the diagnosis the first plan was made on (the paper: all 11 components
-abnormal), the plan, each action's start and end, and the time to all-normal from the
-daemon's start and from the first action, next to the paper's 8.1 s -> 38.3 s = 30.2 s.
+abnormal; the robot's model adds the thermal camera and its driver, reported apart), the plan,
+each action's start and end, and the time to all-normal from the daemon's start and from the
+first action, next to the paper's 8.1 s -> 38.3 s = 30.2 s.
 
 ``dxboard experiment device-shutdown SYSTEM_DIR`` brings the robot up, then switches the base
 (jaguar) off as an operator with the key would, and reports detection, diagnosis, plan(s),
 each action and the time to all-normal again, counted from the switch-off (the paper's repair:
 power_up, stop_node, start_node).
+
+``dxboard experiment mission-fault SYSTEM_DIR`` is M1 of the missions (MISSIONS.md, paper 001):
+the robot's mission (``dxboard mission``) three times, each on a freshly started robot with its
+world: fault-free; with the Hokuyo hanging during the first navigation, the layered robot
+(layer 0 repairs it while the behaviour tree's guard holds the navigation, the mission layer
+never sees a failure); and the same fault on the flat system (the skill aborts once its inputs stop,
+the action fails, the mission replans). It reports each run's duration, actions, replans, the
+fault and layer 0's repair, the failures that reached the mission layer, and the delays
+against the fault-free run. The journals (``--journal FILE``: FILE for the layered run,
+FILE-fault-free.sqlite and FILE-flat.sqlite beside it) draw as timelines with ``dxboard
+report``.
 
 The daemon runs in this process on free ports, without a web page; the emulated board and
 devices run as a child process and the nodes as processes, as with ``dxboard run --emulate``.
@@ -32,12 +44,14 @@ import argparse
 from pathlib import Path
 
 NAME = "experiment"
-HELP = "run paper 000's power-up or device shut-down experiment on the virtual robot"
+HELP = ("run paper 000's power-up or device shut-down experiment, or the mission-fault one "
+        "(M1), on the virtual robot")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("which", choices=("power-up", "device-shutdown"),
-                        help="the experiment: power-up (§VI-A) or device-shutdown (§VI-B)")
+    parser.add_argument("which", choices=("power-up", "device-shutdown", "mission-fault"),
+                        help="the experiment: power-up (§VI-A), device-shutdown (§VI-B) or "
+                             "mission-fault (MISSIONS.md's M1)")
     parser.add_argument("system_dir", metavar="SYSTEM_DIR", help="robot directory (models/NAME)")
     parser.add_argument("--journal", metavar="FILE",
                         help="journal file (default: a temporary one, removed afterwards)")
@@ -55,7 +69,6 @@ def run(args: argparse.Namespace) -> int:
     import json
     import tempfile
 
-    from host.errors import UserError
     from host.experiment import device_shutdown, power_up
     from host.experiment.experiments import SHUTDOWN_DEVICE
     from host.experiment.render import (
@@ -66,29 +79,30 @@ def run(args: argparse.Namespace) -> int:
     )
     from host.experiment.robot import fast_model
 
-    system_dir = Path(args.system_dir)
-    if not (system_dir / "system.yaml").is_file():
-        raise UserError(f"{system_dir}: no system.yaml here",
-                        "give a robot directory, e.g. models/tedusar")
-    if not (system_dir / "robot.yaml").is_file():
-        raise UserError(f"{system_dir}: no robot.yaml, so no virtual robot to experiment on",
-                        "use a robot with virtual devices, e.g. models/tedusar")
-    if args.timeout <= 0:
-        raise UserError(f"--timeout {args.timeout:g} must be positive")
+    system_dir = check_robot(Path(args.system_dir), args.timeout)
     if args.journal is not None:
         journal = Path(args.journal)
-        if not journal.parent.is_dir():
-            raise UserError(f"--journal {args.journal}: directory {journal.parent} does not "
-                            "exist", "create it first")
-        for j in (journal, _sequential(journal)):
-            if j.exists():
-                raise UserError(f"--journal: {j} exists already",
-                                "give a new file name, or remove the old journal")
+        _check_new(journal)
+        if args.which == "power-up":
+            _check_new(_sequential(journal))
+        if args.which == "mission-fault":
+            for label in ("fault-free", "flat"):
+                _check_new(beside(journal, label))
     with tempfile.TemporaryDirectory(prefix="dxboard-experiment-") as tmp:
         robot_dir = fast_model(system_dir, Path(tmp)) if args.fast else system_dir
         base = journal if args.journal is not None else Path(tmp) / "journal.sqlite"
         robot = system_dir.resolve().name
-        if args.which == "power-up":
+        if args.which == "mission-fault":
+            from host.experiment.mission import mission_fault, mission_fault_text
+
+            m1 = asyncio.run(mission_fault(robot_dir, base, timeout_s=args.timeout))
+            if args.json:
+                print(json.dumps({"experiment": "mission-fault", "robot": robot,
+                                  "fast": args.fast,
+                                  "runs": {k: r.to_json() for k, r in m1.items()}}, indent=2))
+            else:
+                print(mission_fault_text(robot, args.fast, m1))
+        elif args.which == "power-up":
             modes = [args.only] if args.only else ["parallel", "sequential"]
             runs = {}
             for mode in modes:
@@ -108,6 +122,45 @@ def run(args: argparse.Namespace) -> int:
             else:
                 print(shutdown_text(robot, args.fast, res, SHUTDOWN_DEVICE))
     return 0
+
+
+def check_robot(system_dir: Path, timeout: float) -> Path:
+    """A robot directory with virtual devices, and a positive timeout; else one clear line."""
+    from host.errors import UserError
+
+    if not (system_dir / "system.yaml").is_file():
+        raise UserError(f"{system_dir}: no system.yaml here",
+                        "give a robot directory, e.g. models/tedusar")
+    if not (system_dir / "robot.yaml").is_file():
+        raise UserError(f"{system_dir}: no robot.yaml, so no virtual robot to experiment on",
+                        "use a robot with virtual devices, e.g. models/tedusar")
+    if timeout <= 0:
+        raise UserError(f"--timeout {timeout:g} must be positive")
+    return system_dir
+
+
+def _check_new(journal: Path) -> None:
+    from host.errors import UserError
+
+    if not journal.parent.is_dir():
+        raise UserError(f"--journal {journal}: directory {journal.parent} does not exist",
+                        "create it first")
+    if journal.exists():
+        raise UserError(f"--journal: {journal} exists already",
+                        "give a new file name, or remove the old journal")
+
+
+def journal_path(arg: str | None, tmp: Path) -> Path:
+    """``--journal`` checked (a new file in an existing directory), or one in ``tmp``."""
+    if arg is None:
+        return tmp / "journal.sqlite"
+    _check_new(Path(arg))
+    return Path(arg)
+
+
+def beside(journal: Path, label: str) -> Path:
+    """FILE-label.sqlite beside the journal FILE."""
+    return journal.with_name(f"{journal.stem}-{label}{journal.suffix or '.sqlite'}")
 
 
 def _sequential(journal: Path) -> Path:

@@ -4,7 +4,9 @@
 emulator's default configuration); the daemon diagnoses every device and node abnormal,
 plans and brings the robot up. Measured from the daemon's start and from its first repair
 action to the first all-normal diagnosis that lasts — paper: planner starts at 8.1 s, all
-normal at 38.3 s, 30.2 s. Run once with independent steps in parallel (the daemon's way) and
+normal at 38.3 s, 30.2 s. The diagnosis is compared with the paper's 11 components exactly;
+components of the robot's model the paper's has not (the thermal camera and its driver) are
+reported apart. Run once with independent steps in parallel (the daemon's way) and
 once one step at a time, each on a freshly started robot.
 
 ``device_shutdown`` (§VI-B): once the robot is healthy, an operator switches the base
@@ -21,6 +23,11 @@ from host.errors import UserError
 from host.experiment.measure import RunResult, measure
 from host.experiment.session import RobotSession
 
+# the paper's diagnosis model (§VI-A: 11 abnormal at power-up); the robot's model has more (the
+# thermal camera and its driver, which the missions need), reported apart as beyond the paper
+PAPER_COMPONENTS = frozenset({
+    "jaguar", "hokuyo", "laser_alignment", "jaguar_node", "hokuyo_node", "laser_alignment_node",
+    "imu_node", "joy_node", "jaguar_teleop_node", "hector_mapping", "laser_alignment_control"})
 PAPER_FIRST_ACTION_S = 8.1
 PAPER_ALL_NORMAL_S = 38.3
 PAPER_REPAIR_S = 30.2

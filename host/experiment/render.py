@@ -1,20 +1,27 @@
 """The experiments' reports: text for a person, a dict for ``--json`` (stable keys).
 
-JSON keys: ``experiment``, ``robot``, ``fast``, ``first_diagnosis`` (the first-ranked bad set
-the first plan was made on), ``plan`` (every planned step, in order), ``plans``, ``actions``
-([{action, args, state, start_s, end_s, plan_id}]), ``time_to_healthy_s``, ``repair_s``
-(first action to all-normal), ``repair_done_s`` (the last action's end), ``first_action_s``,
-``paper_s`` (30.2 for the power-up, null for the device shut-down: the paper gives no time),
-``detected_s``, ``diagnosis_s``, ``journal``, ``journal_from``, ``paper``; for the power-up ``runs``
-({parallel, sequential}, each with the keys above) and ``parallel_vs_sequential``. Times are
-seconds, since the daemon's start (power-up) or since the switch-off (device shut-down).
+JSON keys: ``experiment``, ``robot``, ``fast``, ``first_diagnosis`` (the first-ranked bad set the
+first plan was made on), ``paper_diagnosis`` and ``beyond_paper`` (its part in the paper's model
+and the rest: the power-up compares the first with the paper's 11), ``plan`` (every planned step,
+in order), ``plans``, ``actions`` ([{action, args, state, start_s, end_s, plan_id}]),
+``time_to_healthy_s``, ``repair_s`` (first action to all-normal), ``repair_done_s`` (the last
+action's end), ``first_action_s``, ``paper_s`` (30.2 for the power-up, null for the device shut-
+down: the paper gives no time), ``detected_s``, ``diagnosis_s``, ``journal``, ``journal_from``,
+``paper``; for the power-up ``runs`` ({parallel, sequential}, each with the keys above) and
+``parallel_vs_sequential``. Times are seconds, since the daemon's start (power-up) or since the
+switch-off (device shut-down).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from host.experiment.experiments import PAPER_ALL_NORMAL_S, PAPER_FIRST_ACTION_S, PAPER_REPAIR_S
+from host.experiment.experiments import (
+    PAPER_ALL_NORMAL_S,
+    PAPER_COMPONENTS,
+    PAPER_FIRST_ACTION_S,
+    PAPER_REPAIR_S,
+)
 from host.experiment.measure import RunResult
 
 
@@ -22,14 +29,20 @@ def _s(x: float | None) -> str:
     return "-" if x is None else f"{x:.1f} s"
 
 
+def _paper_split(r: RunResult) -> dict[str, list[str]]:
+    return {"paper_diagnosis": [c for c in r.first_diagnosis if c in PAPER_COMPONENTS],
+            "beyond_paper": [c for c in r.first_diagnosis if c not in PAPER_COMPONENTS]}
+
+
 def power_up_json(robot: str, fast: bool, runs: dict[str, RunResult]) -> dict[str, Any]:
     main = runs.get("parallel") or next(iter(runs.values()))
     out: dict[str, Any] = {"experiment": "power-up", "robot": robot, "fast": fast,
-                           **main.to_json(), "paper_s": PAPER_REPAIR_S,
+                           **main.to_json(), **_paper_split(main), "paper_s": PAPER_REPAIR_S,
                            "paper": {"first_action_s": PAPER_FIRST_ACTION_S,
                                      "all_normal_s": PAPER_ALL_NORMAL_S,
                                      "repair_s": PAPER_REPAIR_S},
-                           "runs": {k: r.to_json() for k, r in runs.items()}}
+                           "runs": {k: {**r.to_json(), **_paper_split(r)}
+                                    for k, r in runs.items()}}
     par, seq = runs.get("parallel"), runs.get("sequential")
     if par is not None and seq is not None and par.repair_s and seq.repair_s:
         out["parallel_vs_sequential"] = {
@@ -73,7 +86,11 @@ def power_up_text(robot: str, fast: bool, runs: dict[str, RunResult]) -> str:
     for label, r in runs.items():
         lines.append(f"{label} execution:" if label == "sequential"
                      else f"{label} execution (independent steps at once):")
-        lines += run_text(r, "the daemon's start")
+        split = _paper_split(r)
+        text = run_text(r, "the daemon's start")
+        lines += [text[0], f"  of the paper's model: {len(split['paper_diagnosis'])} of "
+                  f"{len(PAPER_COMPONENTS)}; beyond it: "
+                  + (", ".join(split["beyond_paper"]) or "none"), *text[1:]]
     lines.append(f"paper: first action at {PAPER_FIRST_ACTION_S} s, all normal at "
                  f"{PAPER_ALL_NORMAL_S} s: {PAPER_REPAIR_S} s")
     for label, r in runs.items():

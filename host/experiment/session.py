@@ -36,14 +36,15 @@ from host.launch.robot import Launch, LaunchedRobot
 
 class RobotSession:
     def __init__(self, system_dir: Path, journal: Path, *, max_parallel: int | None = None,
-                 debounce_s: float = 0.5) -> None:
+                 debounce_s: float = 0.5, emulate_args: tuple[str, ...] = (),
+                 web: tuple[str, int] | None = None) -> None:
         self.system_dir = system_dir
         self.journal_path = journal
         opts = DaemonOptions(
-            system_dir=system_dir, board_url="", web=None, journal=journal,
+            system_dir=system_dir, board_url="", web=web, journal=journal,
             zenoh_listen=[f"tcp/127.0.0.1:{free_port()}"], repair_debounce_s=debounce_s,
             max_parallel_steps=max_parallel)
-        self.robot = LaunchedRobot(Launch(system_dir, daemon=opts))
+        self.robot = LaunchedRobot(Launch(system_dir, daemon=opts, emulate_args=emulate_args))
         self._runner: asyncio.Task[None] | None = None
         self.t0 = 0.0
 
@@ -66,6 +67,8 @@ class RobotSession:
     async def __aexit__(self, exc_type: type[BaseException] | None,
                         exc: BaseException | None, tb: TracebackType | None) -> None:
         if self._runner is not None:
+            self.daemon.stop()  # its wait() ends by itself, leaving no task behind
+            await asyncio.wait([self._runner], timeout=5.0)
             self._runner.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await self._runner

@@ -1,9 +1,12 @@
 """Drawing a ``Timeline`` with matplotlib (Agg, no display): the paper's figures 5 and 6.
 
 The figure, top to bottom: a title (robot and journal) with a subtitle (journal ids, start
-time, clock); the repair actions, one bar per action from its start to its end on a few lanes
-(packed so that no two labels overlap), each labelled with its call and, unless it succeeded,
-its outcome (failed and timed-out actions hatched in their own colours); then one row per
+time, clock); when the journal holds a mission (paper 001), its layers as three lanes — the
+mission's actions (labelled where they fit), their behaviour trees (a tree held by its guard
+while layer 0 repairs hatched amber) and the skills, failures hatched; the repair actions,
+one bar per action from its start to its end on a few lanes (packed so that no two labels
+overlap), each labelled with its call and, unless it succeeded, its outcome (failed and
+timed-out actions hatched in their own colours); then one row per
 component in groups (hardware, drivers, nodes, other), each a band coloured by its state over
 time (normal pale green, abnormal red, unknown hatched grey); a dashed green line where the whole
 system became normal again, labelled with the time and how long the repair took from its first
@@ -20,7 +23,7 @@ from __future__ import annotations
 import logging
 import os
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -37,6 +40,7 @@ from matplotlib.patches import Patch, Rectangle
 from matplotlib.textpath import TextToPath
 from matplotlib.ticker import MaxNLocator
 
+from host.report.mission import LANE_NAMES, LANES
 from host.report.timeline import (
     GROUP_ORDER,
     RUNNING,
@@ -54,6 +58,8 @@ OUTCOME_COLORS = {"succeeded": "#2b6cb0", "failed": "#e8590c", "timeout": "#b779
                   RUNNING: "#7f8c9a"}
 OUTCOME_HATCH = {"failed": "xxxx", "timeout": "....", RUNNING: "////"}
 RECOVERY_COLOR = "#1e7b34"
+MISSION_OK = "#6b46c1"  # a mission layer's command that succeeded
+HOLD_COLOR = "#d69e2e"  # a behaviour tree held while layer 0 repairs
 TEXT = "#222222"
 MUTED = "#666666"
 
@@ -64,6 +70,7 @@ _W = 10.0
 _LEFT, _RIGHT = 2.05, 0.3
 _TITLE_H = 0.62
 _LANE_H = 0.27
+_MISSION_LANE_H = 0.36
 _ACTIONS_PAD = 0.12
 _GAP = 0.1
 _RECOVERY_H = 0.3  # the strip between actions and rows that holds "all normal at ..."
@@ -86,6 +93,7 @@ class Layout:
     row_y_px: dict[str, float]
     lane_count: int
     x_px: Callable[[float], float]
+    layer_y_px: dict[int, float] = field(default_factory=dict)  # the mission's lanes
 
 
 def _text_width_in(text: str, size_pt: float, bold: bool = False) -> float:
@@ -177,7 +185,8 @@ def render(t: Timeline, out: str | os.PathLike[str], *, title: str | None = None
     gap = _RECOVERY_H if t.recoveries else _GAP
     legend_rows = 1 if _legend_count(t) <= 6 else 2
     legend_h = _LEGEND_H + (legend_rows - 1) * 0.2
-    height = _TITLE_H + act_h + gap + rows_h + _AXIS_H + legend_h
+    mis_h = (len(LANES) * _MISSION_LANE_H + 2 * _ACTIONS_PAD) if t.mission else 0.0
+    height = _TITLE_H + mis_h + act_h + gap + rows_h + _AXIS_H + legend_h
 
     fig = Figure(figsize=(_W, height), dpi=dpi)
     fig.patch.set_facecolor("white")
@@ -185,6 +194,13 @@ def render(t: Timeline, out: str | os.PathLike[str], *, title: str | None = None
     ax = fig.add_axes((_LEFT / _W, rows_bottom / height, axw / _W, rows_h / height))
     top = fig.add_axes((_LEFT / _W, (rows_bottom + rows_h + gap) / height, axw / _W,
                         act_h / height), sharex=ax)
+    layer_y: dict[int, float] = {}
+    if t.mission:
+        mis_bottom = rows_bottom + rows_h + gap + act_h
+        mis = fig.add_axes((_LEFT / _W, mis_bottom / height, axw / _W, mis_h / height),
+                           sharex=ax)
+        layer_y = {layer: mis_bottom + yc
+                   for layer, yc in _draw_mission(mis, t, mis_h, axw, sec_per_in).items()}
     head, sub = _title(t)
     fig.text(0.5 * (_LEFT + _W - _RIGHT) / _W, 1 - 0.2 / height, title or head, ha="center",
              va="center", fontsize=13, fontweight="bold", color=TEXT)
@@ -275,7 +291,46 @@ def render(t: Timeline, out: str | os.PathLike[str], *, title: str | None = None
         return (_LEFT + sec / sec_per_in) * dpi
 
     row_px = {n: (height - rows_bottom - yy) * dpi for n, yy in row_y.items()}
-    return Layout(round(_W * dpi), round(height * dpi), row_px, lanes, x_px)
+    return Layout(round(_W * dpi), round(height * dpi), row_px, lanes, x_px,
+                  {n: (height - yy) * dpi for n, yy in layer_y.items()})
+
+
+def _draw_mission(mis: Axes, t: Timeline, mis_h: float, axw: float, sec_per_in: float
+                  ) -> dict[int, float]:
+    """The mission's layers (paper 001) as lanes above the repair actions: mission actions,
+    their behaviour trees (holds hatched), skills; failures in the failed colour."""
+    mis.set_ylim(0, mis_h)
+    mis.set_yticks([])
+    mis.tick_params(axis="x", bottom=False, labelbottom=False)
+    for side in ("top", "right", "left"):
+        mis.spines[side].set_visible(False)
+    mis.spines["bottom"].set_color("#bbbbbb")
+    lane_y = {layer: mis_h - _ACTIONS_PAD - (i + 0.5) * _MISSION_LANE_H
+              for i, layer in enumerate(LANES)}
+    for layer, yc in lane_y.items():
+        mis.text(-0.1 / axw, yc, LANE_NAMES[layer], transform=_blend(mis), ha="right",
+                 va="center", fontsize=_GROUP_PT, fontweight="bold", color=MUTED)
+    for s in t.mission:
+        if s.layer not in lane_y:
+            continue
+        yc = lane_y[s.layer]
+        width = max(s.end - s.start, 0.04 * sec_per_in)
+        if s.held:
+            mis.add_patch(Rectangle((s.start, yc - 0.09), width, 0.18, facecolor="white",
+                                    edgecolor=HOLD_COLOR, hatch="////", lw=1.0, zorder=4))
+            continue
+        color = MISSION_OK if s.ok else OUTCOME_COLORS["failed"]
+        mis.add_patch(Rectangle((s.start, yc - 0.07), width, 0.14,  # white edges part steps
+                                facecolor=color if s.ok else "white",
+                                edgecolor="white" if s.ok else color,
+                                hatch=None if s.ok else OUTCOME_HATCH["failed"], lw=0.8,
+                                zorder=3))
+        if s.layer == LANES[0]:
+            label = s.label.split("(")[0]
+            if _text_width_in(label, 6.5) < width / sec_per_in:
+                mis.text(s.start + width / 2, yc + 0.16, label, ha="center", va="center",
+                         fontsize=6.5, color=TEXT, zorder=6)
+    return lane_y
 
 
 def _blend(ax: Axes) -> matplotlib.transforms.Transform:
@@ -286,7 +341,7 @@ def _blend(ax: Axes) -> matplotlib.transforms.Transform:
 def _legend_count(t: Timeline) -> int:
     states = {iv.state for r in t.rows for iv in r.intervals}
     return (len(states) + len({a.outcome for a in t.actions}) + bool(t.plans)
-            + bool(t.recoveries))
+            + bool(t.recoveries) + bool(t.mission) + any(s.held for s in t.mission))
 
 
 def _legend(fig: Figure, t: Timeline, height: float, rows: int) -> None:
@@ -300,6 +355,11 @@ def _legend(fig: Figure, t: Timeline, height: float, rows: int) -> None:
         c = OUTCOME_COLORS.get(o, OUTCOME_COLORS["failed"])
         handles.append(Patch(facecolor=c if o == "succeeded" else "white", edgecolor=c,
                              hatch=OUTCOME_HATCH.get(o), label=f"action {o}"))
+    if t.mission:
+        handles.append(Patch(facecolor=MISSION_OK, edgecolor=MISSION_OK, label="mission step"))
+    if any(s.held for s in t.mission):
+        handles.append(Patch(facecolor="white", edgecolor=HOLD_COLOR, hatch="////",
+                             label="tree held"))
     if t.plans:
         handles.append(Line2D([], [], marker="^", ls="none", color=MUTED, label="plan made"))
     if t.recoveries:

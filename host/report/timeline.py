@@ -50,6 +50,7 @@ from host.events import (
     PlanRecord,
 )
 from host.journal.entries import Entry
+from host.report.mission import LayerSpan, clip_spans, mission_spans
 
 log = logging.getLogger(__name__)
 
@@ -178,6 +179,7 @@ class Timeline:
     diagnoses: int  # diagnosis entries in the window
     window: str = ""  # how the window was chosen ("" for the whole run)
     run: str = ""  # the daemon run drawn (its run id), "" when not known
+    mission: tuple[LayerSpan, ...] = ()  # the mission's layers (host.report.mission)
 
     def row(self, name: str) -> ComponentRow:
         for r in self.rows:
@@ -365,7 +367,8 @@ def build_timeline(entries: Sequence[Entry], *, name: str, robot: str = "",
         recoveries=tuple(recoveries),
         diagnoses=sum(1 for t in diag_times if ws <= t <= we),
         window="" if start is None and end is None else f"{start or 'start'} .. {end or 'end'}",
-        run=run)
+        run=run,
+        mission=clip_spans(mission_spans(entries, at, _action_time), ws, we))
 
 
 def _wall_at(entries: Sequence[Entry], t: float, at: Callable[[Entry], float]) -> float:

@@ -9,9 +9,10 @@ event's own stamp; in the order they started), the board link (``LinkChange``), 
 (``RunStarted``: its id, and the healthy value of each observable atom, by which the page
 colours observations), quarantines and holds (``QuarantineChange``, ``HoldChange``: each with
 what a person does to release it — the command, with the run's operator socket when it is not
-the default, or for a channel a person switched off, switching it on again), and the running
-counters that ``/metrics`` exports (``DiagnosisRun``, ``RepairEnded``, changes). Nothing else
-feeds the page: what the page shows is what the stream said, folded.
+the default, or for a channel a person switched off, switching it on again), the running
+counters that ``/metrics`` exports (``DiagnosisRun``, ``RepairEnded``, changes), and the
+mission of paper 001's layers (``host.web.mission``: plan, current action, tree status, KB
+changes). Nothing else feeds the page: what the page shows is what the stream said, folded.
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ from host.events import (
     Stamped,
 )
 from host.operator.client import DEFAULT_SOCKET
+from host.web.mission import MissionFold
 from host.web.status import (
     ChannelStatus,
     DiagnosisStatus,
@@ -56,6 +58,7 @@ class StatusFold:
         self._outcomes: Counter[str] = Counter()
         self._observations: dict[str, bool | None] = {}
         self._run: RunStarted | None = None
+        self._mission = MissionFold()
 
     def __call__(self, stamped: Stamped) -> None:
         e = stamped.event
@@ -91,6 +94,8 @@ class StatusFold:
             changes["healthy"] = dict(e.healthy)
         elif isinstance(e, QuarantineChange | HoldChange):
             changes.update(self._out_of_repair(e, status, stamped.wall))
+        elif (mission := self._mission(e)) is not None:
+            changes["mission"] = mission.to_json()
         else:
             return
         self.source.set(dataclasses.replace(status, updated=stamped.wall, **changes))

@@ -112,6 +112,7 @@ class Status:
     out_of_repair: tuple[OutOfRepair, ...] = ()  # the same, in detail, in the order set
     run_id: str = ""
     healthy: Mapping[str, bool] = field(default_factory=dict)  # atom -> its healthy value
+    mission: Mapping[str, Any] = field(default_factory=dict)  # host.web.mission, as JSON
     version: int = 0
 
     def to_json(self) -> dict[str, Any]:
@@ -131,6 +132,7 @@ class Status:
             "quarantined": dict(sorted(self.quarantined.items())),
             "held": dict(sorted(self.held.items())),
             "out_of_repair": [o.to_json() for o in self.out_of_repair],
+            "mission": dict(self.mission),
             "counters": {
                 "observation_changes": self.observation_changes,
                 "diagnosis_runs": self.diagnosis_runs,

@@ -17,10 +17,10 @@ Instead this test runs the daemon's own pieces on one simulated clock, as fast a
   observations and on its safety tick (every ``safety_tick_s`` of simulated time), as its
   diagnosis runner's task does, expiring stale literals each time.
 
-The devices (jaguar, hokuyo, laser_alignment) are switched on as the power-up repair does,
-then the robot is up once the diagnosis is healthy; from then on, over 60 000 readings with
-noise, the board raises no event, the daemon's diagnosis never names a component, the repair
-trigger is never asked to act, and the journal holds no plan and no action.
+The devices (jaguar, hokuyo, laser_alignment, thermal_camera) are switched on as the power-up
+repair does, then the robot is up once the diagnosis is healthy; from then on, over 60 000
+readings with noise, the board raises no event, the daemon's diagnosis never names a
+component, the repair trigger is never asked to act, and the journal holds no plan and no action.
 
 What it leaves out: the topic and process observers (their inputs come from real node
 processes, which do not run on a simulated clock); they are covered on wall time by
@@ -47,7 +47,7 @@ from tests.wait import wait_until_async
 
 MINUTES = 10
 TICK_MS = 10
-DEVICES = {"laser_alignment": 1, "hokuyo": 3, "jaguar": 7}
+DEVICES = {"laser_alignment": 1, "hokuyo": 3, "thermal_camera": 6, "jaguar": 7}
 
 
 class SimClock:

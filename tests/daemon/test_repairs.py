@@ -28,7 +28,8 @@ from tests.daemon.runner import (
 
 ROBOT = {"jaguar", "hokuyo", "laser_alignment", "jaguar_node", "hokuyo_node",
          "laser_alignment_node", "imu_node", "joy_node", "jaguar_teleop_node", "hector_mapping",
-         "laser_alignment_control"}
+         "laser_alignment_control",
+         "thermal_camera", "thermal_camera_node"}  # the camera: beyond paper 000's 11
 HEAL_S = 60.0
 
 

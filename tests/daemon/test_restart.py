@@ -20,7 +20,8 @@ from tests.daemon.runner import RunningDaemon, fast_copy, healthy, key_file
 
 HEAL_S = 120.0
 NODES = ("jaguar_node", "hokuyo_node", "laser_alignment_node", "imu_node", "joy_node",
-         "jaguar_teleop_node", "hector_mapping", "laser_alignment_control")
+         "jaguar_teleop_node", "hector_mapping", "laser_alignment_control",
+         "thermal_camera_node")  # the camera's driver: beyond paper 000's model
 
 
 def node_processes(robot: Path) -> dict[str, list[int]]:

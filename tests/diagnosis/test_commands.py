@@ -24,7 +24,7 @@ def only_diagnosis_commands(monkeypatch: pytest.MonkeyPatch) -> None:
 def test_model_check_ok(capsys: pytest.CaptureFixture[str]) -> None:
     assert cli.main(["model", "check", str(TEDUSAR)]) == 0
     out = capsys.readouterr().out
-    assert "ok (15 components" in out and "2 scenario file(s)" in out
+    assert "ok (17 components" in out and "2 scenario file(s)" in out
 
 
 def test_model_check_reports_problems(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -63,7 +63,7 @@ def test_diagnose_json_lists_what_is_bad(capsys: pytest.CaptureFixture[str]) -> 
     assert cli.main(["diagnose", str(TEDUSAR), "--obs", str(obs), "--json", "--good"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert "jaguar_node" in data["diagnoses"][0]["good"]
-    assert len(data["diagnoses"][0]["good"]) == 14
+    assert len(data["diagnoses"][0]["good"]) == 16  # 14 of the paper's model, and the camera
 
 
 def test_no_consistent_diagnosis_says_so_and_exits_1(

@@ -12,6 +12,9 @@ PAPER_POWER_UP_BAD = {
     "jaguar", "hokuyo", "laser_alignment", "laser_alignment_node", "laser_alignment_control",
     "hector_mapping", "jaguar_node", "hokuyo_node", "imu_node", "jaguar_teleop_node", "joy_node",
 }
+# the robot's model goes beyond the paper's: the missions' thermal camera and its driver, which
+# the paper's power-up observations (power-up.obs) say nothing of
+BEYOND_PAPER = {"thermal_camera", "thermal_camera_node"}
 
 
 @pytest.mark.parametrize("algorithm", sorted(ALGORITHMS))
@@ -23,8 +26,8 @@ def test_power_up_every_device_and_node_abnormal(tedusar: Theory, algorithm: str
     model = load_system(TEDUSAR)
     observed_nodes = {c.name for c in model.by_kind(Kind.N, Kind.HN, Kind.SN)} - {"rviz"}
     switchable = {c.name for c in model.by_kind(Kind.SH)}
-    assert observed_nodes | switchable == PAPER_POWER_UP_BAD
-    assert result.diagnoses[0].good == {"imu", "joystick", "rviz", "board"}
+    assert observed_nodes | switchable == PAPER_POWER_UP_BAD | BEYOND_PAPER
+    assert result.diagnoses[0].good == {"imu", "joystick", "rviz", "board"} | BEYOND_PAPER
 
 
 @pytest.mark.parametrize("algorithm", sorted(ALGORITHMS))

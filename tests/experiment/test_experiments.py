@@ -1,7 +1,8 @@
 """``dxboard experiment`` end to end: both of paper 000's experiments through the real command
 (a subprocess, ``--fast`` boot times), then ``dxboard report`` on each experiment's journal.
 
-Power-up (§VI-A): the first diagnosis is the paper's 11 abnormal components, the plan powers
+Power-up (§VI-A): the first diagnosis is the paper's 11 abnormal components (and, beyond the
+paper's model, the thermal camera with its driver, reported apart), the plan powers
 each device before starting its driver (and the driver starts only after the power-up is
 verified), both runs end all-normal, and the one-at-a-time run never overlaps two steps while
 the parallel one does. Device shut-down (§VI-B): {jaguar} is diagnosed, the repair is the
@@ -27,8 +28,9 @@ ROOT = Path(__file__).resolve().parents[2]
 PAPER_11 = {"jaguar", "hokuyo", "laser_alignment", "laser_alignment_node",
             "laser_alignment_control", "hector_mapping", "jaguar_node", "hokuyo_node",
             "imu_node", "jaguar_teleop_node", "joy_node"}
+BEYOND_PAPER = {"thermal_camera", "thermal_camera_node"}
 DRIVERS = {"jaguar": "jaguar_node", "hokuyo": "hokuyo_node",
-           "laser_alignment": "laser_alignment_node"}
+           "laser_alignment": "laser_alignment_node", "thermal_camera": "thermal_camera_node"}
 
 
 def experiment(which: str, journal: Path) -> dict[str, Any]:
@@ -77,7 +79,9 @@ def test_power_up_diagnoses_the_papers_11_and_powers_before_drivers(
     assert data["experiment"] == "power-up" and data["paper_s"] == 30.2
     assert set(data["runs"]) == {"parallel", "sequential"}
     for label, run in data["runs"].items():
-        assert set(run["first_diagnosis"]) == PAPER_11, label
+        assert set(run["paper_diagnosis"]) == PAPER_11, label
+        assert set(run["beyond_paper"]) == BEYOND_PAPER, label
+        assert set(run["first_diagnosis"]) == PAPER_11 | BEYOND_PAPER, label
         plan = run["plan"]
         for dev, node in DRIVERS.items():
             assert plan.index(f"power_up({dev})") < plan.index(f"start_node({node})"), label

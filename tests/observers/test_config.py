@@ -60,7 +60,8 @@ def test_tedusar_observers_of_the_paper(tmp_path: Path) -> None:
     assert kinds.count("hardware") == 1 and kinds.count("node") == 8  # rviz: not on the robot
     assert kinds.count("frequency") == 5
     hw = next(o for o in cfg.observers if isinstance(o, HardwareObserver))
-    assert set(hw.devices) == {"jaguar", "hokuyo", "laser_alignment"}
+    # the paper's three and the missions' thermal camera (beyond the paper's model)
+    assert set(hw.devices) == {"jaguar", "hokuyo", "laser_alignment", "thermal_camera"}
     assert hw.devices["hokuyo"].channel == 3 and hw.devices["hokuyo"].band == (0.2, 1.2)
     scan = next(o for o in cfg.observers if isinstance(o, FrequencyObserver)
                 and o.topics == ("/scan",))
@@ -70,9 +71,10 @@ def test_tedusar_observers_of_the_paper(tmp_path: Path) -> None:
     assert all(isinstance(o, NodeObserver) for o in cfg.observers if o.kind == "node")
     # every atom is one the generated model knows, the board link's included
     assert check_atoms(cfg, generate(model)) == []
-    # and the committed model's own section says the same as the paper's list above
+    # and the committed model's own section says the same as the paper's list above, and
+    # observes the missions' thermal camera beyond it (its driver and its image topic)
     own = load_observers(TEDUSAR / "system.yaml", model)
-    assert sorted(o.kind for o in own.observers) == sorted(kinds)
+    assert sorted(o.kind for o in own.observers) == sorted([*kinds, "node", "frequency"])
     assert check_atoms(own, generate(model)) == []
 
 

@@ -52,17 +52,19 @@ def robot_dir(tmp_path: Path) -> Path:
 
 
 class Robot:
-    """One ``dxboard emulate DIR --robot`` process: board, control and device URLs."""
+    """One ``dxboard emulate DIR --robot [EXTRA...]`` process: board, control and device URLs
+    (and ``world`` with ``--world``)."""
 
-    def __init__(self, system_dir: Path) -> None:
+    def __init__(self, system_dir: Path, *extra: str) -> None:
         self.env = {**os.environ, "DXBOARD_KEY": KEY_HEX}
-        self.proc = subprocess.Popen([DXBOARD, "emulate", str(system_dir), "--robot"],
+        self.proc = subprocess.Popen([DXBOARD, "emulate", str(system_dir), "--robot", *extra],
                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                      env=self.env, cwd=ROOT)
         self.urls: dict[str, str] = {}
         self.devices: dict[str, str] = {}
+        n = len(yaml.safe_load((system_dir / "robot.yaml").read_text())["devices"])
         assert self.proc.stdout is not None
-        while len(self.devices) < 5:
+        while len(self.devices) < n or ("--world" in extra and "world" not in self.urls):
             line = self.proc.stdout.readline()
             if not line:
                 err = self.proc.stderr.read() if self.proc.stderr else ""

@@ -15,7 +15,8 @@ from tests.wait import wait_until
 
 
 def test_prints_a_url_per_device(robot: Robot) -> None:
-    assert set(robot.devices) == {"jaguar", "hokuyo", "laser_alignment", "imu", "joystick"}
+    assert set(robot.devices) == {"jaguar", "hokuyo", "laser_alignment", "imu", "joystick",
+                                  "thermal_camera"}
     assert all(u.startswith("tcp://127.0.0.1:") and not u.endswith(":0")
                for u in robot.devices.values())
     assert robot.stop() == 0  # SIGTERM: a clean exit

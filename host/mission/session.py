@@ -1,0 +1,89 @@
+"""The mission stack on a running daemon: layers 1-3 wired to layer 0 and the world.
+
+``MissionStack.start(daemon, world_url, system_dir)`` reads the robot's mission
+(``host.mission.files``), connects to the world's skill servers (``host.skills.WorldClient``),
+and wires, as the daemon wires everything, with the daemon's clock and its one event stream:
+
+- layer 0 seen from above: a ``Layer0View`` subscribed to the daemon's stream, seeded with the
+  daemon's current diagnosis, quarantines and holds, and told whether a repair is running;
+- layer 1: a ``Skill`` per skill of ``mission.yaml``;
+- layer 2: the ``Executive`` with the recipes;
+- layer 3: the ``KnowledgeBase``, the ``Dispatcher`` (sensing from the world) and the
+  ``MissionRunner``.
+
+Every event of the layers goes onto the daemon's stream (``daemon.emit``), so the journal, the
+web page and the terminal show the mission beside the components. ``flat=True`` builds the
+baseline without the layers' hand-over: skills that abort once their inputs stop, trees without
+guards or retries, a planner that does not know what layer 0 has taken away (``dxboard experiment
+mission-fault``). ``run()`` runs the mission once; ``close()`` disconnects. ``wire`` builds
+layers 1-3 over any world client, layer-0 view, clock and stream (the tests use it with a world
+in their own process).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from host.events import Event
+from host.executive import Executive
+from host.mission.dispatcher import Dispatcher
+from host.mission.files import MissionFiles, load_mission
+from host.mission.kb import KnowledgeBase
+from host.mission.runner import MissionOutcome, MissionRunner
+from host.skills import Layer0View, Skill, WorldClient
+
+if TYPE_CHECKING:
+    from host.daemon.core import Daemon
+
+log = logging.getLogger(__name__)
+
+
+def wire(files: MissionFiles, world: WorldClient, layer0: Layer0View,
+         clock: Callable[[], float], emit: Callable[[Event], None], *, flat: bool = False,
+         mission_id: str = "m1") -> MissionRunner:
+    """Layers 1-3 over ``world`` and layer 0 as ``layer0`` sees it, on one clock and stream."""
+    skills = {n: Skill(spec, world, layer0, clock, flat=flat)
+              for n, spec in files.skills.items()}
+    params = {a: act.param_names for a, act in files.domain.actions.items()}
+    executive = Executive(files.recipes, params, skills, layer0, clock, emit,
+                          max_hold_s=files.max_hold_s, flat=flat)
+    kb = KnowledgeBase(files.problem.objects, emit)
+    dispatcher = Dispatcher(kb, executive, world.state, files.sensing, emit, clock, mission_id)
+    return MissionRunner(files.domain, files.problem, files.rules, kb, dispatcher,
+                         files.needs_of(), None if flat else layer0, emit, mission_id)
+
+
+class MissionStack:
+    def __init__(self, files: MissionFiles, world: WorldClient, layer0: Layer0View,
+                 runner: MissionRunner, unsubscribe: object) -> None:
+        self.files = files
+        self.world = world
+        self.layer0 = layer0
+        self.runner = runner
+        self._unsubscribe = unsubscribe
+
+    @classmethod
+    async def start(cls, daemon: Daemon, world_url: str, system_dir: Path, *,
+                    flat: bool = False, mission_id: str = "m1") -> MissionStack:
+        files = load_mission(system_dir, daemon.model)
+        layer0 = Layer0View(repair_active=lambda: daemon.repairs.active)
+        unsubscribe = daemon.subscribe(layer0)
+        result = daemon.result
+        listing = daemon.repairs.listing()
+        layer0.seed([] if result is None else result.bad_sets(), listing["quarantined"],
+                    listing["held"])
+        world = await WorldClient.connect(world_url)
+        runner = wire(files, world, layer0, daemon.clock, daemon.emit, flat=flat,
+                      mission_id=mission_id)
+        return cls(files, world, layer0, runner, unsubscribe)
+
+    async def run(self) -> MissionOutcome:
+        return await self.runner.run()
+
+    async def close(self) -> None:
+        if callable(self._unsubscribe):
+            self._unsubscribe()
+        await self.world.close()

@@ -1,0 +1,77 @@
+"""The mission on the page (paper 001's layers): the mission's events folded into the status
+(``host.web.mission`` through ``StatusFold``) and shown beside the components in real headless
+Chromium — the plan with the current step, the tree's nodes with a guard holding, the results
+and the knowledge base's changes."""
+
+from __future__ import annotations
+
+import time
+
+from host.events import (
+    ConditionCheck,
+    Dispatch,
+    KbChange,
+    LayerResult,
+    MissionState,
+    MissionStep,
+    Stamped,
+    TreeChange,
+)
+from host.layers import MISSION, Cause
+from host.web import MemoryStatusSource, WebServer
+from host.web.fold import StatusFold
+from tests.web.chromium import Chromium
+
+PLAN = (MissionStep("level_laser", (), 0.0, 1.0),
+        MissionStep("navigate", ("entrance", "corridor", "door_entrance"), 1.0, 5.0))
+EVENTS = [
+    KbChange(("(at entrance)",), (), "init", "the mission's problem"),
+    MissionState("m1", "planned", goal=("(searched office)",), plan=PLAN),
+    KbChange((), ("(open door_lab)",), "sensing", "at the start"),
+    Dispatch("m1.2", "m1", 1, "navigate", ("entrance", "corridor", "door_entrance"),
+             ("(at entrance)",), (ConditionCheck("(at entrance)", "start", True, True),), True,
+             3.0),
+    TreeChange("m1.2", "navigate available", "RUNNING", "SUCCESS", 9,
+               "holding: layer 0: hokuyo repairing"),
+    LayerResult(MISSION, "level_laser", (), False, (Cause(MISSION, "level_laser() failed"),),
+                1.0, 2.0, "m1.1"),
+]
+
+
+def fold(source: MemoryStatusSource) -> None:
+    f = StatusFold(source)
+    for e in EVENTS:
+        f(Stamped(time.time(), time.monotonic(), e))
+
+
+def test_the_status_holds_the_mission() -> None:
+    source = MemoryStatusSource()
+    fold(source)
+    m = source.snapshot().to_json()["mission"]
+    assert (m["mission_id"], m["state"], m["step"]) == ("m1", "planned", 1)
+    assert [p["step"] for p in m["plan"]] == ["level_laser()",
+                                              "navigate(entrance, corridor, door_entrance)"]
+    assert m["action"] == "navigate(entrance, corridor, door_entrance)"
+    assert m["tree"] == [{"node": "navigate available", "status": "RUNNING",
+                          "detail": "holding: layer 0: hokuyo repairing"}]
+    assert m["kb"][0] == "sensing: -(open door_lab) (at the start)"
+    assert m["results"][0]["why"] == "mission: level_laser() failed"
+
+
+async def test_the_page_shows_the_mission_beside_the_components(
+        server: WebServer, source: MemoryStatusSource) -> None:
+    async with Chromium.launch(f"http://127.0.0.1:{server.port}/") as page:
+        assert await page.wait_for("document.querySelectorAll('.channel').length") == 10
+        assert await page.evaluate("document.getElementById('mission-section').hidden")
+        fold(source)
+        assert await page.wait_for(
+            "!document.getElementById('mission-section').hidden")
+        assert await page.wait_for(
+            "document.getElementById('mission-state').textContent") == "m1 planned"
+        assert await page.evaluate(
+            "document.querySelector('#mission .step[data-at=\"now\"]').textContent"
+        ) == "navigate(entrance, corridor, door_entrance)"
+        assert "holding: layer 0: hokuyo" in await page.evaluate(
+            "document.querySelector('#mission .node[data-status=\"RUNNING\"]').textContent")
+        assert "-(open door_lab)" in await page.evaluate(
+            "document.querySelector('#mission .kb').textContent")
