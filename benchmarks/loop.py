@@ -9,7 +9,9 @@ board streams 10 channels at 100 Hz). Once the robot is up, a quiet interval mea
 daemon process's CPU (psutil, user+system) and resident memory, and the journal's growth.
 Then faults are injected (``--faults``, default 20 of each kind) with ``dxboard inject`` in a
 seeded order — hokuyo ``hang`` (found through /scan falling silent) and laser_alignment
-``overcurrent amps=5`` (a trip the board pushes at once; cleared once diagnosed) — and for
+``overcurrent amps=5`` (a trip the board pushes at once; cleared once diagnosed), two faults
+of one kind at least ``SPACING_S`` apart (a repair of the same device again within the
+limiter's 60 s counts as one that did not hold, and the third would quarantine it) — and for
 each, from the journal's wall times:
 
 - detection: the inject command returned → the first observation that changed;
@@ -71,6 +73,7 @@ from host.journal import (
 from host.observers import load_observers
 from host.observers.base import Update
 from host.observers.hardware import HardwareObserver
+from host.repair.limits import DEFAULT_STABLE_S
 from tests.daemon.runner import (
     KEY,
     TEDUSAR,
@@ -81,6 +84,7 @@ from tests.daemon.runner import (
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "RESULTS.md"
+SPACING_S = DEFAULT_STABLE_S + 5.0  # between two faults of one kind: each repair has held
 FAULTS = {  # kind -> (channel, inject args, components that name it, clear after diagnosis)
     "hang": ("hokuyo", ("hokuyo", "hang"), {"hokuyo", "hokuyo_node"}, False),
     "trip": ("laser_alignment", ("laser_alignment", "overcurrent", "amps=5"),
@@ -188,8 +192,15 @@ def part_one(res: Results, n_faults: int, seed: int, quiet_s: float) -> None:
         assert tele, "no telemetry journaled"
         kinds = [k for k in FAULTS for _ in range(n_faults // len(FAULTS))]
         random.Random(seed).shuffle(kinds)
+        last: dict[str, float] = {}
         for i, kind in enumerate(kinds):
+            # a repair of the same device again within the limiter's stable_s is a repair that
+            # did not hold (host.repair.limits): the third would quarantine the device
+            wait = last.get(kind, 0.0) + SPACING_S - time.monotonic()
+            if wait > 0:
+                time.sleep(wait)
             s = one_fault(d, kind)
+            last[kind] = time.monotonic()
             res.samples.append(s)
             print(f"  {i + 1}/{len(kinds)} {kind}: " + (
                 f"detect {ms(s.detect)}, diagnose {ms(s.diagnose)}, healthy "

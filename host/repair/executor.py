@@ -16,8 +16,9 @@ sum of every step's settle time. Each step:
 2. runs through its actuator within ``step_timeout`` seconds (longer for a ``stop_node``
    whose process may take ``stop_timeout_s`` to stop) — else ``timeout``;
 3. waits for its intended effect (``host.repair.effects``), ending the moment it is seen:
-   output (``ok(t)`` of the topics a started node publishes) in any observation made after
-   the step acted; a state alone (``running(n)``, ``on(d)``, ``in_band(d)``) in one made once
+   output (``ok(t)`` of the topics a started node publishes, none of them ok before the step:
+   else a refresh could pass for new messages) in any observation made after the step acted;
+   a state alone (``running(n)``, ``on(d)``, ``in_band(d)``) in one made once
    the step has settled (a process that dies at once, a device that trips while it boots do
    not pass). The settle time is not waited out otherwise: it only sets the deadline, settle
    + ``verify_s`` (``Beliefs.wait_for``) — after it ``failed`` with what was seen instead, and
@@ -346,6 +347,11 @@ class Executor:
         def finish(state: ActionState, detail: str) -> None:
             self._emit(StepReport(plan_id, action_id, step, state, t0, self.clock(), detail))
 
+        expected = expected_effects(step, self.model, self.observable)
+        outputs = [a for a in expected if a.startswith("ok(")]
+        # a topic already ok before the step (the node's previous instance) could be refreshed
+        # after it without one new message: then only an observation once settled counts
+        early = bool(outputs) and all(self.beliefs.value(a) is not True for a in outputs)
         timeout = self._timeout(step)
         try:
             detail = await asyncio.wait_for(self.actuators.run(step), timeout)
@@ -378,12 +384,10 @@ class Executor:
                     why = f"not verified: {prog.plan.steps[p]} failed"
                     finish(ActionState.FAILED, f"{detail}; {why}")
                     return why
-        expected = expected_effects(step, self.model, self.observable)
         if expected:
             # output (a topic flowing) ends the wait the moment it is seen; a state alone (a
             # process running, a channel on) must still hold once the step has settled
-            outputs = any(a.startswith("ok(") for a in expected)
-            fresh = acted if outputs else due
+            fresh = acted if early else due
             deadline = due + self.verify_s
             abort = contradictions(step, self.observable)
             if not await self.beliefs.wait_for(expected, fresh, deadline - self.clock(),
