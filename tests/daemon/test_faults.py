@@ -157,7 +157,8 @@ def test_a_persistent_short_latches_is_quarantined_unenergised_and_repaired_once
     assert "inrush" in states[states.index("tripped"):states.index("latched")]  # the retry
     d.wait_for(lambda s: any("laser_alignment" in b for b in bad_sets(s)), 15,
                "laser_alignment diagnosed")
-    assert observed(d, mark, "tripped(laser_alignment)", True)
+    d.wait_journal(lambda: observed(d, mark, "tripped(laser_alignment)", True), 15,
+                   "tripped(laser_alignment) = true journaled")
     # a short latched by the board is not energised again by the daemon: quarantined at once
     st = d.wait_for(lambda s: "laser_alignment" in s["quarantined"], 30, "quarantined")
     assert "short circuit" in st["quarantined"]["laser_alignment"]
@@ -178,7 +179,8 @@ def test_a_persistent_short_latches_is_quarantined_unenergised_and_repaired_once
     # the daemon cleared the latch: the channel went from latched back through off to on
     states = board_states(d, mark, 1)
     assert states[-1] == "on" and "off" in states[states.index("latched"):]
-    assert observed(d, mark, "tripped(laser_alignment)", False)
+    d.wait_journal(lambda: observed(d, mark, "tripped(laser_alignment)", False), 15,
+                   "tripped(laser_alignment) = false journaled")
     assert_journal_steps(d, mark, "laser_alignment", repaired=True)
     # the 40 A short trips its own channel; nothing else is shed or touched
     untouched(d, mark, "laser_alignment")
@@ -247,7 +249,8 @@ def test_a_switch_stuck_off_is_quarantined_and_nothing_else_touched(
     d.wait_journal(lambda: "faulted" in board_states(d, mark, 1), 15, "the channel faulted")
     d.wait_for(lambda s: any("laser_alignment" in b for b in bad_sets(s)), 15,
                "laser_alignment diagnosed")
-    assert observed(d, mark, "tripped(laser_alignment)", True)
+    d.wait_journal(lambda: observed(d, mark, "tripped(laser_alignment)", True), 15,
+                   "tripped(laser_alignment) = true journaled")
     d.wait_journal(lambda: any(t.startswith("quarantined laser_alignment")
                                   for t in notes(d, mark)), QUARANTINE_S,
                    "laser_alignment quarantined")

@@ -74,10 +74,9 @@ def test_an_independent_subscriber_sees_the_hokuyo_go_error_on_a_hang_and_ok_aft
         assert 0.2 <= board.data[3] <= 1.2  # the Hokuyo's channel, in its band (A)
         battery = peer.collect("/battery_state", 1)[-1]
         assert battery.current < 0 and battery.present  # discharging
-        # the power-up's diagnoses (everything was off) name the Hokuyo's driver abnormal
-        assert any(s.name.startswith("dxboard diagnosis ") and s.level == b"\x02"
-                   and "hokuyo_node" in s.message.split(", ")
-                   for m in peer.messages("/diagnosis") for s in m.status)
+        # (the power-up's first diagnoses may go out before DDS discovery has matched the
+        # peer's subscription — volatile QoS, as a real topic: /diagnosis is checked on the
+        # hang below, published long after discovery)
 
         daemon.inject("hokuyo", "hang")
         peer.wait_for(lambda: latest(peer, "dxboard: hokuyo") == ERROR,
@@ -85,8 +84,10 @@ def test_an_independent_subscriber_sees_the_hokuyo_go_error_on_a_hang_and_ok_aft
         status = next(s for s in peer.messages("/diagnostics")[-1].status
                       if s.name == "dxboard: hokuyo")
         assert "abnormal in the best diagnosis" in status.message
-        assert any("hokuyo" in [kv.key for kv in s.values]
-                   for m in peer.messages("/diagnosis") for s in m.status)
+        peer.wait_for(lambda: any(s.name.startswith("dxboard diagnosis ") and s.level == b"\x02"
+                                  and "hokuyo" in [kv.key for kv in s.values]
+                                  for m in peer.messages("/diagnosis") for s in m.status),
+                      "/diagnosis naming the Hokuyo", WAIT_S)
         # OK again, and the repair action on it recorded as succeeded (the diagnosis may clear
         # it a moment before the executor has verified the action's effects)
         peer.wait_for(lambda: latest(peer, "dxboard: hokuyo") == OK
