@@ -91,9 +91,9 @@ def test_an_independent_subscriber_sees_the_hokuyo_go_error_on_a_hang_and_ok_aft
         # OK again, and the repair action on it recorded as succeeded (the diagnosis may clear
         # it a moment before the executor has verified the action's effects)
         peer.wait_for(lambda: latest(peer, "dxboard: hokuyo") == OK
+                      and repair_of(peer, "hokuyo").startswith("power_cycle(hokuyo)")
                       and repair_of(peer, "hokuyo").endswith("succeeded"),
-                      "the Hokuyo OK after a successful repair", WAIT_S)
-        assert repair_of(peer, "hokuyo").startswith("power_cycle(hokuyo)")
+                      "the Hokuyo OK after a successful power cycle", WAIT_S)
         # its managed driver lost the device: repaired by lifecycle transitions, not restarted
         peer.wait_for(lambda: repair_of(peer, "hokuyo_node").endswith("succeeded"),
                       "the Hokuyo driver's repair verified", WAIT_S)
