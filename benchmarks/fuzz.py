@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import os
 import platform
 import random
@@ -63,13 +64,24 @@ SETTLE_S = 2.0
 KEY_HEX = os.urandom(32).hex()  # the board's: only the observer uses it, never the fuzzer
 
 
+def _udp_port() -> int:
+    """A UDP port the kernel gave nobody else just now (its own choice for a bind to 0)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
 class Board:
     """``dxboard emulate`` with every front end; its control endpoint tells the truth."""
 
     def __init__(self, runtime: str) -> None:
         group = f"239.74.{random.randrange(1, 250)}.{random.randrange(1, 250)}"
         self.err = tempfile.TemporaryFile(mode="w+")  # noqa: SIM115 (closed by stop)
-        env = {**os.environ, "DXBOARD_KEY": KEY_HEX, "PYTHONPATH": str(ROOT)}
+        # a UDP port of this run's own for the bus (python-can reads $CAN_CONFIG): Linux hands
+        # a multicast datagram to every socket bound to its port, whatever group it joined
+        self.can_port = _udp_port()
+        env = {**os.environ, "DXBOARD_KEY": KEY_HEX, "PYTHONPATH": str(ROOT),
+               "CAN_CONFIG": json.dumps({"port": self.can_port})}
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "host.cli", "emulate", str(ROOT / "models" / "tedusar"),
              "--runtime", runtime, "--modbus", "127.0.0.1:0", "--serial",
@@ -294,8 +306,8 @@ def probe_tug(board: Board) -> bool:
 
 
 class CanFront:
-    def __init__(self, group: str) -> None:
-        self.bus = pycan.Bus(interface="udp_multicast", channel=group,
+    def __init__(self, group: str, port: int) -> None:
+        self.bus = pycan.Bus(interface="udp_multicast", channel=group, port=port,
                              receive_own_messages=False)
 
     def send(self, frames: list[tuple[int, bytes]]) -> None:
@@ -348,7 +360,7 @@ def run(frames: int = 1_000_000, seed: int = 1, runtime: str = "cpython",
             elif name == "modbus":
                 fronts[name] = StreamFront(board.address("modbus"))
             elif name == "can":
-                fronts[name] = CanFront(board.group)
+                fronts[name] = CanFront(board.group, board.can_port)
             else:
                 fronts[name] = StreamFront(board.address("tug"))
         probes = {"tcp": lambda: probe_tcp(board), "modbus": lambda: probe_modbus(board),

@@ -11,6 +11,7 @@ from __future__ import annotations
 import hashlib
 import hmac
 import itertools
+import json
 import random
 import time
 from collections.abc import Iterator
@@ -22,6 +23,7 @@ import cantools
 import pytest
 
 from tests.emulator.wire import KEY, Emulate
+from tests.ports import reserved_udp_port
 
 DBC = Path(__file__).resolve().parents[2] / "protocol" / "dxboard.dbc"
 
@@ -96,13 +98,18 @@ class Peer:
 
 @pytest.fixture(scope="module", params=["cpython", "micropython"])
 def peer(request: pytest.FixtureRequest) -> Iterator[Peer]:
+    # Linux hands a multicast datagram to every socket bound to its port, whatever group it
+    # joined: a port of its own (python-can takes it from $CAN_CONFIG, here and in the
+    # emulator, which inherits the environment) keeps a second copy of the suite off this bus
     group = f"239.74.{random.randrange(1, 250)}.{random.randrange(1, 250)}"
-    with Emulate("--runtime", request.param, "--can", f"udp_multicast:{group}"):
-        p = Peer(group)
-        try:
-            yield p
-        finally:
-            p.close()
+    with reserved_udp_port() as port, pytest.MonkeyPatch.context() as mp:
+        mp.setenv("CAN_CONFIG", json.dumps({"port": port}))
+        with Emulate("--runtime", request.param, "--can", f"udp_multicast:{group}"):
+            p = Peer(group)
+            try:
+                yield p
+            finally:
+                p.close()
 
 
 def test_broadcasts_decode_as_the_dbc_says(peer: Peer) -> None:
