@@ -14,15 +14,19 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[test,ros]'
 	touch $(STAMP)
 
-# The main job on the emulated board: the daemon keeps the virtual TEDUSAR robot healthy.
+# The main job on the emulated board: the daemon keeps the virtual TEDUSAR robot healthy,
+# its nodes real ROS 2 nodes (DXBOARD_MIDDLEWARE=zenoh make run: plain Zenoh instead).
 # A development key lets a person switch channels too (see README.md).
+DXBOARD_MIDDLEWARE ?= ros2
+CONTROL ?= 127.0.0.1:7001
+WEB     ?= 127.0.0.1:8080
 DEV_KEY := .dxboard-dev.key
 run: $(STAMP)
 	test -s $(DEV_KEY) || (umask 077; $(BIN)/python -c "import secrets; print(secrets.token_hex(32))" > $(DEV_KEY))
-	@echo "dxboard: the TEDUSAR robot on the emulated board; open the web address below."
-	@echo "  try: .venv/bin/dxboard inject 127.0.0.1:7001 hokuyo hang    (Ctrl-C stops everything)"
-	$(BIN)/dxboard run models/tedusar --emulate --control 127.0.0.1:7001 \
-		--web 127.0.0.1:8080 --journal dxboard-journal.sqlite --key-file $(DEV_KEY)
+	@echo "dxboard: the TEDUSAR robot ($(DXBOARD_MIDDLEWARE)) on the emulated board; open the web address below."
+	@echo "  try: .venv/bin/dxboard inject $(CONTROL) hokuyo hang    (Ctrl-C stops everything)"
+	$(BIN)/dxboard run models/tedusar --emulate --middleware $(DXBOARD_MIDDLEWARE) \
+		--control $(CONTROL) --web $(WEB) --journal dxboard-journal.sqlite --key-file $(DEV_KEY)
 
 test: $(STAMP) lint pytest mpytest
 

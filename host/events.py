@@ -12,7 +12,8 @@ under the same ``action_id``); ``RepairEnded`` how a repair ended; ``QuarantineC
 ``HoldChange`` a component taken out of (or given back to) automatic repair, by the daemon or a
 person; ``BoardEvent`` what the board said (a trip, a state change, a fresh state after
 connecting); ``LinkChange`` the board link going up or down; ``ChannelSample`` the channels'
-states and currents a few times a second (for the page; not journaled); ``Telemetry`` a
+states and currents and the board's input voltage a few times a second (for the page and the
+ROS 2 reports; not journaled); ``Telemetry`` a
 downsampled summary of the channel currents over one period (never raw samples; stored as
 compact ``[channel, samples, mean, min, max, last]`` rows in mA); ``RunStarted`` the start of
 one daemon run (its id numbers the journal's runs); ``Note`` free text.
@@ -348,17 +349,22 @@ class ChannelReading:
 
 @dataclass(frozen=True)
 class ChannelSample:
-    """Every channel's state and current now (a few times a second; not journaled)."""
+    """Every channel's state and current now, and the board's input voltage (``input_mv``,
+    None when unknown) (a few times a second; not journaled)."""
 
     channels: tuple[ChannelReading, ...]
+    input_mv: int | None = None
     kind: ClassVar[Kind] = Kind.CHANNELS
 
     def to_json(self) -> JSON:
-        return {"channels": [dataclasses.asdict(c) for c in self.channels]}
+        return {"channels": [dataclasses.asdict(c) for c in self.channels],
+                "input_mv": self.input_mv}
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> ChannelSample:
-        return cls(tuple(ChannelReading(**c) for c in data["channels"]))
+        mv = data.get("input_mv")
+        return cls(tuple(ChannelReading(**c) for c in data["channels"]),
+                   None if mv is None else int(mv))
 
 
 @dataclass(frozen=True)

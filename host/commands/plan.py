@@ -1,16 +1,19 @@
 """Offline repair planning: a diagnosis in, a partially ordered repair plan out.
 
-``dxboard plan MODEL --bad A,B [--bad C ...] [--diagnoses FILE] [--obs FILE]
-[--planner NAME] [--domain FILE] [--write-problem FILE] [--json]``. MODEL is a robot
+``dxboard plan MODEL --bad A,B [--bad C ...] [--diagnoses FILE] [--obs FILE] [--planner NAME]
+[--domain FILE] [--middleware zenoh|ros2] [--write-problem FILE] [--json]``. MODEL is a robot
 directory (system.yaml and repair.pddl) or a tug model file of the original system (its
 components' kinds and dependencies read off the clauses; the domain is ``--domain`` or the
-repair.pddl beside it). Any domain plans whose words for abnormal / healthy / powered /
-running are declared or follow the original's conventions (``bad``/``good``/``not_on``: see
-host/repair/vocabulary.py). Each ``--bad`` is one diagnosis (the components it finds
-abnormal); ``--diagnoses`` reads the JSON of ``dxboard diagnose --json``. With several
-diagnoses the policy picks one (or all at once) and prints why. ``--obs`` holds observations
-in the format of ``dxboard diagnose`` (``~on(jaguar)``, ``running(jaguar_node)``); a literal
-the model does not know is an error; what is not observed is assumed and listed.
+repair.pddl beside it). Any domain plans whose words for abnormal / healthy / powered / running
+are declared or follow the original's conventions (``bad``/``good``/``not_on``: see
+host/repair/vocabulary.py). Each ``--bad`` is one diagnosis (the components it finds abnormal);
+``--diagnoses`` reads the JSON of ``dxboard diagnose --json``. With several diagnoses the policy
+picks one (or all at once) and prints why. ``--obs`` holds observations in the format of
+``dxboard diagnose`` (``~on(jaguar)``, ``running(jaguar_node)``); a literal the model does not
+know is an error; what is not observed is assumed and listed. The robot's middleware decides, as
+for the daemon, whether a managed (``lifecycle: true``) node is repaired by ``reconfigure_node``
+(ROS 2) or restarted (Zenoh): ``--middleware``, else ``$DXBOARD_MIDDLEWARE``, else the robot's
+``observers: source: kind:`` (robot directories only).
 ``dxboard plan --problem FILE --domain FILE`` plans a PDDL problem file as it is (the original
 repair server's). Nothing is switched: planning is a dry run. ``--json`` prints ``{"plan":
 [{"id": 0, "action": "power_up", "args": ["jaguar"], "after": []}, ...], "layers": ...,
@@ -21,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -47,6 +51,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--domain", metavar="FILE",
                         help="repair domain (default: MODEL/repair.pddl, or the repair.pddl "
                         "beside a tug model file)")
+    parser.add_argument("--middleware", choices=("zenoh", "ros2"),
+                        help="the robot's middleware, as `dxboard run --middleware`: with ros2 "
+                        "a managed node (lifecycle: true) is repaired by reconfigure_node "
+                        "(default: $DXBOARD_MIDDLEWARE, else the robot's observers: source: "
+                        "kind:; robot directories only)")
     parser.add_argument("--problem", metavar="FILE",
                         help="plan this PDDL problem file as it is (with --domain; no MODEL)")
     parser.add_argument("--write-problem", metavar="FILE",
@@ -69,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
     if args.system is None:
         raise UserError("no model given", "dxboard plan MODEL --bad A,B (or --problem FILE "
                         "--domain FILE)")
-    planner = RepairPlanner.for_system(args.system, args.domain)
+    planner = RepairPlanner.for_system(args.system, args.domain, managed=_managed(args))
     theory = load_theory(args.system)
     observations = ([o.literal for o in read_observations(args.obs, theory)]
                     if args.obs else [])
@@ -101,13 +110,38 @@ def _print_plan(plan: Plan) -> None:
         print(f"note: {note}")
 
 
+def _managed(args: argparse.Namespace) -> list[str]:
+    """The robot's managed nodes on its middleware, as the daemon finds them."""
+    from host.diagnosis.model import SYSTEM_FILE, load_system
+    from host.errors import UserError
+    from host.observers.config import load_observers
+    from host.repair.processes import load_processes, managed_nodes
+
+    path = Path(args.system)
+    if not (path.is_dir() or path.name == SYSTEM_FILE):
+        if args.middleware is not None:
+            raise UserError(f"{path}: --middleware is for a robot directory (its processes: "
+                            "say which nodes are managed)",
+                            "give the robot's directory, or leave --middleware out")
+        return []
+    middleware = args.middleware or os.environ.get("DXBOARD_MIDDLEWARE") or None
+    if middleware not in (None, "zenoh", "ros2"):
+        raise UserError(f"DXBOARD_MIDDLEWARE={middleware}: not a middleware",
+                        "set it to zenoh or ros2, or unset it")
+    model = load_system(path)
+    processes = load_processes(path, model)
+    if not any(p.lifecycle for p in processes.values()):
+        return []  # nothing to decide: the observers need not be read
+    return managed_nodes(processes, middleware or load_observers(path, model).source.kind)
+
+
 def _problem_file(args: argparse.Namespace) -> int:
     from host.errors import UserError
     from host.repair.domain import load_domain
     from host.repair.problem_file import plan_problem_file
 
     if args.domain is None or args.system is not None or args.bad or args.diagnoses \
-            or args.obs:
+            or args.obs or args.middleware:
         raise UserError("--problem plans a problem file as it is",
                         "give only --problem FILE --domain FILE (and --planner, --json)")
     plan = plan_problem_file(load_domain(args.domain), Path(args.problem), args.planner)

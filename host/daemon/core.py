@@ -53,7 +53,7 @@ from host.observers.config import ObserversConfig, SourceSpec
 from host.operator.server import OperatorServer
 from host.repair import service
 from host.repair.planner import RepairPlanner
-from host.repair.processes import ProcessConfig, load_processes
+from host.repair.processes import ProcessConfig, load_processes, managed_nodes
 from host.web.fold import StatusFold
 from host.web.server import WebServer
 from host.web.status import MemoryStatusSource, Status
@@ -116,8 +116,7 @@ def load_robot(system_dir: Path, zenoh_listen: list[str] | None = None,
     if middleware is not None:
         observers.source = dataclasses.replace(observers.source, kind=middleware)
     processes = load_processes(system_dir, model)
-    managed = ([n for n, p in processes.items() if p.lifecycle]
-               if observers.source.kind == "ros2" else [])  # lifecycle needs ROS 2
+    managed = managed_nodes(processes, observers.source.kind)
     return RobotFiles(model, theory, observers, processes,
                       RepairPlanner.for_system(system_dir, managed=managed))
 

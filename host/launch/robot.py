@@ -85,7 +85,7 @@ class LaunchedRobot:
     async def __aenter__(self) -> LaunchedRobot:
         la = self.launch
         opts = la.daemon or DaemonOptions(system_dir=la.system_dir, board_url="")
-        files = load_robot(la.system_dir, opts.zenoh_listen)
+        files = load_robot(la.system_dir, opts.zenoh_listen, opts.middleware)
         if opts.web is not None:
             _check_free(*opts.web, "--web")
         for endpoint in files.observers.source.listen:

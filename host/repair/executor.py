@@ -21,7 +21,9 @@ sum of every step's settle time. Each step:
    a state alone (``running(n)``, ``on(d)``, ``in_band(d)``) in one made once
    the step has settled (a process that dies at once, a device that trips while it boots do
    not pass). The settle time is not waited out otherwise: it only sets the deadline, settle
-   + ``verify_s`` (``Beliefs.wait_for``) — after it ``failed`` with what was seen instead, and
+   + ``verify_s`` (``Beliefs.wait_for``), the settle counted again from the moment the steps
+   it waits for were verified if that was later (a node whose input came late gets its own
+   time after it) — after it ``failed`` with what was seen instead, and
    at once when the board trips the channel the step switched on; then ``succeeded``.
 
 On the first failed step nothing new starts; steps already running finish, and ``execute``
@@ -377,6 +379,7 @@ class Executor:
             await asyncio.sleep(max(0.0, acted - self.clock()))
         # the effect is due once this step and what it waits for have settled
         due = max([end, *(prog.due[p] for p in waits if prog is not None)]) + settle
+        settled = due  # ... and, if what it waits for came later than due, settle after that
         if prog is not None:
             prog.acted(step.id, due)
             for p in waits:
@@ -384,11 +387,13 @@ class Executor:
                     why = f"not verified: {prog.plan.steps[p]} failed"
                     finish(ActionState.FAILED, f"{detail}; {why}")
                     return why
+            if waits:
+                settled = max(due, self.clock() + settle)
         if expected:
             # output (a topic flowing) ends the wait the moment it is seen; a state alone (a
             # process running, a channel on) must still hold once the step has settled
             fresh = acted if early else due
-            deadline = due + self.verify_s
+            deadline = settled + self.verify_s
             abort = contradictions(step, self.observable)
             if not await self.beliefs.wait_for(expected, fresh, deadline - self.clock(),
                                                abort=abort, abort_after=end):

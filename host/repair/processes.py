@@ -28,13 +28,16 @@ other options are left alone). Other arguments are passed unchanged; they are re
 ``cwd``, where the process runs (the project root by default).
 
 ``load_processes(dir, model)`` returns ``{node: ProcessConfig}`` or raises
-``ProcessConfigError`` naming the file, the line and the fix for every problem.
-``ProcessSupervisor`` (in ``host.repair.supervisor``) runs them.
+``ProcessConfigError`` naming the file, the line and the fix for every problem;
+``managed_nodes(processes, middleware)`` those the planner may repair by lifecycle
+transitions (the daemon's and ``dxboard plan``'s one rule). ``ProcessSupervisor`` (in
+``host.repair.supervisor``) runs them.
 """
 
 from __future__ import annotations
 
 import sys
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -71,6 +74,12 @@ class ProcessConfig:
     @property
     def is_systemd(self) -> bool:
         return self.unit is not None
+
+
+def managed_nodes(processes: Mapping[str, ProcessConfig], middleware: str) -> list[str]:
+    """The nodes repaired by lifecycle transitions (``reconfigure_node``): those marked
+    ``lifecycle: true``, and only on ROS 2 (``middleware`` ``ros2``: Zenoh has no lifecycle)."""
+    return [n for n, p in processes.items() if p.lifecycle] if middleware == "ros2" else []
 
 
 def project_root(robot_dir: Path) -> Path:

@@ -10,9 +10,9 @@ the diagnostic aggregator, Foxglove, ``ros2 topic echo``)::
                          channels, board) at once whenever one changes, and once a second
     /board_measurements  std_msgs/Float32MultiArray       channel currents in A, index =
                          channel number (names: the /diagnostics statuses), each sample
-    /battery_state       sensor_msgs/BatteryState         current = -(sum of the channels)
-                         (discharging is negative); voltage NaN: the event stream does not
-                         carry the board's input voltage yet
+    /battery_state       sensor_msgs/BatteryState         voltage = the board's input voltage
+                         (NaN only while the board does not say it), current = -(sum of
+                         the channels) (discharging is negative); charge etc. NaN
     /diagnosis           diagnostic_msgs/DiagnosticArray  the minimal diagnoses of each run
                          that changed them: one status per diagnosis, best first, named
                          "dxboard diagnosis N", level ERROR (OK for the empty one), message the
@@ -94,8 +94,10 @@ class RosPublisher:
         self._measurements.publish(m)
         b = BatteryState()
         b.header.stamp = self._stamp()
-        b.voltage = b.temperature = b.charge = b.capacity = b.design_capacity = math.nan
+        b.temperature = b.charge = b.capacity = b.design_capacity = math.nan
         b.percentage = math.nan
+        volts = self.fold.input_v
+        b.voltage = math.nan if volts is None else volts
         b.current = -sum(currents)
         b.present = True
         b.power_supply_status = BatteryState.POWER_SUPPLY_STATUS_UNKNOWN

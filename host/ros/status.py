@@ -16,8 +16,9 @@ diagnoses it is abnormal, of how many), ``repair`` (its latest repair action and
 state), ``quarantined`` and ``held``. One status per board channel, ``dxboard board: NAME``
 (ERROR when tripped, latched or faulted; STALE while the link is down; key/values state, on,
 current_a, last_event), and one for the board, ``dxboard board`` (OK while the link is up,
-else ERROR with the reason). ``diagnoses`` and ``currents_a`` are the latest minimal diagnoses
-and channel currents, for ``/diagnosis`` and ``/board_measurements``.
+else ERROR with the reason; key/values link, total_current_a, input_v). ``diagnoses``,
+``currents_a`` and ``input_v`` are the latest minimal diagnoses, channel currents and the
+board's input voltage, for ``/diagnosis``, ``/board_measurements`` and ``/battery_state``.
 """
 
 from __future__ import annotations
@@ -99,6 +100,12 @@ class StatusFold:
         return self.diagnosis.diagnoses if self.diagnosis is not None else ()
 
     @property
+    def input_v(self) -> float | None:
+        """The board's input voltage (V) while the link is up and the board says it."""
+        mv = self.channels.input_mv if self.channels is not None else None
+        return mv / 1000.0 if mv is not None and self.link_up else None
+
+    @property
     def currents_a(self) -> list[float]:
         """Every channel's current (A), in channel order; empty before the first sample."""
         return [c.current_ma / 1000.0 for c in self.channels.channels] if self.channels else []
@@ -129,7 +136,9 @@ class StatusFold:
         out = [Status(OK if self.link_up else ERROR, "dxboard board",
                       "link up" if self.link_up else f"link down: {self.link_reason}", "board",
                       (("link", "up" if self.link_up else "down"),
-                       ("total_current_a", f"{sum(self.currents_a):.3f}")))]
+                       ("total_current_a", f"{sum(self.currents_a):.3f}"),
+                       ("input_v", "unknown" if self.input_v is None
+                        else f"{self.input_v:.3f}")))]
         for c in self.channels.channels if self.channels else ():
             if not self.link_up:
                 level, message = STALE, "board link down"

@@ -9,15 +9,18 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
 import signal
 import subprocess
 import sys
 import threading
 import time
 import urllib.request
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
+
+import psutil
 
 from host.experiment.robot import fast_model
 from host.journal import Entry, JournalReader
@@ -36,9 +39,13 @@ def fast_copy(tmp: Path) -> Path:
 
 class RunningDaemon:
     def __init__(self, tmp: Path, system_dir: Path = TEDUSAR,
-                 extra_args: tuple[str, ...] = (), zenoh: str | None = None) -> None:
+                 extra_args: tuple[str, ...] = (), zenoh: str | None = None,
+                 env: Mapping[str, str] | None = None) -> None:
         """``zenoh``: the topic endpoint to use (a restarted daemon takes its predecessor's,
-        where the nodes it left behind reconnect); default: a fresh one."""
+        where the nodes it left behind reconnect); default: a fresh one. ``env``: variables
+        to set for it (and the nodes it starts), e.g. a ROS 2 domain of the test's own."""
+        self.env = {**os.environ, **(env or {})}
+        self.system_dir = system_dir
         self.journal_path = tmp / "journal.sqlite"
         self.err_path = tmp / "daemon.err"
         for _ in range(5):  # its zenoh port taken by another process meanwhile: a fresh one
@@ -65,7 +72,7 @@ class RunningDaemon:
         """Start ``dxboard run``; True once it printed every URL, False if it exited."""
         with self.err_path.open("ab") as err:
             self.proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=err,
-                                         text=True)
+                                         text=True, env=self.env)
         self.urls: dict[str, str] = {}
         assert self.proc.stdout is not None
         while "journal" not in self.urls:
@@ -167,6 +174,22 @@ class RunningDaemon:
             self.proc.stdout.close()
 
 
+def node_processes(robot: Path) -> dict[str, list[int]]:
+    """The virtual robot's node processes of this robot directory, by node."""
+    out: dict[str, list[int]] = {}
+    for p in psutil.process_iter(["pid", "cmdline"]):
+        try:
+            cmd = p.info["cmdline"] or []
+            if "emulator.robot.node" not in cmd or p.status() == psutil.STATUS_ZOMBIE:
+                continue
+            if p.environ().get("DXBOARD_ROBOT") != str(robot.resolve()):
+                continue
+        except psutil.Error:
+            continue
+        out.setdefault(cmd[cmd.index("emulator.robot.node") + 1], []).append(p.info["pid"])
+    return out
+
+
 KEY = bytes(range(32))
 
 
@@ -209,5 +232,5 @@ def bad_sets(status: dict[str, Any]) -> list[set[str]]:
 
 __all__ = [
     "KEY", "RunningDaemon", "bad_sets", "fast_copy", "healthy", "healthy_robot",
-    "key_file", "last_id",
+    "key_file", "last_id", "node_processes",
 ]

@@ -16,28 +16,12 @@ import psutil
 import pytest
 
 from host.journal import QuarantineChange
-from tests.daemon.runner import RunningDaemon, fast_copy, healthy, key_file
+from tests.daemon.runner import RunningDaemon, fast_copy, healthy, key_file, node_processes
 
 HEAL_S = 120.0
 NODES = ("jaguar_node", "hokuyo_node", "laser_alignment_node", "imu_node", "joy_node",
          "jaguar_teleop_node", "hector_mapping", "laser_alignment_control",
          "thermal_camera_node")  # the camera's driver: beyond paper 000's model
-
-
-def node_processes(robot: Path) -> dict[str, list[int]]:
-    """The virtual robot's node processes of this test's robot directory, by node."""
-    out: dict[str, list[int]] = {}
-    for p in psutil.process_iter(["pid", "cmdline"]):
-        try:
-            cmd = p.info["cmdline"] or []
-            if "emulator.robot.node" not in cmd or p.status() == psutil.STATUS_ZOMBIE:
-                continue
-            if p.environ().get("DXBOARD_ROBOT") != str(robot.resolve()):
-                continue
-        except psutil.Error:
-            continue
-        out.setdefault(cmd[cmd.index("emulator.robot.node") + 1], []).append(p.info["pid"])
-    return out
 
 
 @pytest.fixture

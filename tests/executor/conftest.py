@@ -85,8 +85,9 @@ def robot_dir(tmp: Path, processes: str, domain: str | None = None) -> Path:
 class Rig:
     def __init__(self, robot: Path, devices: Sequence[str], nodes: Sequence[str],
                  topics: Sequence[str] = (), endpoint: str | None = None,
-                 max_attempts: int = 3, dry_run: bool = False) -> None:
+                 max_attempts: int = 3, dry_run: bool = False, verify_s: float = 1.5) -> None:
         self.robot = robot
+        self.verify_s = verify_s
         self.model: SystemModel = load_system(robot)
         self.planner = RepairPlanner.for_system(robot)
         self.processes = load_processes(robot, self.model)
@@ -138,7 +139,7 @@ class Rig:
             settle=settle_times(self.model, self.processes,
                                 devices=dict.fromkeys(self.model.components, 0.3)),
             limiter=AttemptLimiter(self.max_attempts, 600.0), report=self.events.append,
-            dry_run=self.dry_run, verify_s=1.5, observable=self.observable)
+            dry_run=self.dry_run, verify_s=self.verify_s, observable=self.observable)
         return self
 
     async def __aexit__(self, *exc: object) -> None:

@@ -227,3 +227,59 @@ async def test_a_driver_starts_while_its_device_settles_and_ends_when_its_output
             ("power_up(jaguar)", ActionState.SUCCEEDED))
         done = [e for e in reports(rig) if e.state is ActionState.SUCCEEDED]
         assert "observed ok(/odom), running(jaguar_node)" in done[-1].detail
+
+
+SCAN_NODE = """\
+import os, time
+from pathlib import Path
+from host.observers.publisher import TopicPublisher
+with TopicPublisher([os.environ["ENDPOINT"]]) as pub:
+    time.sleep(4.0)  # a slow start (a ROS 2 node on a loaded machine: imports, discovery)
+    Path(os.environ["FLOWING"]).write_text("yes")
+    while True:
+        pub.put("/scan", {})
+        time.sleep(0.05)
+"""
+
+MAP_NODE = """\
+import os, time
+from pathlib import Path
+from host.observers.publisher import TopicPublisher
+with TopicPublisher([os.environ["ENDPOINT"]]) as pub:
+    while not Path(os.environ["FLOWING"]).exists():  # its input, /scan
+        time.sleep(0.05)
+    time.sleep(6.0)  # a map needs some scans first
+    while True:
+        pub.put("/map", {})
+        time.sleep(0.05)
+"""
+
+
+async def test_a_node_whose_input_came_late_gets_its_own_time_after_it(
+        tmp_path: Path, endpoint: str) -> None:
+    # Found on the ROS 2 robot: hector_mapping's start was verified against a deadline counted
+    # from when /scan's driver was *due*, not when its /scan was seen; the driver came 4 s late
+    # (rclpy on a loaded machine), so the mapper failed though it worked as soon as it could.
+    for name, text in (("scan.py", SCAN_NODE), ("map.py", MAP_NODE)):
+        (tmp_path / name).write_text(text)
+    env = (f'env: {{ENDPOINT: "{endpoint}", PYTHONPATH: "{TEDUSAR.parents[1]}", '
+           f'FLOWING: "{tmp_path / "flowing"}"}}')
+    robot = robot_dir(tmp_path, f"""\
+hokuyo_node: {{command: [python, {tmp_path / 'scan.py'}], settle_s: 0.5, {env}}}
+hector_mapping: {{command: [python, {tmp_path / 'map.py'}], settle_s: 0.5, {env}}}
+""")
+    async with Rig(robot, ["hokuyo"], ["hokuyo_node", "hector_mapping"], ["/scan", "/map"],
+                   endpoint, verify_s=8.0) as rig:
+        await rig.client.switch(3, True)  # the lidar is on; its driver and the mapper are not
+        await rig.until({"on(hokuyo)": True, "running(hokuyo_node)": False,
+                         "running(hector_mapping)": False})
+        plan = rig.planner.plan({"hokuyo_node", "hector_mapping"},
+                                rig.diagnoser.observations.literals())
+        assert [str(s) for s in plan.steps] == ["start_node(hokuyo_node)",
+                                                "start_node(hector_mapping)"]
+        async with asyncio.timeout(120):  # a deadline for a broken executor, not a measure
+            res = await rig.executor.execute(plan)
+        done = {str(e.step): (e.state, e.detail) for e in reports(rig) if e.finished is not None}
+        assert res.outcome is Outcome.DONE, done
+        assert done["start_node(hector_mapping)"][0] is ActionState.SUCCEEDED
+        assert "observed ok(/map)" in done["start_node(hector_mapping)"][1]

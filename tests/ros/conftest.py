@@ -1,9 +1,9 @@
 """ROS 2 in the tests: a DDS domain of the test's own, and a plain rclpy peer that knows no dxboard.
 
-``domain`` claims a ``ROS_DOMAIN_ID`` for one test: it starts from the test process's pid and
-holds an exclusive lock file per domain (``/tmp/dxboard-ros-domain-N.lock``) for the test's
-duration, so two suites beside each other, or two tests of one, never share a domain; discovery
-stays on this machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``). ``env`` is the process
+``domain`` claims a ``ROS_DOMAIN_ID`` for one test (``tests.ros.domain``: from the test
+process's pid, held by a lock file per domain for the test's duration, so two suites beside
+each other, or two tests of one, never share a domain); discovery stays on this machine
+(``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``). ``env`` is the process
 environment with that domain, for the subprocesses a test starts.
 
 ``Peer`` is the independent observer: plain rclpy and the standard message packages, nothing
@@ -14,7 +14,6 @@ of the topics it is told (arrival time, message object), and reads the ROS 2 gra
 from __future__ import annotations
 
 import contextlib
-import fcntl
 import json
 import os
 import subprocess
@@ -34,48 +33,24 @@ from rclpy.signals import SignalHandlerOptions
 
 from tests.robot import conftest as robot_fixtures
 from tests.robot.conftest import ROOT, Nodes, Robot
+from tests.ros.domain import claim_domain, domain_env
 from tests.wait import wait_until
 
 robot_dir = robot_fixtures.robot_dir  # the virtual robot's fixtures, shared
 robot = robot_fixtures.robot
 
-DOMAINS = 100  # 1..100: Fast DDS's port formula fits them all on one host
-_counter = [0]
-
-
-@contextlib.contextmanager
-def claim_domain() -> Iterator[int]:
-    """A free domain id, held (by a lock file) until the block ends."""
-    _counter[0] += 1
-    start = (os.getpid() * 7 + _counter[0]) % DOMAINS
-    for i in range(DOMAINS):
-        d = 1 + (start + i) % DOMAINS
-        f = Path(f"/tmp/dxboard-ros-domain-{d}.lock").open("w")  # noqa: SIM115 - held
-        try:
-            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            f.close()
-            continue
-        try:
-            yield d
-        finally:
-            f.close()
-        return
-    raise RuntimeError("every ROS 2 domain 1..100 is taken by other tests")
-
 
 @pytest.fixture
 def domain(monkeypatch: pytest.MonkeyPatch) -> Iterator[int]:
     with claim_domain() as d:
-        monkeypatch.setenv("ROS_DOMAIN_ID", str(d))
-        monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+        for name, value in domain_env(d).items():
+            monkeypatch.setenv(name, value)
         yield d
 
 
 @pytest.fixture
 def env(domain: int) -> dict[str, str]:
-    return {**os.environ, "ROS_DOMAIN_ID": str(domain),
-            "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    return {**os.environ, **domain_env(domain)}
 
 
 class Peer:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import yaml
 from diagnostic_msgs.msg import DiagnosticArray
 from sensor_msgs.msg import BatteryState
 from std_msgs.msg import Float32MultiArray
@@ -45,6 +46,12 @@ def repair_of(peer: Peer, component: str) -> str:
                  if kv.key == "repair"), "")
 
 
+def battery_v(system: Path) -> float:
+    """The emulated battery's voltage: ``board: input_mv`` of the robot's ``emulator.yaml``."""
+    board = yaml.safe_load((system / "emulator.yaml").read_text())["board"]
+    return float(board["input_mv"]) / 1000.0
+
+
 def ros_robot(tmp: Path) -> Path:
     d = fast_copy(tmp)
     text = (d / "system.yaml").read_text()
@@ -59,7 +66,8 @@ def test_an_independent_subscriber_sees_the_hokuyo_go_error_on_a_hang_and_ok_aft
                         ("/board_measurements", Float32MultiArray),
                         ("/battery_state", BatteryState)):
         peer.listen(topic, kind)
-    daemon = RunningDaemon(tmp_path, ros_robot(tmp_path))
+    system = ros_robot(tmp_path)
+    daemon = RunningDaemon(tmp_path, system)
     try:
         # the power-up: everything starts off, the daemon brings the robot up by itself (only
         # the Hokuyo, its driver and the board matter here: on a loaded machine another
@@ -74,6 +82,8 @@ def test_an_independent_subscriber_sees_the_hokuyo_go_error_on_a_hang_and_ok_aft
         assert 0.2 <= board.data[3] <= 1.2  # the Hokuyo's channel, in its band (A)
         battery = peer.collect("/battery_state", 1)[-1]
         assert battery.current < 0 and battery.present  # discharging
+        # the board's input: the emulated battery's voltage (the model's value, 10 mV steps)
+        assert abs(battery.voltage - battery_v(system)) < 0.05, battery.voltage
         # (the power-up's first diagnoses may go out before DDS discovery has matched the
         # peer's subscription — volatile QoS, as a real topic: /diagnosis is checked on the
         # hang below, published long after discovery)

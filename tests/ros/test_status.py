@@ -58,7 +58,12 @@ def test_board_and_channels() -> None:
     assert s["dxboard board: hokuyo"][:2] == (ERROR, "tripped")
     assert s["dxboard board: hokuyo"][2]["last_event"] == "trip"
     assert fold.currents_a == [0.25, 0.0]
+    assert fold.input_v is None  # the sample did not say the board's input voltage
+    feed(fold, ChannelSample(sample.channels, input_mv=22150))
+    assert fold.input_v == 22.15
+    assert by_name(fold)["dxboard board"][2]["input_v"] == "22.150"
     feed(fold, LinkChange(False, "timeout"))
+    assert fold.input_v is None  # no longer known
     s = by_name(fold)
     assert s["dxboard board"][:2] == (ERROR, "link down: timeout")
     assert s["dxboard board: sensor_head"][0] == STALE
