@@ -114,14 +114,21 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
     if rules is None:
         raise fail(("rules",), "rules is not a list", "write rules: ['NAB(a) -> ok(x)']")
     clauses: list[Clause] = []
-    unlisted: dict[str, None] = {}  # atoms rules use that props does not list
+    negated: dict[str, Literal] = {}  # a body's text -> its literal, negated (parsed once)
     for i, rule in rules:
         path = ("rules", i)
         text = str(rule)
         body_text, arrow, head_text = text.partition("->")
         if not arrow:
             body_text, head_text = "", text
-        body = [literal(t, path) for t in body_text.split(",") if t.strip()]
+        lits: list[Literal] = []
+        for t in body_text.split(","):
+            lit = negated.get(t)
+            if lit is None:
+                if not t.strip():
+                    continue
+                lit = negated[t] = -literal(t, path)
+            lits.append(lit)
         head_text = head_text.strip()
         if not head_text:
             raise fail(path, f"rule {text!r} has an empty head",
@@ -129,14 +136,12 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
         if head_text.lower() == "false":
             if not arrow:
                 raise fail(path, f"rule {text!r} says only false", "write body -> false")
-            head: list[Literal] = []
         else:
-            head = [literal(t, path) for t in head_text.split("|")]
-        clause = Clause(tuple([-b for b in body] + head))
-        for lit in clause.lits:
-            if lit.atom not in known and ab_component(lit.atom) is None:
-                unlisted.setdefault(lit.atom)
-        clauses.append(clause)
+            lits.extend(literal(t, path) for t in head_text.split("|"))
+        clauses.append(Clause(tuple(lits)))
+    # atoms rules use that props does not list, in the order rules first use them
+    unlisted = {lit.atom: None for lit in seen.values()
+                if lit.atom not in known and ab_component(lit.atom) is None}
     priors = data.get("priors") or {}
     if not isinstance(priors, dict):
         raise fail(("priors",), "priors is not a mapping", "write priors: {name: 0.01}")
