@@ -84,10 +84,13 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
     seen: dict[str, Literal] = {}  # a model repeats its literals: parse each text once
 
     def literal(text: str, path: tuple[object, ...]) -> Literal:
-        s = text.strip()
-        lit = seen.get(s)
+        lit = seen.get(text)
         if lit is None:
-            lit = seen[s] = parse(s, text, path)
+            s = text.strip()
+            lit = seen.get(s)
+            if lit is None:
+                lit = seen[s] = parse(s, text, path)
+            seen[text] = lit
         return lit
 
     def parse(s: str, text: str, path: tuple[object, ...]) -> Literal:
@@ -136,8 +139,10 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
         if head_text.lower() == "false":
             if not arrow:
                 raise fail(path, f"rule {text!r} says only false", "write body -> false")
-        else:
+        elif "|" in head_text:
             lits.extend(literal(t, path) for t in head_text.split("|"))
+        else:
+            lits.append(literal(head_text, path))
         clauses.append(Clause(tuple(lits)))
     # atoms rules use that props does not list, in the order rules first use them
     unlisted = {lit.atom: None for lit in seen.values()
