@@ -15,14 +15,17 @@ figures and a plain Reiter HS-tree (same SAT oracle) measured here.
 
 The whole command: ``dxboard diagnose MODEL.yaml --obs FILE --json --min-card-only`` as a
 process, on circuits written as tug model files, against the engine alone on the same
-instance (``Diagnoser`` built, observations added, diagnosed: in process, the model loaded).
+instance (``Diagnoser`` built, observations added, diagnosed: in process, the model loaded),
+in wall and in CPU time; ``--base DIR`` runs the command from another checkout too (the code
+before a change: ``git archive REV | tar -x -C DIR``), interleaved, and times the start-up
+(``dxboard diagnose --help``) of both.
 
 Synthetic robots: layered robot models of 100, 1,000 and 10,000 components in system.yaml
 form; with every observer reporting, one observation at a time flips and flips back; each
 re-diagnosis (observe -> diagnose) is timed, p50/p99.
 
     .venv/bin/python benchmarks/diagnosis.py [--quick] [--seed N] [--per-circuit N]
-        [--only iscas|command|robots] [--write]
+        [--only iscas|command|robots] [--base DIR] [--write]
 
 ``--write`` replaces the "## Diagnosis" section of benchmarks/RESULTS.md.
 """
@@ -34,6 +37,7 @@ import json
 import os
 import platform
 import random
+import resource
 import statistics
 import subprocess
 import sys
@@ -260,12 +264,46 @@ def bench_c432(args: argparse.Namespace, lines: list[str]) -> None:
     lines.append("")
 
 
+def _run_child(cmd: list[str]) -> tuple[float, float, subprocess.CompletedProcess[str]]:
+    """Wall and CPU time (user + system, from the children's usage) of one process."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), proc
+
+
+def _commands(args: argparse.Namespace) -> dict[str, list[str]]:
+    """The command's argv prefix, and the base checkout's (``--base``) when given."""
+    out = {"command": [str(Path(sys.executable).parent / "dxboard")]}
+    if args.base:
+        out["before"] = [sys.executable, "-c", "import sys; sys.path.insert(0, sys.argv.pop(1)); "
+                         "from host.cli import main; sys.exit(main())", str(args.base)]
+    return out
+
+
+def bench_startup(args: argparse.Namespace, lines: list[str]) -> None:
+    """``dxboard diagnose --help``: the interpreter, the imports, argparse; no model."""
+    runs = 5 if args.quick else 20
+    times: dict[str, list[float]] = {}
+    for _ in range(runs):  # interleaved: the machine's load falls on both alike
+        for label, prefix in _commands(args).items():
+            wall, _cpu, proc = _run_child([*prefix, "diagnose", "--help"])
+            assert proc.returncode == 0, proc.stderr
+            times.setdefault(label, []).append(wall)
+    said = "; ".join(f"{label} {fmt(statistics.median(xs))} (best {fmt(min(xs))})"
+                     for label, xs in times.items())
+    lines.append(f"Start-up, `dxboard diagnose --help`, median of {runs} runs: {said}.\n")
+    print(lines[-1], flush=True)
+
+
 def bench_command(args: argparse.Namespace, lines: list[str]) -> None:
     """The whole ``dxboard diagnose`` process against the engine alone, same instances."""
     rng = random.Random(args.seed + 1)
-    dxboard = Path(sys.executable).parent / "dxboard"
     names = ["c6288"] if args.quick else ["c6288", "c7552"]
     per = 3 if args.quick else 10
+    commands = _commands(args)
     lines.append("### The whole command against the engine alone\n")
     lines.append(f"`dxboard diagnose MODEL.yaml --obs FILE --json --min-card-only` (all minimal-"
                  f"cardinality diagnoses, up to 1,000) as a process on the circuit written as a "
@@ -273,10 +311,18 @@ def bench_command(args: argparse.Namespace, lines: list[str]) -> None:
                  "the engine alone on the same instance (diagnoser built, observations added, "
                  "diagnosed; in process, model loaded); the better of two runs each. "
                  "*overhead*: what the command adds (interpreter and imports, reading the "
-                 "model, writing JSON).\n")
-    lines.append("| circuit | model file | engine, sum | command, sum | command / engine | "
-                 "overhead per run, mean / worst | JSON, largest |")
-    lines.append("|---|---|---|---|---|---|---|")
+                 "model, writing JSON); *CPU*: the same ratio in processor time (user + system), "
+                 "which the machine's load changes less than wall time; *runs cut*: command "
+                 f"runs the time budget ({args.budget:g} s) cut (or whose engine run it cut), "
+                 "not compared"
+                 + ("; *before*: the same command from the checkout `--base` names, run "
+                    "interleaved with it" if args.base else "") + ".\n")
+    bench_startup(args, lines)
+    before = "before, sum | before / engine | " if args.base else ""
+    lines.append(f"| circuit | model file | engine, sum | command, sum | {before}"
+                 "command / engine | CPU, command / engine | overhead per run, mean / worst | "
+                 "JSON, largest | load | runs cut |")
+    lines.append("|---|---|---|---|" + ("---|---|" if args.base else "") + "---|" * 6)
     with tempfile.TemporaryDirectory(prefix="dxboard-bench-") as tmp:
         for name in names:
             circuit = parse_bench(ISCAS / f"{name}.bench")
@@ -284,7 +330,13 @@ def bench_command(args: argparse.Namespace, lines: list[str]) -> None:
             known = theory.observable_atoms()
             model = Path(tmp) / f"{name}.yaml"
             write_tug(theory, model)
-            engine, command, overhead, size = [], [], [], 0
+            engine: list[float] = []
+            engine_cpu: list[float] = []
+            wall: dict[str, list[float]] = {label: [] for label in commands}
+            cpu: dict[str, list[float]] = {label: [] for label in commands}
+            overhead: list[float] = []
+            size, cut = 0, 0
+            loads = [os.getloadavg()[0]]
             for n, (_flips, obs) in enumerate(sample(circuit, rng, per)):
                 obs = [o for o in obs if o.atom in known]
                 obs_file = Path(tmp) / f"{name}-{n}.obs"
@@ -298,27 +350,38 @@ def bench_command(args: argparse.Namespace, lines: list[str]) -> None:
                         return d.diagnose(min_card_only=True, max_count=MAX_COUNT,
                                           time_budget_s=args.budget)
 
-                t_engine, r = timed(engine_run)
-                t_engine = min(t_engine, timed(engine_run)[0])  # the better of two: less noise
-                t_cmd = float("inf")
-                for _ in range(2):
-                    start = time.perf_counter()
-                    proc = subprocess.run(
-                        [str(dxboard), "diagnose", str(model), "--obs", str(obs_file), "--json",
-                         "--min-card-only", "--time-budget", str(args.budget)],
-                        capture_output=True, text=True, check=False)
-                    t_cmd = min(t_cmd, time.perf_counter() - start)
-                assert proc.returncode == 0, proc.stderr
-                data = json.loads(proc.stdout)
-                assert sorted(map(tuple, (x["bad"] for x in data["diagnoses"]))) == sorted(
-                    tuple(sorted(x.bad)) for x in r.diagnoses) or r.cut_by is not None
-                engine.append(t_engine)
-                command.append(t_cmd)
-                overhead.append(t_cmd - t_engine)
-                size = max(size, len(proc.stdout))
+                runs = [cpu_timed(engine_run) for _ in range(2)]  # the better of two
+                r = runs[0][2]
+                engine.append(min(t for t, _c, _r in runs))
+                engine_cpu.append(min(c for _t, c, _r in runs))
+                for label, prefix in commands.items():
+                    best, best_cpu = float("inf"), float("inf")
+                    for _ in range(2):
+                        t, c, proc = _run_child(
+                            [*prefix, "diagnose", str(model), "--obs", str(obs_file), "--json",
+                             "--min-card-only", "--time-budget", str(args.budget)])
+                        best, best_cpu = min(best, t), min(best_cpu, c)
+                        assert proc.returncode in (0, 1), proc.stderr  # 1: cut before the first
+                        data = json.loads(proc.stdout)
+                        if not data["complete"] or r.cut_by is not None:
+                            cut += 1  # the budget cut one of the two on a loaded machine
+                            continue
+                        assert sorted(map(tuple, (x["bad"] for x in data["diagnoses"]))) == (
+                            sorted(tuple(sorted(x.bad)) for x in r.diagnoses))
+                        if label == "command":
+                            size = max(size, len(proc.stdout))
+                    wall[label].append(best)
+                    cpu[label].append(best_cpu)
+                overhead.append(wall["command"][-1] - engine[-1])
+                loads.append(os.getloadavg()[0])
+            ratio = sum(wall["command"]) / sum(engine)
+            old = (f"{fmt(sum(wall['before']))} | {sum(wall['before']) / sum(engine):.2f}x | "
+                   if args.base else "")
             lines.append(f"| {name} | {model.stat().st_size / 1e6:.1f} MB | {fmt(sum(engine))} | "
-                         f"{fmt(sum(command))} | {sum(command) / sum(engine):.2f}x | "
-                         f"{mean_worst(overhead)} | {size / 1e3:.0f} kB |")
+                         f"{fmt(sum(wall['command']))} | {old}**{ratio:.2f}x** | "
+                         f"{sum(cpu['command']) / sum(engine_cpu):.2f}x | "
+                         f"{mean_worst(overhead)} | {size / 1e3:.0f} kB | "
+                         f"{min(loads):.1f}-{max(loads):.1f} | {cut} |")
             print(lines[-1], flush=True)
     lines.append("")
 
@@ -436,6 +499,9 @@ def main() -> None:
                         help="the `cardinality` column's budget, s")
     parser.add_argument("--ref-budget", type=float, default=30.0, help="RC2's budget, s")
     parser.add_argument("--base-budget", type=float, default=5.0, help="HS-tree budget, s")
+    parser.add_argument("--base", type=Path, default=None, metavar="DIR",
+                        help="the whole command: also run it from this checkout (the code "
+                        "before a change, e.g. `git archive REV | tar -x -C DIR`), interleaved")
     parser.add_argument("--only", choices=["iscas", "command", "robots"], default=None)
     parser.add_argument("--circuits", nargs="+", choices=CIRCUITS, metavar="NAME",
                         help="measure these circuits only (the sample is drawn as for all)")

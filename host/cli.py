@@ -1,12 +1,16 @@
 """The ``dxboard`` command line: one sub-command per module, loaded when it is used.
 
 Each entry of ``COMMANDS`` names a module with ``NAME`` (its sub-command), ``HELP`` (one line),
-``add_arguments(parser)`` and ``run(args) -> int``. Modules import their heavy dependencies
-inside ``run`` so that ``dxboard --help`` stays fast. A ``DxboardError`` (a ``UserError`` or a
-``RemoteError``) becomes one line on stderr and exit code 2; ``--verbose`` adds the traceback.
-A reader that closes our stdout early (``dxboard journal --json | head``) ends any command
-quietly with exit code 141 (128 + SIGPIPE, what a shell shows for a process a closed pipe
-stopped), here once for every command.
+``add_arguments(parser)`` and ``run(args) -> int``. Only the module of the command that runs is
+imported (``dxboard diagnose`` never loads the daemon's, the web page's or the ROS commands'
+modules); ``dxboard --help``, an unknown command, or anything but ``-v`` before the command
+loads them all, so the listing names every command. Modules import their heavy dependencies
+inside ``run`` so that ``--help`` stays fast. A command whose module cannot be imported (a
+dependency missing) is listed as unavailable and, when run, says why in one line, exit code 2.
+A ``DxboardError`` (a ``UserError`` or a ``RemoteError``) becomes one line on stderr and exit
+code 2; ``--verbose`` adds the traceback. A reader that closes our stdout early (``dxboard
+journal --json | head``) ends any command quietly with exit code 141 (128 + SIGPIPE, what a
+shell shows for a process a closed pipe stopped), here once for every command.
 """
 
 from __future__ import annotations
@@ -23,7 +27,7 @@ import traceback
 from collections.abc import Sequence
 from types import ModuleType
 
-from host.errors import DxboardError
+from host.errors import DxboardError, UserError
 
 # sub-command -> module implementing it (in the order --help lists them)
 COMMANDS: dict[str, str] = {
@@ -52,7 +56,19 @@ def _load(module_name: str) -> ModuleType:
     return importlib.import_module(module_name)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def chosen_command(argv: Sequence[str]) -> str | None:
+    """The sub-command ``argv`` runs when only ``-v``/``--verbose`` stand before it: the one
+    module to load. None (load every command) for ``--help``, an unknown command or any other
+    option first, so that argparse sees what it always saw."""
+    for token in argv:
+        if token not in ("-v", "--verbose"):
+            return token if token in COMMANDS else None
+    return None
+
+
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every command, or of the command ``only`` alone (its module the only one
+    imported)."""
     parser = argparse.ArgumentParser(
         prog="dxboard",
         description="dxboard: a self-diagnosing, self-repairing power system for robots.",
@@ -63,20 +79,61 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     for name, module_name in COMMANDS.items():
-        module = _load(module_name)
-        command = sub.add_parser(
-            name,
-            help=module.HELP,
-            description=module.__doc__,
-            formatter_class=argparse.RawDescriptionHelpFormatter,
-        )
-        module.add_arguments(command)
-        command.set_defaults(_run=module.run)
+        if only is None or name == only:
+            _add_command(sub, name, module_name, strict=only is not None)
     return parser
 
 
+def _add_command(sub: argparse._SubParsersAction[argparse.ArgumentParser], name: str,
+                 module_name: str, strict: bool) -> None:
+    """Add ``name``'s parser. A module that cannot be imported raises ``UserError`` when
+    ``strict`` (the command about to run), else is listed as unavailable."""
+    try:
+        module = _load(module_name)
+    except ImportError as exc:  # a dependency missing
+        if strict:
+            raise _unavailable(module_name, exc) from exc
+        command = sub.add_parser(name, help=f"(unavailable: {exc})", add_help=False)
+        command.add_argument("_rest", nargs=argparse.REMAINDER, help=argparse.SUPPRESS)
+        command.set_defaults(_run=_Unavailable(module_name, exc))
+        return
+    command = sub.add_parser(
+        name,
+        help=module.HELP,
+        description=module.__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    module.add_arguments(command)
+    command.set_defaults(_run=module.run)
+
+
+class _Unavailable:
+    """The ``run`` of a command whose module could not be imported: one clear line."""
+
+    def __init__(self, module_name: str, exc: ImportError) -> None:
+        self.module_name = module_name
+        self.exc = exc
+
+    def __call__(self, args: argparse.Namespace) -> int:
+        raise _unavailable(self.module_name, self.exc) from self.exc
+
+
+def _unavailable(module_name: str, exc: ImportError) -> UserError:
+    return UserError(f"cannot load {module_name}: {exc}",
+                     "install dxboard with its dependencies: make .venv/.installed")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
+    if argv is None:
+        argv = sys.argv[1:]
+    only = chosen_command(argv)
+    try:
+        parser = build_parser(only)
+    except UserError as exc:  # the command's module cannot be imported: one line
+        if "-v" in argv or "--verbose" in argv:
+            traceback.print_exc()
+        print(f"dxboard {only}: error: {exc}", file=sys.stderr)
+        return 2
     args = parser.parse_args(argv)
     logging.basicConfig(
         level=logging.DEBUG if args.verbose else logging.WARNING,

@@ -29,9 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from host.diagnosis import yamlpos
-from host.diagnosis.generate import generate
 from host.diagnosis.logic import Literal, Theory
-from host.diagnosis.model import SYSTEM_FILE, build_system, load_system
 from host.diagnosis.observations import Observation
 from host.diagnosis.tug import looks_like_tug, parse_tug
 from host.errors import UserError
@@ -39,11 +37,17 @@ from host.errors import UserError
 _TUG = re.compile(r"^rules\s*:", re.MULTILINE)
 _TIME = re.compile(r"^(?P<body>.*?)\s*@\s*(?P<time>[-+0-9.eE]+)\s*$")
 _UNKNOWN = re.compile(r"^(?:unknown\s+|\?\s*)(?P<atom>.+)$")
+#: host.diagnosis.model.SYSTEM_FILE (a test keeps the two equal), named here so that reading a
+#: tug model file does not import the robot model's modules (``dxboard diagnose`` starts faster)
+SYSTEM_FILE = "system.yaml"
 
 
 def load_theory(path: str | Path) -> Theory:
     p = Path(path)
     if p.is_dir() or p.name == SYSTEM_FILE:
+        from host.diagnosis.generate import generate
+        from host.diagnosis.model import load_system
+
         return generate(load_system(p))
     if not p.exists():
         raise UserError(f"{p}: no such file or directory",
@@ -56,6 +60,9 @@ def load_theory(path: str | Path) -> Theory:
     if looks_like_tug(data):
         return parse_tug(data, lines, p)
     if isinstance(data, dict) and "components" in data:
+        from host.diagnosis.generate import generate
+        from host.diagnosis.model import build_system
+
         return generate(build_system(data, lines, p))
     raise UserError(f"{p}: neither a robot directory nor a tug model file",
                     "give a directory holding system.yaml or a YAML file with props and rules")

@@ -20,6 +20,8 @@ AB_PREDICATE = "AB"
 DEFAULT_PRIOR = 0.01
 _ATOM = re.compile(r"^[A-Za-z_][\w.\-]*(\([^()]*\))?$")
 _NEGATIONS = ("~", "¬", "!", "-")
+_NOT = re.compile(r"not\s")
+_SPACE = re.compile(r"\s+")
 
 
 def ab(component: str) -> str:
@@ -36,7 +38,7 @@ def ab_component(atom: str) -> str | None:
 
 def normalize_atom(text: str) -> str:
     """``ok ( /scan )`` -> ``ok(/scan)``; raise ValueError if it is not an atom."""
-    atom = re.sub(r"\s+", "", text)
+    atom = _SPACE.sub("", text)
     if not atom or not _ATOM.match(atom):
         raise ValueError(f"{text.strip()!r} is not an atom like ok(/scan) or on(jaguar)")
     return atom
@@ -67,7 +69,7 @@ def parse_literal(text: str, neg_prefixes: Iterable[str] = ()) -> Literal:
     while True:
         if s.startswith(_NEGATIONS):
             s, positive = s[1:].strip(), not positive
-        elif re.match(r"^not\s+", s):
+        elif _NOT.match(s):
             s, positive = s[3:].strip(), not positive
         else:
             for prefix in neg_prefixes:

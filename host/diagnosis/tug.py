@@ -84,10 +84,13 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
     seen: dict[str, Literal] = {}  # a model repeats its literals: parse each text once
 
     def literal(text: str, path: tuple[object, ...]) -> Literal:
-        s = text.strip()
-        lit = seen.get(s)
+        lit = seen.get(text)
         if lit is None:
-            lit = seen[s] = parse(s, text, path)
+            s = text.strip()
+            lit = seen.get(s)
+            if lit is None:
+                lit = seen[s] = parse(s, text, path)
+            seen[text] = lit
         return lit
 
     def parse(s: str, text: str, path: tuple[object, ...]) -> Literal:
@@ -114,14 +117,21 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
     if rules is None:
         raise fail(("rules",), "rules is not a list", "write rules: ['NAB(a) -> ok(x)']")
     clauses: list[Clause] = []
-    unlisted: dict[str, None] = {}  # atoms rules use that props does not list
+    negated: dict[str, Literal] = {}  # a body's text -> its literal, negated (parsed once)
     for i, rule in rules:
         path = ("rules", i)
         text = str(rule)
         body_text, arrow, head_text = text.partition("->")
         if not arrow:
             body_text, head_text = "", text
-        body = [literal(t, path) for t in body_text.split(",") if t.strip()]
+        lits: list[Literal] = []
+        for t in body_text.split(","):
+            lit = negated.get(t)
+            if lit is None:
+                if not t.strip():
+                    continue
+                lit = negated[t] = -literal(t, path)
+            lits.append(lit)
         head_text = head_text.strip()
         if not head_text:
             raise fail(path, f"rule {text!r} has an empty head",
@@ -129,14 +139,14 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
         if head_text.lower() == "false":
             if not arrow:
                 raise fail(path, f"rule {text!r} says only false", "write body -> false")
-            head: list[Literal] = []
+        elif "|" in head_text:
+            lits.extend(literal(t, path) for t in head_text.split("|"))
         else:
-            head = [literal(t, path) for t in head_text.split("|")]
-        clause = Clause(tuple([-b for b in body] + head))
-        for lit in clause.lits:
-            if lit.atom not in known and ab_component(lit.atom) is None:
-                unlisted.setdefault(lit.atom)
-        clauses.append(clause)
+            lits.append(literal(head_text, path))
+        clauses.append(Clause(tuple(lits)))
+    # atoms rules use that props does not list, in the order rules first use them
+    unlisted = {lit.atom: None for lit in seen.values()
+                if lit.atom not in known and ab_component(lit.atom) is None}
     priors = data.get("priors") or {}
     if not isinstance(priors, dict):
         raise fail(("priors",), "priors is not a mapping", "write priors: {name: 0.01}")
