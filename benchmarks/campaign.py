@@ -18,8 +18,10 @@ watches until the trial's outcome is *settled* (each bounded by a hard cap):
   left to do: a diagnosis that changes faster than the 0.5 s repair debounce starts none);
 - latent: a fixed 6 s watch.
 
-Then every fault is cleared, a person clears the quarantines, holds and attempt counts, and the
-robot must be healthy again before the next trial (else the robot is restarted, and that is
+Then every fault is cleared, a person clears the quarantines, holds and attempt counts and the
+board's retry counters and latches (``clear all``: the board latches a second short on a
+channel within 60 s, which would make one trial's fault the next one's), and the robot must be
+healthy again before the next trial (else the robot is restarted, and that is
 counted). ``--parallel K`` runs K robots, each in its own process on its own ports, trial i
 on robot i mod K; each trial has its own seed, so the split changes no trial's faults.
 What the classes are, how a trial is scored and the table: ``benchmarks/campaign_plan.py``.
@@ -35,6 +37,7 @@ import json
 import logging
 import os
 import random
+import signal
 import sys
 import tempfile
 import time
@@ -59,6 +62,7 @@ from benchmarks.campaign_plan import (  # noqa: E402
     trial_class,
     truth,
 )
+from host.board import BoardClient  # noqa: E402
 from host.events import (  # noqa: E402
     ActionRecord,
     DiagnosisRecord,
@@ -117,6 +121,15 @@ class Campaign:
             r.executor.clear_quarantine(c)
             r.executor.actuators.allow_unlatch(c)
 
+    async def reset_board(self) -> None:
+        """A person clears the board's retry counters and latches (``dxboard board URL clear
+        all``): its rule "a second short within ``retry_reset_ms`` (60 s) latches" must not
+        turn one trial's short into the next trial's permanent one."""
+        assert self.session is not None
+        async with BoardClient(self.session.emulated.board_url,
+                               self.session.emulated.key) as client:
+            await client.clear("all")
+
     async def recover(self, healthy: bool) -> bool:
         """Clear every fault and quarantine; healthy again (restarting the robot if need be).
         True when the robot had to be restarted."""
@@ -124,6 +137,7 @@ class Campaign:
         assert s is not None
         await s.clear()
         self.forgive()
+        await self.reset_board()
         if await s.wait_healthy(10, hold_s=1.0 if healthy else 2.0):
             return False
         r = s.daemon.repairs
@@ -289,7 +303,14 @@ async def run_parallel(args: argparse.Namespace, out_dir: Path) -> list[dict[str
             sys.stdout.flush()
         return await p.wait()
 
-    codes = await asyncio.gather(*(relay(p) for p in procs))
+    try:
+        codes = await asyncio.gather(*(relay(p) for p in procs))
+    except asyncio.CancelledError:  # stopped: each robot stops its own processes
+        for p in procs:
+            if p.returncode is None:
+                p.terminate()
+        await asyncio.gather(*(p.wait() for p in procs))
+        raise
     if any(codes):
         raise RuntimeError(f"a robot's run failed (exit codes {codes})")
     return [json.loads((out_dir / f"shard-{i}.json").read_text()) for i in range(args.parallel)]
@@ -319,6 +340,12 @@ def report(args: argparse.Namespace, shards: list[dict[str, Any]], wall_s: float
 
 
 async def main_async(args: argparse.Namespace) -> int:
+    # SIGTERM or SIGINT (ignored by a background job of a script) stops the campaign cleanly:
+    # the robots' daemons stop their nodes, the emulators go with them
+    main_task = asyncio.current_task()
+    assert main_task is not None
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        asyncio.get_running_loop().add_signal_handler(sig, main_task.cancel)
     plan = plan_trials(random.Random(args.seed), args.singles, args.doubles,
                        weight=args.weight, repairable_doubles=args.repairable_doubles)
     begun = time.monotonic()
@@ -373,7 +400,11 @@ def main() -> int:
         args.passed.append(f"--journal-dir={args.journal_dir}")
     # the injected faults make the board client and the daemon warn on every bad frame
     logging.basicConfig(level=logging.ERROR)
-    return asyncio.run(main_async(args))
+    try:
+        return asyncio.run(main_async(args))
+    except asyncio.CancelledError:
+        print("campaign: stopped", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":
