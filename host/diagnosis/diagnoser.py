@@ -140,6 +140,10 @@ class Diagnoser:
         return gone
 
     # -- diagnosis -------------------------------------------------------------------------
+    def _observed_false(self, atom: str) -> bool:
+        o = self.observations.get(atom)
+        return o is not None and not o.literal.positive
+
     def diagnose(
         self,
         max_card: int | None = None,
@@ -166,8 +170,8 @@ class Diagnoser:
             self._now = max(self._now, now)
         if min_card_only is None:
             min_card_only = self.min_card_only
-        held = (held_atoms(self._lags, self._inputs, self.observations.since, self._now)
-                if self._lags else ())
+        held = (held_atoms(self._lags, self._inputs, self.observations.since, self._now,
+                           self._observed_false) if self._lags else ())
         key = (self._version, max_card, max_count, time_budget_s, min_card_only, held)
         if self._cache is not None and self._cache[0] == key:
             return self._cache[1]

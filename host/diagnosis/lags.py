@@ -12,10 +12,13 @@ restarted it (tests/diagnosis/test_lags.py replays the run).
 the observers: ``window`` of frequency and trend observers, ``within`` of response
 observers). ``held_atoms`` names the observed atoms to treat as unknown now: those whose value
 was established before the last change of an atom they depend on (``depends_on``: the
-positive conditions of the clauses that conclude them, transitively), while that change is
-younger than their lag. Once the window has passed, the observation is evidence again: a node
-that is really broken is diagnosed one window later, never missed. Without lags nothing is
-held. Time is passed in; nothing here reads a clock.
+positive conditions of the clauses that conclude them, transitively), or that turned false
+after it, while that change is younger than their lag (an observer may notice a silence only
+after the input came back: the map's silence noticed 0.14 s after the scan's return still
+judged the outage; a value that turned true after the change is evidence at once). Once the
+window has passed, the observation is evidence again: a node that is really broken is
+diagnosed one window later, never missed. Without lags nothing is held. Time is passed in;
+nothing here reads a clock.
 """
 
 from __future__ import annotations
@@ -61,9 +64,11 @@ def depends_on(theory: Theory, atoms: Iterable[str]) -> dict[str, frozenset[str]
 
 
 def held_atoms(lags: Mapping[str, float], inputs: Mapping[str, frozenset[str]],
-               since: Callable[[str], float | None], now: float) -> tuple[str, ...]:
+               since: Callable[[str], float | None], now: float,
+               false: Callable[[str], bool] = lambda atom: False) -> tuple[str, ...]:
     """The observed atoms to treat as unknown at ``now`` (see the module docstring);
-    ``since(atom)`` is when the atom's current observed value began (None: unknown)."""
+    ``since(atom)`` is when the atom's current observed value began (None: unknown),
+    ``false(atom)`` whether that value is false."""
     held = []
     for atom, lag in lags.items():
         established = since(atom)
@@ -71,7 +76,8 @@ def held_atoms(lags: Mapping[str, float], inputs: Mapping[str, frozenset[str]],
             continue
         for i in inputs.get(atom, ()):
             changed = since(i)
-            if changed is not None and changed > established and now - changed < lag:
+            if changed is not None and now - changed < lag \
+                    and (changed > established or false(atom)):
                 held.append(atom)
                 break
     return tuple(sorted(held))

@@ -80,3 +80,18 @@ def test_without_lags_nothing_is_held(tedusar: Theory) -> None:
     at(d, 29.04, "~ok(/scan)")
     at(d, 34.28, "~ok(/map)")
     assert at(d, 37.41, "ok(/scan)") == [frozenset({"hector_mapping"})]
+
+
+def test_a_map_silence_noticed_just_after_the_scan_came_back_is_held_too(
+    tedusar: Theory,
+) -> None:
+    # the fault campaign (seed 1, --quick, brownout): the board rebooted, ~ok(/scan) at 0.57 s;
+    # the lidar's repair brought ok(/scan) back at 6.26 s, and only then, at 6.40 s, did the
+    # map's observer notice the silence: a judgement of a window that held the outage, which
+    # made {hector_mapping} the only diagnosis and the daemon restarted a healthy node
+    d = tedusar_diagnoser(tedusar)
+    at(d, 0.57, "~ok(/scan)")
+    assert at(d, 6.26, "ok(/scan)") == [frozenset()]
+    assert at(d, 6.40, "~ok(/map)") == [frozenset()]  # was [{hector_mapping}]
+    assert d.diagnose().held == ("ok(/map)",)
+    assert at(d, 12.3) == [frozenset({"hector_mapping"})]  # silent a window later: evidence
