@@ -214,6 +214,7 @@ class MissionDiagnoser:
                 observed: Sequence[Literal] = ()) -> tuple[Event, tuple[Literal, ...]] | None:
         """The runner's call: the diagnosis as an event and the KB's corrections."""
         d = self.diagnose(objects, message, observed)
+        self.taken_back = []  # explained now, with everything sensed so far
         if d is not None:
             self.last = d
         return None if d is None else (d.event, d.corrections)

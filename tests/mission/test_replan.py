@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import asyncio
 
-from host.events import Dispatch, KbChange, MissionState, PlanDiagnosis
+from host.events import DiagnosisRecord, Dispatch, KbChange, MissionState, PlanDiagnosis
 from tests.mission.harness import Harness, until
 
 
@@ -45,3 +45,37 @@ async def test_a_door_closed_behind_the_robot_is_diagnosed_and_planned_around(
                                                "navigate(office, corridor, door_office)"]
     assert h.world.arena.doors()["door_office"]  # opened again by the robot
     assert not [e for e in h.of(KbChange) if e.source == "diagnosis"]  # nothing unobserved
+
+
+async def test_a_marker_reported_placed_but_missing_is_an_action_fault_and_marked_again(
+        h: Harness) -> None:
+    h.world.arena.jammed = True  # the dispenser: the next mark reports a marker it did not leave
+    outcome = await asyncio.wait_for(h.runner().run(), 240)
+    assert outcome.completed, outcome.detail
+    marks = [d for d in h.of(Dispatch) if d.action == "mark_victim"]
+    victim = marks[0].args[0]
+    diag, = h.of(PlanDiagnosis)
+    assert diag.dispatch_id == marks[0].dispatch_id
+    assert diag.classes == ["action fault"]
+    assert diag.symptoms[0].startswith(f"local: ~marked({victim}) observed post step")
+    assert f"mark-not-placed({victim},{marks[0].args[1]}) at step" in diag.histories[0]
+    assert f"~marked({victim}) (observed)" in diag.kb
+    assert [d.args[0] for d in marks].count(victim) == 2  # marked again
+    assert sorted(h.world.arena.marked) == ["victim_1", "victim_2"]
+
+
+async def test_a_locked_door_on_a_healthy_robot_is_a_plan_error_naming_the_condition(
+        h: Harness) -> None:
+    h.say(DiagnosisRecord(((),)))  # layer 0: every component healthy
+    assert h.world.arena.set_door("door_office", False) == ""  # the robot opens this one
+    assert h.world.arena.set_lock("door_lab", True) == ""  # and fails at this one
+    outcome = await asyncio.wait_for(h.runner().run(), 240)
+    assert not outcome.completed and "(searched lab)" in outcome.detail
+    diag, = h.of(PlanDiagnosis)
+    assert diag.classes == ["plan error"] and not diag.histories
+    assert "open_door(door_lab,corridor,lab)" in diag.plan_error
+    assert "reported failure; no fault mode or event explains it" in diag.plan_error
+    assert diag.plan_error.split("; the domain may lack ")[1].startswith(
+        "(not (locked ?d)) (locked(door_lab))")
+    assert any(d.action == "open_door" and d.args[0] == "door_office" and d.ok
+               for d in h.of(Dispatch))
