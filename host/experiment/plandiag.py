@@ -14,10 +14,13 @@ the fault-free run:
 - **M3 marker-missing**: the marker dispenser jams before the first marking: the action reports
   success, and its expected-state check does not see the marker (a local fault); the action's
   fault mode ``mark-not-placed`` explains it, and the victim is marked again.
-- **M4 plan-error**: ``door_office`` is closed (the robot opens it: an ``open_door`` that
-  works) and ``door_lab`` is locked. ``open_door(door_lab)`` fails on a robot layer 0 sees
-  healthy and no modelled event explains it: a plan error, naming the precondition the domain
-  lacks, ``(not (locked ?d))``; the mission stops with the lab unsearched.
+- **M4 plan-error**: ``door_office`` is closed and ``door_lab`` locked (the world reports it:
+  ``(locked door_lab)``). The robot opens ``door_office`` (an ``open_door`` that works, with
+  the door unlocked), then ``open_door(door_lab)`` fails on a robot layer 0 sees healthy and no
+  fault mode or event explains it: a plan error, naming the precondition the domain lacks,
+  ``(not (locked ?d))`` — the one condition over the action's arguments that held at the
+  failure and not at the run that worked; no plan reaches the lab, so the mission stops,
+  saying why.
 
 The times of each diagnosis (``diagnoses`` of ``MissionRun``): from the end of the step that
 raised the alarm to the ``PlanDiagnosis`` event, and to the first plan made after it.
@@ -141,7 +144,7 @@ def plan_diagnosis_text(which: str, robot: str, fast: bool, runs: dict[str, Miss
     for name, run in runs.items():
         state = "completed" if run.completed else f"did not complete: {run.detail}"
         delay = ("" if name == "fault-free" or free.duration_s is None
-                 or run.duration_s is None else
+                 or run.duration_s is None or not run.completed else
                  f", delay {run.duration_s - free.duration_s:+.1f} s against fault-free")
         lines.append(f"{name:14} {state}: {run.duration_s or 0:.1f} s, {run.actions} actions, "
                      f"{run.replans} replans{delay}")

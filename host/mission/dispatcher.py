@@ -145,7 +145,7 @@ class Dispatcher:
         expected = {(a, pos) for a, pos in g.eff["end"]}
         missed = [(a, pos) for a, pos in overridden if (a, not pos) in expected]
         if missed:
-            what = ", ".join(("not " if pos else "") + spell(a) for a, pos in missed)
+            what = ", ".join(("" if pos else "not ") + spell(a) for a, pos in missed)
             return self._end(Outcome.SURPRISE, Result.fail(
                 MISSION, f"{call} reported success but the world shows {what}",
                 data=result.data), g, started, did, tuple(missed))

@@ -57,6 +57,7 @@ async def test_a_marker_reported_placed_but_missing_is_an_action_fault_and_marke
     diag, = h.of(PlanDiagnosis)
     assert diag.dispatch_id == marks[0].dispatch_id
     assert diag.classes == ["action fault"]
+    assert f"reported success but the world shows not (marked {victim})" in diag.alarm
     assert diag.symptoms[0].startswith(f"local: ~marked({victim}) observed post step")
     assert f"mark-not-placed({victim},{marks[0].args[1]}) at step" in diag.histories[0]
     assert f"~marked({victim}) (observed)" in diag.kb
@@ -77,5 +78,7 @@ async def test_a_locked_door_on_a_healthy_robot_is_a_plan_error_naming_the_condi
     assert "reported failure; no fault mode or event explains it" in diag.plan_error
     assert diag.plan_error.split("; the domain may lack ")[1].startswith(
         "(not (locked ?d)) (locked(door_lab))")
-    assert any(d.action == "open_door" and d.args[0] == "door_office" and d.ok
-               for d in h.of(Dispatch))
+    locks = {a for d in h.of(Dispatch) for a in d.kb if a.startswith("(locked")}
+    assert locks == {"(locked door_lab)"}  # sensed from the world
+    opened = [d for d in h.of(Dispatch) if d.action == "open_door"]
+    assert [(d.args[0], d.ok) for d in opened] == [("door_office", True), ("door_lab", True)]
