@@ -1,4 +1,4 @@
-"""Run paper 000's experiments (§VI) on the virtual robot and report the times.
+"""Run paper 000's experiments (§VI) and the missions' (M1-M4) on the virtual robot.
 
 ``dxboard experiment power-up SYSTEM_DIR`` starts the robot with everything off but the board
 and the PC; the daemon diagnoses, plans and brings it up by itself. It runs twice, each time

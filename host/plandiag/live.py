@@ -74,7 +74,7 @@ class _Record:
     action: str
     args: tuple[str, ...]
     kb: tuple[str, ...]
-    failed: tuple[Literal, ...]  # the conditions that did not hold (refused)
+    failed: tuple[Literal, ...]  # what a refusing check found: the conditions' opposites
     ok: bool
     start: float
     end: float | None = None
@@ -112,7 +112,7 @@ class MissionDiagnoser:
     def on_event(self, e: Event) -> None:
         match e:
             case Dispatch():
-                failed = tuple((parse_atom(c.atom), c.expected) for c in e.failed_checks)
+                failed = tuple((parse_atom(c.atom), not c.expected) for c in e.failed_checks)
                 self.records.append(_Record(e.dispatch_id, e.action, e.args, e.kb, failed,
                                             e.ok, e.at))
             case KbChange(source="effect"):

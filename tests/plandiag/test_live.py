@@ -60,9 +60,18 @@ def test_observations_go_where_the_diagnosis_can_use_them() -> None:
     assert [(o.literal(), o.where) for o in second.observations] == [
         ("~open(door_office)", Where.PRE)]  # seen after step 1: how the world was before 2
     assert h.alarm is not None and (h.alarm.step, h.alarm.where) == (2, Where.PRE)
+    assert [(str(a), v) for a, v in h.alarm.atoms] == [("open(door_office)", False)]
     e = d.diagnose(h.objects, "refused")
     assert e is not None and e.event.classes == ["exogenous event"]
     assert e.event.symptoms[0].startswith("propagated: ~open(door_office) observed pre step 2")
+
+
+def test_a_refused_check_is_an_observation_of_what_the_kb_held() -> None:
+    d = MissionDiagnoser(load_mission_model(FILES.domain, FILES.path.parent), FILES.domain, "m1")
+    check = ConditionCheck("(level)", "start", True, False)
+    d.on_event(dispatch(1, "navigate", ("office", "corridor", "door_office"), False, (check,)))
+    h = d.history({"office": "room", "corridor": "room", "door_office": "door"}, "refused")
+    assert [(o.literal(), o.where) for o in h.steps[0].observations] == [("~level", Where.PRE)]
 
 
 def test_sensing_that_takes_back_an_effect_is_a_surprise_once() -> None:
