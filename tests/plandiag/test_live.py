@@ -5,16 +5,21 @@ expected-state check, any other to the next step's precondition check) and where
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
+from host.atoms import Atom
 from host.events import ConditionCheck, Dispatch, KbChange
 from host.layers import MISSION, Result
 from host.mission.dispatcher import Dispatched, Outcome
 from host.mission.files import load_mission
+from host.plandiag.history import Alarm, Observation, Step, Where
 from host.plandiag.history import Result as StepResult
-from host.plandiag.history import Where
-from host.plandiag.live import MissionDiagnoser
+from host.plandiag.live import MissionDiagnoser, corrections
+from host.plandiag.model import PlanModel
+from host.plandiag.pipeline import explain_history
 from host.plandiag.strips import load_mission_model, step_of, strips_text
+from tests.plandiag.conftest import arena_history
 
 TEDUSAR = Path(__file__).resolve().parents[2] / "models" / "tedusar"
 FILES = load_mission(TEDUSAR)
@@ -82,3 +87,14 @@ def test_sensing_that_takes_back_an_effect_is_a_surprise_once() -> None:
     d.on_event(KbChange((), ("(marked victim_1)",), "sensing"))
     assert d.surprise() == ((("marked", "victim_1"), True),)
     assert d.surprise() == ()
+
+
+def test_the_corrections_are_what_the_most_probable_history_implies_beyond_sensing(
+        arena: PlanModel) -> None:
+    h = arena_history("m2-door-closed")
+    steps = [h.steps[0], Step("navigate", ("tedusar", "hall1", "hall2")),
+             Step("open-door", ("tedusar", "door2", "hall2", "room2"), StepResult.NOT_RUN,
+                  (Observation(Atom("at", ("tedusar", "hall2")), False, Where.PRE),))]
+    e = explain_history(arena, replace(h, steps=tuple(steps), alarm=Alarm(3, Where.PRE)))
+    # navigate-stuck is the most probable: the robot is still in hall1, which nobody observed
+    assert corrections(e) == ((("at", "tedusar", "hall1"), True),)
