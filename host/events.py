@@ -64,6 +64,7 @@ class Kind(StrEnum):
     TREE = "tree"
     RESULT = "result"
     KB = "kb"
+    PLAN_DIAGNOSIS = "plan_diagnosis"
     # not journaled (for live readers only)
     DIAGNOSIS_RUN = "diagnosis_run"
     CHANNELS = "channels"
@@ -528,10 +529,33 @@ class KbChange:
                    str(data.get("dispatch_id", "")))
 
 
+@dataclass(frozen=True)
+class PlanDiagnosis(_Plain):
+    """The mission layer's plan-execution diagnosis of a failed step (``host.plandiag``): the
+    alarm, the classes of the fault, the symptoms, the fault region, the minimal alternative
+    histories (one line each, most probable first), the most probable one's winning path
+    through the context tree, the knowledge base corrected (``kb``: observed and inferred
+    literals, ``~`` for false) or the plan error, and how long it took."""
+
+    mission_id: str
+    dispatch_id: str
+    step: int
+    alarm: str
+    classes: list[str]
+    symptoms: list[str]
+    region: str
+    histories: list[str]
+    path: list[str]
+    kb: list[str]
+    plan_error: str
+    elapsed_s: float
+    kind: ClassVar[Kind] = Kind.PLAN_DIAGNOSIS
+
+
 Event = (Observation | DiagnosisRecord | PlanRecord | ActionRecord | BoardEvent | Telemetry
          | Note | LinkChange | RepairEnded | QuarantineChange | HoldChange | RunStarted
          | DiagnosisRun | ChannelSample | MissionState | Dispatch | TreeChange | LayerResult
-         | KbChange)
+         | KbChange | PlanDiagnosis)
 Payload = Event  # what the journal stores: the journaled events
 
 
@@ -566,6 +590,7 @@ _DECODERS: dict[Kind, Any] = {
     Kind.TREE: TreeChange.from_json,
     Kind.RESULT: LayerResult.from_json,
     Kind.KB: KbChange.from_json,
+    Kind.PLAN_DIAGNOSIS: PlanDiagnosis.from_json,
 }
 
 
@@ -670,4 +695,9 @@ def describe(event: Event) -> str:
             parts = [f"+{a}" for a in event.added] + [f"-{a}" for a in event.removed]
             why = f" ({event.cause})" if event.cause else ""
             return f"kb {event.source}: {' '.join(parts) or 'no change'}{why}"
+        case PlanDiagnosis():
+            what = ", ".join(event.classes) or "nothing explains it"
+            best = f": {event.histories[0]}" if event.histories else ""
+            return (f"plan diagnosis of {event.dispatch_id or 'step ' + str(event.step)}: "
+                    f"{what}{best}" + (f" ({event.plan_error})" if event.plan_error else ""))
     raise TypeError(f"not an event: {event!r}")

@@ -1,4 +1,4 @@
-"""Run paper 000's experiments (§VI) on the virtual robot and report the times.
+"""Run paper 000's experiments (§VI) and the missions' (M1-M4) on the virtual robot.
 
 ``dxboard experiment power-up SYSTEM_DIR`` starts the robot with everything off but the board
 and the PC; the daemon diagnoses, plans and brings it up by itself. It runs twice, each time
@@ -24,6 +24,17 @@ against the fault-free run. The journals (``--journal FILE``: FILE for the layer
 FILE-fault-free.sqlite and FILE-flat.sqlite beside it) draw as timelines with ``dxboard
 report``.
 
+``dxboard experiment door-closed|marker-missing|plan-error SYSTEM_DIR`` are M2-M4 (MISSIONS.md,
+paper 004's plan-execution diagnosis): the mission fault-free, then with an event injected
+through the arena (``host.experiment.plandiag``): M2 a door falls shut behind the robot (an
+exogenous event, found at the precondition check of the way out; the new plan opens it); M3 the
+marker dispenser jams (a local action fault; the victim is marked again); M4 a locked door the
+domain's open_door ignores (a plan error naming the condition the domain lacks). Each reports
+the diagnosis (class, symptoms, fault region, alternative histories, the winning path of the
+context tree, the corrected knowledge base or the plan error), the new plan, the time from the
+alarm to the diagnosis and to the new plan, and the mission's delay against the fault-free run
+(its journal: FILE-fault-free.sqlite beside FILE).
+
 The daemon runs in this process on free ports, without a web page; the emulated board and
 devices run as a child process and the nodes as processes, as with ``dxboard run --emulate``.
 Options:
@@ -44,14 +55,17 @@ import argparse
 from pathlib import Path
 
 NAME = "experiment"
-HELP = ("run paper 000's power-up or device shut-down experiment, or the mission-fault one "
-        "(M1), on the virtual robot")
+HELP = ("run paper 000's power-up or device shut-down experiment, or a mission experiment "
+        "(M1 mission-fault, M2-M4 plan-execution diagnosis), on the virtual robot")
+PLANDIAG = ("door-closed", "marker-missing", "plan-error")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("which", choices=("power-up", "device-shutdown", "mission-fault"),
-                        help="the experiment: power-up (§VI-A), device-shutdown (§VI-B) or "
-                             "mission-fault (MISSIONS.md's M1)")
+    parser.add_argument("which", choices=("power-up", "device-shutdown", "mission-fault",
+                                          *PLANDIAG),
+                        help="the experiment: power-up (§VI-A), device-shutdown (§VI-B), "
+                             "mission-fault (MISSIONS.md's M1), door-closed (M2), "
+                             "marker-missing (M3) or plan-error (M4)")
     parser.add_argument("system_dir", metavar="SYSTEM_DIR", help="robot directory (models/NAME)")
     parser.add_argument("--journal", metavar="FILE",
                         help="journal file (default: a temporary one, removed afterwards)")
@@ -88,11 +102,23 @@ def run(args: argparse.Namespace) -> int:
         if args.which == "mission-fault":
             for label in ("fault-free", "flat"):
                 _check_new(beside(journal, label))
+        if args.which in PLANDIAG:
+            _check_new(beside(journal, "fault-free"))
     with tempfile.TemporaryDirectory(prefix="dxboard-experiment-") as tmp:
         robot_dir = fast_model(system_dir, Path(tmp)) if args.fast else system_dir
         base = journal if args.journal is not None else Path(tmp) / "journal.sqlite"
         robot = system_dir.resolve().name
-        if args.which == "mission-fault":
+        if args.which in PLANDIAG:
+            from host.experiment.plandiag import plan_diagnosis, plan_diagnosis_text
+
+            pd = asyncio.run(plan_diagnosis(args.which, robot_dir, base,
+                                            timeout_s=args.timeout))
+            if args.json:
+                print(json.dumps({"experiment": args.which, "robot": robot, "fast": args.fast,
+                                  "runs": {k: r.to_json() for k, r in pd.items()}}, indent=2))
+            else:
+                print(plan_diagnosis_text(args.which, robot, args.fast, pd))
+        elif args.which == "mission-fault":
             from host.experiment.mission import mission_fault, mission_fault_text
 
             m1 = asyncio.run(mission_fault(robot_dir, base, timeout_s=args.timeout))

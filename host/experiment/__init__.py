@@ -1,4 +1,5 @@
-"""Paper 000's two experiments (§VI) on the virtual robot, as ``dxboard experiment``.
+"""Paper 000's two experiments (§VI) and the missions' (MISSIONS.md) on the virtual robot, as
+``dxboard experiment``.
 
 - ``session``: the robot and the daemon, in this process (``RobotSession``): the emulated board
   with its devices as a child process (``EmulatedBoard``, as ``dxboard run --emulate`` does),
@@ -9,6 +10,8 @@
   (§VI-B), each returning plain results.
 - ``render``: the human-readable report and the ``--json`` form.
 - ``robot``: a copy of a robot model with short device boot times (``--fast``).
+- ``mission``: a mission run on the virtual robot (``dxboard mission``) and M1 (mission-fault).
+- ``plandiag``: M2-M4, plan-execution diagnosis of events injected through the arena.
 """
 
 from host.experiment.experiments import device_shutdown, power_up

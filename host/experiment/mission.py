@@ -5,7 +5,9 @@ experiment M1 (``dxboard experiment mission-fault``, MISSIONS.md).
 emulate --robot --world``) and the daemon through ``host.launch`` (``RobotSession``), waits until
 layer 0 has brought the robot up (all-normal), wires layers 1-3 to the daemon
 (``host.mission.session``) and runs the mission, every event on the daemon's stream and in its
-journal. With ``fault`` the Hokuyo hangs (``dxboard inject hokuyo hang``) ``FAULT_DELAY_S`` into the
+journal. ``prepare`` sets the world up before the mission (given its URL), ``inject`` runs
+beside the mission (M2-M4: ``host.experiment.plandiag``). With ``fault`` the Hokuyo hangs
+(``dxboard inject hokuyo hang``) ``FAULT_DELAY_S`` into the
 mission's first navigation: layer 0 diagnoses and repairs it while the tree's guard
 holds the navigation. With ``flat`` the mission runs without the layers' hand-over (skills
 that abort once their inputs stop, trees without guards or retries, a planner blind to layer 0), the
@@ -24,7 +26,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -34,6 +36,7 @@ from host.events import (
     Dispatch,
     LayerResult,
     MissionState,
+    PlanDiagnosis,
     PlanRecord,
     RepairEnded,
     Stamped,
@@ -44,6 +47,8 @@ from host.layers import MISSION
 from host.mission.session import MissionStack
 
 log = logging.getLogger(__name__)
+
+Injection = Callable[[RobotSession, "_Watch", "MissionRun"], Awaitable[None]]
 
 FAULT_DEVICE = "hokuyo"
 FAULT_DELAY_S = 1.5  # into the first navigation, the lidar hangs
@@ -65,6 +70,7 @@ class MissionRun:
     mission_failures: list[str] = field(default_factory=list)
     journal: str = ""
     journal_from: int | None = None
+    diagnoses: list[dict[str, Any]] = field(default_factory=list)  # plan-execution diagnoses
 
     def to_json(self) -> dict[str, Any]:
         def r(x: float | None) -> float | None:
@@ -75,7 +81,8 @@ class MissionRun:
                 "actions": self.actions, "replans": self.replans, "fault_s": r(self.fault_s),
                 "repair_start_s": r(self.repair_start_s), "repair_end_s": r(self.repair_end_s),
                 "holds": self.holds, "mission_failures": self.mission_failures,
-                "journal": self.journal, "journal_from": self.journal_from}
+                "journal": self.journal, "journal_from": self.journal_from,
+                "diagnoses": self.diagnoses}
 
 
 class _Watch:
@@ -86,6 +93,14 @@ class _Watch:
         self.on_event = on_event
         self.t0: float | None = None
         self.driving = asyncio.Event()
+        self.alarm: float | None = None  # when the last mission action ended (not as planned)
+        self.waiters: list[tuple[Callable[[Any], bool], asyncio.Future[None]]] = []
+
+    def when(self, test: Callable[[Any], bool]) -> asyncio.Future[None]:
+        """Done once an event of the stream passes ``test``."""
+        fut: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+        self.waiters.append((test, fut))
+        return fut
 
     def __call__(self, s: Stamped) -> None:
         e, run = s.event, self.run
@@ -105,8 +120,23 @@ class _Watch:
                 run.repair_end_s = s.mono - (self.t0 or s.mono)
             case LayerResult(layer=layer, success=False) if layer == MISSION:
                 run.mission_failures.append(f"{e.command}({', '.join(e.args)})")
+                self.alarm = s.mono
             case MissionState(state="replanning"):
                 run.replans += 1
+            case PlanDiagnosis():
+                after = None if self.alarm is None else round(s.mono - self.alarm, 3)
+                run.diagnoses.append({**e.to_json(), "to_diagnosis_s": after,
+                                      "to_new_plan_s": None, "new_plan": None,
+                                      "at_s": None if self.t0 is None
+                                      else round(s.mono - self.t0, 2)})
+            case MissionState(state="planned") if run.diagnoses \
+                    and run.diagnoses[-1]["new_plan"] is None:
+                d = run.diagnoses[-1]
+                d["new_plan"] = [str(p) for p in e.plan]
+                d["to_new_plan_s"] = None if self.alarm is None else round(s.mono - self.alarm, 3)
+        for test, fut in list(self.waiters):
+            if not fut.done() and test(e):
+                fut.set_result(None)
         if self.on_event is not None:
             self.on_event(s)
 
@@ -115,7 +145,9 @@ async def run_mission(system_dir: Path, journal: Path, *, label: str = "mission"
                       fault: bool = False, flat: bool = False, timeout_s: float = 300.0,
                       web: tuple[str, int] | None = None,
                       on_event: Callable[[Stamped], None] | None = None,
-                      on_ready: Callable[[RobotSession], None] | None = None) -> MissionRun:
+                      on_ready: Callable[[RobotSession], None] | None = None,
+                      prepare: Callable[[str], Awaitable[None]] | None = None,
+                      inject: Injection | None = None) -> MissionRun:
     run = MissionRun(label, journal=str(journal))
     async with RobotSession(system_dir, journal, emulate_args=("--world",), web=web) as s:
         if on_ready is not None:
@@ -127,11 +159,15 @@ async def run_mission(system_dir: Path, journal: Path, *, label: str = "mission"
         if world is None:
             raise UserError(f"{system_dir}: the emulated robot serves no world",
                             "give a robot with an arena (SYSTEM_DIR/arena/world.yaml)")
+        if prepare is not None:
+            await prepare(world)  # the world as the experiment wants it before the mission
         run.journal_from = await s.last_id() + 1
         watch = _Watch(run, on_event)
         unsubscribe = s.daemon.subscribe(watch)
         stack = await MissionStack.start(s.daemon, world, system_dir, flat=flat)
-        injector = asyncio.ensure_future(_inject(s, watch, run)) if fault else None
+        if fault:
+            inject = _inject
+        injector = None if inject is None else asyncio.ensure_future(inject(s, watch, run))
         try:
             outcome = await asyncio.wait_for(stack.run(), timeout_s)
         except TimeoutError:

@@ -54,6 +54,8 @@ class Dispatched:
     outcome: Outcome
     result: Result
     dispatch_id: str
+    alarm: tuple[Literal, ...] = ()  # what was observed that raised it (as sensed)
+    halted: bool = False  # an over-all condition stopped holding: halted at once
 
 
 class Executes(Protocol):
@@ -66,7 +68,8 @@ WorldState = Callable[[], Awaitable[Mapping[str, Any]]]
 class Dispatcher:
     def __init__(self, kb: KnowledgeBase, executive: Executes, world_state: WorldState,
                  sensing: Sensing, emit: Callable[[Event], None],
-                 clock: Callable[[], float], mission_id: str, sense_s: float = SENSE_S) -> None:
+                 clock: Callable[[], float], mission_id: str, sense_s: float = SENSE_S,
+                 on_sensed: Callable[[list[Literal], str], None] | None = None) -> None:
         self.kb = kb
         self.executive = executive
         self.world_state = world_state
@@ -75,6 +78,7 @@ class Dispatcher:
         self.clock = clock
         self.mission_id = mission_id
         self.sense_s = sense_s
+        self.on_sensed = on_sensed  # every observation, for plan-execution diagnosis
         self.count = 0
 
     async def sense(self, data: Mapping[str, Any] | None = None, cause: str = "",
@@ -90,6 +94,8 @@ class Dispatcher:
         lits, new = self.sensing.observe(self.kb.objects, state, data)
         for obj, typ in new.items():
             self.kb.learn(obj, typ)
+        if self.on_sensed is not None:
+            self.on_sensed(lits, dispatch_id)
         differ = [(a, pos) for a, pos in lits
                   if (a in self.kb.atoms) != pos and a not in leave]
         self.kb.change(differ, "sensing", cause, dispatch_id)
@@ -120,7 +126,9 @@ class Dispatcher:
             result = Result.fail(MISSION, f"{call} halted: over-all condition "
                                  f"{', '.join(violated)} stopped holding")
             await self.sense(None, f"after {call}", did)
-            return self._end(Outcome.FAILED, result, g, started, did)
+            lits = tuple((a, not pos) for a, pos in g.cond["over all"]
+                         if spell(a) in {v.removeprefix("not ") for v in violated})
+            return self._end(Outcome.FAILED, result, g, started, did, lits, halted=True)
         result = run.result()
         if not result.success:
             await self.sense(result.data, f"after {call} failed", did)
@@ -137,10 +145,10 @@ class Dispatcher:
         expected = {(a, pos) for a, pos in g.eff["end"]}
         missed = [(a, pos) for a, pos in overridden if (a, not pos) in expected]
         if missed:
-            what = ", ".join(("not " if pos else "") + spell(a) for a, pos in missed)
+            what = ", ".join(("" if pos else "not ") + spell(a) for a, pos in missed)
             return self._end(Outcome.SURPRISE, Result.fail(
                 MISSION, f"{call} reported success but the world shows {what}",
-                data=result.data), g, started, did)
+                data=result.data), g, started, did, tuple(missed))
         return self._end(Outcome.DONE, Result.ok(result.data), g, started, did)
 
     async def _monitor(self, run: asyncio.Future[Result], over_all: tuple[Literal, ...],
@@ -166,7 +174,7 @@ class Dispatcher:
         return []
 
     def _end(self, outcome: Outcome, result: Result, g: Any, started: float,
-             did: str) -> Dispatched:
+             did: str, alarm: tuple[Literal, ...] = (), halted: bool = False) -> Dispatched:
         self.emit(LayerResult(MISSION, g.name, g.args, result.success, result.explanation,
                               started, self.clock(), did, self.kb.snapshot(), result.data))
-        return Dispatched(outcome, result, did)
+        return Dispatched(outcome, result, did, alarm, halted)

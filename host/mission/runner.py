@@ -14,7 +14,12 @@ Dispatching & Monitoring):
    action, a success the world does not show, or a goal that grew, the KB is as sensed and the
    mission replans (at most ``max_replans`` times, then it *fails*); an action that failed
    with no component to blame (the world did not let it work) is not planned again from the
-   same knowledge base, so the plan goes around it or the mission stops, saying so.
+   same knowledge base, so the plan goes around it or the mission stops, saying so;
+5. plan-execution diagnosis (``host.plandiag.live``, when a ``diagnoser`` is given): after a
+   step that did not go as planned, and when sensing takes back an effect an earlier step
+   reported (a marker gone), the executed history is explained (``PlanDiagnosis`` event) and
+   the KB takes what the most probable history implies (``KbChange``, source ``diagnosis``)
+   before the mission replans from it.
 
 It emits ``MissionState`` events (started, planned with its schedule, replanning, completed,
 stopped, failed) and returns a ``MissionOutcome``: completed or not, why, the components blamed.
@@ -25,10 +30,11 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from host.events import Event, MissionState, MissionStep
 from host.layers import MISSION, Result
-from host.mission.dispatcher import Dispatcher, Outcome
+from host.mission.dispatcher import Dispatched, Dispatcher, Outcome
 from host.mission.kb import KnowledgeBase
 from host.mission.pddl import Atom, Domain, Literal, Problem, spell
 from host.mission.planner import Ground, ground, holds, plan
@@ -56,6 +62,18 @@ class GoalRule:
         return out
 
 
+class Diagnoses(Protocol):
+    """What the runner needs of plan-execution diagnosis (``host.plandiag.live``)."""
+
+    def ended(self, done: Dispatched, at: float) -> None: ...
+
+    def surprise(self) -> tuple[Literal, ...]: ...
+
+    def explain(self, objects: Mapping[str, str], message: str,
+                observed: Sequence[Literal] = ()) -> tuple[Event, tuple[Literal, ...]] | None:
+        ...
+
+
 @dataclass
 class MissionOutcome:
     completed: bool
@@ -70,7 +88,7 @@ class MissionRunner:
                  kb: KnowledgeBase, dispatcher: Dispatcher,
                  needs_of: Mapping[str, Sequence[str]], layer0: Layer0View | None,
                  emit: Callable[[Event], None], mission_id: str = "m1",
-                 max_replans: int = 20) -> None:
+                 max_replans: int = 20, diagnoser: Diagnoses | None = None) -> None:
         self.domain = domain
         self.problem = problem
         self.rules = rules
@@ -81,6 +99,7 @@ class MissionRunner:
         self.emit = emit
         self.mission_id = mission_id
         self.max_replans = max_replans
+        self.diagnoser = diagnoser
         # ground actions that failed, with nothing to blame below, from a KB state: not planned
         # again from that state (the world will not let them work there)
         self.failed: dict[tuple[str, tuple[str, ...], frozenset[Atom]], str] = {}
@@ -124,11 +143,20 @@ class MissionRunner:
                 before = self.kb.state()
                 done = await self.dispatcher.dispatch(step, i)
                 actions += 1
+                if self.diagnoser is not None:
+                    self.diagnoser.ended(done, self.dispatcher.clock())
                 if done.outcome is not Outcome.DONE:
                     why = f"{step.ground}: {done.outcome}: {done.result.describe()}"
+                    self._diagnose(why, done.dispatch_id)
                     if done.outcome is Outcome.FAILED and not done.result.components():
                         g = step.ground
                         self.failed[(g.name, g.args, before)] = done.result.describe()
+                    break
+                taken = () if self.diagnoser is None else self.diagnoser.surprise()
+                if taken:
+                    why = "the world no longer shows " + ", ".join(spell(a) for a, _ in taken) \
+                        + f" (after {step.ground})"
+                    self._diagnose(why, done.dispatch_id, [(a, False) for a, _ in taken])
                     break
                 if self.goal() != goal:
                     why = "the goal grew: " + ", ".join(
@@ -142,6 +170,17 @@ class MissionRunner:
                 self._state("failed", detail)
                 return MissionOutcome(False, detail, replans=replans, actions=actions)
             self._state("replanning", why)
+
+    def _diagnose(self, why: str, dispatch_id: str, observed: Sequence[Literal] = ()) -> None:
+        """Explain the history; the KB takes what its most probable history implies."""
+        if self.diagnoser is None:
+            return
+        found = self.diagnoser.explain(self.kb.objects, why, observed)
+        if found is None:
+            return
+        event, corrections = found
+        self.emit(event)
+        self.kb.change(corrections, "diagnosis", "plan-execution diagnosis", dispatch_id)
 
     def _stop(self, grounds: list[Ground], goal: tuple[Literal, ...], replans: int,
               actions: int) -> MissionOutcome:

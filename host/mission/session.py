@@ -17,7 +17,9 @@ baseline without the layers' hand-over: skills that abort once their inputs stop
 guards or retries, a planner that does not know what layer 0 has taken away (``dxboard experiment
 mission-fault``). ``run()`` runs the mission once; ``close()`` disconnects. ``wire`` builds
 layers 1-3 over any world client, layer-0 view, clock and stream (the tests use it with a world
-in their own process).
+in their own process). Unless flat, layer 3 has plan-execution diagnosis
+(``host.plandiag.live``): the mission's domain read as STRIPS with ``faults.pddl`` beside it,
+layer 0's word on the components the skills need as the sensor interpreter's input.
 """
 
 from __future__ import annotations
@@ -33,6 +35,9 @@ from host.mission.dispatcher import Dispatcher
 from host.mission.files import MissionFiles, load_mission
 from host.mission.kb import KnowledgeBase
 from host.mission.runner import MissionOutcome, MissionRunner
+from host.plandiag.history import ComponentHealth
+from host.plandiag.live import MissionDiagnoser
+from host.plandiag.strips import load_mission_model
 from host.skills import Layer0View, Skill, WorldClient
 
 if TYPE_CHECKING:
@@ -50,10 +55,32 @@ def wire(files: MissionFiles, world: WorldClient, layer0: Layer0View,
     params = {a: act.param_names for a, act in files.domain.actions.items()}
     executive = Executive(files.recipes, params, skills, layer0, clock, emit,
                           max_hold_s=files.max_hold_s, flat=flat)
+    diagnoser = None if flat else MissionDiagnoser(
+        load_mission_model(files.domain, files.path.parent), files.domain, mission_id,
+        lambda: health(layer0, files))
+    if diagnoser is not None:
+        plain, recorder = emit, diagnoser.on_event
+
+        def emit(e: Event) -> None:
+            recorder(e)
+            plain(e)
+
     kb = KnowledgeBase(files.problem.objects, emit)
-    dispatcher = Dispatcher(kb, executive, world.state, files.sensing, emit, clock, mission_id)
+    dispatcher = Dispatcher(kb, executive, world.state, files.sensing, emit, clock, mission_id,
+                            on_sensed=None if diagnoser is None else diagnoser.sensed)
     return MissionRunner(files.domain, files.problem, files.rules, kb, dispatcher,
-                         files.needs_of(), None if flat else layer0, emit, mission_id)
+                         files.needs_of(), None if flat else layer0, emit, mission_id,
+                         diagnoser=diagnoser)
+
+
+def health(layer0: Layer0View, files: MissionFiles) -> ComponentHealth:
+    """Layer 0's word on the components the mission's skills need (nothing before its first
+    diagnosis): broken what it blames, healthy the rest."""
+    if not layer0.diagnosed:
+        return ComponentHealth()
+    comps = {n for spec in files.skills.values() for n in spec.needs if not n.startswith("/")}
+    broken = {c for c in comps if c in layer0.suspects or c in layer0.quarantined}
+    return ComponentHealth(frozenset(comps - broken - layer0.repairing), frozenset(broken))
 
 
 class MissionStack:

@@ -10,9 +10,14 @@ symptom identifier, fault region identifier, plan-execution inference — and re
 knowledge base, or the plan error and the condition the domain lacks. The inference engines
 (``ENGINES``: the context tree, SAT, naive enumeration) return the same minimal diagnoses::
 
-    model = load_model("models/tedusar")
+    model = load_model("tests/plandiag/arena")
     explanation = explain_history(model, load_history("history.json"))
     print("\\n".join(render(explanation)))
+
+In the running mission, ``strips`` reads the mission layer's temporal domain as STRIPS (with
+the ``faults.pddl`` beside it) and ``live.MissionDiagnoser`` records the executed history from
+the dispatcher's events and sensing, explains it on an alarm (a ``PlanDiagnosis`` event) and
+gives the mission the knowledge base's corrections to replan from.
 """
 
 from host.plandiag.engines import DEFAULT_ENGINE, ENGINES

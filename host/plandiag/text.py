@@ -49,7 +49,7 @@ def render(e: Explanation) -> list[str]:
         out.append(f"{len(e.histories)} minimal alternative histor"
                    f"{'y' if len(e.histories) == 1 else 'ies'} ({state}; engine {e.engine}, "
                    f"{o.elapsed_s * 1000:.1f} ms):")
-        out += [f"  {line}" for line in _listing(e.histories)]
+        out += [f"  {line}" for line in listing(e.histories)]
         best = e.histories[0]
         out.append("the most probable history, along the context tree:")
         out += [f"  {line}" for line in winning_path(e, best)]
@@ -84,7 +84,7 @@ def _gaps_text(gaps: list[int]) -> str:
     return "before step " + ", ".join(map(str, gaps))
 
 
-def _listing(histories: list[AlternativeHistory]) -> list[str]:
+def listing(histories: list[AlternativeHistory]) -> list[str]:
     """One line per history, or per group of one-event histories that differ in the gap."""
     groups: dict[str, list[AlternativeHistory]] = {}
     order: list[str] = []

@@ -5,7 +5,10 @@
 failed) and why, its goal, the current plan (each step with its planned start and duration) and
 the step being carried out, the dispatched action with its behaviour tree's nodes and their
 latest status (a guard's reason to hold), the last results of layers 2 and 3 with their
-explanations, and the recent changes of the knowledge base (effects and sensing). ``StatusFold``
+explanations, the recent changes of the knowledge base (effects, sensing, diagnosis), and the
+latest plan-execution diagnosis (``diagnosis``: the alarm, the class of the fault, the symptoms,
+the fault region, the alternative histories, the winning path of the context tree, the corrected
+knowledge base or the plan error, and the new plan the mission made from it). ``StatusFold``
 (``host.web.fold``) puts it into the page's ``Status``.
 """
 
@@ -15,7 +18,15 @@ from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
-from host.events import Dispatch, Event, KbChange, LayerResult, MissionState, TreeChange
+from host.events import (
+    Dispatch,
+    Event,
+    KbChange,
+    LayerResult,
+    MissionState,
+    PlanDiagnosis,
+    TreeChange,
+)
 
 RECENT = 12
 
@@ -33,12 +44,14 @@ class MissionStatus:
     tree: tuple[dict[str, str], ...] = ()  # {node, status, detail}
     results: tuple[dict[str, Any], ...] = ()  # the last results of layers 2-3, newest first
     kb: tuple[str, ...] = ()  # recent changes, newest first ("sensing: -(open door_lab)")
+    diagnosis: dict[str, Any] = field(default_factory=dict)  # the latest plan diagnosis
 
     def to_json(self) -> dict[str, Any]:
         return {"mission_id": self.mission_id, "state": self.state, "detail": self.detail,
                 "goal": list(self.goal), "plan": list(self.plan), "step": self.step,
                 "action": self.action, "dispatch_id": self.dispatch_id,
-                "tree": list(self.tree), "results": list(self.results), "kb": list(self.kb)}
+                "tree": list(self.tree), "results": list(self.results), "kb": list(self.kb),
+                "diagnosis": dict(self.diagnosis)}
 
 
 @dataclass
@@ -60,7 +73,14 @@ class MissionFold:
                         {"step": str(p), "start": p.start, "duration": p.duration}
                         for p in e.plan)
                     changes["step"] = None
+                    if s.diagnosis and s.diagnosis.get("new_plan") is None:
+                        changes["diagnosis"] = {**s.diagnosis, "new_plan": [
+                            str(p) for p in e.plan]}  # the plan made from the corrected KB
                 s = _replace(s, **changes)
+            case PlanDiagnosis():
+                diag = e.to_json()
+                diag["new_plan"] = None
+                s = _replace(s, diagnosis=diag)
             case Dispatch():
                 self._tree = {}
                 s = _replace(s, step=e.step, action=f"{e.action}({', '.join(e.args)})",

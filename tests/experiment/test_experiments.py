@@ -33,15 +33,15 @@ DRIVERS = {"jaguar": "jaguar_node", "hokuyo": "hokuyo_node",
            "laser_alignment": "laser_alignment_node", "thermal_camera": "thermal_camera_node"}
 
 
-def experiment(which: str, journal: Path) -> dict[str, Any]:
+def experiment(which: str, journal: Path, timeout_s: float = 90) -> dict[str, Any]:
     for _ in range(3):  # the zenoh port it picked was taken meanwhile: it says so, run again
         out = subprocess.run(
             [sys.executable, "-m", "host.cli", "experiment", which, "models/tedusar", "--fast",
-             "--json", "--journal", str(journal), "--timeout", "90"],
-            cwd=ROOT, capture_output=True, text=True, timeout=240)
+             "--json", "--journal", str(journal), "--timeout", f"{timeout_s:g}"],
+            cwd=ROOT, capture_output=True, text=True, timeout=max(240, 4 * timeout_s))
         if out.returncode == 0 or not clashed(out.stderr):
             break
-        for f in journal.parent.glob(journal.name + "*"):  # a fresh journal for the rerun
+        for f in journal.parent.glob(journal.stem + "*"):  # fresh journals for the rerun
             f.unlink()
     assert out.returncode == 0, out.stderr[-3000:]
     data: dict[str, Any] = json.loads(out.stdout)

@@ -57,7 +57,7 @@ def test_a_mistake_in_the_pddl_names_its_line(robot: Path) -> None:
     path.write_text(path.read_text().replace("(over all (open ?d))", "(during all (open ?d))"))
     with pytest.raises(UserError) as err:
         load_mission(robot)
-    assert "domain.pddl:35: (during all ...) is not a condition here" in str(err.value)
+    assert "domain.pddl:38: (during all ...) is not a condition here" in str(err.value)
 
 
 def test_no_mission_in_the_directory(tmp_path: Path) -> None:

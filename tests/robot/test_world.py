@@ -123,6 +123,32 @@ def test_victims_are_seen_only_in_their_room_and_marked_only_in_view(arena_facto
     assert arena.world.get_object_by_name("marker_victim_1") is not None
 
 
+def test_a_locked_door_does_not_open_and_a_jammed_dispenser_leaves_no_marker(
+        arena_factory: Any) -> None:
+    from emulator.robot.world.server import WorldServer
+
+    arena: Arena = arena_factory()
+    truth = GivenTruth()
+    server = WorldServer(arena, truth, lambda: 0)
+    bad = server._request(b'{"op": "door", "door": "door_lab", "open": false, "locked": 1}', None)
+    assert bad is not None and bad["event"] == "error" and "locked" in bad["error"]
+    assert not arena.locked()  # bad input changes nothing
+    ok = server._request(b'{"op": "door", "door": "door_lab", "open": false, "locked": true}',
+                         None)
+    assert ok == {"event": "door", "door": "door_lab", "open": False}
+    assert arena.state()["locked"] == ["door_lab"]
+    run(make_goal(arena, truth, "navigate", {"to": "corridor"}))
+    _, prog = run(make_goal(arena, truth, "open", {"door": "door_lab"}))
+    assert not prog.success and "locked" in prog.message and not arena.doors()["door_lab"]
+    assert server._request(b'{"op": "jam"}', None) == {"event": "jam"}
+    run(make_goal(arena, truth, "navigate", {"to": "office"}))
+    run(make_goal(arena, truth, "detect", {}))
+    _, prog = run(make_goal(arena, truth, "mark", {"victim": "victim_1"}))
+    assert prog.success and arena.state()["marked"] == []  # it says so, and left nothing
+    _, prog = run(make_goal(arena, truth, "mark", {"victim": "victim_1"}))
+    assert prog.success and arena.state()["marked"] == ["victim_1"]  # one jam, one marking
+
+
 def test_requests_for_what_the_arena_lacks_are_refused(arena_factory: Any,
                                                        tmp_path: Path) -> None:
     arena: Arena = arena_factory()

@@ -1,10 +1,12 @@
 """The mission on the page (paper 001's layers): the mission's events folded into the status
 (``host.web.mission`` through ``StatusFold``) and shown beside the components in real headless
 Chromium — the plan with the current step, the tree's nodes with a guard holding, the results
-and the knowledge base's changes."""
+and the knowledge base's changes, and the latest plan-execution diagnosis with the plan made
+from it."""
 
 from __future__ import annotations
 
+import json
 import time
 
 from host.events import (
@@ -14,8 +16,11 @@ from host.events import (
     LayerResult,
     MissionState,
     MissionStep,
+    PlanDiagnosis,
     Stamped,
     TreeChange,
+    describe,
+    event_from_json,
 )
 from host.layers import MISSION, Cause
 from host.web import MemoryStatusSource, WebServer
@@ -75,3 +80,63 @@ async def test_the_page_shows_the_mission_beside_the_components(
             "document.querySelector('#mission .node[data-status=\"RUNNING\"]').textContent")
         assert "-(open door_lab)" in await page.evaluate(
             "document.querySelector('#mission .kb').textContent")
+
+
+DIAGNOSIS = PlanDiagnosis(
+    "m1", "m1.7", 7, "navigate(office, corridor, door_office): refused",
+    ["exogenous event"],
+    ["propagated: ~open(door_office) observed pre step 7, the knowledge base said "
+     "open(door_office)"],
+    "fault region: step 6 (gaps before steps 7..7), following open(door_office)",
+    ["1. p=1.000  exogenous event: door-closes(door_office) before step 7"],
+    ["steps 1..6: as intended", "before step 7: door-closes(door_office) happened: "
+     "~open(door_office)"],
+    ["~open(door_office) (observed)"], "", 0.0123)
+REPLAN = MissionState("m1", "planned", goal=("(searched office)",), plan=(
+    MissionStep("open_door", ("door_office", "office", "corridor"), 0.0, 3.0),
+    MissionStep("navigate", ("office", "corridor", "door_office"), 3.0, 5.0)))
+
+
+def test_a_plan_diagnosis_is_journaled_whole() -> None:
+    back = event_from_json(DIAGNOSIS.kind, json.loads(json.dumps(DIAGNOSIS.to_json())))
+    assert back == DIAGNOSIS
+    assert describe(DIAGNOSIS) == ("plan diagnosis of m1.7: exogenous event: 1. p=1.000  "
+                                   "exogenous event: door-closes(door_office) before step 7")
+
+
+def test_the_status_holds_the_latest_plan_diagnosis_and_the_plan_made_from_it() -> None:
+    source = MemoryStatusSource()
+    f = StatusFold(source)
+    for e in [*EVENTS, DIAGNOSIS]:
+        f(Stamped(time.time(), time.monotonic(), e))
+    d = source.snapshot().to_json()["mission"]["diagnosis"]
+    assert d["classes"] == ["exogenous event"] and d["new_plan"] is None
+    assert d["path"][1].startswith("before step 7: door-closes(door_office)")
+    f(Stamped(time.time(), time.monotonic(), REPLAN))
+    d = source.snapshot().to_json()["mission"]["diagnosis"]
+    assert d["new_plan"] == ["open_door(door_office, office, corridor)",
+                             "navigate(office, corridor, door_office)"]
+    f(Stamped(time.time(), time.monotonic(), PLAN_AGAIN))  # a later plan is not its plan
+    assert source.snapshot().to_json()["mission"]["diagnosis"]["new_plan"] == d["new_plan"]
+
+
+PLAN_AGAIN = MissionState("m1", "planned", plan=PLAN)
+
+
+async def test_the_page_shows_the_plan_diagnosis(server: WebServer,
+                                                 source: MemoryStatusSource) -> None:
+    async with Chromium.launch(f"http://127.0.0.1:{server.port}/") as page:
+        assert await page.wait_for("document.querySelectorAll('.channel').length") == 10
+        f = StatusFold(source)
+        for e in [*EVENTS, DIAGNOSIS, REPLAN]:
+            f(Stamped(time.time(), time.monotonic(), e))
+        assert await page.wait_for(
+            "document.querySelector('#mission .plandiag .class')?.textContent"
+        ) == "exogenous event"
+        text = await page.evaluate("document.querySelector('#mission .plandiag').textContent")
+        assert "door-closes(door_office) happened: ~open(door_office)" in text  # the path
+        assert "kb ~open(door_office) (observed)" in text
+        assert await page.evaluate(
+            "document.querySelector('#mission .plandiag .newplan').textContent"
+        ) == ("new plan: open_door(door_office, office, corridor); "
+              "navigate(office, corridor, door_office)")

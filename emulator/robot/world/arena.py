@@ -89,6 +89,7 @@ class Arena:
         self.speed = float(getattr(executor, "linear_velocity", 1.0) or 1.0)
         self.turn_rate = getattr(executor, "max_angular_velocity", None)
         self.marked: list[str] = []
+        self.jammed = False  # the marker dispenser: the next mark leaves nothing
         _quiet([world.name, *(r.name for r in world.robots)])
 
     # --- where things are -------------------------------------------------------------------
@@ -184,6 +185,17 @@ class Arena:
         self.robot.path_planner.reset()
         return ""
 
+    def locked(self) -> list[str]:
+        return sorted(d for d in self.doors() if self._door(d).is_locked)
+
+    def set_lock(self, door: str, locked: bool) -> str:
+        """Lock or unlock a door (a locked door does not open); '' when done."""
+        h = self._door(door)
+        if bool(h.is_locked) == locked:
+            return ""
+        res = self.world.lock_location(h) if locked else self.world.unlock_location(h)
+        return "" if res.is_success() else str(res.message or res.status.name)
+
     def mark(self, victim: str) -> None:
         """Leave a marker beside ``victim`` (on its rubble pile)."""
         obj = self.world.get_object_by_name(victim)
@@ -208,7 +220,7 @@ class Arena:
         x, y, a = self.pose()
         return {"pose": [round(x, 3), round(y, 3), round(a, 3)], "place": self.place(),
                 "room": self.room(),
-                "doors": self.doors(), "marked": list(self.marked)}
+                "doors": self.doors(), "locked": self.locked(), "marked": list(self.marked)}
 
     def _door(self, door: str) -> Any:
         h = self.world.get_hallway_by_name(door)

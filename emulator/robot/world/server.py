@@ -12,10 +12,14 @@ Protocol (like a ROS action server, one JSON object per line each way, UTF-8, at
     -> {"op": "state"}                         <- {"event": "state", "state": STATE}
     -> {"op": "door", "door": D, "open": bool}  <- {"event": "door", "door": D, "open": bool,
                                                    "error": "..." when it could not}
-       (an exogenous event: a door opens or closes without the robot; for experiments)
+       (an exogenous event: a door opens or closes without the robot; for experiments;
+       "locked": bool as well locks or unlocks it: a locked door does not open)
+    -> {"op": "jam"}                           <- {"event": "jam"}
+       (a fault of the marker dispenser: the next mark reports success and leaves nothing)
 
 ``STATE`` is ``{"t_ms", "pose": [x, y, yaw], "place": room or door, "room": the room, or in a
-doorway the nearer of its two rooms, "doors": {name: open}, "marked": [victim, ...]}``.
+doorway the nearer of its two rooms, "doors": {name: open}, "locked": [door, ...],
+"marked": [victim, ...]}``.
 The robot does one skill at a time: a new goal preempts the active
 one (its result: "canceled"). A bad line gets ``{"event": "error", "error": "..."}`` and
 changes nothing. Results and feedback go to the connection that sent the goal; a goal whose
@@ -160,7 +164,10 @@ class WorldServer:
             return self._goal(msg, writer)
         if op == "door":
             return self._door(msg)
-        return {"event": "error", "error": f"unknown op {op!r} (goal, cancel, state, door)"}
+        if op == "jam":
+            self.arena.jammed = True
+            return {"event": "jam"}
+        return {"event": "error", "error": f"unknown op {op!r} (goal, cancel, state, door, jam)"}
 
     def _goal(self, msg: dict[str, Any], writer: asyncio.StreamWriter) -> dict[str, Any] | None:
         goal_id, skill, args = msg.get("id"), msg.get("skill"), msg.get("args", {})
@@ -200,11 +207,15 @@ class WorldServer:
             act.goal_id, Progress(act.goal.fraction(), done=True, message=why), "canceled"))
 
     def _door(self, msg: dict[str, Any]) -> dict[str, Any]:
-        door, open_ = msg.get("door"), msg.get("open")
-        if not isinstance(door, str) or not isinstance(open_, bool):
-            return {"event": "error", "error": 'door needs "door": NAME and "open": true|false'}
+        door, open_, locked = msg.get("door"), msg.get("open"), msg.get("locked")
+        if not isinstance(door, str) or not isinstance(open_, bool) \
+                or not isinstance(locked, bool | None):
+            return {"event": "error", "error": 'door needs "door": NAME and "open": true|false '
+                    '(and may give "locked": true|false)'}
         try:
             why = self.arena.set_door(door, open_)
+            if locked is not None and not why:
+                why = self.arena.set_lock(door, locked)
         except ValueError as exc:
             return {"event": "error", "error": str(exc)}
         reply: dict[str, Any] = {"event": "door", "door": door, "open": self.arena.doors()[door]}

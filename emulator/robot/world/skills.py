@@ -165,7 +165,10 @@ class Mark(Goal):
         if self.arena.room_of(self.victim) != self.arena.place() \
                 or self.victim not in self.arena.in_view():
             return Progress(1.0, done=True, message=f"{self.victim} is not in view")
-        self.arena.mark(self.victim)
+        if self.arena.jammed:  # the dispenser jammed: it reports a marker it did not leave
+            self.arena.jammed = False
+        else:
+            self.arena.mark(self.victim)
         return Progress(1.0, done=True, success=True, data={"marked": self.victim})
 
 

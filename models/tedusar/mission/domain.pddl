@@ -4,6 +4,8 @@
 ;   (at ?r)              the robot is in room ?r
 ;   (connects ?d ?a ?b)  static: door ?d leads from room ?a to room ?b (both ways are listed)
 ;   (open ?d)            door ?d is open
+;   (locked ?d)          door ?d is locked (sensed; no action here looks at it: that open_door
+;                        does not is the plan error of experiment M4, host/experiment/)
 ;   (level)              the laser is levelled (navigation on rubble needs it)
 ;   (searched ?r)        room ?r was searched for victims
 ;   (victim-in ?v ?r)    victim ?v lies in room ?r (learnt by sensing: detection)
@@ -15,6 +17,7 @@
   (:predicates (at ?r - room)
                (connects ?d - door ?a - room ?b - room)
                (open ?d - door)
+               (locked ?d - door)
                (level)
                (searched ?r - room)
                (victim-in ?v - victim ?r - room)
