@@ -10,11 +10,13 @@ restarted it (tests/diagnosis/test_lags.py replays the run).
 
 ``lags`` maps an atom to the window its observer judges (``observation_lags`` reads it off
 the observers: ``window`` of frequency and trend observers, ``within`` of response
-observers). ``held_atoms`` names the observed atoms to treat as unknown now: those whose value
-was established before the last change of an atom they depend on (``depends_on``: the
-positive conditions of the clauses that conclude them, transitively), while that change is
-younger than their lag. Once the window has passed, the observation is evidence again: a node
-that is really broken is diagnosed one window later, never missed. Without lags nothing is
+observers). ``held_atoms`` names the observed atoms to treat as unknown now: those whose
+inputs (``depends_on``: the positive conditions of the clauses that conclude them,
+transitively) changed less than their lag ago, whenever their own value was established —
+one judged *after* the input came back (the map's observer noticing the silence only once the
+lidar is repaired) still judges a window that holds the outage. Once the window has passed,
+the observation is evidence again: a node that is really broken is diagnosed one window
+later, never missed. Without lags nothing is
 held. Time is passed in; nothing here reads a clock.
 """
 
@@ -71,7 +73,7 @@ def held_atoms(lags: Mapping[str, float], inputs: Mapping[str, frozenset[str]],
             continue
         for i in inputs.get(atom, ()):
             changed = since(i)
-            if changed is not None and changed > established and now - changed < lag:
+            if changed is not None and now - changed < lag:
                 held.append(atom)
                 break
     return tuple(sorted(held))

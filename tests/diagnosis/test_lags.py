@@ -58,6 +58,8 @@ def test_the_lidar_recovers_before_the_maps_observer_does(tedusar: Theory) -> No
     assert result_bad == [frozenset()]  # was [{hector_mapping}]: a false repair followed
     assert d.diagnose().held == ("ok(/map)",)
     assert at(d, 39.9, "ok(/map)") == [frozenset()]  # the map came back in time
+    assert d.diagnose().held == ("ok(/map)",)  # its window still holds the outage
+    assert at(d, 43.5) == [frozenset()]
     assert d.diagnose().held == ()
 
 
@@ -80,3 +82,17 @@ def test_without_lags_nothing_is_held(tedusar: Theory) -> None:
     at(d, 29.04, "~ok(/scan)")
     at(d, 34.28, "~ok(/map)")
     assert at(d, 37.41, "ok(/scan)") == [frozenset({"hector_mapping"})]
+
+
+def test_a_map_judged_silent_after_the_lidar_came_back_is_held(tedusar: Theory) -> None:
+    """Issue 18 item 1, from the loop benchmark's journal: a faster lidar repair brings
+    ``ok(/scan)`` back *before* the map's observer (6 s window, silence of 3 periods) has
+    even noticed the outage; its ``~ok(/map)``, established after the scan's change, still
+    judges a window that holds the outage and named hector_mapping, which was restarted."""
+    d = tedusar_diagnoser(tedusar)
+    at(d, 29.04, "~ok(/scan)")
+    assert at(d, 33.0, "ok(/scan)") == [frozenset()]  # repaired within 4 s
+    assert at(d, 34.28, "~ok(/map)") == [frozenset()]  # was [{hector_mapping}]
+    assert d.diagnose().held == ("ok(/map)",)
+    assert at(d, 38.9) == [frozenset()]  # still within the window after the scan's return
+    assert at(d, 39.1) == [frozenset({"hector_mapping"})]  # a map still silent: evidence

@@ -85,7 +85,9 @@ def robot_dir(tmp: Path, processes: str, domain: str | None = None) -> Path:
 class Rig:
     def __init__(self, robot: Path, devices: Sequence[str], nodes: Sequence[str],
                  topics: Sequence[str] = (), endpoint: str | None = None,
-                 max_attempts: int = 3, dry_run: bool = False) -> None:
+                 max_attempts: int = 3, dry_run: bool = False,
+                 refresh: float = REFRESH) -> None:
+        """``refresh``: how often observers repeat an unchanged literal (validity 3.5x)."""
         self.robot = robot
         self.model: SystemModel = load_system(robot)
         self.planner = RepairPlanner.for_system(robot)
@@ -96,6 +98,7 @@ class Rig:
         self.endpoint = endpoint
         self.max_attempts = max_attempts
         self.dry_run = dry_run
+        self.refresh, self.validity = refresh, refresh * VALIDITY / REFRESH
         self.diagnoser = Diagnoser(generate(self.model))
         self.beliefs = ObservedBeliefs(self.diagnoser.observations)
         self.events: list[Event] = []
@@ -114,10 +117,12 @@ class Rig:
         observers: list[Observer[Any]] = [HardwareObserver(
             {d: Device(d, c.channel or 0, c.current) for d in self.devices
              for c in [self.model.components[d]]},
-            link_timeout=0.5, refresh=REFRESH, validity=VALIDITY)]
-        observers += [NodeObserver(n, refresh=REFRESH, validity=VALIDITY) for n in self.nodes]
-        observers += [FrequencyObserver(t, rate=20, tolerance=8, window=0.5, refresh=REFRESH,
-                                        validity=VALIDITY) for t in self.topics]
+            link_timeout=0.5, refresh=self.refresh, validity=self.validity)]
+        observers += [NodeObserver(n, refresh=self.refresh, validity=self.validity)
+                      for n in self.nodes]
+        observers += [FrequencyObserver(t, rate=20, tolerance=8, window=0.5,
+                                        refresh=self.refresh, validity=self.validity)
+                      for t in self.topics]
         self.observable = {a for o in observers for a in o.atoms()}
         self.hub = ObserverHub(observers, self.sink)
         source = ZenohSource(listen=[self.endpoint]) if self.endpoint else None
