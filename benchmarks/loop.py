@@ -197,7 +197,10 @@ def _one_fault(d: RunningDaemon, kind: str, device: str, clock: TopicClock,
     while time.monotonic() < end:
         entries = reader.query(after_id=mark, kind=("observation", "diagnosis", "action",
                                                     "repair"))
-        obs = [e for e in entries if isinstance(e.payload, Observation)]
+        # the fault's own literals (tripped(d), ok(/t) of its driver's topic): another
+        # literal may change meanwhile (the previous repair's last verdicts)
+        obs = [e for e in entries if isinstance(e.payload, Observation)
+               and e.payload.literal.endswith((f"({device})", f"({TOPIC.get(device)})"))]
         if kind == "hang" and last_msg is None and obs:
             last_msg = clock.last.get(TOPIC[device])  # the topic's silence is observed
         diag = [e for e in entries if isinstance(e.payload, DiagnosisRecord)
