@@ -83,10 +83,12 @@ async def test_jaguar_shut_down_is_repaired_for_real(tmp_path: Path, endpoint: s
 
 
 async def test_node_that_dies_at_once_is_replanned_then_quarantined(tmp_path: Path) -> None:
+    # settle_s well beyond the interpreter's start on a loaded machine: the process must have
+    # died (and been seen to) by then, else its "running" would still stand when it settled
     robot = robot_dir(tmp_path, """\
 jaguar_node:
   command: [python, -c, "import sys; print('no device'); sys.exit(3)"]
-  settle_s: 0.3
+  settle_s: 2.0
 """)
     async with Rig(robot, ["jaguar"], ["jaguar_node"]) as rig:
         await rig.client.switch(JAGUAR, True)
