@@ -17,14 +17,16 @@ sum of every step's settle time. Each step:
    whose process may take ``stop_timeout_s`` to stop) — else ``timeout``;
 3. waits for its intended effect (``host.repair.effects``), ending the moment it is seen:
    output (``ok(t)`` of the topics a started node publishes, none of them ok before the step:
-   else a refresh could pass for new messages) in any observation made after the step acted;
-   a state alone (``running(n)``, ``on(d)``, ``in_band(d)``) in one made once
-   the step has settled (a process that dies at once, a device that trips while it boots do
-   not pass). The settle time is not waited out otherwise: it only sets the deadline, settle
-   + ``verify_s`` (``Beliefs.wait_for``), the settle counted again from the moment the steps
-   it waits for were verified if that was later (a node whose input came late gets its own
-   time after it) — after it ``failed`` with what was seen instead, and
-   at once when the board trips the channel the step switched on; then ``succeeded``.
+   else a refresh could pass for new messages), or the immediate effect of a ``stop_node`` or
+   ``shutdown``, in any observation made since the step began (the process observer may see
+   it before the actuator returns); a state alone (``running(n)``, ``on(d)``, ``in_band(d)``)
+   in one made since the step began that still stands once the step has settled (a process
+   that dies at once, a device that trips while it boots do not pass: observers report such
+   a change at once). The deadline is settle + ``verify_s`` (``Beliefs.wait_for``), the
+   settle counted again from the moment the steps it waits for were verified if that was
+   later (a node whose input came late gets its own time after it) — after it ``failed``
+   with what was seen instead, and at once when the board trips the channel the
+   step switched on; then ``succeeded``.
 
 On the first failed step nothing new starts; steps already running finish, and ``execute``
 returns ``ExecutionResult(outcome=FAILED, failed=step, reason=...)`` so the caller
@@ -390,11 +392,20 @@ class Executor:
             if waits:
                 settled = max(due, self.clock() + settle)
         if expected:
-            # output (a topic flowing) ends the wait the moment it is seen; a state alone (a
-            # process running, a channel on) must still hold once the step has settled
-            fresh = acted if early else due
+            # output (a topic flowing) ends the wait the moment it is seen, and so does an
+            # immediate effect (a process gone, a channel off); a state alone (a process
+            # running, a channel on) must still hold once the step has settled: that is waited
+            # out first (a trip ends it). Each counts in any observation made since the step
+            # began (the process observer may see it before the actuator returns) that still
+            # stands: observers report a change at once, so no refresh is waited for.
+            fresh = t0
             deadline = settled + self.verify_s
             abort = contradictions(step, self.observable)
+            if not early and step.action not in IMMEDIATE:
+                if abort:
+                    await self.beliefs.wait_for(abort, end, due - self.clock())
+                else:
+                    await asyncio.sleep(max(0.0, due - self.clock()))
             if not await self.beliefs.wait_for(expected, fresh, deadline - self.clock(),
                                                abort=abort, abort_after=end):
                 seen = self.beliefs.missing(expected, fresh)

@@ -10,6 +10,12 @@ as the planner's sequence: the plan stays valid whichever independent steps run 
 gives the steps an executor may start now, ``layers()`` the steps grouped into rounds that
 could run in parallel (the executor still spaces switch-ons on the board). Plans are plain
 values: ``to_json`` is the ``dxboard plan --json`` format.
+
+``stops_first`` reorders a valid sequence before that: a driver is stopped *before* its
+device's power cycle, not after it. Both orders are valid and cost the same, but after the
+cycle the stop (and so the driver's restart) waits until the device's boot is verified,
+while before it the stop takes a moment and the restart begins as soon as the device is back
+on, its driver connecting while the device boots (issue 18: a hung lidar's repair).
 """
 
 from __future__ import annotations
@@ -18,7 +24,10 @@ from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from host.repair.task import GroundOp
+from host.repair.task import GroundOp, holds
+
+#: a ``stop_node`` moves ahead of these steps (``stops_first``)
+STOP_BEFORE = frozenset({"power_cycle"})
 
 
 @dataclass(frozen=True)
@@ -118,3 +127,25 @@ def deorder(
             readers[a] = []
     steps = tuple(Step(k, op.name, op.args) for k, op in enumerate(ops))
     return Plan(steps, tuple(after), cost, planner, tuple(notes))
+
+
+def _valid(ops: Sequence[GroundOp], init: int, goal: Sequence[int]) -> bool:
+    state = init
+    for op in ops:
+        if not op.applicable(state):
+            return False
+        state = op.apply(state)
+    return all(holds(x, state) for x in goal)
+
+
+def stops_first(ops: Sequence[GroundOp], init: int, goal: Sequence[int]) -> list[GroundOp]:
+    """``ops`` (valid from ``init`` to ``goal``) with every ``stop_node`` moved ahead of the
+    ``STOP_BEFORE`` steps just before it, wherever the sequence stays valid."""
+    out = list(ops)
+    for j in range(len(out)):
+        k = j
+        while (k > 0 and out[k].name == "stop_node" and out[k - 1].name in STOP_BEFORE
+               and _valid(swapped := [*out[:k - 1], out[k], out[k - 1], *out[k + 1:]],
+                          init, goal)):
+            out, k = swapped, k - 1
+    return out

@@ -26,7 +26,7 @@ from host.repair.domain import DOMAIN_FILE, ROOT_TYPE, Atom, Domain, load_domain
 from host.repair.downward import fast_downward
 from host.repair.errors import DomainError, NoPlanError, ProblemError
 from host.repair.grounding import ground
-from host.repair.plan import Plan, deorder
+from host.repair.plan import Plan, deorder, stops_first
 from host.repair.problem import (
     RepairModel,
     RepairProblem,
@@ -159,6 +159,7 @@ class RepairPlanner:
             )
         ops = [task.ops[i] for i in result.ops]
         validate(task, init, goal, ops, planner)
+        ops = stops_first(ops, init, goal)
         check_plan(task, ops, self.model.protected, self.vocabulary)
         notes = [f"assumed {a} (not observed)" for a in problem.assumed]
         cost = sum(op.cost for op in ops)

@@ -58,7 +58,7 @@ def test_the_lidar_recovers_before_the_maps_observer_does(tedusar: Theory) -> No
     assert result_bad == [frozenset()]  # was [{hector_mapping}]: a false repair followed
     assert d.diagnose().held == ("ok(/map)",)
     assert at(d, 39.9, "ok(/map)") == [frozenset()]  # the map came back in time
-    assert d.diagnose().held == ()
+    assert d.diagnose().held == ()  # a map seen flowing after the change: evidence at once
 
 
 def test_a_map_that_stays_silent_is_diagnosed_once_its_window_has_passed(
@@ -95,3 +95,17 @@ def test_a_map_silence_noticed_just_after_the_scan_came_back_is_held_too(
     assert at(d, 6.40, "~ok(/map)") == [frozenset()]  # was [{hector_mapping}]
     assert d.diagnose().held == ("ok(/map)",)
     assert at(d, 12.3) == [frozenset({"hector_mapping"})]  # silent a window later: evidence
+
+
+def test_a_map_judged_silent_after_the_lidar_came_back_is_held(tedusar: Theory) -> None:
+    """Issue 18 item 1, from the loop benchmark's journal: a faster lidar repair brings
+    ``ok(/scan)`` back *before* the map's observer (6 s window, silence of 3 periods) has
+    even noticed the outage; its ``~ok(/map)``, established after the scan's change, still
+    judges a window that holds the outage and named hector_mapping, which was restarted."""
+    d = tedusar_diagnoser(tedusar)
+    at(d, 29.04, "~ok(/scan)")
+    assert at(d, 33.0, "ok(/scan)") == [frozenset()]  # repaired within 4 s
+    assert at(d, 34.28, "~ok(/map)") == [frozenset()]  # was [{hector_mapping}]
+    assert d.diagnose().held == ("ok(/map)",)
+    assert at(d, 38.9) == [frozenset()]  # still within the window after the scan's return
+    assert at(d, 39.1) == [frozenset({"hector_mapping"})]  # a map still silent: evidence

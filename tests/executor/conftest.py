@@ -85,7 +85,9 @@ def robot_dir(tmp: Path, processes: str, domain: str | None = None) -> Path:
 class Rig:
     def __init__(self, robot: Path, devices: Sequence[str], nodes: Sequence[str],
                  topics: Sequence[str] = (), endpoint: str | None = None,
-                 max_attempts: int = 3, dry_run: bool = False, verify_s: float = 1.5) -> None:
+                 max_attempts: int = 3, dry_run: bool = False, verify_s: float = 1.5,
+                 refresh: float = REFRESH) -> None:
+        """``refresh``: how often observers repeat an unchanged literal (validity 3.5x)."""
         self.robot = robot
         self.verify_s = verify_s
         self.model: SystemModel = load_system(robot)
@@ -97,6 +99,7 @@ class Rig:
         self.endpoint = endpoint
         self.max_attempts = max_attempts
         self.dry_run = dry_run
+        self.refresh, self.validity = refresh, refresh * VALIDITY / REFRESH
         self.diagnoser = Diagnoser(generate(self.model))
         self.beliefs = ObservedBeliefs(self.diagnoser.observations)
         self.events: list[Event] = []
@@ -115,10 +118,12 @@ class Rig:
         observers: list[Observer[Any]] = [HardwareObserver(
             {d: Device(d, c.channel or 0, c.current) for d in self.devices
              for c in [self.model.components[d]]},
-            link_timeout=0.5, refresh=REFRESH, validity=VALIDITY)]
-        observers += [NodeObserver(n, refresh=REFRESH, validity=VALIDITY) for n in self.nodes]
-        observers += [FrequencyObserver(t, rate=20, tolerance=8, window=0.5, refresh=REFRESH,
-                                        validity=VALIDITY) for t in self.topics]
+            link_timeout=0.5, refresh=self.refresh, validity=self.validity)]
+        observers += [NodeObserver(n, refresh=self.refresh, validity=self.validity)
+                      for n in self.nodes]
+        observers += [FrequencyObserver(t, rate=20, tolerance=8, window=0.5,
+                                        refresh=self.refresh, validity=self.validity)
+                      for t in self.topics]
         self.observable = {a for o in observers for a in o.atoms()}
         self.hub = ObserverHub(observers, self.sink)
         source = ZenohSource(listen=[self.endpoint]) if self.endpoint else None

@@ -83,10 +83,12 @@ async def test_jaguar_shut_down_is_repaired_for_real(tmp_path: Path, endpoint: s
 
 
 async def test_node_that_dies_at_once_is_replanned_then_quarantined(tmp_path: Path) -> None:
+    # settle_s well beyond the interpreter's start on a loaded machine: the process must have
+    # died (and been seen to) by then, else its "running" would still stand when it settled
     robot = robot_dir(tmp_path, """\
 jaguar_node:
   command: [python, -c, "import sys; print('no device'); sys.exit(3)"]
-  settle_s: 0.3
+  settle_s: 2.0
 """)
     async with Rig(robot, ["jaguar"], ["jaguar_node"]) as rig:
         await rig.client.switch(JAGUAR, True)
@@ -283,3 +285,28 @@ hector_mapping: {{command: [python, {tmp_path / 'map.py'}], settle_s: 0.5, {env}
         assert res.outcome is Outcome.DONE, done
         assert done["start_node(hector_mapping)"][0] is ActionState.SUCCEEDED
         assert "observed ok(/map)" in done["start_node(hector_mapping)"][1]
+
+
+async def test_each_step_ends_on_what_was_seen_since_it_began(
+        tmp_path: Path, endpoint: str) -> None:
+    """Issue 18 item 1: observers report a change the moment they see it — the process
+    observer often before the actuator has returned, the hardware observer well before a
+    device has settled — and such an observation was too early to count: the step waited for
+    the observer's next refresh of the unchanged literal (1 s in the daemon). Observers here
+    repeat unchanged literals only every 60 s, so a step that needed a refresh would fail."""
+    robot = odom_robot(tmp_path, endpoint, 600)
+    async with Rig(robot, ["jaguar"], ["jaguar_node"], ["/odom"], endpoint,
+                   refresh=60.0) as rig:
+        await rig.until({"on(jaguar)": False, "running(jaguar_node)": False})
+        steps = [("power_up", "jaguar", {"on(jaguar)": True}),
+                 ("start_node", "jaguar_node", {"ok(/odom)": True}),
+                 ("stop_node", "jaguar_node", {"ok(/odom)": False}),
+                 ("start_node", "jaguar_node", {"ok(/odom)": True})]
+        for action, arg, until in steps:
+            plan = Plan((Step(0, action, (arg,)),), (frozenset(),))
+            async with asyncio.timeout(120):  # a deadline for a broken executor, not a measure
+                res = await rig.executor.execute(plan)
+            assert res.outcome is Outcome.DONE, f"{action}: {res.reason}"
+            await rig.until(until)
+        assert [s for _, s in final(rig)] == [ActionState.SUCCEEDED] * 4
+        assert rig.beliefs.value("running(jaguar_node)") is True

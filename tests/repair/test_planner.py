@@ -101,10 +101,16 @@ def test_device_shut_down_jaguar(tedusar: RepairPlanner) -> None:
     assert plan.notes == ()
 
 
-def test_hung_powered_device_is_power_cycled(tedusar: RepairPlanner) -> None:
-    plan = tedusar.plan({"hokuyo"}, [parse_literal("on(hokuyo)")])
-    assert [str(s) for s in plan.steps] == [
-        "power_cycle(hokuyo)", "stop_node(hokuyo_node)", "start_node(hokuyo_node)"]
+def test_hung_powered_device_is_power_cycled_its_driver_stopped_first(
+        tedusar: RepairPlanner) -> None:
+    """Issue 18 item 1: stopped after the cycle, the driver's stop waited for the lidar's boot
+    to be verified and its restart began only then; stopped first, its restart follows the
+    channel coming back on and the driver connects while the lidar boots."""
+    for bad in ({"hokuyo"}, {"hokuyo", "hokuyo_node"}):
+        plan = tedusar.plan(bad, [parse_literal("on(hokuyo)")])
+        assert [str(s) for s in plan.steps] == [
+            "stop_node(hokuyo_node)", "power_cycle(hokuyo)", "start_node(hokuyo_node)"]
+        assert plan.orderings() == [(0, 1), (1, 2)]
 
 
 def test_stopped_driver_alone_is_just_started(tedusar: RepairPlanner) -> None:
