@@ -56,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _check_robot(path: Path) -> int:
     from host.diagnosis.files import read_observations
-    from host.diagnosis.generate import generate
+    from host.diagnosis.generation import generate
     from host.diagnosis.model import check_system, load_system
     from host.errors import UserError
     from host.repair.domain import domain_file

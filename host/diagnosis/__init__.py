@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:  # the names, for type checkers; at run time __getattr__ loads them
     from host.diagnosis.diagnoser import Diagnoser, UnknownLiteral
     from host.diagnosis.files import load_theory, read_observations
-    from host.diagnosis.generate import generate
+    from host.diagnosis.generation import generate
     from host.diagnosis.lags import observation_lags
     from host.diagnosis.logic import Clause, Literal, Theory, ab, format_clauses, parse_literal
     from host.diagnosis.model import (
@@ -55,7 +55,7 @@ _WHERE = {  # name -> the module defining it, imported on first use
     "check_system": "host.diagnosis.model",
     "dump_tug": "host.diagnosis.tug",
     "format_clauses": "host.diagnosis.logic",
-    "generate": "host.diagnosis.generate",
+    "generate": "host.diagnosis.generation",
     "load_system": "host.diagnosis.model",
     "load_theory": "host.diagnosis.files",
     "observation_lags": "host.diagnosis.lags",

@@ -45,7 +45,7 @@ SYSTEM_FILE = "system.yaml"
 def load_theory(path: str | Path) -> Theory:
     p = Path(path)
     if p.is_dir() or p.name == SYSTEM_FILE:
-        from host.diagnosis.generate import generate
+        from host.diagnosis.generation import generate
         from host.diagnosis.model import load_system
 
         return generate(load_system(p))
@@ -60,7 +60,7 @@ def load_theory(path: str | Path) -> Theory:
     if looks_like_tug(data):
         return parse_tug(data, lines, p)
     if isinstance(data, dict) and "components" in data:
-        from host.diagnosis.generate import generate
+        from host.diagnosis.generation import generate
         from host.diagnosis.model import build_system
 
         return generate(build_system(data, lines, p))

@@ -56,7 +56,7 @@ def test_diagnose_imports_its_own_command_module_only(model: tuple[Path, Path]) 
     assert commands == {"host.commands.diagnose", "host.commands.model"}  # print_notes
     # nothing of the daemon, the web page, the robot's model or the event loop
     assert not modules & {"asyncio", "aiohttp", "host.events", "host.diagnosis.model",
-                          "host.diagnosis.generate"}
+                          "host.diagnosis.generation"}
 
 
 def test_help_lists_every_command() -> None:

@@ -24,7 +24,7 @@ import pytest
 
 from host.board import BoardClient
 from host.diagnosis.diagnoser import Diagnoser
-from host.diagnosis.generate import generate
+from host.diagnosis.generation import generate
 from host.diagnosis.logic import Literal
 from host.diagnosis.model import SystemModel, load_system
 from host.observers import (
