@@ -2,11 +2,13 @@
 
 ``timeline`` folds journal entries into a ``Timeline`` (per component: normal, abnormal and
 unknown intervals from the diagnoses; the repair actions with start, end and outcome; the
-plans; the moments the whole system became normal again), pure and without matplotlib;
+plans; the moments the whole system became normal again; a mission's layers and its
+plan-execution diagnoses), pure and without matplotlib;
 ``source`` reads a journal file, an optional robot model and a window into one; ``chart``
 draws it with matplotlib (Agg) into a PNG or an SVG. ``dxboard report`` is the command.
 """
 
+from host.report.diagnosis import DiagnosisMark
 from host.report.timeline import (
     ActionSpan,
     Bound,
@@ -24,6 +26,7 @@ __all__ = [
     "ActionSpan",
     "Bound",
     "ComponentRow",
+    "DiagnosisMark",
     "Group",
     "Interval",
     "PlanMark",

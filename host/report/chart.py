@@ -3,7 +3,10 @@
 The figure, top to bottom: a title (robot and journal) with a subtitle (journal ids, start
 time, clock); when the journal holds a mission (paper 001), its layers as three lanes — the
 mission's actions (labelled where they fit), their behaviour trees (a tree held by its guard
-while layer 0 repairs hatched amber) and the skills, failures hatched; the repair actions,
+while layer 0 repairs hatched amber) and the skills, failures hatched, and above them each
+plan-execution diagnosis: a marker at its time, shaped and coloured by its class (exogenous
+event, action fault, plan error, component fault), a dotted line down through the lanes, and
+its class with the short explanation beside it; the repair actions,
 one bar per action from its start to its end on a few lanes (packed so that no two labels
 overlap), each labelled with its call and, unless it succeeded, its outcome (failed and
 timed-out actions hatched in their own colours); then one row per
@@ -40,6 +43,7 @@ from matplotlib.patches import Patch, Rectangle
 from matplotlib.textpath import TextToPath
 from matplotlib.ticker import MaxNLocator
 
+from host.report.diagnosis import UNEXPLAINED, DiagnosisMark
 from host.report.mission import LANE_NAMES, LANES
 from host.report.timeline import (
     GROUP_ORDER,
@@ -60,6 +64,10 @@ OUTCOME_HATCH = {"failed": "xxxx", "timeout": "....", RUNNING: "////"}
 RECOVERY_COLOR = "#1e7b34"
 MISSION_OK = "#6b46c1"  # a mission layer's command that succeeded
 HOLD_COLOR = "#d69e2e"  # a behaviour tree held while layer 0 repairs
+# a plan-execution diagnosis by its class: (colour, marker)
+DIAGNOSIS_STYLE = {"exogenous event": ("#0f8b8d", "D"), "action fault": ("#c2185b", "X"),
+                   "plan error": ("#1a365d", "s"), "component fault": ("#d7263d", "o"),
+                   UNEXPLAINED: ("#7f8c9a", "o")}
 TEXT = "#222222"
 MUTED = "#666666"
 
@@ -94,6 +102,7 @@ class Layout:
     lane_count: int
     x_px: Callable[[float], float]
     layer_y_px: dict[int, float] = field(default_factory=dict)  # the mission's lanes
+    diagnosis_px: tuple[tuple[float, float], ...] = ()  # (x, y) of each plan diagnosis
 
 
 def _text_width_in(text: str, size_pt: float, bold: bool = False) -> float:
@@ -119,28 +128,50 @@ class _Placed:
     align: str  # "left" (after the bar) or "right" (before it)
 
 
-def _pack(actions: tuple[ActionSpan, ...], end: float, sec_per_in: float) -> list[_Placed]:
-    """Lanes for the actions, first fit, so no two bars or labels overlap."""
+def _fit(items: list[tuple[float, float, str, bool]], end: float, sec_per_in: float
+         ) -> list[tuple[int, float, str]]:
+    """Lanes for (start, end, label, bold) items, first fit, so no two of them or their labels
+    overlap: per item its lane, its label's anchor (data x) and its alignment."""
     gap = 0.06 * sec_per_in
     lanes: list[float] = []  # per lane: where it is free from
-    placed: list[_Placed] = []
-    for s in actions:
-        text = action_label(s)
-        bar_end = end if s.end is None else max(s.end, s.start + 0.04 * sec_per_in)
-        w = _text_width_in(text, _LABEL_PT, bold=not s.ok) * sec_per_in
-        if bar_end + gap + w <= end or s.start - gap - w < 0:
-            lo, hi, tx, align = s.start, bar_end + gap + w, bar_end + gap, "left"
+    placed: list[tuple[int, float, str]] = []
+    for start, stop, text, bold in items:
+        w = _text_width_in(text, _LABEL_PT, bold=bold) * sec_per_in
+        if stop + gap + w <= end or (start - gap - w < 0 and end - stop >= start):
+            lo, hi, tx, align = start, stop + gap + w, stop + gap, "left"
         else:
-            lo, hi, tx, align = s.start - gap - w, bar_end, s.start - gap, "right"
-        for i, free in enumerate(lanes):
-            if lo >= free:
-                lanes[i] = hi + 2 * gap
-                placed.append(_Placed(s, i, text, tx, align))
-                break
-        else:
-            lanes.append(hi + 2 * gap)
-            placed.append(_Placed(s, len(lanes) - 1, text, tx, align))
+            lo, hi, tx, align = start - gap - w, stop, start - gap, "right"
+        lane = next((i for i, free in enumerate(lanes) if lo >= free), len(lanes))
+        if lane == len(lanes):
+            lanes.append(0.0)
+        lanes[lane] = hi + 2 * gap
+        placed.append((lane, tx, align))
     return placed
+
+
+def _pack(actions: tuple[ActionSpan, ...], end: float, sec_per_in: float) -> list[_Placed]:
+    """Lanes for the actions, so no two bars or labels overlap."""
+    items = [(s.start, end if s.end is None else max(s.end, s.start + 0.04 * sec_per_in),
+              action_label(s), not s.ok) for s in actions]
+    return [_Placed(s, lane, item[2], tx, align)
+            for s, item, (lane, tx, align) in zip(actions, items,
+                                                  _fit(items, end, sec_per_in), strict=True)]
+
+
+def _pack_diagnoses(marks: tuple[DiagnosisMark, ...], end: float, sec_per_in: float
+                    ) -> list[tuple[int, float, str, str]]:
+    """Lanes for the plan diagnoses' markers and labels (elided where they do not fit):
+    per mark its lane, its label's anchor, alignment and text."""
+    half = 0.05 * sec_per_in  # half a marker's width
+    items = []
+    for m in marks:
+        room = (max(end - m.time, m.time) - 2.5 * half) / sec_per_in  # inches beside it
+        label = m.label
+        while len(label) > 8 and _text_width_in(label, _LABEL_PT, bold=True) > room:
+            label = label[:-2] + "\u2026"  # elided to fit: the journal holds it whole
+        items.append((m.time - half, m.time + half, label, True))
+    return [(lane, tx, align, item[2])
+            for item, (lane, tx, align) in zip(items, _fit(items, end, sec_per_in), strict=True)]
 
 
 def _row_slots(rows: tuple[ComponentRow, ...]) -> list[tuple[str, str]]:
@@ -185,7 +216,10 @@ def render(t: Timeline, out: str | os.PathLike[str], *, title: str | None = None
     gap = _RECOVERY_H if t.recoveries else _GAP
     legend_rows = 1 if _legend_count(t) <= 6 else 2
     legend_h = _LEGEND_H + (legend_rows - 1) * 0.2
-    mis_h = (len(LANES) * _MISSION_LANE_H + 2 * _ACTIONS_PAD) if t.mission else 0.0
+    diag = _pack_diagnoses(t.plan_diagnoses, end, sec_per_in)
+    diag_lanes = max([p[0] + 1 for p in diag], default=0)
+    mis_h = (len(LANES) * _MISSION_LANE_H + diag_lanes * _LANE_H + 2 * _ACTIONS_PAD
+             if t.mission or t.plan_diagnoses else 0.0)
     height = _TITLE_H + mis_h + act_h + gap + rows_h + _AXIS_H + legend_h
 
     fig = Figure(figsize=(_W, height), dpi=dpi)
@@ -195,12 +229,14 @@ def render(t: Timeline, out: str | os.PathLike[str], *, title: str | None = None
     top = fig.add_axes((_LEFT / _W, (rows_bottom + rows_h + gap) / height, axw / _W,
                         act_h / height), sharex=ax)
     layer_y: dict[int, float] = {}
-    if t.mission:
+    diag_y: list[float] = []
+    if mis_h:
         mis_bottom = rows_bottom + rows_h + gap + act_h
         mis = fig.add_axes((_LEFT / _W, mis_bottom / height, axw / _W, mis_h / height),
                            sharex=ax)
-        layer_y = {layer: mis_bottom + yc
-                   for layer, yc in _draw_mission(mis, t, mis_h, axw, sec_per_in).items()}
+        lane_y = _draw_mission(mis, t, mis_h - diag_lanes * _LANE_H, axw, sec_per_in)
+        layer_y = {layer: mis_bottom + yc for layer, yc in lane_y.items()}
+        diag_y = [mis_bottom + yc for yc in _draw_diagnoses(mis, t, diag, mis_h, axw)]
     head, sub = _title(t)
     fig.text(0.5 * (_LEFT + _W - _RIGHT) / _W, 1 - 0.2 / height, title or head, ha="center",
              va="center", fontsize=13, fontweight="bold", color=TEXT)
@@ -292,14 +328,16 @@ def render(t: Timeline, out: str | os.PathLike[str], *, title: str | None = None
 
     row_px = {n: (height - rows_bottom - yy) * dpi for n, yy in row_y.items()}
     return Layout(round(_W * dpi), round(height * dpi), row_px, lanes, x_px,
-                  {n: (height - yy) * dpi for n, yy in layer_y.items()})
+                  {n: (height - yy) * dpi for n, yy in layer_y.items()},
+                  tuple((x_px(m.time), (height - yy) * dpi)
+                        for m, yy in zip(t.plan_diagnoses, diag_y, strict=True)))
 
 
 def _draw_mission(mis: Axes, t: Timeline, mis_h: float, axw: float, sec_per_in: float
                   ) -> dict[int, float]:
     """The mission's layers (paper 001) as lanes above the repair actions: mission actions,
-    their behaviour trees (holds hatched), skills; failures in the failed colour."""
-    mis.set_ylim(0, mis_h)
+    their behaviour trees (holds hatched), skills; failures in the failed colour. ``mis_h`` is
+    the height from the axes' bottom the lanes take (the diagnoses' lanes lie above it)."""
     mis.set_yticks([])
     mis.tick_params(axis="x", bottom=False, labelbottom=False)
     for side in ("top", "right", "left"):
@@ -333,6 +371,29 @@ def _draw_mission(mis: Axes, t: Timeline, mis_h: float, axw: float, sec_per_in: 
     return lane_y
 
 
+def _draw_diagnoses(mis: Axes, t: Timeline, placed: list[tuple[int, float, str, str]],
+                    mis_h: float, axw: float) -> list[float]:
+    """The plan diagnoses in lanes at the top of the mission band: a marker each (its class's
+    shape and colour), a dotted line down through the layers, and its label; their y."""
+    mis.set_ylim(0, mis_h)
+    if t.plan_diagnoses:
+        lanes = max(p[0] for p in placed) + 1
+        mis.text(-0.1 / axw, mis_h - _ACTIONS_PAD - lanes * _LANE_H / 2, "plan diagnosis",
+                 transform=_blend(mis), ha="right", va="center", fontsize=_GROUP_PT,
+                 fontweight="bold", color=MUTED)
+    ys = []
+    for m, (lane, tx, align, text) in zip(t.plan_diagnoses, placed, strict=True):
+        color, marker = DIAGNOSIS_STYLE.get(m.cls, DIAGNOSIS_STYLE[UNEXPLAINED])
+        yc = mis_h - _ACTIONS_PAD - (lane + 0.5) * _LANE_H
+        mis.plot([m.time, m.time], [0, yc], color=color, lw=1.0, ls=(0, (1, 1.5)), zorder=5)
+        mis.plot([m.time], [yc], marker=marker, ms=6.5, color=color, ls="none", zorder=7)
+        mis.text(tx, yc, text, ha=align, va="center", fontsize=_LABEL_PT, color=color,
+                 fontweight="bold", zorder=6, bbox={"boxstyle": "square,pad=0.1",
+                                                    "facecolor": "white", "edgecolor": "none"})
+        ys.append(yc)
+    return ys
+
+
 def _blend(ax: Axes) -> matplotlib.transforms.Transform:
     """x in axes fractions, y in the axis' data units (inches here)."""
     return matplotlib.transforms.blended_transform_factory(ax.transAxes, ax.transData)
@@ -341,7 +402,8 @@ def _blend(ax: Axes) -> matplotlib.transforms.Transform:
 def _legend_count(t: Timeline) -> int:
     states = {iv.state for r in t.rows for iv in r.intervals}
     return (len(states) + len({a.outcome for a in t.actions}) + bool(t.plans)
-            + bool(t.recoveries) + bool(t.mission) + any(s.held for s in t.mission))
+            + bool(t.recoveries) + bool(t.mission) + any(s.held for s in t.mission)
+            + len({m.cls for m in t.plan_diagnoses}))
 
 
 def _legend(fig: Figure, t: Timeline, height: float, rows: int) -> None:
@@ -360,6 +422,10 @@ def _legend(fig: Figure, t: Timeline, height: float, rows: int) -> None:
     if any(s.held for s in t.mission):
         handles.append(Patch(facecolor="white", edgecolor=HOLD_COLOR, hatch="////",
                              label="tree held"))
+    for cls in dict.fromkeys(m.cls for m in t.plan_diagnoses):
+        color, marker = DIAGNOSIS_STYLE.get(cls, DIAGNOSIS_STYLE[UNEXPLAINED])
+        handles.append(Line2D([], [], marker=marker, ls="none", color=color, ms=6,
+                              label=cls if cls != UNEXPLAINED else "diagnosis: unexplained"))
     if t.plans:
         handles.append(Line2D([], [], marker="^", ls="none", color=MUTED, label="plan made"))
     if t.recoveries:

@@ -3,8 +3,10 @@
 ``build_timeline`` folds journal entries, in id order, into what the paper's figures 5 and 6
 show (paper 000 §VI): one ``ComponentRow`` per component with the ``Interval``\\ s in which it
 was ``normal``, ``abnormal`` or ``unknown``; the repair actions as ``ActionSpan``\\ s (start,
-end, outcome); the plans as ``PlanMark``\\ s; and every ``Recovery``, the moment the whole
-system became normal again after something was abnormal. The rules:
+end, outcome); the plans as ``PlanMark``\\ s; every ``Recovery``, the moment the whole
+system became normal again after something was abnormal; and, when the journal holds a
+mission, its layers' commands (``host.report.mission``) and its plan-execution diagnoses
+(``host.report.diagnosis``). The rules:
 
 - A component is **abnormal** from a diagnosis entry whose *first-ranked* diagnosis (bad set)
   names it until the next diagnosis entry that does not; **normal** while a diagnosis exists
@@ -50,6 +52,7 @@ from host.events import (
     PlanRecord,
 )
 from host.journal.entries import Entry
+from host.report.diagnosis import DiagnosisMark, clip_marks, diagnosis_marks
 from host.report.mission import LayerSpan, clip_spans, mission_spans
 
 log = logging.getLogger(__name__)
@@ -180,6 +183,7 @@ class Timeline:
     window: str = ""  # how the window was chosen ("" for the whole run)
     run: str = ""  # the daemon run drawn (its run id), "" when not known
     mission: tuple[LayerSpan, ...] = ()  # the mission's layers (host.report.mission)
+    plan_diagnoses: tuple[DiagnosisMark, ...] = ()  # host.report.diagnosis
 
     def row(self, name: str) -> ComponentRow:
         for r in self.rows:
@@ -368,7 +372,8 @@ def build_timeline(entries: Sequence[Entry], *, name: str, robot: str = "",
         diagnoses=sum(1 for t in diag_times if ws <= t <= we),
         window="" if start is None and end is None else f"{start or 'start'} .. {end or 'end'}",
         run=run,
-        mission=clip_spans(mission_spans(entries, at, _action_time), ws, we))
+        mission=clip_spans(mission_spans(entries, at, _action_time), ws, we),
+        plan_diagnoses=clip_marks(diagnosis_marks(entries, at), ws, we))
 
 
 def _wall_at(entries: Sequence[Entry], t: float, at: Callable[[Entry], float]) -> float:
