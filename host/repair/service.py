@@ -4,9 +4,10 @@ stale data — knowing nothing of the daemon that feeds it.
 ``RepairService`` is fed, and emits; it reads nothing of its owner:
 
 - ``diagnosed(result)``: a diagnosis changed. When it names broken components a repair starts
-  after ``debounce_s`` — unless a newer diagnosis superseded it, the board link is down (then
-  every board literal is unknown: nothing to act on), or a repair is already running (the
-  running loop re-diagnoses after each plan, so it sees the change);
+  after ``debounce_s`` (a component that keeps entering and leaving the diagnosis faster than
+  that is reported, ``host.repair.unsettled``) — unless a newer diagnosis superseded it, the
+  board link is down (then every board literal is unknown: nothing to act on), or a repair is
+  already running (the running loop re-diagnoses after each plan, so it sees the change);
 - ``link(client)``: the board link it acts through (``None``: the link is down);
 - ``diagnose``: given at construction, an async callable returning a fresh diagnosis of the
   observations now (the daemon runs it off its loop); ``observations``: the daemon's one
@@ -61,6 +62,7 @@ from host.repair.planner import RepairPlanner
 from host.repair.policy import Candidate
 from host.repair.processes import ProcessConfig
 from host.repair.supervisor import ProcessSupervisor
+from host.repair.unsettled import Unsettled
 from protocol.constants import B_OVER_TOTAL, B_UV_OFF, B_UV_SHED, F_SHED_TOTAL, F_SHED_UV
 
 if TYPE_CHECKING:
@@ -99,6 +101,7 @@ class RepairService:
         self._latest: DiagnosisResult | None = None
         self._pending: asyncio.Task[Any] | None = None
         self._running: asyncio.Task[Any] | None = None
+        self.unsettled = Unsettled()
 
     # --- inputs -------------------------------------------------------------------------
     def link(self, client: BoardClient | None) -> None:
@@ -109,6 +112,9 @@ class RepairService:
     def diagnosed(self, result: DiagnosisResult) -> None:
         """A diagnosis changed: start a repair after the debounce if it names anything."""
         self._latest = result
+        named = set().union(*result.bad_sets()) if result.bad_sets() else set()
+        for flip in self.unsettled.diagnosed(named, self.executor.clock()):
+            self._emit(Note(flip.text(), "warning"))
         if self._pending is not None:
             self._pending.cancel()
             self._pending = None
