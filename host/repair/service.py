@@ -176,8 +176,8 @@ class RepairService:
                 continue
             if ch.live_faults & F_SHED_TOTAL:
                 if c.name not in held:
-                    self.hold(c.name, f"{SHED_HOLD} ({state.total_ma} mA in all); switch it "
-                              "on when the cause is found", by="board")
+                    self.hold(c.name, f"{SHED_HOLD}; switch it on when the cause is found",
+                              by="board")
             elif held.get(c.name, "").startswith(SHED_HOLD):
                 self.release(c.name, by="board")
 
