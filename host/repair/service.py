@@ -301,6 +301,8 @@ class RepairService:
         if device is None:
             return
         if not on:
+            if self.executor.held.get(device, "").startswith(SHED_HOLD):
+                del self.executor.held[device]  # the person's switch-off is what holds it now
             self.hold(device, "switched off on the board by a command this daemon did not "
                       "send", by="board")
         elif self.executor.held.get(device, "").startswith(("switched off on the board",

@@ -78,6 +78,13 @@ def test_devices_shed_for_the_total_current_are_held_and_the_base_is_repaired(
         holds = [e for e in events if isinstance(e, HoldChange) and e.held]
         assert {h.component for h in holds} == {"hokuyo", "thermal_camera"}
         assert all(h.by == "board" and "total-current" in h.reason for h in holds)
+        # a person switches the shed camera off for good: that, not the shed, holds it now,
+        # and the board's state (no longer shed) does not release it
+        svc.board_switched(6, False)
+        assert svc.executor.held["thermal_camera"].startswith("switched off on the board")
+        svc.link(Board(board({3})))  # type: ignore[arg-type]
+        await svc._wait_for_board()
+        assert svc.executor.held["thermal_camera"].startswith("switched off on the board")
         await svc.close()
 
     asyncio.run(main())
