@@ -113,7 +113,7 @@ class RepairService:
         """A diagnosis changed: start a repair after the debounce if it names anything."""
         self._latest = result
         named = set().union(*result.bad_sets()) if result.bad_sets() else set()
-        for flip in self.unsettled.diagnosed(named, self.executor.clock()):
+        for flip in self.unsettled.diagnosed(named, self.executor.clock(), not self.busy):
             self._emit(Note(flip.text(), "warning"))
         if self._pending is not None:
             self._pending.cancel()

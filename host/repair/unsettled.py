@@ -6,7 +6,7 @@ superseded and nothing is ever done. The debounce is right not to act on what do
 but the person must hear of it. ``Unsettled`` counts, per component, how often it entered or
 left the diagnosis (the union of the minimal diagnoses' bad sets) within ``window_s`` seconds,
 and reports a component once its count reaches ``threshold`` — once per window, not at every
-change. Time is passed in.
+change; the changes a running repair makes are not counted. Time is passed in.
 """
 
 from __future__ import annotations
@@ -40,11 +40,13 @@ class Unsettled:
     _changes: dict[str, deque[float]] = field(default_factory=dict)
     _told: dict[str, float] = field(default_factory=dict)
 
-    def diagnosed(self, named: Iterable[str], now: float) -> list[Flipping]:
-        """The components named now; returns those to report (sorted by name)."""
+    def diagnosed(self, named: Iterable[str], now: float, count: bool = True) -> list[Flipping]:
+        """The components named now; returns those to report (sorted by name). With ``count``
+        false (a repair is running: its power cycles and restarts change the diagnosis by
+        design) the change is taken in but not counted."""
         named = frozenset(named)
         out: list[Flipping] = []
-        for c in sorted(named ^ self._named):
+        for c in sorted(named ^ self._named if count else ()):
             q = self._changes.setdefault(c, deque())
             q.append(now)
             while q and q[0] < now - self.window_s:

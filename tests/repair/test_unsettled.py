@@ -50,6 +50,13 @@ def test_a_flipping_diagnosis_is_told_once_per_window_and_no_repair_starts(
         assert describe(told[0]).startswith(
             "warning: hokuyo: diagnosis keeps changing (6 times in 2.5 s)")
         assert not svc.busy  # nothing repaired on a diagnosis that does not hold
+        # while a repair runs, its own power cycles and restarts change the diagnosis: untold
+        svc._running = asyncio.get_running_loop().create_future()
+        for i in range(30):
+            svc.diagnosed(result("hokuyo") if i % 2 == 0 else result())
+            clock[0] += 0.5
+        assert len([e for e in events if isinstance(e, Note)]) == 2
+        svc._running.cancel()
         await svc.close()
 
     asyncio.run(main())
