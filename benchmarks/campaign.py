@@ -2,7 +2,7 @@
 
     .venv/bin/python benchmarks/campaign.py [--quick] [--seed N] [--singles N] [--doubles N]
         [--weight W] [--repairable-doubles F] [--quiet-runs N] [--quiet-s S]
-        [--parallel K] [--json FILE] [--journal-dir DIR]
+        [--parallel K] [--kinds K,K] [--json FILE] [--journal-dir DIR]
 
 The daemon runs in this process (``host.experiment.RobotSession``: the emulated board and
 devices as a child process, the nodes as processes) on a copy of ``models/tedusar`` with short
@@ -49,6 +49,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # before benchmarks/, whose protocol.py would shadow protocol/
 
 from benchmarks.campaign_plan import (  # noqa: E402
+    BY_NAME,
     LATENT,
     LINK,
     NOT_REPAIRABLE,
@@ -347,7 +348,8 @@ async def main_async(args: argparse.Namespace) -> int:
     for sig in (signal.SIGTERM, signal.SIGINT):
         asyncio.get_running_loop().add_signal_handler(sig, main_task.cancel)
     plan = plan_trials(random.Random(args.seed), args.singles, args.doubles,
-                       weight=args.weight, repairable_doubles=args.repairable_doubles)
+                       weight=args.weight, repairable_doubles=args.repairable_doubles,
+                       only=[BY_NAME[k] for k in args.kinds])
     begun = time.monotonic()
     if args.shard:
         robot, _, robots = args.shard.partition("/")
@@ -378,6 +380,9 @@ def main() -> int:
     p.add_argument("--quiet-s", type=float, default=60.0)
     p.add_argument("--parallel", type=int, default=1, metavar="K",
                    help="K robots, each in its own process, the trials split between them")
+    p.add_argument("--kinds", default="", metavar="K,K",
+                   help="only these fault kinds (a re-run): singles cycle through them, each "
+                   "double holds one of them; default every kind")
     p.add_argument("--json", metavar="FILE", help="write every trial as JSON")
     p.add_argument("--journal-dir", metavar="DIR", help="keep each robot's journal here")
     p.add_argument("--shard", help=argparse.SUPPRESS)  # I/K: one robot of --parallel K
@@ -388,13 +393,18 @@ def main() -> int:
             or not 0.0 <= args.repairable_doubles <= 1.0:
         p.error("need --parallel >= 1, --weight >= 1, counts >= 0, --repairable-doubles "
                 "between 0 and 1")
+    args.kinds = [k.strip() for k in args.kinds.split(",") if k.strip()]
+    unknown = [k for k in args.kinds if k not in BY_NAME]
+    if unknown:
+        p.error(f"--kinds: unknown kind {unknown[0]!r}; the kinds are {', '.join(BY_NAME)}")
     if args.shard and not args.json:
         p.error("--shard needs --json")
     # what a robot of --parallel runs: the same campaign
     args.passed = [f"--seed={args.seed}", f"--singles={args.singles}",
                    f"--doubles={args.doubles}", f"--weight={args.weight}",
                    f"--repairable-doubles={args.repairable_doubles}",
-                   f"--quiet-runs={args.quiet_runs}", f"--quiet-s={args.quiet_s}"]
+                   f"--quiet-runs={args.quiet_runs}", f"--quiet-s={args.quiet_s}",
+                   f"--kinds={','.join(args.kinds)}"]
     if args.journal_dir:
         Path(args.journal_dir).mkdir(parents=True, exist_ok=True)
         args.passed.append(f"--journal-dir={args.journal_dir}")

@@ -39,6 +39,7 @@ from __future__ import annotations
 import random
 import statistics
 from collections import defaultdict
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -142,21 +143,27 @@ class Planned:
 
 
 def plan_trials(rng: random.Random, singles: int, doubles: int, *, weight: int = 3,
-                repairable_doubles: float = 0.7) -> list[Planned]:
+                repairable_doubles: float = 0.7,
+                only: Sequence[Kind] = ()) -> list[Planned]:
     """``singles`` single faults (every kind, repairable ones ``weight`` times as often) and
-    ``doubles`` double faults (``repairable_doubles`` of them both repairable), shuffled."""
+    ``doubles`` double faults (``repairable_doubles`` of them both repairable), shuffled.
+    With ``only`` (a re-run of some kinds) the singles cycle through those kinds and each
+    double pairs one of them (a device fault) with any kind a double may hold."""
     out: list[Faults] = []
     pool: list[Kind] = []
     for _ in range(singles):
         if not pool:
-            pool = list(KINDS) + [k for k in KINDS if k.cls == REPAIRABLE] * (weight - 1)
+            pool = list(only) or \
+                list(KINDS) + [k for k in KINDS if k.cls == REPAIRABLE] * (weight - 1)
             rng.shuffle(pool)
         k = pool.pop()
         out.append([(k, "board")] if k.board else _place([k], rng))
     n_rep = round(doubles * repairable_doubles)
-    for i in range(doubles):
-        kinds = REPAIRABLE_DOUBLE_KINDS if i < n_rep else DOUBLE_KINDS
-        out.append(_place([rng.choice(kinds), rng.choice(kinds)], rng))
+    chosen = [k for k in only if k in DOUBLE_KINDS]
+    for i in range(doubles if chosen or not only else 0):
+        kinds = REPAIRABLE_DOUBLE_KINDS if i < n_rep and not only else DOUBLE_KINDS
+        first = rng.choice(chosen) if chosen else rng.choice(kinds)
+        out.append(_place([first, rng.choice(kinds)], rng))
     rng.shuffle(out)
     return [Planned(i, f, rng.randrange(2**31)) for i, f in enumerate(out)]
 

@@ -107,8 +107,11 @@ class RepairLoop:
             return Round(None, None, f"no plan: {exc}", no_plan=True)
         if not choice.plan.steps:
             note = "nothing to repair"
-            if dropped:
-                note += f"; quarantined: {', '.join(sorted(dropped))}"
+            held = {c for c in dropped if c in self.executor.held}
+            if dropped - held:
+                note += f"; quarantined: {', '.join(sorted(dropped - held))}"
+            if held:
+                note += f"; held: {', '.join(sorted(held))}"
             return Round(choice if choice.bad else None, None, note,
                          quarantined=frozenset(dropped))
         plan_id = f"repair-{next(self._ids)}"

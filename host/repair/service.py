@@ -4,9 +4,10 @@ stale data — knowing nothing of the daemon that feeds it.
 ``RepairService`` is fed, and emits; it reads nothing of its owner:
 
 - ``diagnosed(result)``: a diagnosis changed. When it names broken components a repair starts
-  after ``debounce_s`` — unless a newer diagnosis superseded it, the board link is down (then
-  every board literal is unknown: nothing to act on), or a repair is already running (the
-  running loop re-diagnoses after each plan, so it sees the change);
+  after ``debounce_s`` (a component that keeps entering and leaving the diagnosis faster than
+  that is reported, ``host.repair.unsettled``) — unless a newer diagnosis superseded it, the
+  board link is down (then every board literal is unknown: nothing to act on), or a repair is
+  already running (the running loop re-diagnoses after each plan, so it sees the change);
 - ``link(client)``: the board link it acts through (``None``: the link is down);
 - ``diagnose``: given at construction, an async callable returning a fresh diagnosis of the
   observations now (the daemon runs it off its loop); ``observations``: the daemon's one
@@ -22,13 +23,18 @@ deliberate switch-off is not undone. Quarantines and holds a previous run left i
 are ``restore``d at start.
 
 While the board's own protection has the channels (it sheds them for input under-voltage and
-restores them itself afterwards) repairs wait for it rather than fight it. A repair is the
-``RepairLoop``: diagnose, choose, plan, execute with verified effects, until healthy, bounded by
-the executor's attempt limiter and quarantine. With ``dry_run`` plans are made and reported but
-nothing acts. ``build`` makes a service for a robot: from its planner (``repair.pddl``) and its
-``processes:`` (of ``system.yaml``), the process supervisor, the actuators (board power through
-the linked ``BoardClient``, nodes through the supervisor) and the executor, whose effect checks
-wait on the same observation set the diagnoser reads.
+restores them itself afterwards) repairs wait for it rather than fight it. A channel the board
+shed to stay under its total-current limit is no fault of its device and stays off until it is
+commanded on: the device is held (``SHED_HOLD``, shown like any hold) while the board keeps it
+shed, so no repair switches it back for the board to shed again, and the diagnosis turns to the
+channel whose current is abnormal; the hold ends when the channel is switched on or off.
+
+A repair is the ``RepairLoop``: diagnose, choose, plan, execute with verified effects, until
+healthy, bounded by the executor's attempt limiter and quarantine. With ``dry_run`` plans are
+made and reported but nothing acts. ``build`` makes a service for a robot: from its planner
+(``repair.pddl``) and its ``processes:`` (of ``system.yaml``), the process supervisor, the
+actuators (board power through the linked ``BoardClient``, nodes through the supervisor) and the
+executor, whose effect checks wait on the same observation set the diagnoser reads.
 """
 
 from __future__ import annotations
@@ -56,16 +62,19 @@ from host.repair.planner import RepairPlanner
 from host.repair.policy import Candidate
 from host.repair.processes import ProcessConfig
 from host.repair.supervisor import ProcessSupervisor
-from protocol.constants import B_UV_OFF, B_UV_SHED, F_SHED_UV
+from host.repair.unsettled import Unsettled
+from protocol.constants import B_OVER_TOTAL, B_UV_OFF, B_UV_SHED, F_SHED_TOTAL, F_SHED_UV
 
 if TYPE_CHECKING:
     from host.board.client import BoardClient
+    from host.board.types import BoardState
     from host.diagnosis.model import SystemModel
 
 log = logging.getLogger(__name__)
 
 BOARD_POLL_S = 0.5
 FOREIGN_WINDOW_S = 5.0  # a switch command this host sent that long ago is still its own
+SHED_HOLD = "shed by the board to stay under its total-current limit"
 Emit = Callable[[Event], None]
 FreshDiagnosis = Callable[[], Awaitable[DiagnosisResult]]
 
@@ -92,6 +101,7 @@ class RepairService:
         self._latest: DiagnosisResult | None = None
         self._pending: asyncio.Task[Any] | None = None
         self._running: asyncio.Task[Any] | None = None
+        self.unsettled = Unsettled()
 
     # --- inputs -------------------------------------------------------------------------
     def link(self, client: BoardClient | None) -> None:
@@ -102,6 +112,9 @@ class RepairService:
     def diagnosed(self, result: DiagnosisResult) -> None:
         """A diagnosis changed: start a repair after the debounce if it names anything."""
         self._latest = result
+        named = set().union(*result.bad_sets()) if result.bad_sets() else set()
+        for flip in self.unsettled.diagnosed(named, self.executor.clock(), not self.busy):
+            self._emit(Note(flip.text(), "warning"))
         if self._pending is not None:
             self._pending.cancel()
             self._pending = None
@@ -143,12 +156,30 @@ class RepairService:
             state = await client.state()
         except RemoteError as exc:  # the link went down under us: wait for it like the rest
             return f"the board does not answer ({exc.message})"
+        self._hold_shed(state)
         if state.board_flags & (B_UV_SHED | B_UV_OFF):
             return "the board sheds channels for input under-voltage"
+        if state.board_flags & B_OVER_TOTAL:
+            return "the board is over its total-current limit"
         shed = [c.name for c in state.channels if c.live_faults & F_SHED_UV]
         if shed:
             return f"the board is restoring {', '.join(shed)} after an under-voltage"
         return ""
+
+    def _hold_shed(self, state: BoardState) -> None:
+        """Hold the devices the board keeps shed for its total current; release those it no
+        longer does (switched on or off since)."""
+        held = self.executor.held
+        for c in self.executor.model.components.values():
+            ch = next((x for x in state.channels if x.channel == c.channel), None)
+            if ch is None or c.channel is None:
+                continue
+            if ch.live_faults & F_SHED_TOTAL:
+                if c.name not in held:
+                    self.hold(c.name, f"{SHED_HOLD}; switch it on when the cause is found",
+                              by="board")
+            elif held.get(c.name, "").startswith(SHED_HOLD):
+                self.release(c.name, by="board")
 
     async def _wait_for_board(self) -> None:
         """Wait (noting why, once) while the board's own protection has the channels."""
@@ -270,9 +301,12 @@ class RepairService:
         if device is None:
             return
         if not on:
+            if self.executor.held.get(device, "").startswith(SHED_HOLD):
+                del self.executor.held[device]  # the person's switch-off is what holds it now
             self.hold(device, "switched off on the board by a command this daemon did not "
                       "send", by="board")
-        elif self.executor.held.get(device, "").startswith("switched off on the board"):
+        elif self.executor.held.get(device, "").startswith(("switched off on the board",
+                                                            SHED_HOLD)):
             self.release(device, by="board")
 
     def _again(self) -> None:
