@@ -1,17 +1,21 @@
 """Record a robot's ROS 2 topics into a bag while diagnosing them; diagnose a bag again later.
 
 ``record(robot, bag, journal, stop)`` subscribes, through the ROS 2 source (``host.ros``), the
-topics the robot's topic observers watch plus ``/diagnostics`` (the drivers' and dxboard's own),
-each once: every message is written to the bag (``BagWriter``) and fed to the observers, so
-what is diagnosed live is exactly what the bag holds. The observers run on ``ClockedObservers``
-on the source's (wall) clock: a timer advances them ``GRACE_S`` behind the clock, so a message
-still queued between DDS and the loop is fed before the deadlines that follow it. With a
-journal, the diagnoses (``Diagnosing``) are journaled as the daemon journals them.
+topics the robot's topic observers watch, ``/board_stream`` (what a ``dxboard run``'s hardware
+observer is fed: ``host.ros.boardstream``) when the robot has a hardware observer, plus
+``/diagnostics`` (the drivers' and dxboard's own), each once: every message is written to the
+bag (``BagWriter``) and fed to the observers, so what is diagnosed live is exactly what the
+bag holds. The observers run on ``ClockedObservers`` on the source's (wall) clock, ``GRACE_S``
+behind it: messages wait in a ``Reorder`` until the clock is ``GRACE_S`` past their time (a
+board item counts at its stamp, a topic message at its arrival), so a message still queued
+between DDS and the loop is fed before the deadlines that follow it. With a journal, the
+diagnoses (``Diagnosing``) are journaled as the daemon journals them.
 
 ``replay(robot, bag, journal)`` runs the same observers and the same diagnosis over a bag on
-the bag's clock: from the recording's start, every message at its time, every deadline at its
-time, up to the recording's end, as fast as the bag can be read (no sleeping); the journal it
-writes has the bag's times, so ``dxboard report`` draws the timeline of the recorded failure.
+the bag's clock: from the recording's start, every message at its time (in the same
+``Reorder``, driven by the arrival times), every deadline at its time, up to the recording's
+end, as fast as the bag can be read (no sleeping); the journal it writes has the bag's
+times, so ``dxboard report`` draws the timeline of the recorded failure.
 Given the same messages, the deadlines fire at the same times: the replay gives the diagnoses
 the recording gave.
 """
@@ -33,7 +37,7 @@ from host.journal import Journal
 from host.observers.base import Update
 from host.ros.bag import Bag, BagWriter
 from host.ros.message import RosMessage
-from host.ros.offline import ClockedObservers, Diagnosing, bag_observers
+from host.ros.offline import ClockedObservers, Diagnosing, Reorder, bag_observers
 
 log = logging.getLogger(__name__)
 
@@ -86,24 +90,30 @@ async def record(robot: RobotFiles, bag_path: Path, journal: Journal | None,
     source = Ros2Source(spec.domain, dict(spec.types), clock=clock, name="dxboard_recorder")
     loop = asyncio.get_running_loop()
     timer: list[asyncio.TimerHandle] = []
+    waiting = Reorder(GRACE_S)
+    last = [clock()]  # the latest arrival
 
     def arm() -> None:
         for handle in timer:
             handle.cancel()
         timer.clear()
-        due = observers.next_deadline()
-        if due is not None:
-            timer.append(loop.call_later(max(0.0, due + GRACE_S - clock()), tick))
+        due = [t for t in (observers.next_deadline(), waiting.first()) if t is not None]
+        if due:
+            timer.append(loop.call_later(max(0.0, min(due) + GRACE_S - clock()), tick))
 
     def tick() -> None:
-        observers.advance(clock() - GRACE_S)
+        now = clock()
+        for msg in waiting.due(now):
+            observers.feed(msg)
+        observers.advance(now - GRACE_S)
         arm()
 
     def on_message(msg: object) -> None:
         assert isinstance(msg, RosMessage)
         writer.write(msg)
-        observers.feed(msg)
-        arm()
+        last[0] = max(last[0], msg.time)
+        waiting.push(msg)
+        tick()
 
     start = clock()
     t0 = time.perf_counter()
@@ -120,7 +130,10 @@ async def record(robot: RobotFiles, bag_path: Path, journal: Journal | None,
         source.close()
         for handle in timer:
             handle.cancel()
-        end = observers.now if observers.now is not None else start
+        for msg in waiting.drain():
+            observers.feed(msg)
+        end = max(observers.now if observers.now is not None else start, last[0])
+        observers.advance(end)
         observers.stop()
         stream.emit(Note("dxboard record stopped"))
         writer.close(start, end)
@@ -144,12 +157,17 @@ def replay(robot: RobotFiles, bag: Bag, journal: Journal | None) -> RunStats:
     t0 = time.perf_counter()
     stream.emit(Note(f"dxboard replay {bag.path}: {robot.model.name}"))
     observers.start(bag.start)
+    waiting = Reorder(GRACE_S)
     count = 0
     try:
         for msg in bag.messages():
             if msg.topic in observers.topics:
-                observers.feed(msg)
+                waiting.push(msg)
+            for due in waiting.due(msg.time):
+                observers.feed(due)
             count += 1
+        for due in waiting.drain():
+            observers.feed(due)
         observers.advance(bag.end)
         now[0] = bag.end
         observers.stop()
