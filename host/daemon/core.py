@@ -364,7 +364,7 @@ class Daemon:
         """The hardware observer's input; on ROS 2 also on ``/board_stream`` (for bags)."""
         self.hub.feed_board(item)
         if self.ros_out is not None:
-            self.ros_out.board(item)
+            self.ros_out.board(item, self.stream.wall())
 
     async def _board_item(self, client: BoardClient, item: object) -> None:
         if isinstance(item, Reading):

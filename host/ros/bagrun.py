@@ -41,7 +41,7 @@ from host.ros.offline import ClockedObservers, Diagnosing, Reorder, bag_observer
 
 log = logging.getLogger(__name__)
 
-GRACE_S = 0.5  # how far the live observers run behind the clock
+GRACE_S = 2.0  # how far the live observers run behind the clock (a loaded machine's DDS lag)
 DIAGNOSTICS = "/diagnostics"
 
 

@@ -9,7 +9,8 @@ the link going down and up and reboots. So the daemon also publishes, on ``/boar
 (``diagnostic_msgs/DiagnosticArray``, a standard type: ``ros2 topic echo``, Foxglove and
 ``rosbags`` read it), every item its hardware observer is fed, as it is fed:
 
-- ``header.stamp``: the item's ``host_time`` (wall clock, when the host received it);
+- ``header.stamp``: when the daemon fed it to its hardware observer (wall clock; by default
+  the item's ``host_time``, when the host received it);
 - ``status[0]``: name ``dxboard board stream``, level OK (ERROR for ``link_down``), message the
   item's kind (``reading``, ``event``, ``state``, ``link_down``, ``link_up``, ``rebooted``),
   ``hardware_id`` ``board``, and one key/value per field of the item as ``host.board.types``
@@ -29,6 +30,7 @@ was fed, at the stamp's time (``when``). Anything that does not decode is None (
 from __future__ import annotations
 
 import dataclasses
+import functools
 import logging
 import typing
 from dataclasses import dataclass
@@ -69,8 +71,8 @@ class Record:
     values: tuple[tuple[str, str], ...]
 
 
-def encode(item: BoardInput) -> tuple[float, list[Record]]:
-    """The stamp (s) and the statuses that carry ``item``."""
+def encode(item: BoardInput) -> list[Record]:
+    """The statuses that carry ``item``."""
     kind = _KIND_OF[type(item)]
     level = ERROR if kind == "link_down" else OK
     out = [Record(level, NAME, kind, _values(item))]
@@ -79,14 +81,16 @@ def encode(item: BoardInput) -> tuple[float, list[Record]]:
                 for c in item.channels]
     elif isinstance(item, LinkUp):
         out.append(Record(OK, INFO, "info", _values(item.info)))
-    return item.host_time, out
+    return out
 
 
-def message(item: BoardInput) -> Any:
-    """``item`` as the ``diagnostic_msgs/DiagnosticArray`` that ``/board_stream`` carries."""
+def message(item: BoardInput, stamp: float | None = None) -> Any:
+    """``item`` as the ``diagnostic_msgs/DiagnosticArray`` that ``/board_stream`` carries,
+    stamped ``stamp`` (default: its ``host_time``)."""
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
-    stamp, records = encode(item)
+    records = encode(item)
+    stamp = item.host_time if stamp is None else stamp
     msg = DiagnosticArray()
     sec = int(stamp // 1)
     msg.header.stamp.sec, msg.header.stamp.nanosec = sec, min(int((stamp - sec) * 1e9),
@@ -150,8 +154,13 @@ def _values(obj: Any) -> tuple[tuple[str, str], ...]:
     return tuple(out)
 
 
+@functools.cache
+def _hints(cls: type[Any]) -> dict[str, Any]:
+    return typing.get_type_hints(cls)
+
+
 def _build(cls: type[Any], values: dict[str, str], extra: dict[str, Any]) -> Any:
-    hints = typing.get_type_hints(cls)
+    hints = _hints(cls)
     args: dict[str, Any] = dict(extra)
     for f in dataclasses.fields(cls):
         if f.name in args:

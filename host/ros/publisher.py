@@ -82,11 +82,11 @@ class RosPublisher:
             self._last = statuses  # one reference swap: the timer's thread reads it
             self._publish_statuses()
 
-    def board(self, item: BoardInput) -> None:
-        """One item the hardware observer is fed, on ``/board_stream`` (the loop's thread)."""
-        if self._closed:
-            return
-        self._stream.publish(boardstream.message(item))
+    def board(self, item: BoardInput, fed_at: float) -> None:
+        """One item the hardware observer was fed at ``fed_at`` (wall clock), on
+        ``/board_stream`` (on the loop's thread)."""
+        if not self._closed:
+            self._stream.publish(boardstream.message(item, fed_at))
 
     def _stamp(self) -> Any:
         return self.ros.node.get_clock().now().to_msg()
