@@ -30,7 +30,6 @@ was fed, at the stamp's time (``when``). Anything that does not decode is None (
 from __future__ import annotations
 
 import dataclasses
-import functools
 import logging
 import typing
 from dataclasses import dataclass
@@ -154,9 +153,14 @@ def _values(obj: Any) -> tuple[tuple[str, str], ...]:
     return tuple(out)
 
 
-@functools.cache
+_HINTS: dict[type[Any], dict[str, Any]] = {}
+
+
 def _hints(cls: type[Any]) -> dict[str, Any]:
-    return typing.get_type_hints(cls)
+    """A dataclass's field types (read once per class: ``get_type_hints`` is slow)."""
+    if cls not in _HINTS:
+        _HINTS[cls] = typing.get_type_hints(cls)
+    return _HINTS[cls]
 
 
 def _build(cls: type[Any], values: dict[str, str], extra: dict[str, Any]) -> Any:
