@@ -19,6 +19,7 @@ from __future__ import annotations
 import shutil
 import signal
 import subprocess
+import time
 from pathlib import Path
 
 from host.events import Kind
@@ -57,6 +58,23 @@ def blamed(records: list[tuple[tuple[str, ...], ...]], component: str) -> list[b
         b = bool(ds) and all(component in bad for bad in ds)
         if not out or out[-1] != b:
             out.append(b)
+    return out
+
+
+def changes(journal: Path, component: str, since: float,
+            until: float) -> list[tuple[str, bool | None]]:
+    """The changes of what the hardware observer says of ``component`` between the wall times
+    ``since`` and ``until``: (literal, value), None when retracted (a refresh is no change)."""
+    atoms = {f"on({component})", f"tripped({component})", f"in_band({component})"}
+    out: list[tuple[str, bool | None]] = []
+    last: dict[str, bool | None] = {}
+    with JournalReader(journal) as r:
+        for e in r.query(kind=Kind.OBSERVATION, limit=100000):
+            atom, value = e.payload.literal, e.payload.value  # type: ignore[attr-defined]
+            if atom in atoms and last.get(atom, "?") != value:
+                last[atom] = value
+                if since < e.wall < until:
+                    out.append((atom, value))
     return out
 
 
@@ -145,6 +163,7 @@ def test_a_bag_recorded_from_a_live_board_trip_replays_to_the_daemons_diagnoses(
                    show=lambda: diagnoses(live)[-3:])
         d.caught_up()
     finally:
+        stopped = time.time()  # the daemon's shutdown after this is not in the bag
         if rec is not None:
             rec.send_signal(signal.SIGINT)
             out, err = rec.communicate(timeout=WAIT_S)
@@ -166,6 +185,11 @@ def test_a_bag_recorded_from_a_live_board_trip_replays_to_the_daemons_diagnoses(
                            DEVICE)  # the mark
     assert daemon_blamed == [False, True, False], daemon_blamed
     assert blamed(replay_d, DEVICE) == daemon_blamed, replay_d
+    # and the hardware observer saw the board as the daemon's did: the same changes
+    since = next(e.wall for e in d.journal() if e.id == mark)
+    said = changes(d.journal_path, DEVICE, since, stopped)
+    assert (f"tripped({DEVICE})", True) in said
+    assert changes(replayed, DEVICE, since, stopped) == said
 
 
 def test_bad_input_is_one_line_and_exit_code_2(tmp_path: Path) -> None:
