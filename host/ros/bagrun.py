@@ -2,14 +2,15 @@
 
 ``record(robot, bag, journal, stop)`` subscribes, through the ROS 2 source (``host.ros``), the
 topics the robot's topic observers watch, ``/board_stream`` (what a ``dxboard run``'s hardware
-observer is fed: ``host.ros.boardstream``) when the robot has a hardware observer, plus
-``/diagnostics`` (the drivers' and dxboard's own), each once: every message is written to the
-bag (``BagWriter``) and fed to the observers, so what is diagnosed live is exactly what the
-bag holds. The observers run on ``ClockedObservers`` on the source's (wall) clock, ``GRACE_S``
-behind it: messages wait in a ``Reorder`` until the clock is ``GRACE_S`` past their time (a
-board item counts at its stamp, a topic message at its arrival), so a message still queued
-between DDS and the loop is fed before the deadlines that follow it. With a journal, the
-diagnoses (``Diagnosing``) are journaled as the daemon journals them.
+observer is fed: ``host.ros.boardstream``) when the robot has a hardware observer, the ROS 2
+graph's node list every discovery period (on ``/dxboard/graph``: ``host.ros.graphlog``) when it
+has graph observers, plus ``/diagnostics`` (the drivers' and dxboard's own), each once: every
+message is written to the bag (``BagWriter``) and fed to the observers, so what is diagnosed
+live is exactly what the bag holds. The observers run on ``ClockedObservers`` on the source's
+(wall) clock, ``GRACE_S`` behind it: messages wait in a ``Reorder`` until the clock is
+``GRACE_S`` past their time (a board item counts at its stamp, a topic message at its arrival),
+so a message still queued between DDS and the loop is fed before the deadlines that follow it.
+With a journal, the diagnoses (``Diagnosing``) are journaled as the daemon journals them.
 
 ``replay(robot, bag, journal)`` runs the same observers and the same diagnosis over a bag on
 the bag's clock: from the recording's start, every message at its time (in the same
@@ -35,7 +36,10 @@ from host.errors import UserError
 from host.events import JOURNALED, Note, Stamped
 from host.journal import Journal
 from host.observers.base import Update
+from host.observers.payload import Message
+from host.ros import graphlog
 from host.ros.bag import Bag, BagWriter
+from host.ros.graph import GRAPH
 from host.ros.message import RosMessage
 from host.ros.offline import ClockedObservers, Diagnosing, Reorder, bag_observers
 
@@ -109,7 +113,9 @@ async def record(robot: RobotFiles, bag_path: Path, journal: Journal | None,
         arm()
 
     def on_message(msg: object) -> None:
-        assert isinstance(msg, RosMessage)
+        if not isinstance(msg, RosMessage):  # a sample of the graph: in the bag's form
+            assert isinstance(msg, Message) and msg.topic == GRAPH
+            msg = graphlog.to_bag(msg)
         writer.write(msg)
         last[0] = max(last[0], msg.time)
         waiting.push(msg)
@@ -119,7 +125,7 @@ async def record(robot: RobotFiles, bag_path: Path, journal: Journal | None,
     t0 = time.perf_counter()
     stream.emit(Note(f"dxboard record {bag_path}: {robot.model.name}"))
     observers.start(start)
-    subs = [source.subscribe(t, on_message)
+    subs = [source.subscribe(GRAPH if t == graphlog.TOPIC else t, on_message)
             for t in sorted({*observers.topics, DIAGNOSTICS})]
     arm()
     try:

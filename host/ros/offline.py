@@ -16,10 +16,11 @@ the diagnoser ranks them (cardinality, then probability) and ties by name, so th
 (whose solvers may find tied diagnoses in any order) journal the same list.
 
 ``bag_observers`` picks what a bag can feed: the topic observers of the robot's ``observers:``
-section and its hardware observer (fed the board's items from ``/board_stream``, which a
-``dxboard run`` on ROS 2 publishes: ``host.ros.boardstream``, each at its own stamp), without
-node presence from the graph (not a topic; not in a bag) or process observers (the supervisor
-is not in a bag).
+section, its hardware observer (fed the board's items from ``/board_stream``, which a
+``dxboard run`` on ROS 2 publishes: ``host.ros.boardstream``, each at its own stamp) and node
+presence from the graph (fed the graph samples the recorder wrote on ``/dxboard/graph``:
+``host.ros.graphlog``), without process observers (the supervisor is not in a bag). Its
+``topics`` are the bag's names (``/dxboard/graph`` for the graph).
 """
 
 from __future__ import annotations
@@ -38,7 +39,7 @@ from host.events import DiagnosisRecord, Event, Observation
 from host.observers.base import Observer, Update
 from host.observers.hardware import HardwareObserver
 from host.observers.topics import TopicObserver
-from host.ros import boardstream
+from host.ros import boardstream, graphlog
 from host.ros.graph import GRAPH
 from host.ros.message import RosMessage
 
@@ -49,10 +50,8 @@ MIN_STEP_S = 0.001  # a deadline that does not move after its tick is retried th
 
 
 def bag_observers(observers: Sequence[Observer[Any]]) -> list[Observer[Any]]:
-    """The observers a bag can feed: topic observers of real topics, the hardware observer."""
-    return [o for o in observers
-            if (isinstance(o, TopicObserver) and GRAPH not in o.topics)
-            or isinstance(o, HardwareObserver)]
+    """The observers a bag can feed: topic observers (of the graph too), the hardware one."""
+    return [o for o in observers if isinstance(o, (TopicObserver, HardwareObserver))]
 
 
 class ClockedObservers:
@@ -64,8 +63,9 @@ class ClockedObservers:
         self._hardware = [o for o in self.observers if isinstance(o, HardwareObserver)]
         for o in self.observers:
             if isinstance(o, TopicObserver):
-                for t in o.topics:
-                    self._by_topic.setdefault(t, []).append(o)
+                for t in o.topics:  # the graph's samples are on a topic of their own in a bag
+                    self._by_topic.setdefault(graphlog.TOPIC if t == GRAPH else t,
+                                              []).append(o)
         if self._hardware:
             self._by_topic.setdefault(boardstream.TOPIC, [])
         self._fired: dict[int, float] = {}
@@ -103,8 +103,10 @@ class ClockedObservers:
         t = boardstream.when(msg)
         self.advance(t)
         t = max(t, self.now if self.now is not None else t)  # later than its grace: now
-        for o in self._by_topic.get(msg.topic, ()):
-            self._out(o.feed(msg, t), t)
+        fed = graphlog.from_bag(msg) if msg.topic == graphlog.TOPIC else msg
+        if fed is not None:
+            for o in self._by_topic.get(msg.topic, ()):
+                self._out(o.feed(fed, t), t)
         if msg.topic == boardstream.TOPIC and self._hardware:
             item = boardstream.decode(msg)
             if item is not None:
