@@ -91,14 +91,18 @@ def message(item: BoardInput, stamp: float | None = None) -> Any:
     records = encode(item)
     stamp = item.host_time if stamp is None else stamp
     msg = DiagnosticArray()
-    sec = int(stamp // 1)
-    msg.header.stamp.sec, msg.header.stamp.nanosec = sec, min(int((stamp - sec) * 1e9),
-                                                                999_999_999)
+    set_stamp(msg.header, stamp)
     msg.status = [DiagnosticStatus(level=bytes([r.level]), name=r.name, message=r.message,
                                    hardware_id="board",
                                    values=[KeyValue(key=k, value=v) for k, v in r.values])
                   for r in records]
     return msg
+
+
+def set_stamp(header: Any, t: float) -> None:
+    """A ``std_msgs/Header``'s stamp to ``t`` (seconds; whole nanoseconds)."""
+    sec = int(t // 1)
+    header.stamp.sec, header.stamp.nanosec = sec, min(int((t - sec) * 1e9), 999_999_999)
 
 
 def when(msg: RosMessage) -> float:

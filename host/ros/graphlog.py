@@ -20,6 +20,7 @@ from __future__ import annotations
 import logging
 
 from host.observers.payload import Message, encode
+from host.ros.boardstream import set_stamp
 from host.ros.graph import GRAPH
 from host.ros.message import RosMessage
 
@@ -38,9 +39,7 @@ def to_bag(sample: Message) -> RosMessage:
     nodes = (sample.values or {}).get("nodes")
     names = sorted(str(n) for n in nodes) if isinstance(nodes, list) else []
     msg = DiagnosticArray()
-    sec = int(sample.time // 1)
-    msg.header.stamp.sec = sec
-    msg.header.stamp.nanosec = min(int((sample.time - sec) * 1e9), 999_999_999)
+    set_stamp(msg.header, sample.time)
     msg.status = [DiagnosticStatus(
         level=b"\x00", name=NAME, message=f"{len(names)} nodes", hardware_id="ros2 graph",
         values=[KeyValue(key=n, value="present") for n in names])]
