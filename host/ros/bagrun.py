@@ -6,11 +6,13 @@ observer is fed: ``host.ros.boardstream``) when the robot has a hardware observe
 graph's node list every discovery period (on ``/dxboard/graph``: ``host.ros.graphlog``) when it
 has graph observers, plus ``/diagnostics`` (the drivers' and dxboard's own), each once: every
 message is written to the bag (``BagWriter``) and fed to the observers, so what is diagnosed
-live is exactly what the bag holds. The observers run on ``ClockedObservers`` on the source's
-(wall) clock, ``GRACE_S`` behind it: messages wait in a ``Reorder`` until the clock is
-``GRACE_S`` past their time (a board item counts at its stamp, a topic message at its arrival),
-so a message still queued between DDS and the loop is fed before the deadlines that follow it.
-With a journal, the diagnoses (``Diagnosing``) are journaled as the daemon journals them.
+live is exactly what the bag holds. The observers run on ``ClockedObservers``, driven by the
+arrivals alone (``step``): each message waits in a ``Reorder`` until an arrival ``GRACE_S`` past
+its time (a board item counts at its stamp, a topic message at its arrival), then is fed, and
+the observers' deadlines fire up to ``GRACE_S`` before the latest arrival; a replay does the
+very same from the bag's arrival times, so the live and the replayed diagnoses are the same
+(with nothing arriving at all, the live observers wait for the next message or the end). With a
+journal, the diagnoses (``Diagnosing``) are journaled as the daemon journals them.
 
 ``replay(robot, bag, journal)`` runs the same observers and the same diagnosis over a bag on
 the bag's clock: from the recording's start, every message at its time (in the same
@@ -24,6 +26,7 @@ the recording gave.
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 import logging
 import time
 from collections.abc import Callable
@@ -38,7 +41,7 @@ from host.journal import Journal
 from host.observers.base import Update
 from host.observers.payload import Message
 from host.ros import graphlog
-from host.ros.bag import Bag, BagWriter
+from host.ros.bag import NS, Bag, BagWriter
 from host.ros.graph import GRAPH
 from host.ros.message import RosMessage
 from host.ros.offline import ClockedObservers, Diagnosing, Reorder, bag_observers
@@ -92,53 +95,33 @@ async def record(robot: RobotFiles, bag_path: Path, journal: Journal | None,
     observers = ClockedObservers(bag_observers(robot.observers.observers), diagnosing.apply)
     writer = BagWriter(bag_path)
     source = Ros2Source(spec.domain, dict(spec.types), clock=clock, name="dxboard_recorder")
-    loop = asyncio.get_running_loop()
-    timer: list[asyncio.TimerHandle] = []
     waiting = Reorder(GRACE_S)
     last = [clock()]  # the latest arrival
-
-    def arm() -> None:
-        for handle in timer:
-            handle.cancel()
-        timer.clear()
-        due = [t for t in (observers.next_deadline(), waiting.first()) if t is not None]
-        if due:
-            timer.append(loop.call_later(max(0.0, min(due) + GRACE_S - clock()), tick))
-
-    def tick() -> None:
-        now = clock()
-        for msg in waiting.due(now):
-            observers.feed(msg)
-        observers.advance(now - GRACE_S)
-        arm()
 
     def on_message(msg: object) -> None:
         if not isinstance(msg, RosMessage):  # a sample of the graph: in the bag's form
             assert isinstance(msg, Message) and msg.topic == GRAPH
             msg = graphlog.to_bag(msg)
+        msg = dataclasses.replace(msg, time=whole_ns(msg.time))  # as the bag will say it
         writer.write(msg)
         last[0] = max(last[0], msg.time)
-        waiting.push(msg)
-        tick()
+        step(observers, waiting, msg)
 
-    start = clock()
+    start = whole_ns(clock())
     t0 = time.perf_counter()
     stream.emit(Note(f"dxboard record {bag_path}: {robot.model.name}"))
     observers.start(start)
     subs = [source.subscribe(GRAPH if t == graphlog.TOPIC else t, on_message)
             for t in sorted({*observers.topics, DIAGNOSTICS})]
-    arm()
     try:
         await stop.wait()
     finally:
         for s in subs:
             s.close()
         source.close()
-        for handle in timer:
-            handle.cancel()
         for msg in waiting.drain():
             observers.feed(msg)
-        end = max(observers.now if observers.now is not None else start, last[0])
+        end = whole_ns(max(observers.now if observers.now is not None else start, last[0]))
         observers.advance(end)
         observers.stop()
         stream.emit(Note("dxboard record stopped"))
@@ -146,6 +129,23 @@ async def record(robot: RobotFiles, bag_path: Path, journal: Journal | None,
         diagnosing.close()
     return RunStats(writer.count, end - start, time.perf_counter() - t0,
                     len(diagnosing.records))
+
+
+def whole_ns(t: float) -> float:
+    """``t`` as a bag holds it (whole nanoseconds), so live and replayed times are equal."""
+    return round(t * NS) / NS
+
+
+def step(observers: ClockedObservers, waiting: Reorder, msg: RosMessage) -> None:
+    """One message as it arrived (live, or at its time in the bag): it waits in ``waiting``;
+    what is ``GRACE_S`` old at its arrival is fed, and the observers' deadlines up to then
+    fire. Arrivals alone drive the observers' clock, live as in a replay, so both do the
+    same thing in the same order."""
+    if msg.topic in observers.topics:
+        waiting.push(msg)
+    for due in waiting.due(msg.time):
+        observers.feed(due)
+    observers.advance(msg.time - GRACE_S)
 
 
 def replay(robot: RobotFiles, bag: Bag, journal: Journal | None) -> RunStats:
@@ -167,10 +167,7 @@ def replay(robot: RobotFiles, bag: Bag, journal: Journal | None) -> RunStats:
     count = 0
     try:
         for msg in bag.messages():
-            if msg.topic in observers.topics:
-                waiting.push(msg)
-            for due in waiting.due(msg.time):
-                observers.feed(due)
+            step(observers, waiting, msg)
             count += 1
         for due in waiting.drain():
             observers.feed(due)
