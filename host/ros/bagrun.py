@@ -48,7 +48,7 @@ from host.ros.offline import ClockedObservers, Diagnosing, Reorder, bag_observer
 
 log = logging.getLogger(__name__)
 
-GRACE_S = 2.0  # how far the live observers run behind the clock (a loaded machine's DDS lag)
+GRACE_S = 5.0  # how far the live observers run behind the arrivals (a loaded recorder lags)
 DIAGNOSTICS = "/diagnostics"
 
 

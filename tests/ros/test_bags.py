@@ -63,17 +63,19 @@ def blamed(records: list[tuple[tuple[str, ...], ...]], component: str) -> list[b
     return out
 
 
-def changes(journal: Path, component: str, since: float,
-            until: float) -> list[tuple[str, bool | None]]:
+def changes(journal: Path, component: str, since: float, until: float) -> list[tuple[str, bool]]:
     """The changes of what the hardware observer says of ``component`` between the wall times
-    ``since`` and ``until``: (literal, value), None when retracted (a refresh is no change)."""
+    ``since`` and ``until``: (literal, value); a refresh is no change, nor is a retraction (a
+    link loss: a daemon whose loop stalls longer than the link timeout on a loaded machine
+    lets the next reading in before its own timer, where a replay judges the link at its
+    deadline)."""
     atoms = {f"on({component})", f"tripped({component})", f"in_band({component})"}
-    out: list[tuple[str, bool | None]] = []
-    last: dict[str, bool | None] = {}
+    out: list[tuple[str, bool]] = []
+    last: dict[str, bool] = {}
     with JournalReader(journal) as r:
         for e in r.query(kind=Kind.OBSERVATION, limit=100000):
             atom, value = e.payload.literal, e.payload.value  # type: ignore[attr-defined]
-            if atom in atoms and last.get(atom, "?") != value:
+            if atom in atoms and value is not None and last.get(atom) != value:
                 last[atom] = value
                 if since < e.wall < until:
                     out.append((atom, value))
