@@ -1,13 +1,16 @@
 """Record a ROS 2 robot's topics into a rosbag2 MCAP bag: ``dxboard record SYSTEM_DIR BAG``.
 
 Records the topics the robot's topic observers watch (its ``observers:`` section in
-``system.yaml``, which must say ``source: {kind: ros2}``) plus ``/diagnostics`` (the drivers'
-and a running ``dxboard run``'s own), each message as it came over DDS, into the new rosbag2
-directory BAG (MCAP storage; ``ros2 bag play`` and Foxglove read it). Until Ctrl-C (or SIGTERM),
-or for ``--duration S`` seconds. The DDS domain is the model's ``domain:`` or
-``$ROS_DOMAIN_ID``. With ``--journal FILE`` the observers and the diagnoser run on the
-messages as they are recorded and the diagnoses go into the journal, as ``dxboard replay``
-would write them from the bag.
+``system.yaml``, which must say ``source: {kind: ros2}``), ``/board_stream`` (what a running
+``dxboard run``'s hardware observer is fed: the board's readings, events and link) when the
+robot has a hardware observer, the ROS 2 graph's node list every discovery period (on
+``/dxboard/graph``) when it observes node presence from the graph, plus ``/diagnostics`` (the
+drivers' and ``dxboard run``'s own), each message as it came over DDS, into the new rosbag2
+directory BAG (MCAP storage; ``ros2 bag play`` and Foxglove read it). Until Ctrl-C (or
+SIGTERM), or for ``--duration S`` seconds. The DDS domain is the model's ``domain:`` or
+``$ROS_DOMAIN_ID``. With ``--journal FILE`` the observers and the diagnoser run on the messages
+as they are recorded and the diagnoses go into the journal, as ``dxboard replay`` would write
+them from the bag.
 """
 
 from __future__ import annotations

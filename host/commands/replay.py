@@ -1,12 +1,15 @@
 """Diagnose a recorded bag again: ``dxboard replay BAG SYSTEM_DIR --journal FILE``.
 
-Runs the topic observers of the robot's ``observers:`` section (``source: {kind: ros2}``) and
-the diagnoser over the rosbag2 bag BAG (MCAP or SQLite; ``dxboard record`` or ``ros2 bag
-record`` wrote it) on the bag's clock: every message at its recorded time, every observer
-deadline at its time, as fast as the bag can be read. The journal FILE gets the observations and
-the diagnoses with the bag's times, so ``dxboard report FILE -o timeline.png`` draws the
-timeline of the recorded failure. Node presence, process and board observers are not replayed
-(a bag holds topics only).
+Runs the topic observers and the hardware observer of the robot's ``observers:`` section
+(``source: {kind: ros2}``; the hardware observer is fed the board's items from the bag's
+``/board_stream``, which a ``dxboard run`` on ROS 2 publishes, each at its stamp) and the
+diagnoser over the rosbag2 bag BAG (MCAP or SQLite; ``dxboard record`` or ``ros2 bag record``
+wrote it) on the bag's clock: every message at its recorded time, every observer deadline at
+its time, as fast as the bag can be read. The journal FILE gets the observations and the
+diagnoses with the bag's times, so ``dxboard report FILE -o timeline.png`` draws the timeline
+of the recorded failure. Node presence from the ROS 2 graph is replayed from the graph samples
+``dxboard record`` wrote (``/dxboard/graph``); process observers are not (not yet: a bag holds
+no supervisor).
 """
 
 from __future__ import annotations

@@ -33,7 +33,15 @@ from pathlib import Path
 from typing import Any
 
 from host.board import BoardClient
-from host.board.types import BoardEvent, BoardState, LinkDown, LinkUp, Reading, Rebooted
+from host.board.types import (
+    BoardEvent,
+    BoardState,
+    LinkDown,
+    LinkUp,
+    Reading,
+    Rebooted,
+    StreamItem,
+)
 from host.board.view import BoardView
 from host.diagnosis import Diagnoser, generate, load_system, observation_lags
 from host.diagnosis.healthy import healthy_values
@@ -328,7 +336,7 @@ class Daemon:
                     backoff = 0.2
                     await self._board_state(await client.state(), "connected")
                     async for item in client.subscribe(self.opts.rate_hz):
-                        self.hub.feed_board(item)
+                        self._feed_board(item)
                         self.view.apply(item)
                         await self._board_item(client, item)
             except RemoteError as exc:  # unreachable, lost, refused: keep trying, say so once
@@ -342,7 +350,7 @@ class Daemon:
             backoff = min(backoff * 2, 5.0)
 
     async def _board_state(self, state: BoardState, why: str) -> None:
-        self.hub.feed_board(state)
+        self._feed_board(state)
         self.view.reset(state)
         self.emit(BoardEventRecord(why, None, {
             "boot_id": f"{state.boot_id:08x}",
@@ -351,6 +359,12 @@ class Daemon:
         }))
         self._set_link(True, why)
         self.emit(self.view.sample())
+
+    def _feed_board(self, item: BoardState | StreamItem) -> None:
+        """The hardware observer's input; on ROS 2 also on ``/board_stream`` (for bags)."""
+        self.hub.feed_board(item)
+        if self.ros_out is not None:
+            self.ros_out.board(item, self.stream.wall())
 
     async def _board_item(self, client: BoardClient, item: object) -> None:
         if isinstance(item, Reading):

@@ -1,17 +1,24 @@
 """Record a robot's ROS 2 topics into a bag while diagnosing them; diagnose a bag again later.
 
 ``record(robot, bag, journal, stop)`` subscribes, through the ROS 2 source (``host.ros``), the
-topics the robot's topic observers watch plus ``/diagnostics`` (the drivers' and dxboard's own),
-each once: every message is written to the bag (``BagWriter``) and fed to the observers, so
-what is diagnosed live is exactly what the bag holds. The observers run on ``ClockedObservers``
-on the source's (wall) clock: a timer advances them ``GRACE_S`` behind the clock, so a message
-still queued between DDS and the loop is fed before the deadlines that follow it. With a
+topics the robot's topic observers watch, ``/board_stream`` (what a ``dxboard run``'s hardware
+observer is fed: ``host.ros.boardstream``) when the robot has a hardware observer, the ROS 2
+graph's node list every discovery period (on ``/dxboard/graph``: ``host.ros.graphlog``) when it
+has graph observers, plus ``/diagnostics`` (the drivers' and dxboard's own), each once: every
+message is written to the bag (``BagWriter``) and fed to the observers, so what is diagnosed
+live is exactly what the bag holds. The observers run on ``ClockedObservers``, driven by the
+arrivals alone (``step``): each message waits in a ``Reorder`` until an arrival ``GRACE_S`` past
+its time (a board item counts at its stamp, a topic message at its arrival), then is fed, and
+the observers' deadlines fire up to ``GRACE_S`` before the latest arrival; a replay does the
+very same from the bag's arrival times, so the live and the replayed diagnoses are the same
+(with nothing arriving at all, the live observers wait for the next message or the end). With a
 journal, the diagnoses (``Diagnosing``) are journaled as the daemon journals them.
 
 ``replay(robot, bag, journal)`` runs the same observers and the same diagnosis over a bag on
-the bag's clock: from the recording's start, every message at its time, every deadline at its
-time, up to the recording's end, as fast as the bag can be read (no sleeping); the journal it
-writes has the bag's times, so ``dxboard report`` draws the timeline of the recorded failure.
+the bag's clock: from the recording's start, every message at its time (in the same
+``Reorder``, driven by the arrival times), every deadline at its time, up to the recording's
+end, as fast as the bag can be read (no sleeping); the journal it writes has the bag's
+times, so ``dxboard report`` draws the timeline of the recorded failure.
 Given the same messages, the deadlines fire at the same times: the replay gives the diagnoses
 the recording gave.
 """
@@ -19,6 +26,7 @@ the recording gave.
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 import logging
 import time
 from collections.abc import Callable
@@ -31,13 +39,16 @@ from host.errors import UserError
 from host.events import JOURNALED, Note, Stamped
 from host.journal import Journal
 from host.observers.base import Update
-from host.ros.bag import Bag, BagWriter
+from host.observers.payload import Message
+from host.ros import graphlog
+from host.ros.bag import NS, Bag, BagWriter
+from host.ros.graph import GRAPH
 from host.ros.message import RosMessage
-from host.ros.offline import ClockedObservers, Diagnosing, bag_observers
+from host.ros.offline import ClockedObservers, Diagnosing, Reorder, bag_observers
 
 log = logging.getLogger(__name__)
 
-GRACE_S = 0.5  # how far the live observers run behind the clock
+GRACE_S = 5.0  # how far the live observers run behind the arrivals (a loaded recorder lags)
 DIAGNOSTICS = "/diagnostics"
 
 
@@ -84,49 +95,57 @@ async def record(robot: RobotFiles, bag_path: Path, journal: Journal | None,
     observers = ClockedObservers(bag_observers(robot.observers.observers), diagnosing.apply)
     writer = BagWriter(bag_path)
     source = Ros2Source(spec.domain, dict(spec.types), clock=clock, name="dxboard_recorder")
-    loop = asyncio.get_running_loop()
-    timer: list[asyncio.TimerHandle] = []
-
-    def arm() -> None:
-        for handle in timer:
-            handle.cancel()
-        timer.clear()
-        due = observers.next_deadline()
-        if due is not None:
-            timer.append(loop.call_later(max(0.0, due + GRACE_S - clock()), tick))
-
-    def tick() -> None:
-        observers.advance(clock() - GRACE_S)
-        arm()
+    waiting = Reorder(GRACE_S)
+    last = [clock()]  # the latest arrival
 
     def on_message(msg: object) -> None:
-        assert isinstance(msg, RosMessage)
+        if not isinstance(msg, RosMessage):  # a sample of the graph: in the bag's form
+            assert isinstance(msg, Message) and msg.topic == GRAPH
+            msg = graphlog.to_bag(msg)
+        msg = dataclasses.replace(msg, time=whole_ns(msg.time))  # as the bag will say it
         writer.write(msg)
-        observers.feed(msg)
-        arm()
+        last[0] = max(last[0], msg.time)
+        step(observers, waiting, msg)
 
-    start = clock()
+    start = whole_ns(clock())
     t0 = time.perf_counter()
     stream.emit(Note(f"dxboard record {bag_path}: {robot.model.name}"))
     observers.start(start)
-    subs = [source.subscribe(t, on_message)
+    subs = [source.subscribe(GRAPH if t == graphlog.TOPIC else t, on_message)
             for t in sorted({*observers.topics, DIAGNOSTICS})]
-    arm()
     try:
         await stop.wait()
     finally:
         for s in subs:
             s.close()
         source.close()
-        for handle in timer:
-            handle.cancel()
-        end = observers.now if observers.now is not None else start
+        for msg in waiting.drain():
+            observers.feed(msg)
+        end = whole_ns(max(observers.now if observers.now is not None else start, last[0]))
+        observers.advance(end)
         observers.stop()
         stream.emit(Note("dxboard record stopped"))
         writer.close(start, end)
         diagnosing.close()
     return RunStats(writer.count, end - start, time.perf_counter() - t0,
                     len(diagnosing.records))
+
+
+def whole_ns(t: float) -> float:
+    """``t`` as a bag holds it (whole nanoseconds), so live and replayed times are equal."""
+    return round(t * NS) / NS
+
+
+def step(observers: ClockedObservers, waiting: Reorder, msg: RosMessage) -> None:
+    """One message as it arrived (live, or at its time in the bag): it waits in ``waiting``;
+    what is ``GRACE_S`` old at its arrival is fed, and the observers' deadlines up to then
+    fire. Arrivals alone drive the observers' clock, live as in a replay, so both do the
+    same thing in the same order."""
+    if msg.topic in observers.topics:
+        waiting.push(msg)
+    for due in waiting.due(msg.time):
+        observers.feed(due)
+    observers.advance(msg.time - GRACE_S)
 
 
 def replay(robot: RobotFiles, bag: Bag, journal: Journal | None) -> RunStats:
@@ -144,12 +163,14 @@ def replay(robot: RobotFiles, bag: Bag, journal: Journal | None) -> RunStats:
     t0 = time.perf_counter()
     stream.emit(Note(f"dxboard replay {bag.path}: {robot.model.name}"))
     observers.start(bag.start)
+    waiting = Reorder(GRACE_S)
     count = 0
     try:
         for msg in bag.messages():
-            if msg.topic in observers.topics:
-                observers.feed(msg)
+            step(observers, waiting, msg)
             count += 1
+        for due in waiting.drain():
+            observers.feed(due)
         observers.advance(bag.end)
         now[0] = bag.end
         observers.stop()

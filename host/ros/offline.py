@@ -16,15 +16,19 @@ the diagnoser ranks them (cardinality, then probability) and ties by name, so th
 (whose solvers may find tied diagnoses in any order) journal the same list.
 
 ``bag_observers`` picks what a bag can feed: the topic observers of the robot's ``observers:``
-section, without node presence from the graph (not a topic; not in a bag), process or hardware
-observers (the supervisor and the board are not in a bag).
+section, its hardware observer (fed the board's items from ``/board_stream``, which a
+``dxboard run`` on ROS 2 publishes: ``host.ros.boardstream``, each at its own stamp) and node
+presence from the graph (fed the graph samples the recorder wrote on ``/dxboard/graph``:
+``host.ros.graphlog``), without process observers (the supervisor is not in a bag). Its
+``topics`` are the bag's names (``/dxboard/graph`` for the graph).
 """
 
 from __future__ import annotations
 
+import heapq
 import logging
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from host.diagnosis import Diagnoser
@@ -33,9 +37,11 @@ from host.diagnosis.observations import ObservationSet
 from host.diagnosis.runner import fold_updates
 from host.events import DiagnosisRecord, Event, Observation
 from host.observers.base import Observer, Update
-from host.observers.payload import Message
+from host.observers.hardware import HardwareObserver
 from host.observers.topics import TopicObserver
+from host.ros import boardstream, graphlog
 from host.ros.graph import GRAPH
+from host.ros.message import RosMessage
 
 log = logging.getLogger(__name__)
 
@@ -43,21 +49,25 @@ Sink = Callable[[list[Update], float], None]
 MIN_STEP_S = 0.001  # a deadline that does not move after its tick is retried this much later
 
 
-def bag_observers(observers: Sequence[Observer[Any]]) -> list[TopicObserver]:
-    """The observers a bag can feed: topic observers of real topics."""
-    return [o for o in observers
-            if isinstance(o, TopicObserver) and GRAPH not in o.topics]
+def bag_observers(observers: Sequence[Observer[Any]]) -> list[Observer[Any]]:
+    """The observers a bag can feed: topic observers (of the graph too), the hardware one."""
+    return [o for o in observers if isinstance(o, (TopicObserver, HardwareObserver))]
 
 
 class ClockedObservers:
-    def __init__(self, observers: Sequence[TopicObserver], sink: Sink) -> None:
+    def __init__(self, observers: Sequence[Observer[Any]], sink: Sink) -> None:
         self.observers = list(observers)
         self.sink = sink
         self.now: float | None = None
         self._by_topic: dict[str, list[TopicObserver]] = {}
+        self._hardware = [o for o in self.observers if isinstance(o, HardwareObserver)]
         for o in self.observers:
-            for t in o.topics:
-                self._by_topic.setdefault(t, []).append(o)
+            if isinstance(o, TopicObserver):
+                for t in o.topics:  # the graph's samples are on a topic of their own in a bag
+                    self._by_topic.setdefault(graphlog.TOPIC if t == GRAPH else t,
+                                              []).append(o)
+        if self._hardware:
+            self._by_topic.setdefault(boardstream.TOPIC, [])
         self._fired: dict[int, float] = {}
 
     @property
@@ -87,11 +97,21 @@ class ClockedObservers:
                     self._out(o.tick(due), due)
         self.now = t if self.now is None else max(self.now, t)
 
-    def feed(self, msg: Message) -> None:
-        """One message, at its own time (deadlines before it fire first)."""
-        self.advance(msg.time)
-        for o in self._by_topic.get(msg.topic, ()):
-            self._out(o.feed(msg, msg.time), msg.time)
+    def feed(self, msg: RosMessage) -> None:
+        """One message, at its own time (``boardstream.when``: deadlines before it fire
+        first); a ``/board_stream`` item goes to the hardware observer."""
+        t = boardstream.when(msg)
+        self.advance(t)
+        t = max(t, self.now if self.now is not None else t)  # later than its grace: now
+        fed = graphlog.from_bag(msg) if msg.topic == graphlog.TOPIC else msg
+        if fed is not None:
+            for o in self._by_topic.get(msg.topic, ()):
+                self._out(o.feed(fed, t), t)
+        if msg.topic == boardstream.TOPIC and self._hardware:
+            item = boardstream.decode(msg)
+            if item is not None:
+                for h in self._hardware:
+                    self._out(h.feed(item, t), t)
 
     def stop(self) -> None:
         """Retract what every observer asserted (the recording or the replay ends)."""
@@ -109,6 +129,36 @@ class ClockedObservers:
     def _out(self, updates: list[Update], t: float) -> None:
         if updates:
             self.sink(updates, t)
+
+
+class Reorder:
+    """Messages in the order of their own times (``boardstream.when``: a board item's stamp
+    comes a little before its arrival), each released once the clock is ``grace`` seconds
+    past it; ties keep the order they came in. Live (the clock) and in a replay (the arrival
+    times of the bag) the same messages come out in the same order."""
+
+    def __init__(self, grace: float) -> None:
+        self.grace = grace
+        self._heap: list[tuple[float, int, RosMessage]] = []
+        self._seq = 0
+
+    def push(self, msg: RosMessage) -> None:
+        self._seq += 1
+        heapq.heappush(self._heap, (boardstream.when(msg), self._seq, msg))
+
+    def first(self) -> float | None:
+        """When the next message is due (its time plus the grace)."""
+        return self._heap[0][0] + self.grace if self._heap else None
+
+    def due(self, now: float) -> Iterator[RosMessage]:
+        """The messages whose time is ``grace`` seconds past at ``now``, in order."""
+        while self._heap and self._heap[0][0] + self.grace <= now:
+            yield heapq.heappop(self._heap)[2]
+
+    def drain(self) -> Iterator[RosMessage]:
+        """Every message left, in order."""
+        while self._heap:
+            yield heapq.heappop(self._heap)[2]
 
 
 class Diagnosing:

@@ -13,6 +13,9 @@ the diagnostic aggregator, Foxglove, ``ros2 topic echo``)::
     /battery_state       sensor_msgs/BatteryState         voltage = the board's input voltage
                          (NaN only while the board does not say it), current = -(sum of
                          the channels) (discharging is negative); charge etc. NaN
+    /board_stream        diagnostic_msgs/DiagnosticArray  every item the daemon's hardware
+                         observer is fed (readings at the board's rate, events, states, the
+                         link), fed by ``board(item)`` (``host.ros.boardstream``), for bags
     /diagnosis           diagnostic_msgs/DiagnosticArray  the minimal diagnoses of each run
                          that changed them: one status per diagnosis, best first, named
                          "dxboard diagnosis N", level ERROR (OK for the empty one), message the
@@ -38,6 +41,8 @@ from sensor_msgs.msg import BatteryState
 from std_msgs.msg import Float32MultiArray, MultiArrayDimension
 
 from host.events import ChannelSample, DiagnosisRecord, Stamped
+from host.observers.hardware import BoardInput
+from host.ros import boardstream
 from host.ros.node import RosNode
 from host.ros.status import ERROR, OK, Status, StatusFold
 
@@ -57,6 +62,7 @@ class RosPublisher:
         self._diagnosis = node.create_publisher(DiagnosticArray, "/diagnosis", LATCHED)
         self._measurements = node.create_publisher(Float32MultiArray, "/board_measurements", 10)
         self._battery = node.create_publisher(BatteryState, "/battery_state", 10)
+        self._stream = node.create_publisher(DiagnosticArray, boardstream.TOPIC, 100)
         self._closed = False
         self._last: tuple[Status, ...] = tuple(self.fold.statuses())
         self._publish_statuses()
@@ -75,6 +81,12 @@ class RosPublisher:
         if statuses != self._last:
             self._last = statuses  # one reference swap: the timer's thread reads it
             self._publish_statuses()
+
+    def board(self, item: BoardInput, fed_at: float) -> None:
+        """One item the hardware observer was fed at ``fed_at`` (wall clock), on
+        ``/board_stream`` (on the loop's thread)."""
+        if not self._closed:
+            self._stream.publish(boardstream.message(item, fed_at))
 
     def _stamp(self) -> Any:
         return self.ros.node.get_clock().now().to_msg()
