@@ -12,10 +12,19 @@ switch read-back, live-fault bit and current), ``BoardEvent`` (trips, state chan
   switched-off device has no band to judge);
 - ``tripped(d)``: the board's protection tripped, latched or (switch fault) faulted the channel;
 - the link: ``link(board)`` (the atom is configurable, or None to leave it out) while readings
-  arrive, ``¬link(board)`` on ``LinkDown`` or after ``link_timeout`` seconds without a reading.
+  arrive, ``¬link(board)`` on ``LinkDown`` or after ``link_limit`` seconds without a reading.
   With the link gone every device literal is *retracted* at once — observations from a lost
   link are unknown, never stale truths — and comes back with the next readings that agree. A
   reboot retracts ``tripped`` (the board's channel states started anew).
+
+Late is not lost (a busy machine: the board's process or the daemon's loop descheduled, the
+readings still stamped by the board every period). ``link_limit`` is ``link_timeout``, or twice
+the longest gap between two readings seen in the last minute if that is longer (the gaps the
+link survived without a reconnect), at most ``link_timeout + link_slack``; and a gap that
+reached it is confirmed by a tick of an awake loop (``host.observers.silence``, as the
+frequency observer does): a late tick means readings may be queued behind the stalled loop, so
+the confirmation starts again. However stalled the loop, ``link_timeout + link_slack`` without
+a reading is a lost link: a silent board is found within that bound.
 
 Agreement before belief: a frame can lie with a valid checksum (a firmware bug, a corrupted
 buffer), and one lie must not start a repair. So what readings show changes only after ``settle``
@@ -33,7 +42,8 @@ Detection latency (``settle`` readings, default 3): ``on`` after 3 readings (30 
 20 ms more than believing the first); ``in_band`` after 3 readings; a trip 3 readings after the
 board switched the channel off (the event itself comes first; at 100 Hz the trip counts about
 30-40 ms after it, the read-back lagging one tick); a dead link after ``link_timeout`` (default
-0.25 s) or at once on ``LinkDown``.
+0.25 s) plus ``JITTER_S`` on a quiet machine, at most ``link_timeout + link_slack`` (default
+1 s) on a busy one, or at once on ``LinkDown``.
 """
 
 from __future__ import annotations
@@ -54,6 +64,7 @@ from host.board.types import (
     StreamItem,
 )
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
+from host.observers.silence import JITTER_GAIN, JITTER_MEMORY_S, Confirmation, SlidingExtreme
 from protocol.constants import (
     EV_TRIP,
     ST_FAULTED,
@@ -66,6 +77,7 @@ log = logging.getLogger(__name__)
 BoardInput = StreamItem | BoardState
 DEFAULT_LINK_ATOM = str(A.link("board"))
 DEFAULT_LINK_TIMEOUT = 0.25
+DEFAULT_LINK_SLACK = 0.75  # the most the link limit grows on a busy machine
 DEFAULT_SETTLE = 3
 _BAD_STATES = (ST_TRIPPED, ST_LATCHED, ST_FAULTED)
 # what one reading shows of a channel's health (every bad state keeps a live fault)
@@ -138,19 +150,23 @@ class HardwareObserver(Observer[BoardInput]):
 
     def __init__(self, devices: Mapping[str, Device], link_timeout: float = DEFAULT_LINK_TIMEOUT,
                  settle: int = DEFAULT_SETTLE, link_atom: str | None = DEFAULT_LINK_ATOM, *,
-                 name: str = "hardware", validity: float = DEFAULT_VALIDITY,
-                 refresh: float = DEFAULT_REFRESH) -> None:
+                 link_slack: float = DEFAULT_LINK_SLACK, name: str = "hardware",
+                 validity: float = DEFAULT_VALIDITY, refresh: float = DEFAULT_REFRESH) -> None:
         super().__init__(name, validity, refresh)
-        if link_timeout <= 0 or settle < 1:
-            raise ValueError(f"{name}: need link_timeout > 0 and settle >= 1")
+        if link_timeout <= 0 or link_slack < 0 or settle < 1:
+            raise ValueError(f"{name}: need link_timeout > 0, link_slack >= 0 and settle >= 1")
         self.devices = dict(devices)
         self.by_channel = {d.channel: d for d in self.devices.values()}
         self.link_timeout = link_timeout
+        self.link_slack = link_slack
         self.settle = settle
         self.link_atom = link_atom
         self.bands: dict[str, str] = {}  # device -> the settled band (nominal, over, under)
         self._ev = {d: self._fresh() for d in self.devices}
-        self._last_reading: float | None = None
+        self._last_reading: float | None = None  # the last sign of life (reading, STATE)
+        self._prev_reading: float | None = None  # the last reading since a reconnect
+        self._gaps = SlidingExtreme(JITTER_MEMORY_S, greatest=True)  # between readings
+        self._confirm = Confirmation()  # of a gap that reached the link limit
         self._up = False
 
     def atoms(self) -> list[str]:
@@ -170,8 +186,10 @@ class HardwareObserver(Observer[BoardInput]):
         elif isinstance(item, BoardState):
             self._state(item, now)
         elif isinstance(item, LinkDown):
+            self._prev_reading = None  # a reconnect follows: its gap is no lateness
             self._link_lost(now)
         elif isinstance(item, LinkUp):
+            self._prev_reading = None
             self._link_up(now)
         elif isinstance(item, Rebooted):
             for d in self.devices.values():
@@ -186,10 +204,14 @@ class HardwareObserver(Observer[BoardInput]):
     def _link_up(self, now: float) -> None:
         self._up = True
         self._last_reading = now
+        self._confirm.reset()
         if self.link_atom:
             self._say(self.link_atom, True, now)
 
     def _reading(self, r: Reading, now: float) -> None:
+        if self._prev_reading is not None:
+            self._gaps.push(now, now - self._prev_reading)
+        self._prev_reading = now
         self._link_up(now)
         for d in self.devices.values():
             if d.channel < len(r.currents_ma):
@@ -264,6 +286,15 @@ class HardwareObserver(Observer[BoardInput]):
             self._say(str(A.tripped(d.name)), False, now)
 
     # -- the link rule ---------------------------------------------------------------------
+    @property
+    def link_limit(self) -> float:
+        """Seconds without a reading before the link counts as lost (see the module
+        docstring): ``link_timeout``, or ``JITTER_GAIN`` times the longest gap seen lately,
+        at most ``link_timeout + link_slack``."""
+        worst = self._gaps.get() or 0.0
+        return min(self.link_timeout + self.link_slack,
+                   max(self.link_timeout, JITTER_GAIN * worst))
+
     def _link_lost(self, now: float) -> None:
         self._up = False
         for atom in list(self._said):
@@ -275,13 +306,14 @@ class HardwareObserver(Observer[BoardInput]):
             self._say(self.link_atom, False, now)
 
     def _check(self, now: float) -> None:
-        if self._up and self._last_reading is not None and (
-                now >= self._last_reading + self.link_timeout):
+        last = self._last_reading
+        if self._up and last is not None and self._confirm.silent(
+                now, last + self.link_limit, last + self.link_timeout + self.link_slack):
             self._link_lost(now)
 
     def _deadline(self) -> float | None:
         if self._up and self._last_reading is not None:
-            return self._last_reading + self.link_timeout
+            return self._confirm.deadline(self._last_reading + self.link_limit)
         return None
 
 
