@@ -38,6 +38,11 @@ themselves (every bad state keeps a live fault), so ``tripped`` recovers with th
 after a silence, without waiting for a STATE. A state change to off, inrush or on says
 ``¬tripped`` at once, and a ``BoardState`` (a reply to the host's own request) is believed at once.
 
+Cheap when nothing changes (a host watches ten boards at 100 Hz): a reading that shows what the
+last one showed — the same switches and live faults, each switched-on device's current in the
+same band — after looking at that one changed nothing and said nothing, would not either, and
+is not looked at further (``tests/observers/test_steady.py`` proves that nothing said differs).
+
 Detection latency (``settle`` readings, default 3): ``on`` after 3 readings (30 ms at 100 Hz,
 20 ms more than believing the first); ``in_band`` after 3 readings; a trip 3 readings after the
 board switched the channel off (the event itself comes first; at 100 Hz the trip counts about
@@ -63,7 +68,7 @@ from host.board.types import (
     Rebooted,
     StreamItem,
 )
-from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
+from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer, Update
 from host.observers.silence import JITTER_GAIN, JITTER_MEMORY_S, Confirmation, SlidingExtreme
 from protocol.constants import (
     EV_TRIP,
@@ -111,6 +116,9 @@ class Settled(Generic[V]):
         """Set the value at once (a source believed without agreement), or forget it (None)."""
         self.value, self._cand, self._count = value, None, 0
 
+    def state(self) -> tuple[object, ...]:
+        return (self.value, self._cand, self._count)
+
 
 def agrees(health: str | None, claim: int) -> bool:
     """Does a channel's settled health bear out an event's claim of bad state ``claim``?"""
@@ -128,6 +136,10 @@ class _Evidence:
     health: Settled[str]
     claim: int | None = None  # the bad state an event claimed, not yet borne out
     clear_since_claim: int = 0  # readings with no live fault since the claim
+
+    def state(self) -> tuple[object, ...]:
+        return (*self.on.state(), *self.band.state(), *self.health.state(), self.claim,
+                self.clear_since_claim)
 
 
 @dataclass(frozen=True)
@@ -157,6 +169,14 @@ class HardwareObserver(Observer[BoardInput]):
             raise ValueError(f"{name}: need link_timeout > 0, link_slack >= 0 and settle >= 1")
         self.devices = dict(devices)
         self.by_channel = {d.channel: d for d in self.devices.values()}
+        # each device's atoms: on, tripped, in_band (built once, not per reading)
+        self._atoms = {d.name: (str(A.on(d.name)), str(A.tripped(d.name)),
+                                str(A.in_band(d.name))) for d in self.devices.values()}
+        self._mask = sum(1 << d.channel for d in self.devices.values())
+        self._banded = [d for d in self.devices.values() if d.band is not None]
+        # what the last reading showed, when looking at it changed nothing and said nothing:
+        # a reading that shows the same would not either, and is not looked at (most of them)
+        self._steady: tuple[object, ...] | None = None
         self.link_timeout = link_timeout
         self.link_slack = link_slack
         self.settle = settle
@@ -172,16 +192,21 @@ class HardwareObserver(Observer[BoardInput]):
     def atoms(self) -> list[str]:
         out = [self.link_atom] if self.link_atom else []
         for d in self.devices.values():
-            out += [str(A.on(d.name)), str(A.tripped(d.name))]
-            if d.band is not None:
-                out.append(str(A.in_band(d.name)))
+            on, tripped, in_band = self._atoms[d.name]
+            out += [on, tripped, in_band] if d.band is not None else [on, tripped]
         return out
+
+    def stop(self, now: float) -> list[Update]:
+        self._steady = None
+        return super().stop(now)
 
     # -- inputs ----------------------------------------------------------------------------
     def _feed(self, item: BoardInput, now: float) -> None:
         if isinstance(item, Reading):
             self._reading(item, now)
-        elif isinstance(item, BoardEvent):
+            return
+        self._steady = None  # anything else may change what a reading would say
+        if isinstance(item, BoardEvent):
             self._event(item, now)
         elif isinstance(item, BoardState):
             self._state(item, now)
@@ -196,7 +221,7 @@ class HardwareObserver(Observer[BoardInput]):
                 ev = self._ev[d.name]
                 ev.health.force(None)  # the new boot's readings tell again
                 ev.claim = None
-                self._forget(str(A.tripped(d.name)), now)
+                self._forget(self._atoms[d.name][1], now)
 
     def _fresh(self) -> _Evidence:
         return _Evidence(Settled(self.settle), Settled(self.settle), Settled(self.settle))
@@ -209,14 +234,34 @@ class HardwareObserver(Observer[BoardInput]):
             self._say(self.link_atom, True, now)
 
     def _reading(self, r: Reading, now: float) -> None:
-        if self._prev_reading is not None:
-            self._gaps.push(now, now - self._prev_reading)
-        self._prev_reading = now
+        prev, self._prev_reading = self._prev_reading, now
+        if prev is not None and JITTER_GAIN * (now - prev) > self.link_timeout:
+            self._gaps.push(now, now - prev)  # a shorter gap cannot raise the link limit
         self._link_up(now)
+        shows = self._shows(r)
+        if shows == self._steady:
+            return
+        before, said = self._evidence(), len(self._out)
         for d in self.devices.values():
             if d.channel < len(r.currents_ma):
                 self._device(d, bool(r.on_mask >> d.channel & 1),
                              bool(r.fault_mask >> d.channel & 1), r.currents_ma[d.channel], now)
+        # looking at it again (or at one that shows the same) would be as idle as this was
+        idle = len(self._out) == said and self._evidence() == before
+        self._steady = shows if idle else None
+
+    def _evidence(self) -> tuple[object, ...]:
+        """Everything a reading's rules read and write, but the literals said."""
+        return (*[ev.state() for ev in self._ev.values()], *sorted(self.bands.items()))
+
+    def _shows(self, r: Reading) -> tuple[object, ...]:
+        """What a reading shows of the devices: all the rules below look at (switches, live
+        faults, the band of each switched-on banded device's current)."""
+        on, cur = r.on_mask & self._mask, r.currents_ma
+        n = len(cur)
+        return (n, on, r.fault_mask & self._mask,
+                *[d.classify(cur[d.channel] / 1000.0) if d.channel < n and on >> d.channel & 1
+                  else None for d in self._banded])
 
     def _state(self, s: BoardState, now: float) -> None:
         """A STATE answers the host's own request: believed at once, no agreement needed."""
@@ -230,7 +275,7 @@ class HardwareObserver(Observer[BoardInput]):
             ev.health.force(_health(ch.physical, bool(ch.live_faults)))
             ev.claim = None
             self._switch(d, ch.physical, now)
-            self._say(str(A.tripped(d.name)), ch.state in _BAD_STATES, now)
+            self._say(self._atoms[d.name][1], ch.state in _BAD_STATES, now)
 
     def _device(self, d: Device, on: bool, fault: bool, current_ma: int, now: float) -> None:
         """One reading of one device's channel: each of its facts counts once it settled."""
@@ -241,19 +286,20 @@ class HardwareObserver(Observer[BoardInput]):
             ev.band.add(d.classify(current_ma / 1000.0))
             if ev.on.value and ev.band.value is not None:
                 self.bands[d.name] = ev.band.value
-                self._say(str(A.in_band(d.name)), ev.band.value == "nominal", now)
+                self._say(self._atoms[d.name][2], ev.band.value == "nominal", now)
         self._health(d, ev, _health(on, fault), now)
 
     def _switch(self, d: Device, on: bool, now: float) -> None:
-        self._say(str(A.on(d.name)), on, now)
+        on_atom, _, in_band = self._atoms[d.name]
+        self._say(on_atom, on, now)
         if not on:
-            self._forget(str(A.in_band(d.name)), now)
+            self._forget(in_band, now)
             self.bands.pop(d.name, None)
             self._ev[d.name].band.force(None)
 
     def _health(self, d: Device, ev: _Evidence, sample: str, now: float) -> None:
         ev.health.add(sample)
-        atom = str(A.tripped(d.name))
+        atom = self._atoms[d.name][1]
         if ev.claim is None:
             if ev.health.value == CLEAR:
                 self._say(atom, False, now)
@@ -278,12 +324,12 @@ class HardwareObserver(Observer[BoardInput]):
             claim = e.new_state if e.new_state in _BAD_STATES else ST_TRIPPED
             if agrees(ev.health.value, claim):  # the readings already show it
                 ev.claim = None
-                self._say(str(A.tripped(d.name)), True, now)
+                self._say(self._atoms[d.name][1], True, now)
             else:
                 ev.claim, ev.clear_since_claim = claim, 0
         elif e.new_state != e.old_state:  # a state change to off, inrush or on
             ev.claim = None
-            self._say(str(A.tripped(d.name)), False, now)
+            self._say(self._atoms[d.name][1], False, now)
 
     # -- the link rule ---------------------------------------------------------------------
     @property
@@ -291,12 +337,13 @@ class HardwareObserver(Observer[BoardInput]):
         """Seconds without a reading before the link counts as lost (see the module
         docstring): ``link_timeout``, or ``JITTER_GAIN`` times the longest gap seen lately,
         at most ``link_timeout + link_slack``."""
-        worst = self._gaps.get() or 0.0
+        worst = self._gaps.get(self._last_reading) or 0.0
         return min(self.link_timeout + self.link_slack,
                    max(self.link_timeout, JITTER_GAIN * worst))
 
     def _link_lost(self, now: float) -> None:
         self._up = False
+        self._steady = None
         for atom in list(self._said):
             if atom != self.link_atom:
                 self._forget(atom, now)

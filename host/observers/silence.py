@@ -43,8 +43,14 @@ class SlidingExtreme:
         while q[0][0] < t - self.memory:
             q.popleft()
 
-    def get(self) -> float | None:
-        return None if not self._q else self.sign * self._q[0][1]
+    def get(self, now: float | None = None) -> float | None:
+        """The extreme; with ``now``, of the last ``memory`` seconds before it (values pushed
+        seldom — only those that matter — expire here rather than at the next push)."""
+        q = self._q
+        if now is not None:
+            while q and q[0][0] < now - self.memory:
+                q.popleft()
+        return None if not q else self.sign * q[0][1]
 
     def clear(self) -> None:
         self._q.clear()
