@@ -102,19 +102,26 @@ QUEUE_LIMIT = 4096  # items a subscriber may fall behind before the oldest are d
 
 
 class _Subscriber:
-    """One subscriber's items, in order: at most ``QUEUE_LIMIT`` (the oldest are dropped and
-    counted). A deque and one waiter, not an ``asyncio.Queue``: a hundred readings a second
-    from each of several boards pass here."""
+    """One subscriber's items, in order: at most ``QUEUE_LIMIT``. When it falls behind, the
+    oldest are dropped; the readings among them (and those they said were missed before them)
+    are added to ``missed`` of the next reading it gets, so no loss is silent. A deque and one
+    waiter, not an ``asyncio.Queue``: a hundred readings a second from each of several boards
+    pass here."""
 
-    def __init__(self) -> None:
+    def __init__(self, url: str) -> None:
+        self.url = url
         self.items: collections.deque[StreamItem] = collections.deque()
-        self.dropped = 0
+        self.dropped = 0  # readings lost since the last one handed out
         self._waiter: asyncio.Future[None] | None = None
 
     def put(self, item: StreamItem) -> None:
         if len(self.items) >= QUEUE_LIMIT:
-            self.items.popleft()
-            self.dropped += 1
+            old = self.items.popleft()
+            if isinstance(old, Reading):
+                self.dropped += 1 + old.missed
+            else:
+                log.warning("%s: a subscriber fell %d items behind: dropped %r", self.url,
+                            QUEUE_LIMIT, old)
         self.items.append(item)
         waiter = self._waiter
         if waiter is not None and not waiter.done():
@@ -127,7 +134,11 @@ class _Subscriber:
                 await self._waiter
             finally:
                 self._waiter = None
-        return self.items.popleft()
+        item = self.items.popleft()
+        if self.dropped and isinstance(item, Reading):
+            item = dataclasses.replace(item, missed=item.missed + self.dropped)
+            self.dropped = 0
+        return item
 
 
 class BoardClient(LinkMixin, ActuateMixin, ConfigMixin):
@@ -289,12 +300,7 @@ class BoardClient(LinkMixin, ActuateMixin, ConfigMixin):
                               missed if missed > 0 else 0)
             self.latest = reading
             for sub in self._subs:
-                if sub.dropped:
-                    more = reading.missed + sub.dropped
-                    sub.dropped = 0
-                    sub.put(dataclasses.replace(reading, missed=more))
-                else:
-                    sub.put(reading)
+                sub.put(reading)
         elif isinstance(msg, Event):
             if msg.channel >= channels and msg.channel != BOARD_CHANNEL:
                 log.warning("%s: an event for channel %d of a board of %d: dropped", self.url,
@@ -436,7 +442,7 @@ class BoardClient(LinkMixin, ActuateMixin, ConfigMixin):
         Over transports without push the transport polls at that rate."""
         if not 1 <= rate_hz <= 100:
             raise BadRequest(f"rate {rate_hz} Hz is out of range", "use 1..100 Hz")
-        sub = _Subscriber()
+        sub = _Subscriber(self.url)
         self._subs.append(sub)
         try:
             if rate_hz > self._rate:
