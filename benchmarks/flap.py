@@ -15,8 +15,10 @@ channels at 100 Hz, the nodes run as real processes), is left alone with a healt
    /scan falling silent and repaired: fault → diagnosis and fault → verified healthy.
 
 For phases 1 and 2, from the journal: every topic observation that went false (``~ok(/t)``:
-a frequency observer's verdict), every diagnosis naming any component (a healthy robot has
-none: each is false) and every repair action started (each is a false repair). Target: 0 false
+a frequency observer's verdict), every other abnormal literal (``~link(board)``...), every link
+drop of the board client itself (``LinkChange``: a reconnect), every diagnosis naming any
+component (a healthy robot has none: each is false) and every repair action started (each is
+a false repair). Target: 0 false
 diagnoses and 0 repairs under the hog. ``--write`` replaces the '## No flapping under load'
 section of benchmarks/RESULTS.md.
 """
@@ -37,7 +39,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from benchmarks.loop import Sample, ms, one_fault, pct, write_section
-from host.journal import ActionRecord, DiagnosisRecord, Observation
+from host.journal import ActionRecord, DiagnosisRecord, LinkChange, Observation
 from tests.daemon.runner import RunningDaemon, healthy_robot
 
 HOG = "import time\nend = time.monotonic() + {s}\nwhile time.monotonic() < end:\n    pass\n"
@@ -51,6 +53,7 @@ class Phase:
     others: dict[str, int] = field(default_factory=dict)  # any other literal -> times false
     diagnoses: int = 0  # diagnoses naming a component (a healthy robot: each one is false)
     repairs: int = 0  # repair actions started
+    link_drops: dict[str, int] = field(default_factory=dict)  # the client's, by reason
     named: set[str] = field(default_factory=set)
 
 
@@ -93,10 +96,14 @@ def watch(d: RunningDaemon, name: str, seconds: float) -> Phase:
             ph.named.update(c for bad in p.diagnoses for c in bad)
         elif isinstance(p, ActionRecord):
             started.add(p.action_id)
+        elif isinstance(p, LinkChange) and not p.up:  # the client dropped the link itself
+            why = p.reason.split(":")[-1].strip()[:60]
+            ph.link_drops[why] = ph.link_drops.get(why, 0) + 1
     ph.repairs = len(started)
     print(f"  {name}: {ph.seconds:.0f} s, topic verdicts ~ok {sum(ph.flips.values())} "
           f"{ph.flips or ''}, other abnormal literals {ph.others or 0}, false diagnoses "
-          f"{ph.diagnoses} naming {sorted(ph.named)}, repairs {ph.repairs}", flush=True)
+          f"{ph.diagnoses} naming {sorted(ph.named)}, repairs {ph.repairs}, the client's link "
+          f"drops {ph.link_drops or 0}", flush=True)
     return ph
 
 
@@ -117,13 +124,15 @@ def run(idle_s: float, hog_s: float, n_faults: int) -> tuple[list[Phase], list[S
 
 def report(phases: list[Phase], samples: list[Sample], args: argparse.Namespace) -> str:
     rows = ["| phase | minutes | topic verdicts ~ok (by topic) | other abnormal literals | "
-            "false diagnoses (naming) | repairs |", "|---|---|---|---|---|---|"]
+            "the client's link drops | false diagnoses (naming) | repairs |",
+            "|---|---|---|---|---|---|---|"]
     for ph in phases:
         by = ", ".join(f"{k} {v}" for k, v in sorted(ph.flips.items())) or "none"
         other = ", ".join(f"`{k}` {v}" for k, v in sorted(ph.others.items())) or "none"
+        drops = sum(ph.link_drops.values())
         rows.append(f"| {ph.name} | {ph.seconds / 60:.1f} | {sum(ph.flips.values())} ({by}) | "
-                    f"{other} | {ph.diagnoses} ({', '.join(sorted(ph.named)) or '-'}) | "
-                    f"{ph.repairs} |")
+                    f"{other} | {drops} | {ph.diagnoses} "
+                    f"({', '.join(sorted(ph.named)) or '-'}) | {ph.repairs} |")
     diag = [s.to_diagnosis for s in samples if s.to_diagnosis is not None]
     heal = [s.to_healthy for s in samples if s.to_healthy is not None]
     hog = phases[-1]
@@ -137,8 +146,9 @@ def report(phases: list[Phase], samples: list[Sample], args: argparse.Namespace)
 real `dxboard run models/tedusar --emulate` with a healthy robot (board at 10 channels x \
 100 Hz, 9 node processes publishing /imu_data at 100 Hz, /scan 40, /odom 20, /cmd_vel 10, \
 /map 0.5), left alone on the idle machine (the baseline), then beside one busy-looping process \
-per core. Counted from the journal: frequency verdicts `~ok(/t)`, diagnoses naming any \
-component (each false: nothing is broken) and repair actions started.
+per core. Counted from the journal: frequency verdicts `~ok(/t)`, other abnormal literals \
+(`~link(board)` among them), the board client's own link drops (a reconnect), diagnoses \
+naming any component (each false: nothing is broken) and repair actions started.
 
 {chr(10).join(rows)}
 
@@ -151,7 +161,8 @@ component (each false: nothing is broken) and repair actions started.
 and `ok(/scan)` about 20 times in a second; only the repair debounce kept them from a repair. \
 The frequency observer now judges the rate on the publishers' stamps and confirms a silence \
 only with its loop awake (`host/observers/topics.py`); the simulated-clock proof is \
-`tests/observers/test_jitter.py`.
+`tests/observers/test_jitter.py`. The board's link rule learns the gaps between readings the \
+same way (`host/observers/hardware.py`, `tests/observers/test_link_jitter.py`).
 """
 
 

@@ -121,12 +121,13 @@ class LinkMixin:
         self._heard = asyncio.Event()
         self._rearm.set()
 
-    def _news(self, uptime_ms: int) -> None:
-        """A measurement arrived: news if the board's clock moved since the last one."""
+    def _news(self, uptime_ms: int, now: float) -> None:
+        """A measurement arrived at ``now`` (the host's clock): news if the board's clock moved
+        since the last one."""
         last, self._last_uptime = self._last_uptime, uptime_ms
         if last is None or uptime_ms != last:
-            self._last_rx = self.clock()
-        if last is not None and uptime_ms != last:
+            self._last_rx = now
+        if last is not None and uptime_ms != last and not self._heard.is_set():
             self._heard.set()
 
     def _subscribed(self, rate_hz: int) -> None:

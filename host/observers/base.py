@@ -93,6 +93,8 @@ class Observer(ABC, Generic[In]):
         self.validity = validity
         self.refresh = refresh
         self._said: dict[str, tuple[bool, float]] = {}  # atom -> (positive, last emitted at)
+        self._refresh_due: float | None = None  # the earliest refresh (kept while unchanged)
+        self._refresh_known = True  # False: ``_said`` changed since it was computed
         self._fed_at: float | None = None
         self._out: list[Update] = []
 
@@ -116,13 +118,19 @@ class Observer(ABC, Generic[In]):
 
     def next_deadline(self) -> float | None:
         """The earliest time a ``tick`` is needed (None: only inputs can change anything)."""
-        times = [last + self.refresh for _, last in self._said.values()]
+        if not self._refresh_known:  # (called after every input: kept while unchanged)
+            self._refresh_due = min((last for _, last in self._said.values()),
+                                    default=None)
+            self._refresh_known = True
+        due = None if self._refresh_due is None else self._refresh_due + self.refresh
         own = self._deadline()
-        if own is not None:
-            times.append(own)
+        if own is not None and (due is None or own < due):
+            due = own
         if self.needs_input and self._fed_at is not None and self._said:
-            times.append(self._fed_at + self.validity)
-        return min(times) if times else None
+            starve = self._fed_at + self.validity
+            if due is None or starve < due:
+                due = starve
+        return due
 
     def stop(self, now: float) -> list[Update]:
         """Retract everything this observer asserted (it is being shut down)."""
@@ -160,10 +168,12 @@ class Observer(ABC, Generic[In]):
 
     def _forget(self, atom: str, now: float) -> None:
         if self._said.pop(atom, None) is not None:
+            self._refresh_known = False
             self._out.append(Retraction(atom, now, self.name))
 
     def _emit(self, atom: str, positive: bool, now: float) -> None:
         self._said[atom] = (positive, now)
+        self._refresh_known = False
         self._out.append(Observation(Literal(atom, positive), now, self.name, self.validity))
 
     def _flush(self) -> list[Update]:

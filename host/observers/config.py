@@ -9,7 +9,9 @@
       source: {kind: zenoh, listen: [tcp/127.0.0.1:7447], connect: [], prefix: ""}
       # or ROS 2 (host.observers.sources.ros2); domain defaults to $ROS_DOMAIN_ID, types
       # (topic -> pkg/msg/Type) to what the ROS 2 graph says: source: {kind: ros2, domain: 7}
-      hardware: {link_timeout: 0.25, settle: 3, link: link(board)}   # devices: SH components
+      hardware: {link_timeout: 0.25, link_slack: 0.75, settle: 3, link: link(board)}
+                              # devices: SH components; link_slack: the most link_timeout
+                              # grows on a busy machine (0: never)
       nodes:                  # node observer: running(n); exactly one of pid, match, supervised
         hector_mapping: {match: 'hector_mapping'}     # regex on the command line (pgrep -f)
         jaguar_node: {supervised: true}               # the daemon starts it and tracks its pid
@@ -48,6 +50,7 @@ from host.diagnosis.model import Kind, ModelError, Problem, SystemModel, read_se
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
 from host.observers.hardware import (
     DEFAULT_LINK_ATOM,
+    DEFAULT_LINK_SLACK,
     DEFAULT_LINK_TIMEOUT,
     DEFAULT_SETTLE,
     Device,
@@ -251,7 +254,8 @@ class _Builder:
 
     def _hardware(self, value: Any) -> list[Observer[Any]]:
         p: tuple[object, ...] = ("hardware",)
-        spec = self.mapping(p, value, {"link_timeout", "settle", "link", "devices", *_TIMING},
+        spec = self.mapping(p, value, {"link_timeout", "link_slack", "settle", "link", "devices",
+                                       *_TIMING},
                             "hardware: {link_timeout: 0.25}")
         if spec is None:
             return []
@@ -270,7 +274,13 @@ class _Builder:
                 link = DEFAULT_LINK_ATOM
         timeout = self.number((*p, "link_timeout"), spec.get("link_timeout"),
                               DEFAULT_LINK_TIMEOUT) or DEFAULT_LINK_TIMEOUT
-        return [HardwareObserver(devices, timeout, settle, link, **self.timing(p, spec))]
+        slack = spec.get("link_slack", DEFAULT_LINK_SLACK)
+        if isinstance(slack, bool) or not isinstance(slack, int | float) or slack < 0:
+            self.err((*p, "link_slack"), f"link_slack {slack!r} is not a number of seconds "
+                     ">= 0", "give the most the link timeout may grow, e.g. link_slack: 0.75")
+            slack = DEFAULT_LINK_SLACK
+        return [HardwareObserver(devices, timeout, settle, link, link_slack=float(slack),
+                                 **self.timing(p, spec))]
 
     def _devices(self, value: Any) -> dict[str, Device]:
         p: tuple[object, ...] = ("hardware", "devices")

@@ -12,10 +12,19 @@ switch read-back, live-fault bit and current), ``BoardEvent`` (trips, state chan
   switched-off device has no band to judge);
 - ``tripped(d)``: the board's protection tripped, latched or (switch fault) faulted the channel;
 - the link: ``link(board)`` (the atom is configurable, or None to leave it out) while readings
-  arrive, ``¬link(board)`` on ``LinkDown`` or after ``link_timeout`` seconds without a reading.
+  arrive, ``¬link(board)`` on ``LinkDown`` or after ``link_limit`` seconds without a reading.
   With the link gone every device literal is *retracted* at once — observations from a lost
   link are unknown, never stale truths — and comes back with the next readings that agree. A
   reboot retracts ``tripped`` (the board's channel states started anew).
+
+Late is not lost (a busy machine: the board's process or the daemon's loop descheduled, the
+readings still stamped by the board every period). ``link_limit`` is ``link_timeout``, or twice
+the longest gap between two readings seen in the last minute if that is longer (the gaps the
+link survived without a reconnect), at most ``link_timeout + link_slack``; and a gap that
+reached it is confirmed by a tick of an awake loop (``host.observers.silence``, as the
+frequency observer does): a late tick means readings may be queued behind the stalled loop, so
+the confirmation starts again. However stalled the loop, ``link_timeout + link_slack`` without
+a reading is a lost link: a silent board is found within that bound.
 
 Agreement before belief: a frame can lie with a valid checksum (a firmware bug, a corrupted
 buffer), and one lie must not start a repair. So what readings show changes only after ``settle``
@@ -29,11 +38,17 @@ themselves (every bad state keeps a live fault), so ``tripped`` recovers with th
 after a silence, without waiting for a STATE. A state change to off, inrush or on says
 ``¬tripped`` at once, and a ``BoardState`` (a reply to the host's own request) is believed at once.
 
+Cheap when nothing changes (a host watches ten boards at 100 Hz): a reading that shows what the
+last one showed — the same switches and live faults, each switched-on device's current in the
+same band — after looking at that one changed nothing and said nothing, would not either, and
+is not looked at further (``tests/observers/test_steady.py`` proves that nothing said differs).
+
 Detection latency (``settle`` readings, default 3): ``on`` after 3 readings (30 ms at 100 Hz,
 20 ms more than believing the first); ``in_band`` after 3 readings; a trip 3 readings after the
 board switched the channel off (the event itself comes first; at 100 Hz the trip counts about
 30-40 ms after it, the read-back lagging one tick); a dead link after ``link_timeout`` (default
-0.25 s) or at once on ``LinkDown``.
+0.25 s) plus ``JITTER_S`` on a quiet machine, at most ``link_timeout + link_slack`` (default
+1 s) on a busy one, or at once on ``LinkDown``.
 """
 
 from __future__ import annotations
@@ -53,7 +68,8 @@ from host.board.types import (
     Rebooted,
     StreamItem,
 )
-from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
+from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer, Update
+from host.observers.silence import JITTER_GAIN, JITTER_MEMORY_S, Confirmation, SlidingExtreme
 from protocol.constants import (
     EV_TRIP,
     ST_FAULTED,
@@ -66,6 +82,7 @@ log = logging.getLogger(__name__)
 BoardInput = StreamItem | BoardState
 DEFAULT_LINK_ATOM = str(A.link("board"))
 DEFAULT_LINK_TIMEOUT = 0.25
+DEFAULT_LINK_SLACK = 0.75  # the most the link limit grows on a busy machine
 DEFAULT_SETTLE = 3
 _BAD_STATES = (ST_TRIPPED, ST_LATCHED, ST_FAULTED)
 # what one reading shows of a channel's health (every bad state keeps a live fault)
@@ -99,6 +116,9 @@ class Settled(Generic[V]):
         """Set the value at once (a source believed without agreement), or forget it (None)."""
         self.value, self._cand, self._count = value, None, 0
 
+    def state(self) -> tuple[object, ...]:
+        return (self.value, self._cand, self._count)
+
 
 def agrees(health: str | None, claim: int) -> bool:
     """Does a channel's settled health bear out an event's claim of bad state ``claim``?"""
@@ -116,6 +136,10 @@ class _Evidence:
     health: Settled[str]
     claim: int | None = None  # the bad state an event claimed, not yet borne out
     clear_since_claim: int = 0  # readings with no live fault since the claim
+
+    def state(self) -> tuple[object, ...]:
+        return (*self.on.state(), *self.band.state(), *self.health.state(), self.claim,
+                self.clear_since_claim)
 
 
 @dataclass(frozen=True)
@@ -138,47 +162,73 @@ class HardwareObserver(Observer[BoardInput]):
 
     def __init__(self, devices: Mapping[str, Device], link_timeout: float = DEFAULT_LINK_TIMEOUT,
                  settle: int = DEFAULT_SETTLE, link_atom: str | None = DEFAULT_LINK_ATOM, *,
-                 name: str = "hardware", validity: float = DEFAULT_VALIDITY,
-                 refresh: float = DEFAULT_REFRESH) -> None:
+                 link_slack: float = DEFAULT_LINK_SLACK, name: str = "hardware",
+                 validity: float = DEFAULT_VALIDITY, refresh: float = DEFAULT_REFRESH) -> None:
         super().__init__(name, validity, refresh)
-        if link_timeout <= 0 or settle < 1:
-            raise ValueError(f"{name}: need link_timeout > 0 and settle >= 1")
+        if link_timeout <= 0 or link_slack < 0 or settle < 1:
+            raise ValueError(f"{name}: need link_timeout > 0, link_slack >= 0 and settle >= 1")
         self.devices = dict(devices)
         self.by_channel = {d.channel: d for d in self.devices.values()}
+        # each device's atoms: on, tripped, in_band (built once, not per reading)
+        self._atoms = {d.name: (str(A.on(d.name)), str(A.tripped(d.name)),
+                                str(A.in_band(d.name))) for d in self.devices.values()}
+        self._mask = sum(1 << d.channel for d in self.devices.values())
+        self._banded = [(d.channel, *d.band) for d in self.devices.values() if d.band]
+        # what the last reading showed, when looking at it changed nothing and said nothing:
+        # a reading that shows the same would not either, and is not looked at (most of them)
+        self._steady: tuple[object, ...] | None = None
         self.link_timeout = link_timeout
+        self.link_slack = link_slack
         self.settle = settle
         self.link_atom = link_atom
         self.bands: dict[str, str] = {}  # device -> the settled band (nominal, over, under)
         self._ev = {d: self._fresh() for d in self.devices}
-        self._last_reading: float | None = None
+        self._last_reading: float | None = None  # the last sign of life (reading, STATE)
+        self._prev_reading: float | None = None  # the last reading since a reconnect
+        self._gaps = SlidingExtreme(JITTER_MEMORY_S, greatest=True)  # between readings
+        self._confirm = Confirmation()  # of a gap that reached the link limit
         self._up = False
 
     def atoms(self) -> list[str]:
         out = [self.link_atom] if self.link_atom else []
         for d in self.devices.values():
-            out += [str(A.on(d.name)), str(A.tripped(d.name))]
-            if d.band is not None:
-                out.append(str(A.in_band(d.name)))
+            on, tripped, in_band = self._atoms[d.name]
+            out += [on, tripped, in_band] if d.band is not None else [on, tripped]
         return out
 
+    def stop(self, now: float) -> list[Update]:
+        self._steady = None
+        return super().stop(now)
+
     # -- inputs ----------------------------------------------------------------------------
+    def feed(self, item: BoardInput, now: float) -> list[Update]:
+        if type(item) is Reading:  # the common case, a hundred times a second: straight on
+            self._fed_at = now
+            self._reading(item, now)
+            return self._flush()
+        return super().feed(item, now)
+
     def _feed(self, item: BoardInput, now: float) -> None:
         if isinstance(item, Reading):
             self._reading(item, now)
-        elif isinstance(item, BoardEvent):
+            return
+        self._steady = None  # anything else may change what a reading would say
+        if isinstance(item, BoardEvent):
             self._event(item, now)
         elif isinstance(item, BoardState):
             self._state(item, now)
         elif isinstance(item, LinkDown):
+            self._prev_reading = None  # a reconnect follows: its gap is no lateness
             self._link_lost(now)
         elif isinstance(item, LinkUp):
+            self._prev_reading = None
             self._link_up(now)
         elif isinstance(item, Rebooted):
             for d in self.devices.values():
                 ev = self._ev[d.name]
                 ev.health.force(None)  # the new boot's readings tell again
                 ev.claim = None
-                self._forget(str(A.tripped(d.name)), now)
+                self._forget(self._atoms[d.name][1], now)
 
     def _fresh(self) -> _Evidence:
         return _Evidence(Settled(self.settle), Settled(self.settle), Settled(self.settle))
@@ -186,15 +236,44 @@ class HardwareObserver(Observer[BoardInput]):
     def _link_up(self, now: float) -> None:
         self._up = True
         self._last_reading = now
+        self._confirm.reset()
         if self.link_atom:
             self._say(self.link_atom, True, now)
 
     def _reading(self, r: Reading, now: float) -> None:
+        prev, self._prev_reading = self._prev_reading, now
+        if prev is not None and JITTER_GAIN * (now - prev) > self.link_timeout:
+            self._gaps.push(now, now - prev)  # a shorter gap cannot raise the link limit
         self._link_up(now)
+        shows = self._shows(r)
+        if shows == self._steady:
+            return
+        before, said = self._evidence(), len(self._out)
         for d in self.devices.values():
             if d.channel < len(r.currents_ma):
                 self._device(d, bool(r.on_mask >> d.channel & 1),
                              bool(r.fault_mask >> d.channel & 1), r.currents_ma[d.channel], now)
+        # looking at it again (or at one that shows the same) would be as idle as this was
+        idle = len(self._out) == said and self._evidence() == before
+        self._steady = shows if idle else None
+
+    def _evidence(self) -> tuple[object, ...]:
+        """Everything a reading's rules read and write, but the literals said."""
+        return (*[ev.state() for ev in self._ev.values()], *sorted(self.bands.items()))
+
+    def _shows(self, r: Reading) -> tuple[object, ...]:
+        """What a reading shows of the devices: all the rules below look at (switches, live
+        faults, the band of each switched-on banded device's current)."""
+        on, cur = r.on_mask & self._mask, r.currents_ma
+        n = len(cur)
+        shows: list[object] = [n, on, r.fault_mask & self._mask]
+        for ch, low, high in self._banded:  # the partition of ``Device.classify``, inline
+            if ch < n and on >> ch & 1:
+                amperes = cur[ch] / 1000.0
+                shows.append(0 if low <= amperes <= high else 1 if amperes > high else -1)
+            else:
+                shows.append(None)
+        return tuple(shows)
 
     def _state(self, s: BoardState, now: float) -> None:
         """A STATE answers the host's own request: believed at once, no agreement needed."""
@@ -208,7 +287,7 @@ class HardwareObserver(Observer[BoardInput]):
             ev.health.force(_health(ch.physical, bool(ch.live_faults)))
             ev.claim = None
             self._switch(d, ch.physical, now)
-            self._say(str(A.tripped(d.name)), ch.state in _BAD_STATES, now)
+            self._say(self._atoms[d.name][1], ch.state in _BAD_STATES, now)
 
     def _device(self, d: Device, on: bool, fault: bool, current_ma: int, now: float) -> None:
         """One reading of one device's channel: each of its facts counts once it settled."""
@@ -219,19 +298,20 @@ class HardwareObserver(Observer[BoardInput]):
             ev.band.add(d.classify(current_ma / 1000.0))
             if ev.on.value and ev.band.value is not None:
                 self.bands[d.name] = ev.band.value
-                self._say(str(A.in_band(d.name)), ev.band.value == "nominal", now)
+                self._say(self._atoms[d.name][2], ev.band.value == "nominal", now)
         self._health(d, ev, _health(on, fault), now)
 
     def _switch(self, d: Device, on: bool, now: float) -> None:
-        self._say(str(A.on(d.name)), on, now)
+        on_atom, _, in_band = self._atoms[d.name]
+        self._say(on_atom, on, now)
         if not on:
-            self._forget(str(A.in_band(d.name)), now)
+            self._forget(in_band, now)
             self.bands.pop(d.name, None)
             self._ev[d.name].band.force(None)
 
     def _health(self, d: Device, ev: _Evidence, sample: str, now: float) -> None:
         ev.health.add(sample)
-        atom = str(A.tripped(d.name))
+        atom = self._atoms[d.name][1]
         if ev.claim is None:
             if ev.health.value == CLEAR:
                 self._say(atom, False, now)
@@ -256,16 +336,26 @@ class HardwareObserver(Observer[BoardInput]):
             claim = e.new_state if e.new_state in _BAD_STATES else ST_TRIPPED
             if agrees(ev.health.value, claim):  # the readings already show it
                 ev.claim = None
-                self._say(str(A.tripped(d.name)), True, now)
+                self._say(self._atoms[d.name][1], True, now)
             else:
                 ev.claim, ev.clear_since_claim = claim, 0
         elif e.new_state != e.old_state:  # a state change to off, inrush or on
             ev.claim = None
-            self._say(str(A.tripped(d.name)), False, now)
+            self._say(self._atoms[d.name][1], False, now)
 
     # -- the link rule ---------------------------------------------------------------------
+    @property
+    def link_limit(self) -> float:
+        """Seconds without a reading before the link counts as lost (see the module
+        docstring): ``link_timeout``, or ``JITTER_GAIN`` times the longest gap seen lately,
+        at most ``link_timeout + link_slack``."""
+        worst = self._gaps.get(self._last_reading) or 0.0
+        return min(self.link_timeout + self.link_slack,
+                   max(self.link_timeout, JITTER_GAIN * worst))
+
     def _link_lost(self, now: float) -> None:
         self._up = False
+        self._steady = None
         for atom in list(self._said):
             if atom != self.link_atom:
                 self._forget(atom, now)
@@ -275,13 +365,14 @@ class HardwareObserver(Observer[BoardInput]):
             self._say(self.link_atom, False, now)
 
     def _check(self, now: float) -> None:
-        if self._up and self._last_reading is not None and (
-                now >= self._last_reading + self.link_timeout):
+        last = self._last_reading
+        if self._up and last is not None and self._confirm.silent(
+                now, last + self.link_limit, last + self.link_timeout + self.link_slack):
             self._link_lost(now)
 
     def _deadline(self) -> float | None:
         if self._up and self._last_reading is not None:
-            return self._last_reading + self.link_timeout
+            return self._confirm.deadline(self._last_reading + self.link_limit)
         return None
 
 

@@ -6,7 +6,10 @@ typically ``lambda u: apply_updates(u, diagnoser)`` followed by a diagnosis); ``
 each topic observer's topics on a ``TopicSource`` and starts a ``ProcessWatcher``; the board
 stream is fed with ``feed_board(item)``. After every input the hub (re)arms one timer per
 observer at its ``next_deadline()``, so silence, response and link deadlines fire when due and
-refreshes go out on time — no fixed poll. The hub reads the clock (``clock``), as the I/O edge.
+refreshes go out on time — no fixed poll. A deadline that recedes (a board's link deadline moves
+on with each of its hundred readings a second) keeps its timer, which is moved on when it fires:
+an observer is ticked only once its deadline is due. The hub reads the clock (``clock``), as the
+I/O edge.
 """
 
 from __future__ import annotations
@@ -115,8 +118,9 @@ class ObserverHub:
         key = id(o)
         old = self._timers.get(key)
         if old is not None:
-            if old[0] == deadline:
-                return
+            if old[0] == deadline or (deadline is not None and old[0] < deadline):
+                return  # due then, or earlier: ``_fire`` moves it on (a deadline that only
+                # recedes, as a link deadline does with every reading, costs no new timer)
             old[1].cancel()
             del self._timers[key]
         if deadline is None:
@@ -129,6 +133,10 @@ class ObserverHub:
 
     def _fire(self, o: Observer[Any]) -> None:
         fired = self._timers.pop(id(o), (None, None))[0]
+        due = o.next_deadline()
+        if due is None or (fired is not None and due > fired):
+            self._arm(o)  # the deadline receded meanwhile: no tick before it is due
+            return
         updates = o.tick(self.clock())
         if updates:
             self.sink(updates)

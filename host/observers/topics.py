@@ -26,7 +26,8 @@ Judged by the messages' own timing, so a busy machine is not a rate drop (no fla
   that comes on time (at most ``JITTER_S`` late); a late tick means the loop itself was
   stalled (messages may be queued behind it), so the confirmation starts again. However
   stalled the loop, a gap of ``silence / mu + ω`` is judged silent at once: a silent or slow
-  publisher is found within the window.
+  publisher is found within the window (``host.observers.silence``, shared with the board's
+  link rule).
 
 ``ResponseObserver`` is the multiple observer MObs: after a message on ``input``, a message on
 ``output`` must follow within ``within`` seconds; it emits ``ok(output)`` when one does and
@@ -49,12 +50,15 @@ from collections import deque
 import host.atoms as A
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
 from host.observers.payload import Message
+from host.observers.silence import (
+    JITTER_GAIN,
+    JITTER_MEMORY_S,
+    Confirmation,
+    SlidingExtreme,
+)
 
 DEFAULT_SILENCE = 5.0  # periods without a message before a topic counts as silent
-JITTER_S = 0.02  # a silence is confirmed this long after it was noticed, by an on-time tick
 JITTER_FLOOR_S = 0.1  # the least delay tolerated on the way from a publisher to us
-JITTER_GAIN = 2.0  # the delay tolerated: this times the worst seen lately
-JITTER_MEMORY_S = 60.0  # how long a delay seen is remembered (a busy spell)
 GAP = 1.5  # periods: a message after a longer gap may head a delayed burst
 
 
@@ -62,30 +66,6 @@ class TopicObserver(Observer[Message]):
     """An observer fed with the messages of ``topics``."""
 
     topics: tuple[str, ...] = ()
-
-
-class _SlidingExtreme:
-    """The least (or greatest) value pushed within the last ``memory`` seconds."""
-
-    def __init__(self, memory: float, greatest: bool) -> None:
-        self.memory = memory
-        self.sign = -1.0 if greatest else 1.0
-        self._q: deque[tuple[float, float]] = deque()  # (time, sign * value), increasing
-
-    def push(self, t: float, value: float) -> None:
-        v = self.sign * value
-        q = self._q
-        while q and q[-1][1] >= v:
-            q.pop()
-        q.append((t, v))
-        while q[0][0] < t - self.memory:
-            q.popleft()
-
-    def get(self) -> float | None:
-        return None if not self._q else self.sign * self._q[0][1]
-
-    def clear(self) -> None:
-        self._q.clear()
 
 
 class FrequencyObserver(TopicObserver):
@@ -111,9 +91,9 @@ class FrequencyObserver(TopicObserver):
         self._arrived: float | None = None  # the last message's arrival
         self._start: float | None = None
         self._judge_at: float | None = None  # a verdict waiting for the rest of a burst
-        self._noticed: float | None = None  # an on-time tick saw the silence gap here
-        self._fastest = _SlidingExtreme(JITTER_MEMORY_S, greatest=False)  # arrival - stamp
-        self._delays = _SlidingExtreme(JITTER_MEMORY_S, greatest=True)  # delay beyond that
+        self._confirm = Confirmation()  # of a silence gap, by an on-time tick
+        self._fastest = SlidingExtreme(JITTER_MEMORY_S, greatest=False)  # arrival - stamp
+        self._delays = SlidingExtreme(JITTER_MEMORY_S, greatest=True)  # delay beyond that
         self.frequency: float | None = None  # the last estimate, for journals and tests
 
     def atoms(self) -> list[str]:
@@ -132,7 +112,7 @@ class FrequencyObserver(TopicObserver):
             self._start = now
         gap = None if self._arrived is None else now - self._arrived
         self._arrived = now
-        self._noticed = None
+        self._confirm.reset()
         stamp = item.stamp
         stamped = stamp is not None
         t = stamp if stamp is not None else now
@@ -178,21 +158,13 @@ class FrequencyObserver(TopicObserver):
             self._judge_at = None
             self._judge(now)
         since = self._silent_since()
-        if since is None or self.asserted.get(self.atom) is False \
-                or now < since + self.max_gap + self.allowance:
+        if since is None or self.asserted.get(self.atom) is False:
             return
-        if now >= since + self.max_gap + self.window:
-            self._silent(now)  # however stalled the loop: silent for a whole window more
-        elif self._noticed is None:
-            self._noticed = now  # the gap is long enough: confirm it a little later
-        elif now >= self._noticed + JITTER_S:
-            if now <= self._noticed + 2 * JITTER_S:
-                self._silent(now)  # the loop was awake all through: nothing is queued
-            else:
-                self._noticed = now  # the loop stalled meanwhile: confirm again
+        if self._confirm.silent(now, since + self.max_gap + self.allowance,
+                                since + self.max_gap + self.window):
+            self._silent(now)
 
     def _silent(self, now: float) -> None:
-        self._noticed = None
         self.frequency = 0.0
         self._say(self.atom, False, now)
 
@@ -200,8 +172,7 @@ class FrequencyObserver(TopicObserver):
         times = [] if self._judge_at is None else [self._judge_at]
         since = self._silent_since()
         if since is not None and self.asserted.get(self.atom) is not False:
-            times.append(since + self.max_gap + self.allowance if self._noticed is None
-                         else self._noticed + JITTER_S)
+            times.append(self._confirm.deadline(since + self.max_gap + self.allowance))
         return min(times) if times else None
 
 

@@ -239,6 +239,26 @@ async def test_withheld_measurements_show_as_missed() -> None:
         assert [r.missed for r in got] == [0, 0, 0, 4, 0, 0]
 
 
+async def test_a_subscriber_that_falls_behind_loses_the_oldest_and_is_told(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    import host.board.client as client_module
+    monkeypatch.setattr(client_module, "QUEUE_LIMIT", 8)
+    async with MemoryBoard(tedusar()) as mb, client(mb.url, KEY) as c:
+        got: list[Reading] = []
+        async for item in c.subscribe(50):
+            if isinstance(item, Reading):
+                got.append(item)
+                if len(got) == 2:
+                    await asyncio.sleep(0.5)  # busy elsewhere: ~25 readings arrive meanwhile
+                if len(got) == 12:
+                    break
+        seqs = [r.seq for r in got]
+        dropped = seqs[2] - seqs[1] - 1
+        assert dropped > 0 and got[2].missed == dropped  # the oldest went, and it says so
+        assert seqs[2:] == list(range(seqs[2], seqs[2] + 10))  # then in order, none lost
+        assert sum(r.missed for r in got) == seqs[-1] - seqs[0] - len(got) + 1
+
+
 async def test_a_listening_client_keeps_its_session_alive() -> None:
     # A client that only listens to its subscription still PINGs (the board closes sessions
     # that sent nothing for 30 s, and PING feeds its host dead-man timer).

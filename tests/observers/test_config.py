@@ -144,3 +144,19 @@ def test_two_observers_for_one_atom_is_an_error(tmp_path: Path) -> None:
                  "  responses: [{input: /cmd_vel, output: /odom, within: 0.5}]\n")
     with pytest.raises(ObserverConfigError, match="ok\\(/odom\\) is emitted by two observers"):
         load_observers(f)
+
+
+def test_the_link_slack_is_read_and_checked(tmp_path: Path) -> None:
+    f = tmp_path / "system.yaml"
+    f.write_text("observers:\n  hardware:\n    devices: {fan: {channel: 4}}\n"
+                 "    link_timeout: 0.3\n    link_slack: 0\n")
+    hw = load_observers(f).observers[0]
+    assert isinstance(hw, HardwareObserver)
+    assert (hw.link_timeout, hw.link_slack, hw.link_limit) == (0.3, 0.0, 0.3)
+    f.write_text("observers:\n  hardware:\n    devices: {fan: {channel: 4}}\n"
+                 "    link_slack: -1\n")
+    with pytest.raises(ObserverConfigError, match=r"system.yaml:4: link_slack -1 is not"):
+        load_observers(f)
+    # the default: the link limit may grow by 0.75 s on a busy machine
+    hw = load_observers(TEDUSAR / "system.yaml", load_system(TEDUSAR)).observers[0]
+    assert isinstance(hw, HardwareObserver) and hw.link_slack == 0.75

@@ -12,6 +12,7 @@ import pytest
 
 from host.board.types import BoardEvent, BoardState, ChannelState, LinkDown, Reading, Rebooted
 from host.observers import Device, HardwareObserver, Retraction
+from host.observers.silence import JITTER_S
 from protocol.constants import (
     EV_FAULT,
     EV_STATE,
@@ -141,7 +142,8 @@ def test_a_stuck_switch_fault_is_confirmed_with_the_switch_on() -> None:
 
 def test_literals_recover_with_fresh_readings_after_a_silence() -> None:
     h = healthy_hokuyo()
-    out = h.tick(1.1)  # the readings stopped: the link is judged dead at its deadline
+    assert h.tick(1.1) == []  # the readings stopped: the gap is noticed at its deadline...
+    h.tick(1.1 + JITTER_S)  # ...and the link judged dead by a tick of an awake loop
     assert h.asserted == {"link(board)": False}
     out = feed_readings(h, 3.0, 3, {3: 500})  # back, without a reconnect (no new STATE)
     assert h.asserted == {"link(board)": True, "on(hokuyo)": True, "in_band(hokuyo)": True,
@@ -168,11 +170,13 @@ def test_link_lost_makes_device_literals_unknown() -> None:
     assert h.asserted == {"link(board)": True, "on(hokuyo)": True, "in_band(hokuyo)": True,
                           "tripped(hokuyo)": False}
     assert h.next_deadline() == pytest.approx(2.05)
-    out = h.tick(2.05)  # readings stopped: the link is judged dead at its deadline
-    assert sorted(lits(out)) == [("in_band(hokuyo)", 2.05), ("on(hokuyo)", 2.05),
-                                 ("tripped(hokuyo)", 2.05), ("~link(board)", 2.05)]
+    assert h.tick(2.05) == []  # readings stopped: the gap is noticed at its deadline...
+    assert h.next_deadline() == pytest.approx(2.05 + JITTER_S)
+    out = h.tick(2.07)  # ...and confirmed by an on-time tick: the link is judged dead
+    assert sorted(lits(out)) == [("in_band(hokuyo)", 2.07), ("on(hokuyo)", 2.07),
+                                 ("tripped(hokuyo)", 2.07), ("~link(board)", 2.07)]
     assert h.asserted == {"link(board)": False}
-    assert h.next_deadline() == pytest.approx(3.05)  # refresh of ~link only
+    assert h.next_deadline() == pytest.approx(3.07)  # refresh of ~link only
     out = h.feed(reading(2, {3: 500}), 3.0)  # back
     assert h.asserted["link(board)"] is True and h.asserted["on(hokuyo)"] is True
     out = h.feed(LinkDown(3.01, "eof"), 3.01)  # an explicit notice acts at once

@@ -12,7 +12,8 @@ from host.observers import (
     Retraction,
     apply_updates,
 )
-from host.observers.topics import JITTER_FLOOR_S, JITTER_S
+from host.observers.silence import JITTER_S
+from host.observers.topics import JITTER_FLOOR_S
 
 
 class SetSink:
