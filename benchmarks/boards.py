@@ -37,7 +37,6 @@ import json
 import os
 import platform
 import re
-import signal
 import statistics
 import subprocess
 import sys
@@ -47,7 +46,7 @@ from pathlib import Path
 
 import psutil
 
-from benchmarks.loop import start_board
+from benchmarks.loop import start_board, stop_boards
 from host.board import BoardClient
 from host.board.types import Reading
 from host.diagnosis import Diagnoser, generate, load_system
@@ -127,19 +126,6 @@ class PhaseResult:
     missed: int = 0
     to_diagnosis: list[float] = field(default_factory=list)
     undiagnosed: int = 0
-
-
-def stop_boards(boards: list[tuple[subprocess.Popen[str], dict[str, str]]]) -> None:
-    for proc, _ in boards:
-        proc.send_signal(signal.SIGINT)
-    for proc, _ in boards:
-        try:
-            proc.wait(15)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
-        if proc.stdout is not None:
-            proc.stdout.close()
 
 
 def cpu_seconds(me: psutil.Process) -> float:

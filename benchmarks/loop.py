@@ -358,6 +358,20 @@ def start_board(system: Path) -> tuple[subprocess.Popen[str], dict[str, str]]:
     return proc, urls
 
 
+def stop_boards(boards: list[tuple[subprocess.Popen[str], dict[str, str]]]) -> None:
+    """Stop the emulated boards ``start_board`` started (SIGINT; killed after 15 s)."""
+    for proc, _ in boards:
+        proc.send_signal(signal.SIGINT)
+    for proc, _ in boards:
+        try:
+            proc.wait(15)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+        if proc.stdout is not None:
+            proc.stdout.close()
+
+
 async def part_two(res: Results, n_boards: int, seconds: float) -> None:
     boards = [start_board(TEDUSAR) for _ in range(n_boards)]
     pipes = [Pipeline(urls["board"]) for _, urls in boards]
@@ -393,16 +407,7 @@ async def part_two(res: Results, n_boards: int, seconds: float) -> None:
                 await t
         for p in pipes:
             p.diagnoser.close()
-        for proc, _ in boards:
-            proc.send_signal(signal.SIGINT)
-        for proc, _ in boards:
-            try:
-                proc.wait(15)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
-            if proc.stdout is not None:
-                proc.stdout.close()
+        stop_boards(boards)
 
 
 # --- report --------------------------------------------------------------------------------
