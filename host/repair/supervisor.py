@@ -153,9 +153,10 @@ class ProcessSupervisor:
         return r.code
 
     async def close(self) -> None:
-        """Stop every process this supervisor started (units are left to systemd)."""
-        for node in list(self._running):
-            await self.stop(node)
+        """Stop every process this supervisor started (units are left to systemd), all at
+        once: one after the other, nine nodes on a loaded machine took longer than a person
+        waits for Ctrl-C (over 20 s)."""
+        await asyncio.gather(*(self.stop(node) for node in list(self._running)))
 
     # -- processes the host runs -----------------------------------------------------------
     async def _spawn(self, cfg: ProcessConfig) -> int:
