@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -41,11 +42,30 @@ def experiment(which: str, journal: Path, timeout_s: float = 90) -> dict[str, An
             cwd=ROOT, capture_output=True, text=True, timeout=max(240, 4 * timeout_s))
         if out.returncode == 0 or not clashed(out.stderr):
             break
-        for f in journal.parent.glob(journal.stem + "*"):  # fresh journals for the rerun
-            f.unlink()
+        fresh_journals(journal)
     assert out.returncode == 0, out.stderr[-3000:]
     data: dict[str, Any] = json.loads(out.stdout)
     return data
+
+
+def fresh_journals(journal: Path) -> None:
+    """Remove a run's journal, its sidecars and its node-log directory, for a rerun."""
+    for f in journal.parent.glob(journal.stem + "*"):
+        if f.is_dir():
+            shutil.rmtree(f)
+        else:
+            f.unlink()
+
+
+def test_a_rerun_starts_from_no_journal_and_no_node_logs(tmp_path: Path) -> None:
+    journal = tmp_path / "m2.sqlite"
+    journal.write_bytes(b"x")
+    (tmp_path / "m2.sqlite-wal").write_bytes(b"x")
+    (tmp_path / "m2-fault-free-logs").mkdir()
+    (tmp_path / "m2-fault-free-logs" / "nodes.json").write_text("{}")
+    (tmp_path / "other.sqlite").write_bytes(b"x")
+    fresh_journals(journal)
+    assert [p.name for p in tmp_path.iterdir()] == ["other.sqlite"]
 
 
 def last_diagnosis_normal(journal: Path) -> bool:
