@@ -10,14 +10,24 @@ emulated board, not to the boot.
 from __future__ import annotations
 
 import os
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
-if TYPE_CHECKING:
-    from emulator.sim import Emulator
+from emulator.electronics import Electronics
+
+
+class Board(Protocol):
+    """What a boot's HAL needs of the emulated board (``emulator.sim.Emulator`` is one)."""
+
+    now: int
+    electronics: Electronics
+    storage: Any
+    factory: Any  # the factory settings it was built with (None: none)
+    last_feed: int
+    reboot_requested: bool
 
 
 class SimHal:
-    def __init__(self, emu: Emulator, cause: int) -> None:
+    def __init__(self, emu: Board, cause: int) -> None:
         self.emu = emu
         self.elec = emu.electronics
         self.n_channels = len(self.elec.loads)
