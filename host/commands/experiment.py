@@ -92,13 +92,14 @@ def run(args: argparse.Namespace) -> int:
         shutdown_text,
     )
     from host.experiment.robot import fast_model
+    from host.experiment.session import beside
 
     system_dir = check_robot(Path(args.system_dir), args.timeout)
     if args.journal is not None:
         journal = Path(args.journal)
         _check_new(journal)
         if args.which == "power-up":
-            _check_new(_sequential(journal))
+            _check_new(beside(journal, "sequential"))
         if args.which == "mission-fault":
             for label in ("fault-free", "flat"):
                 _check_new(beside(journal, label))
@@ -132,7 +133,8 @@ def run(args: argparse.Namespace) -> int:
             modes = [args.only] if args.only else ["parallel", "sequential"]
             runs = {}
             for mode in modes:
-                path = _sequential(base) if mode == "sequential" and len(modes) > 1 else base
+                second = mode == "sequential" and len(modes) > 1
+                path = beside(base, "sequential") if second else base
                 runs[mode] = asyncio.run(power_up(robot_dir, path,
                                                   sequential=mode == "sequential",
                                                   timeout_s=args.timeout))
@@ -184,11 +186,3 @@ def journal_path(arg: str | None, tmp: Path) -> Path:
     return Path(arg)
 
 
-def beside(journal: Path, label: str) -> Path:
-    """FILE-label.sqlite beside the journal FILE."""
-    return journal.with_name(f"{journal.stem}-{label}{journal.suffix or '.sqlite'}")
-
-
-def _sequential(journal: Path) -> Path:
-    p = journal
-    return p.with_name(p.stem + "-sequential" + (p.suffix or ".sqlite"))

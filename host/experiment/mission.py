@@ -42,7 +42,7 @@ from host.events import (
     Stamped,
     TreeChange,
 )
-from host.experiment.session import RobotSession
+from host.experiment.session import RobotSession, beside
 from host.layers import MISSION
 from host.mission.session import MissionStack
 
@@ -200,7 +200,6 @@ async def _inject(s: RobotSession, watch: _Watch, run: MissionRun) -> None:
 async def mission_fault(system_dir: Path, journal: Path, *, timeout_s: float = 300.0
                         ) -> dict[str, MissionRun]:
     """M1: fault-free, the lidar hang on the layered robot, the same on the flat system."""
-    from host.commands.experiment import beside
 
     return {
         "fault-free": await run_mission(system_dir, beside(journal, "fault-free"),

@@ -38,6 +38,7 @@ from typing import Any
 from host.errors import UserError
 from host.events import Dispatch
 from host.experiment.mission import Injection, MissionRun, run_mission
+from host.experiment.session import beside
 from host.skills import WorldClient
 
 log = logging.getLogger(__name__)
@@ -124,7 +125,6 @@ SCENARIOS = {
 async def plan_diagnosis(which: str, system_dir: Path, journal: Path, *,
                          timeout_s: float = 300.0) -> dict[str, MissionRun]:
     """One of M2-M4: the fault-free mission, then the one with the scenario's event."""
-    from host.commands.experiment import beside
 
     sc = SCENARIOS[which]
     free = await run_mission(system_dir, beside(journal, "fault-free"), label="fault-free",

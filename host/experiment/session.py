@@ -34,6 +34,11 @@ from host.launch.emulated import EmulatedBoard
 from host.launch.robot import Launch, LaunchedRobot
 
 
+def beside(journal: Path, label: str) -> Path:
+    """FILE-label.sqlite beside the journal FILE (a second run of an experiment journals there)."""
+    return journal.with_name(f"{journal.stem}-{label}{journal.suffix or '.sqlite'}")
+
+
 class RobotSession:
     def __init__(self, system_dir: Path, journal: Path, *, max_parallel: int | None = None,
                  debounce_s: float = 0.5, emulate_args: tuple[str, ...] = (),
