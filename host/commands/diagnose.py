@@ -88,7 +88,7 @@ def run(args: argparse.Namespace) -> int:
     from host.diagnosis.diagnoser import Diagnoser
     from host.diagnosis.files import load_theory, read_observations
 
-    theory = load_theory(args.model)
+    theory = load_theory(args.model, cache=True)
     print_notes(theory)
     observations = read_observations(args.obs, theory)
     with Diagnoser(theory, algorithm=args.algorithm) as diagnoser:
