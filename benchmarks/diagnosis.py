@@ -323,13 +323,13 @@ def bench_command(args: argparse.Namespace, lines: list[str]) -> None:
                  f"cardinality diagnoses, up to 1,000) as a process on the circuit written as a "
                  f"tug model file, {per} instances per circuit (seed {args.seed + 1}), against "
                  "the engine alone on the same instance (diagnoser built, observations added, "
-                 "diagnosed; in process, model loaded); the better of two runs each. "
+                 f"diagnosed; in process, model loaded); the best of {args.repeat} runs each. "
                  "*overhead*: what the command adds (interpreter and imports, reading the "
                  "model, writing JSON); *CPU*: the same ratio in processor time (user + system), "
                  "which the machine's load changes less than wall time; *runs cut*: command "
                  f"runs the time budget ({args.budget:g} s) cut (or whose engine run it cut), "
                  "not compared; *warm*: the parsed model read from the command's cache (the "
-                 "first run of each circuit fills it; every run is the better of two, so all "
+                 "first run of each circuit fills it; every figure is the best of several, so all "
                  "are warm), *cold*: the same command with an empty cache directory each "
                  "time (it parses the YAML and writes the cache entry); every process "
                  "with Python's bytecode kept, as an installed program has it"
@@ -374,13 +374,13 @@ def bench_command(args: argparse.Namespace, lines: list[str]) -> None:
                         return d.diagnose(min_card_only=True, max_count=MAX_COUNT,
                                           time_budget_s=args.budget)
 
-                runs = [cpu_timed(engine_run) for _ in range(2)]  # the better of two
+                runs = [cpu_timed(engine_run) for _ in range(args.repeat)]  # the best
                 r = runs[0][2]
                 engine.append(min(t for t, _c, _r in runs))
                 engine_cpu.append(min(c for _t, c, _r in runs))
                 for label, prefix in commands.items():
                     best, best_cpu = float("inf"), float("inf")
-                    for _ in range(2):
+                    for _ in range(args.repeat):
                         if label == "cold":  # a cache directory of its own, empty
                             colds += 1
                             run_env = {**env, "XDG_CACHE_HOME": str(Path(tmp) / f"c{colds}")}
@@ -534,6 +534,9 @@ def main() -> None:
     parser.add_argument("--base", type=Path, default=None, metavar="DIR",
                         help="the whole command: also run it from this checkout (the code "
                         "before a change, e.g. `git archive REV | tar -x -C DIR`), interleaved")
+    parser.add_argument("--repeat", type=int, default=2, metavar="N",
+                        help="the whole command: runs of each kind per instance, the best "
+                        "counted (default: 2)")
     parser.add_argument("--only", choices=["iscas", "command", "robots"], default=None)
     parser.add_argument("--circuits", nargs="+", choices=CIRCUITS, metavar="NAME",
                         help="measure these circuits only (the sample is drawn as for all; "
