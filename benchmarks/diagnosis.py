@@ -264,11 +264,12 @@ def bench_c432(args: argparse.Namespace, lines: list[str]) -> None:
     lines.append("")
 
 
-def _run_child(cmd: list[str]) -> tuple[float, float, subprocess.CompletedProcess[str]]:
+def _run_child(cmd: list[str], env: dict[str, str] | None = None) -> tuple[
+        float, float, subprocess.CompletedProcess[str]]:
     """Wall and CPU time (user + system, from the children's usage) of one process."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
-    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    proc = subprocess.run(cmd, capture_output=True, text=True, check=False, env=env)
     wall = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), proc
@@ -283,13 +284,24 @@ def _commands(args: argparse.Namespace) -> dict[str, list[str]]:
     return out
 
 
-def bench_startup(args: argparse.Namespace, lines: list[str]) -> None:
+def _child_env(tmp: Path) -> dict[str, str]:
+    """The commands' environment: a cache directory of their own (not the user's), and
+    Python's bytecode kept (in ``tmp``) as an installed program has it, whatever
+    ``PYTHONDONTWRITEBYTECODE`` says here: without it every run compiled dxboard's modules
+    from source again (about 30 ms a run), which no user's install does."""
+    env = {**os.environ, "XDG_CACHE_HOME": str(tmp / "cache"),
+           "PYTHONPYCACHEPREFIX": str(tmp / "pycache")}
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    return env
+
+
+def bench_startup(args: argparse.Namespace, lines: list[str], env: dict[str, str]) -> None:
     """``dxboard diagnose --help``: the interpreter, the imports, argparse; no model."""
     runs = 5 if args.quick else 20
     times: dict[str, list[float]] = {}
     for _ in range(runs):  # interleaved: the machine's load falls on both alike
         for label, prefix in _commands(args).items():
-            wall, _cpu, proc = _run_child([*prefix, "diagnose", "--help"])
+            wall, _cpu, proc = _run_child([*prefix, "diagnose", "--help"], env)
             assert proc.returncode == 0, proc.stderr
             times.setdefault(label, []).append(wall)
     said = "; ".join(f"{label} {fmt(statistics.median(xs))} (best {fmt(min(xs))})"
@@ -304,28 +316,40 @@ def bench_command(args: argparse.Namespace, lines: list[str]) -> None:
     names = ["c6288"] if args.quick else ["c6288", "c7552"]
     per = 3 if args.quick else 10
     commands = _commands(args)
+    commands = {"command": commands["command"], "cold": commands["command"],
+                **{k: v for k, v in commands.items() if k != "command"}}
     lines.append("### The whole command against the engine alone\n")
     lines.append(f"`dxboard diagnose MODEL.yaml --obs FILE --json --min-card-only` (all minimal-"
                  f"cardinality diagnoses, up to 1,000) as a process on the circuit written as a "
                  f"tug model file, {per} instances per circuit (seed {args.seed + 1}), against "
                  "the engine alone on the same instance (diagnoser built, observations added, "
-                 "diagnosed; in process, model loaded); the better of two runs each. "
+                 f"diagnosed; in process, model loaded); the best of {args.repeat} runs each. "
                  "*overhead*: what the command adds (interpreter and imports, reading the "
                  "model, writing JSON); *CPU*: the same ratio in processor time (user + system), "
                  "which the machine's load changes less than wall time; *runs cut*: command "
                  f"runs the time budget ({args.budget:g} s) cut (or whose engine run it cut), "
-                 "not compared"
+                 "not compared; *warm*: the parsed model read from the command's cache (the "
+                 "first run of each circuit fills it; every figure is the best of several, so all "
+                 "are warm), *cold*: the same command with an empty cache directory each "
+                 "time (it parses the YAML and writes the cache entry); every process "
+                 "with Python's bytecode kept, as an installed program has it"
                  + ("; *before*: the same command from the checkout `--base` names, run "
                     "interleaved with it" if args.base else "") + ".\n")
-    bench_startup(args, lines)
     before = "before, sum | before / engine | " if args.base else ""
-    lines.append(f"| circuit | model file | engine, sum | command, sum | {before}"
-                 "command / engine | CPU, command / engine | overhead per run, mean / worst | "
-                 "JSON, largest | load | runs cut |")
-    lines.append("|---|---|---|---|" + ("---|---|" if args.base else "") + "---|" * 6)
     with tempfile.TemporaryDirectory(prefix="dxboard-bench-") as tmp:
+        env = _child_env(Path(tmp))
+        bench_startup(args, lines, env)
+        lines.append(f"| circuit | model file | engine, sum | command (warm), sum | {before}"
+                     "command / engine | CPU, command / engine | cold / engine | CPU, cold / "
+                     "engine | overhead per run (warm), mean / worst | JSON, largest | load | "
+                     "runs cut |")
+        lines.append("|---|---|---|---|" + ("---|---|" if args.base else "") + "---|" * 8)
+        colds = 0
         for name in names:
             circuit = parse_bench(ISCAS / f"{name}.bench")
+            if args.circuits and name not in args.circuits:
+                list(sample(circuit, rng, per))  # drawn all the same: the others' sample stays
+                continue
             theory = circuit_theory(circuit)
             known = theory.observable_atoms()
             model = Path(tmp) / f"{name}.yaml"
@@ -350,22 +374,28 @@ def bench_command(args: argparse.Namespace, lines: list[str]) -> None:
                         return d.diagnose(min_card_only=True, max_count=MAX_COUNT,
                                           time_budget_s=args.budget)
 
-                runs = [cpu_timed(engine_run) for _ in range(2)]  # the better of two
+                runs = [cpu_timed(engine_run) for _ in range(args.repeat)]  # the best
                 r = runs[0][2]
                 engine.append(min(t for t, _c, _r in runs))
                 engine_cpu.append(min(c for _t, c, _r in runs))
                 for label, prefix in commands.items():
                     best, best_cpu = float("inf"), float("inf")
-                    for _ in range(2):
+                    for _ in range(args.repeat):
+                        if label == "cold":  # a cache directory of its own, empty
+                            colds += 1
+                            run_env = {**env, "XDG_CACHE_HOME": str(Path(tmp) / f"c{colds}")}
                         t, c, proc = _run_child(
                             [*prefix, "diagnose", str(model), "--obs", str(obs_file), "--json",
-                             "--min-card-only", "--time-budget", str(args.budget)])
+                             "--min-card-only", "--time-budget", str(args.budget)],
+                            run_env if label == "cold" else env)
                         best, best_cpu = min(best, t), min(best_cpu, c)
                         assert proc.returncode in (0, 1), proc.stderr  # 1: cut before the first
                         data = json.loads(proc.stdout)
-                        if not data["complete"] or r.cut_by is not None:
+                        if "time_budget" in (data["cut_by"], r.cut_by):
                             cut += 1  # the budget cut one of the two on a loaded machine
                             continue
+                        if not data["complete"] or r.cut_by is not None:
+                            continue  # 1,000 kept of more: not compared (ties at the edge)
                         assert sorted(map(tuple, (x["bad"] for x in data["diagnoses"]))) == (
                             sorted(tuple(sorted(x.bad)) for x in r.diagnoses))
                         if label == "command":
@@ -380,6 +410,8 @@ def bench_command(args: argparse.Namespace, lines: list[str]) -> None:
             lines.append(f"| {name} | {model.stat().st_size / 1e6:.1f} MB | {fmt(sum(engine))} | "
                          f"{fmt(sum(wall['command']))} | {old}**{ratio:.2f}x** | "
                          f"{sum(cpu['command']) / sum(engine_cpu):.2f}x | "
+                         f"{sum(wall['cold']) / sum(engine):.2f}x | "
+                         f"{sum(cpu['cold']) / sum(engine_cpu):.2f}x | "
                          f"{mean_worst(overhead)} | {size / 1e3:.0f} kB | "
                          f"{min(loads):.1f}-{max(loads):.1f} | {cut} |")
             print(lines[-1], flush=True)
@@ -502,9 +534,13 @@ def main() -> None:
     parser.add_argument("--base", type=Path, default=None, metavar="DIR",
                         help="the whole command: also run it from this checkout (the code "
                         "before a change, e.g. `git archive REV | tar -x -C DIR`), interleaved")
+    parser.add_argument("--repeat", type=int, default=2, metavar="N",
+                        help="the whole command: runs of each kind per instance, the best "
+                        "counted (default: 2)")
     parser.add_argument("--only", choices=["iscas", "command", "robots"], default=None)
     parser.add_argument("--circuits", nargs="+", choices=CIRCUITS, metavar="NAME",
-                        help="measure these circuits only (the sample is drawn as for all)")
+                        help="measure these circuits only (the sample is drawn as for all; "
+                        "the whole command too)")
     args = parser.parse_args()
     if args.quick:
         args.per_circuit = min(args.per_circuit, 10)

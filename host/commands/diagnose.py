@@ -16,6 +16,8 @@ contradict the model whatever is broken, or a bound cut the search before the fi
 on bad input. ``--json`` prints ``{"order": "probability", "diagnoses": [{"bad": [...],
 "probability": p, "cardinality": k}, ...], "complete": true|false, "cut_by": ...,
 "explainable": ...}``; ``--good`` adds each diagnosis' healthy components (``"good"``).
+A model file's parsed form is kept in ``$XDG_CACHE_HOME/dxboard/models`` (default
+``~/.cache/dxboard/models``) and read back while the file is unchanged; deleting it is safe.
 """
 
 from __future__ import annotations
@@ -88,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
     from host.diagnosis.diagnoser import Diagnoser
     from host.diagnosis.files import load_theory, read_observations
 
-    theory = load_theory(args.model)
+    theory = load_theory(args.model, cache=True)
     print_notes(theory)
     observations = read_observations(args.obs, theory)
     with Diagnoser(theory, algorithm=args.algorithm) as diagnoser:

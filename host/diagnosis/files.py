@@ -4,7 +4,9 @@ observation files.
 ``load_theory(path)`` takes a robot directory (or its ``system.yaml``, or a file of that form
 under any name), validated and turned into clauses, or a tug model file (the original
 system's format, ``host.diagnosis.tug``); the file is parsed once, with libyaml, and a YAML
-error names the file and line.
+error names the file and line. With ``cache=True`` (``dxboard diagnose``) a model file's parsed
+form is kept in the user's cache directory and read back, without PyYAML, while the file and
+the loader are unchanged (``host.diagnosis.cache``).
 
 ``read_observations(path, theory)`` reads an observation file, one observation a line
 (``#`` starts a comment)::
@@ -28,10 +30,8 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from host.diagnosis import yamlpos
 from host.diagnosis.logic import Literal, Theory
 from host.diagnosis.observations import Observation
-from host.diagnosis.tug import looks_like_tug, parse_tug
 from host.errors import UserError
 
 _TUG = re.compile(r"^rules\s*:", re.MULTILINE)
@@ -42,7 +42,10 @@ _UNKNOWN = re.compile(r"^(?:unknown\s+|\?\s*)(?P<atom>.+)$")
 SYSTEM_FILE = "system.yaml"
 
 
-def load_theory(path: str | Path) -> Theory:
+def load_theory(path: str | Path, cache: bool = False) -> Theory:
+    """The theory of a robot directory or a model file. ``cache``: a model file's parsed form
+    is kept in the user's cache directory and read back while the file and the loader stay
+    the same (``host.diagnosis.cache``; a robot directory, several files, is always read)."""
     p = Path(path)
     if p.is_dir() or p.name == SYSTEM_FILE:
         from host.diagnosis.generation import generate
@@ -52,6 +55,18 @@ def load_theory(path: str | Path) -> Theory:
     if not p.exists():
         raise UserError(f"{p}: no such file or directory",
                         "give a robot directory (with system.yaml) or a tug model file")
+    if cache:
+        from host.diagnosis.cache import cached
+
+        return cached(p, lambda: _read_model_file(p))
+    return _read_model_file(p)
+
+
+def _read_model_file(p: Path) -> Theory:
+    """A tug model file, or a robot model of the system.yaml form under another name."""
+    from host.diagnosis import yamlpos  # PyYAML: not needed when the cache answers
+    from host.diagnosis.tug import looks_like_tug, parse_tug
+
     text = read_text(p, "a robot directory or a tug model file (YAML)")
     try:  # a tug model is all strings: read it without implicit typing (twice as fast)
         data, lines = yamlpos.load(text, typed=not _TUG.search(text))

@@ -44,7 +44,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 
-from pysat.examples.hitman import Hitman  # type: ignore[import-untyped]
 from pysat.examples.rc2 import RC2  # type: ignore[import-untyped]
 from pysat.formula import WCNF  # type: ignore[import-untyped]
 
@@ -172,6 +171,9 @@ def hitting_set_search(
     quota: Quota,
     min_card_only: bool = False,
 ) -> SearchOutcome:
+    # imported here: only this algorithm uses it (with its LBX/MCSls, ~3 ms of every start)
+    from pysat.examples.hitman import Hitman  # type: ignore[import-untyped]
+
     out = SearchOutcome([])
     healthy = [-v for v in ctx.ab_vars]
     hitman = Hitman(solver="g3", htype="sorted")

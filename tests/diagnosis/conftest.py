@@ -24,3 +24,13 @@ def diagnoser_for(theory: Theory, scenario: str, algorithm: str = "cardinality")
     for obs in read_observations(SCENARIOS / f"{scenario}.obs", theory):
         d.observe(obs)
     return d
+
+
+@pytest.fixture(autouse=True)
+def _own_cache_dir(tmp_path_factory: pytest.TempPathFactory,
+                   monkeypatch: pytest.MonkeyPatch) -> Path:
+    """``dxboard diagnose`` keeps parsed models in the user's cache directory: each test gets
+    a fresh one (its processes inherit it), never the person's ~/.cache."""
+    path = tmp_path_factory.mktemp("xdg-cache")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(path))
+    return path
