@@ -15,12 +15,19 @@ configuration (shared memory on), as a driver of any robot would open, one proce
 from __future__ import annotations
 
 import asyncio
+import functools
 import json
+import os
 import re
+import signal
 import subprocess
+import tracemalloc
 from collections import Counter
 from pathlib import Path
 
+import pytest
+
+from host.daemon import memprobe
 from host.observers.payload import Message
 from host.observers.sources.zenoh_peer import ZenohSource
 from tests.observers.conftest import PYTHON
@@ -63,6 +70,9 @@ async def test_driver_restarts_leave_no_shared_memory_mapped_in_the_daemon() -> 
         seen.append(len(msg.payload))
         gens[int(json.loads(msg.payload)["gen"])] += 1
 
+    def received(gen: int) -> bool:
+        return gens[gen] >= MESSAGES
+
     source.subscribe("/scan", on_message)
     before = shm_mappings()
     try:
@@ -71,7 +81,7 @@ async def test_driver_restarts_leave_no_shared_memory_mapped_in_the_daemon() -> 
             try:
                 # zenoh's pool is made lazily: the first messages go by TCP, the later ones
                 # by shared memory
-                await wait_until_async(lambda g=gen: gens[g] >= MESSAGES, 60,
+                await wait_until_async(functools.partial(received, gen), 60,
                                        f"{MESSAGES} scans of driver generation {gen}")
             finally:
                 driver.kill()
@@ -84,3 +94,25 @@ async def test_driver_restarts_leave_no_shared_memory_mapped_in_the_daemon() -> 
             f"of {GENERATIONS} driver generations: {sorted(grown)}"
     finally:
         source.close()
+
+
+async def test_the_memory_probe_writes_a_snapshot_on_sigusr2_only_when_asked(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    loop = asyncio.get_running_loop()
+    monkeypatch.delenv(memprobe.ENV, raising=False)
+    assert memprobe.install(loop) is None and not tracemalloc.is_tracing()  # off: nothing
+    monkeypatch.setenv(memprobe.ENV, str(tmp_path / "probe"))
+    try:
+        out = memprobe.install(loop)
+        assert out == tmp_path / "probe" and tracemalloc.is_tracing()
+        for n in (1, 2):
+            os.kill(os.getpid(), signal.SIGUSR2)
+            await wait_until_async((out / f"snap-{n}.tracemalloc").exists, 60,
+                                   f"snapshot {n}")
+        snap = tracemalloc.Snapshot.load(str(out / "snap-2.tracemalloc"))
+        assert snap.traces  # a real snapshot of this process's allocations
+        types = json.loads((out / "types-2.json").read_text())
+        assert types["dict"] > 0 and types["function"] > 0  # live objects counted by type
+    finally:
+        loop.remove_signal_handler(signal.SIGUSR2)
+        tracemalloc.stop()
