@@ -1,4 +1,9 @@
-"""The daemon's memory stays bounded however often a driver restarts (issue 18, item 3).
+"""The daemon's memory stays bounded over many faults and repairs (issue 18, item 3).
+
+Each test drives one component many times and counts what it keeps: shared-memory mappings in
+the topic source across driver restarts, variables in the diagnoser's solver across diagnosis
+runs, switch commands remembered by the actuators; and the memory probe (``$DXBOARD_MEMPROBE``)
+that ``benchmarks/memory.py`` uses to find such growth in the running daemon.
 
 Zenoh 1.x hands a payload of 3 KB or more (a LaserScan) to a peer on the same machine through
 shared memory: the publisher's session makes a 16 MB pool in ``/dev/shm``, and the receiver
@@ -27,6 +32,7 @@ from pathlib import Path
 
 import pytest
 
+from host.board import BoardClient
 from host.daemon import memprobe
 from host.diagnosis import Diagnoser, generate, load_system
 from host.diagnosis.healthy import healthy_values
@@ -34,7 +40,9 @@ from host.diagnosis.logic import Literal
 from host.diagnosis.satctx import SatContext
 from host.observers.payload import Message
 from host.observers.sources.zenoh_peer import ZenohSource
+from host.repair.actuators import RECENT, Actuators
 from tests.daemon.runner import TEDUSAR
+from tests.host.memboard import KEY, MemoryBoard, tedusar
 from tests.observers.conftest import PYTHON
 from tests.ports import zenoh_endpoint
 from tests.wait import wait_until_async
@@ -145,3 +153,16 @@ def test_the_diagnosers_solver_stays_bounded_however_many_runs(
             sizes.append(d._ctx.solver.nof_vars())
         assert max(sizes) < start + 3 * renew_after, (start, max(sizes))
         assert d._ctx.renewed >= 4
+
+
+async def test_the_actuators_remember_a_bounded_number_of_switch_commands() -> None:
+    """Every power-up and power cycle was kept in ``switch_ons`` for the life of the daemon;
+    like the switch commands, only the last RECENT are kept."""
+    model = load_system(TEDUSAR)
+    async with MemoryBoard(tedusar()) as board, BoardClient(board.url, KEY) as client:
+        actuators = Actuators(model, client, spacing_s=0.0, off_s=0.0)
+        for _ in range(3 * RECENT):
+            await actuators.power_up("jaguar")
+        assert len(actuators.switch_ons) == RECENT and len(actuators.commands) == RECENT
+        assert actuators.switch_ons[-1][1] == model.components["jaguar"].channel
+        assert (await client.state()).channels[model.components["jaguar"].channel or 0].physical
