@@ -1,7 +1,7 @@
 """The daemon's memory over many faults: a leak (grows with each fault) or a high-water mark?
 
     .venv/bin/python -m benchmarks.memory [--faults N] [--quiet-s S] [--probe] [--seed S]
-        [--frames N]
+        [--frames N] [--hangs-only]
 
 Starts the real ``dxboard run models/tedusar --emulate`` as ``benchmarks/loop.py`` does (fast
 device boots, free ports, journal in a temporary folder), waits until the robot is healthy,
@@ -9,7 +9,8 @@ then samples the daemon's resident memory (psutil) every 5 s: first over a quiet
 (``--quiet-s``, no faults), then over ``--faults`` faults injected with ``dxboard inject``
 exactly as the loop benchmark injects them (hangs in turn on hokuyo, jaguar and thermal_camera,
 laser_alignment trips, a device's next fault at least ``loop.SPACING_S`` after its last, the
-next fault as soon as the robot is healthy again). It prints the RSS after each fault and the
+next fault as soon as the robot is healthy again; ``--hangs-only``: hangs only, each of which
+restarts a driver). It prints the RSS after each fault and the
 slope per fault over the first and the second half of the series: a leak keeps its slope, a
 high-water mark flattens.
 
@@ -34,7 +35,7 @@ from pathlib import Path
 
 import psutil
 
-from benchmarks.loop import SPACING_S, TOPIC, TopicClock, ms, one_fault, schedule
+from benchmarks.loop import KINDS, SPACING_S, TOPIC, TopicClock, ms, one_fault, schedule
 from tests.daemon.runner import RunningDaemon, fast_copy, healthy, key_file
 from tests.wait import wait_until
 
@@ -112,6 +113,8 @@ def main() -> None:
     ap.add_argument("--faults", type=int, default=24)
     ap.add_argument("--quiet-s", type=float, default=120.0)
     ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--hangs-only", action="store_true",
+                    help="only hangs, in turn on each device (each restarts a driver)")
     ap.add_argument("--probe", action="store_true", help="tracemalloc snapshots in the daemon")
     ap.add_argument("--frames", type=int, default=1, help="tracemalloc frames per allocation")
     args = ap.parse_args()
@@ -136,7 +139,9 @@ def main() -> None:
                 snapshot(d, probe, 1)
             sampler.phase = "faults"
             clock = TopicClock(d.zenoh, sorted(set(TOPIC.values())))
-            todo = schedule(args.faults, args.seed)
+            todo = ([("hang", KINDS["hang"][i % len(KINDS["hang"])])
+                     for i in range(args.faults)] if args.hangs_only
+                    else schedule(args.faults, args.seed))
             ready: dict[str, float] = {}
             after: list[float] = []
             try:
