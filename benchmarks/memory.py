@@ -26,6 +26,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import signal
 import tempfile
 import threading
@@ -64,6 +65,23 @@ class Sampler(threading.Thread):
 
 def rss_mb(proc: psutil.Process) -> float:
     return float(proc.memory_info().rss) / 2**20
+
+
+def by_mapping(pid: int) -> dict[str, float]:
+    """The process's resident memory (MB) by kind of mapping: the C heap, anonymous mappings
+    (Python's arenas, other threads' malloc arenas, stacks), /dev/shm, libraries, files."""
+    out: dict[str, float] = {}
+    kind = ""
+    for line in Path(f"/proc/{pid}/smaps").read_text().splitlines():
+        head = line.split()
+        if re.match(r"^[0-9a-f]+-[0-9a-f]+ ", line):
+            name = head[5] if len(head) > 5 else ""
+            kind = ("anon" if not name else "shm" if name.startswith("/dev/shm/")
+                    else "lib" if ".so" in name else name.strip("[]") if name.startswith("[")
+                    else "file")
+        elif head and head[0] == "Rss:":
+            out[kind] = out.get(kind, 0.0) + int(head[1]) / 1024
+    return {k: round(v, 1) for k, v in sorted(out.items()) if v >= 0.1}
 
 
 def load_avg() -> str:
@@ -166,6 +184,7 @@ def main() -> None:
                 snapshot(d, probe, 3)
             sampler.stop()
             half = len(after) // 2
+            print(f"resident by mapping (MB): {by_mapping(proc.pid)}")
             print(f"quiet {quiet:.1f} MB; after each fault {min(after):.1f}-{max(after):.1f} "
                   f"MB, last {after[-1]:.1f} MB; slope {slope(after[:half]):+.2f} MB/fault "
                   f"(first half), {slope(after[half:]):+.2f} MB/fault (second half)")
