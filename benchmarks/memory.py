@@ -8,11 +8,11 @@ device boots, free ports, journal in a temporary folder), waits until the robot 
 then samples the daemon's resident memory (psutil) every 5 s: first over a quiet interval
 (``--quiet-s``, no faults), then over ``--faults`` faults injected with ``dxboard inject``
 exactly as the loop benchmark injects them (hangs in turn on hokuyo, jaguar and thermal_camera,
-laser_alignment trips, a device's next fault at least ``loop.SPACING_S`` after its last, the
-next fault as soon as the robot is healthy again; ``--hangs-only``: hangs only, each of which
-restarts a driver). It prints the RSS after each fault and the
-slope per fault over the first and the second half of the series: a leak keeps its slope, a
-high-water mark flattens.
+laser_alignment trips, a device's next fault at least ``loop.SPACING_S`` after its last,
+``loop.spaced``; the next fault as soon as the robot is healthy again; ``--hangs-only``: hangs
+only, each of which restarts a driver). It prints the RSS after each fault and the slope per
+fault over the first and the second half of the series: a leak keeps its slope, a high-water
+mark flattens; and at the end the RSS by kind of mapping.
 
 ``--probe`` runs the daemon with ``$DXBOARD_MEMPROBE`` (``host.daemon.memprobe``): it sends
 SIGUSR2 after the quiet interval, after the first fault and after the last, and prints what
@@ -36,7 +36,7 @@ from pathlib import Path
 
 import psutil
 
-from benchmarks.loop import KINDS, SPACING_S, TOPIC, TopicClock, ms, one_fault, schedule
+from benchmarks.loop import KINDS, TOPIC, TopicClock, ms, one_fault, schedule, spaced
 from tests.daemon.runner import RunningDaemon, fast_copy, healthy, key_file
 from tests.wait import wait_until
 
@@ -160,18 +160,10 @@ def main() -> None:
             todo = ([("hang", KINDS["hang"][i % len(KINDS["hang"])])
                      for i in range(args.faults)] if args.hangs_only
                     else schedule(args.faults, args.seed))
-            ready: dict[str, float] = {}
             after: list[float] = []
             try:
-                for i in range(len(todo)):
-                    now = time.monotonic()
-                    pick = next((f for f in todo if ready.get(f[1], 0.0) <= now), None)
-                    if pick is None:
-                        pick = min(todo, key=lambda f: ready.get(f[1], 0.0))
-                        time.sleep(max(0.0, ready[pick[1]] - now))
-                    todo.remove(pick)
+                for i, pick in enumerate(spaced(todo)):
                     s = one_fault(d, *pick, clock)
-                    ready[pick[1]] = time.monotonic() + SPACING_S
                     after.append(rss_mb(proc))
                     print(f"  {i + 1}/{args.faults} {pick[0]} {pick[1]}: healthy "
                           f"{ms(s.to_healthy)}, RSS {after[-1]:.1f} MB, load {load_avg()}",
