@@ -1,7 +1,7 @@
 """The daemon's memory over many faults: a leak (grows with each fault) or a high-water mark?
 
     .venv/bin/python -m benchmarks.memory [--faults N] [--quiet-s S] [--probe] [--seed S]
-        [--frames N] [--hangs-only]
+        [--frames N] [--hangs-only | --trips-only]
 
 Starts the real ``dxboard run models/tedusar --emulate`` as ``benchmarks/loop.py`` does (fast
 device boots, free ports, journal in a temporary folder), waits until the robot is healthy,
@@ -10,9 +10,9 @@ then samples the daemon's resident memory (psutil) every 5 s: first over a quiet
 exactly as the loop benchmark injects them (hangs in turn on hokuyo, jaguar and thermal_camera,
 laser_alignment trips, a device's next fault at least ``loop.SPACING_S`` after its last,
 ``loop.spaced``; the next fault as soon as the robot is healthy again; ``--hangs-only``: hangs
-only, each of which restarts a driver). It prints the RSS after each fault and the slope per
-fault over the first and the second half of the series: a leak keeps its slope, a high-water
-mark flattens; and at the end the RSS by kind of mapping.
+only, each of which restarts a driver; ``--trips-only``: trips only). It prints the RSS after
+each fault and the slope per fault over the first and the second half of the series: a leak
+keeps its slope, a high-water mark flattens; and at the end the RSS by kind of mapping.
 
 ``--probe`` runs the daemon with ``$DXBOARD_MEMPROBE`` (``host.daemon.memprobe``): it sends
 SIGUSR2 after the quiet interval, after the first fault and after the last, and prints what
@@ -131,8 +131,10 @@ def main() -> None:
     ap.add_argument("--faults", type=int, default=24)
     ap.add_argument("--quiet-s", type=float, default=120.0)
     ap.add_argument("--seed", type=int, default=7)
-    ap.add_argument("--hangs-only", action="store_true",
-                    help="only hangs, in turn on each device (each restarts a driver)")
+    only = ap.add_mutually_exclusive_group()
+    only.add_argument("--hangs-only", action="store_true",
+                      help="only hangs, in turn on each device (each restarts a driver)")
+    only.add_argument("--trips-only", action="store_true", help="only trips")
     ap.add_argument("--probe", action="store_true", help="tracemalloc snapshots in the daemon")
     ap.add_argument("--frames", type=int, default=1, help="tracemalloc frames per allocation")
     args = ap.parse_args()
@@ -157,9 +159,9 @@ def main() -> None:
                 snapshot(d, probe, 1)
             sampler.phase = "faults"
             clock = TopicClock(d.zenoh, sorted(set(TOPIC.values())))
-            todo = ([("hang", KINDS["hang"][i % len(KINDS["hang"])])
-                     for i in range(args.faults)] if args.hangs_only
-                    else schedule(args.faults, args.seed))
+            kind = "hang" if args.hangs_only else "trip" if args.trips_only else ""
+            todo = ([(kind, KINDS[kind][i % len(KINDS[kind])]) for i in range(args.faults)]
+                    if kind else schedule(args.faults, args.seed))
             after: list[float] = []
             try:
                 for i, pick in enumerate(spaced(todo)):
