@@ -61,7 +61,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -238,6 +238,25 @@ def schedule(n_faults: int, seed: int) -> list[tuple[str, str]]:
     return faults
 
 
+def spaced(todo: list[tuple[str, str]]) -> Iterator[tuple[str, str]]:
+    """The (kind, device) faults of ``todo``, each once its device is ready: a repair of the
+    same device again within the limiter's stable_s is a repair that did not hold
+    (host.repair.limits), and the third would quarantine it. The first fault in ``todo``'s
+    order whose device is ready goes next (or the one ready soonest, after a wait); a device
+    is ready SPACING_S after the caller came back from its last fault."""
+    todo = list(todo)
+    ready: dict[str, float] = {}  # device -> when it may have its next fault
+    while todo:
+        now = time.monotonic()
+        pick = next((f for f in todo if ready.get(f[1], 0.0) <= now), None)
+        if pick is None:
+            pick = min(todo, key=lambda f: ready.get(f[1], 0.0))
+            time.sleep(max(0.0, ready[pick[1]] - now))
+        todo.remove(pick)
+        yield pick
+        ready[pick[1]] = time.monotonic() + SPACING_S
+
+
 def part_one(res: Results, n_faults: int, seed: int, quiet_s: float) -> None:
     with tempfile.TemporaryDirectory() as tmpdir, healthy_robot(Path(tmpdir), 120) as d:
         time.sleep(3.0)
@@ -257,22 +276,10 @@ def part_one(res: Results, n_faults: int, seed: int, quiet_s: float) -> None:
         tele = [e for e in d.journal("telemetry") if isinstance(e.payload, Telemetry)]
         assert tele, "no telemetry journaled"
         clock = TopicClock(d.zenoh, sorted(set(TOPIC.values())))
-        todo = schedule(n_faults, seed)
-        ready: dict[str, float] = {}  # device -> when it may have its next fault
         c0, t0 = cpu_of([proc]), time.monotonic()
         try:
-            for i in range(len(todo)):
-                # a repair of the same device again within the limiter's stable_s is a repair
-                # that did not hold (host.repair.limits): the third would quarantine it. The
-                # first fault in the seeded order whose device is ready goes next.
-                now = time.monotonic()
-                pick = next((f for f in todo if ready.get(f[1], 0.0) <= now), None)
-                if pick is None:
-                    pick = min(todo, key=lambda f: ready.get(f[1], 0.0))
-                    time.sleep(max(0.0, ready[pick[1]] - now))
-                todo.remove(pick)
+            for i, pick in enumerate(spaced(schedule(n_faults, seed))):
                 s = one_fault(d, *pick, clock)
-                ready[pick[1]] = time.monotonic() + SPACING_S
                 res.samples.append(s)
                 res.run_rss_mb.append(proc.memory_info().rss / 2**20)
                 print(f"  {i + 1}/{n_faults} {pick[0]} {pick[1]}: " + (

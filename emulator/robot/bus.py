@@ -60,6 +60,9 @@ class Bus:
     def __init__(self, connect: str = DEFAULT_ENDPOINT, listen: str = LISTEN) -> None:
         cfg = zenoh.Config()
         cfg.insert_json5("mode", '"peer"')
+        # no shared memory: a receiver keeps a gone sender's 16 MB pool mapped for good
+        # (eclipse-zenoh/zenoh#2787), in hector_mapping at each restart of the lidar's driver
+        cfg.insert_json5("transport/shared_memory/enabled", "false")
         cfg.insert_json5("scouting/multicast/enabled", "false")
         cfg.insert_json5("listen/endpoints", json.dumps([listen]))
         cfg.insert_json5("connect/endpoints", json.dumps([connect]))

@@ -86,6 +86,7 @@ def run(args: argparse.Namespace) -> int:
 async def _main(args: argparse.Namespace, system_dir: Path, web: tuple[str, int] | None) -> int:
     from host.board.keys import load_key
     from host.commands.terminal import TerminalLines
+    from host.daemon import memprobe
     from host.daemon.core import DaemonOptions
     from host.launch.robot import Launch, LaunchedRobot
     from host.operator.client import default_socket
@@ -95,6 +96,7 @@ async def _main(args: argparse.Namespace, system_dir: Path, web: tuple[str, int]
     terminal: TerminalLines | None = None
     for sig in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(sig, stop.set)
+    memprobe.install(loop)  # off unless $DXBOARD_MEMPROBE is set
     try:
         key = load_key(args.key_file) if (args.key_file or not args.emulate) else None
         journal = Path(args.journal)

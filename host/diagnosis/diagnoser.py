@@ -176,6 +176,7 @@ class Diagnoser:
         if self._cache is not None and self._cache[0] == key:
             return self._cache[1]
         start = time.perf_counter()
+        self._ctx.renew()  # a run's variables stay in the solver: bounded by starting afresh
         calls = self._ctx.calls
         assumptions = [x for atom, x in self._assumed.items() if atom not in held]
         quota = Quota(max_count, self._index_weights, self._ub)

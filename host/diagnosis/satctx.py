@@ -5,10 +5,11 @@ an incremental PySAT solver. Observations are never added as clauses: they are p
 *assumptions* on each call, so a changed observation needs no rebuilding. A search may add
 clauses that hold for one run only by guarding them with a fresh activation variable
 (``new_run()``/``end_run()``): the run assumes it, and ``end_run`` disables the clauses for
-good with a unit clause. Cardinality bounds over the health variables come from an
-incremental totalizer (``pysat.card.ITotalizer``) grown on demand. A wall-clock budget
-interrupts a running solver call (``solve`` then returns None); the budget is the only clock
-this package reads, and only to bound computation time.
+good with a unit clause; the variable stays, so after ``RENEW_AFTER`` runs ``renew()`` (the
+diagnoser calls it between runs) starts a fresh solver. Cardinality bounds over the health
+variables come from an incremental totalizer (``pysat.card.ITotalizer``) grown on demand. A
+wall-clock budget interrupts a running solver call (``solve`` then returns None); the budget
+is the only clock this package reads, and only to bound computation time.
 """
 
 from __future__ import annotations
@@ -81,23 +82,55 @@ class _Watchdog:
 
 
 class SatContext:
+    #: runs (activation variables, ``new_run``) after which ``renew`` starts a fresh solver
+    RENEW_AFTER = 20_000
+
     def __init__(self, theory: Theory, solver: str = "g4") -> None:
         self.theory = theory
         self.vars: dict[str, int] = {}
         self.top = 0
+        self._solver_name = solver
         self.solver = Solver(name=solver)
         # CaDiCaL in PySAT cannot be interrupted: budgets are then checked between calls only
         self._interruptible = not solver.startswith(("cd", "cadical"))
         self.ab_vars: list[int] = [self.var(ab(c)) for c in theory.components]
         self.index_of_ab = {v: i for i, v in enumerate(self.ab_vars)}
-        for clause in theory.clauses:
-            self.solver.add_clause([self.lit(lit) for lit in clause.lits])
+        self._add_theory()
         self._tot: ITotalizer | None = None
         self._deadline: float | None = None
         self._watchdog = _Watchdog(self.solver)
         self.calls = 0
+        self.runs = 0  # since the solver was made
+        self.renewed = 0
         self._structure: Structure | bool | None = False  # False: not inferred yet
         self._atom_of: dict[int, str] | None = None
+
+    def _add_theory(self) -> None:
+        for clause in self.theory.clauses:
+            self.solver.add_clause([self.lit(lit) for lit in clause.lits])
+
+    def renew(self) -> bool:
+        """Start a fresh solver once ``RENEW_AFTER`` runs have used it; True when it did.
+        A solver never frees a variable: each run's activation literal (``new_run``) stays in
+        it for good, fixed false, so a daemon diagnosing for weeks would grow by one variable a
+        run without bound (about 200 bytes each). The atoms keep their numbers (observations
+        assumed as solver literals stay valid); learnt clauses and the totalizer are dropped
+        and come back as needed. Call it between runs, never inside one."""
+        if self.runs < self.RENEW_AFTER:
+            return False
+        self.stop_budget()
+        old, self.solver = self.solver, Solver(name=self._solver_name)
+        self.top = max(self.vars.values(), default=0)
+        self._add_theory()
+        if self._tot is not None:
+            self._tot.delete()
+            self._tot = None
+        self._watchdog.close()
+        self._watchdog = _Watchdog(self.solver)
+        old.delete()
+        self.runs = 0
+        self.renewed += 1
+        return True
 
     # -- variables -------------------------------------------------------------------------
     def var(self, atom: str) -> int:
@@ -131,6 +164,7 @@ class SatContext:
     # -- runs, bounds and budget -----------------------------------------------------------
     def new_run(self) -> int:
         """A fresh activation literal for clauses that hold during one run only."""
+        self.runs += 1
         return self.new_var()
 
     def end_run(self, act: int) -> None:

@@ -49,6 +49,7 @@ log = logging.getLogger(__name__)
 
 DEFAULT_SPACING_S = 0.2
 DEFAULT_OFF_S = 1.0
+RECENT = 100  # switch commands and switch-ons remembered (the latest; a daemon runs for weeks)
 SWITCH_OFF = frozenset({"shutdown", "power_cycle", "stop_node", "power_down"})
 
 
@@ -87,10 +88,10 @@ class Actuators:
                 if c.channel is not None and c.channel in model.protected}
         prot |= {protected_channel_object(ch) for ch in model.protected}
         self.protected = frozenset(prot | set(protected))
-        #: (clock time, channel) of every switch-on sent, for journals and tests
+        #: (clock time, channel) of the latest switch-ons sent (RECENT), for journals and tests
         self.switch_ons: list[tuple[float, int]] = []
-        #: (clock time, channel, on) of every switch command sent, so that the daemon can tell
-        #: its own commands from a person's
+        #: (clock time, channel, on) of the latest switch commands sent (RECENT), so that the
+        #: daemon can tell its own commands from a person's
         self.commands: list[tuple[float, int, bool]] = []
         self._may_unlatch_short: set[str] = set()
         self._on_lock = asyncio.Lock()
@@ -157,7 +158,11 @@ class Actuators:
 
     def _sent(self, ch: int, on: bool) -> None:
         self.commands.append((self.clock(), ch, on))
-        del self.commands[:-100]
+        del self.commands[:-RECENT]
+
+    def _switched_on(self, t: float, ch: int) -> None:
+        self.switch_ons.append((t, ch))
+        del self.switch_ons[:-RECENT]
 
     def note_command(self, ch: int, on: bool) -> None:
         """A switch command sent on this host's behalf by something else in its process (an
@@ -176,7 +181,7 @@ class Actuators:
             cleared = await self._unlatch(board, ch, device)
             self._sent(ch, True)
             res = await board.switch(ch, True)
-            self.switch_ons.append((self.clock(), ch))
+            self._switched_on(self.clock(), ch)
             return f"channel {ch} {cleared}on ({res.state_name})"
 
         return await self._spaced(0.0, send)
@@ -223,7 +228,7 @@ class Actuators:
             self._sent(ch, False)
             self._sent(ch, True)
             res = await board.power_cycle(ch, self.off_s)
-            self.switch_ons.append((self.clock() + self.off_s, ch))
+            self._switched_on(self.clock() + self.off_s, ch)
             return f"channel {ch} off for {self.off_s:g} s, then on ({res.state_name})"
 
         return await self._spaced(self.off_s, send)

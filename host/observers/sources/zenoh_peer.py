@@ -5,7 +5,11 @@ directly (it is also what ROS 2's rmw_zenoh runs on). The daemon's session *list
 loopback endpoint (default ``tcp/127.0.0.1:7447``); driver processes' publishers *connect* to
 it (``host.observers.publisher``), and gossip lets peers that joined through it find each
 other. Multicast scouting is off by default, so nothing is sent to the network: the robot's
-topics stay on the robot unless ``listen``/``connect`` name other endpoints.
+topics stay on the robot unless ``listen``/``connect`` name other endpoints. Shared memory is
+off: zenoh would hand a message of 3 KB or more (a scan) over a publisher's 16 MB pool in
+``/dev/shm``, and a receiver keeps every sender's pool mapped for good once the sender has gone
+(eclipse-zenoh/zenoh#2787): the daemon would grow by 19 MB with each restart of a driver.
+Without it, such peers send to the daemon over the loopback link like any other.
 
 Topic names map to key expressions by dropping the leading slash and adding ``prefix``:
 ``/odom`` is ``odom`` (or ``robot1/odom`` with prefix ``robot1``). Zenoh calls subscribers on
@@ -34,9 +38,11 @@ DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 
 def zenoh_config(listen: Sequence[str] = (), connect: Sequence[str] = (),
                  multicast: bool = False) -> zenoh.Config:
-    """A peer-mode configuration: these endpoints only, multicast scouting off by default."""
+    """A peer-mode configuration: these endpoints only, multicast scouting off by default, no
+    shared memory (see the module's docstring)."""
     cfg = zenoh.Config()
     cfg.insert_json5("mode", '"peer"')
+    cfg.insert_json5("transport/shared_memory/enabled", "false")
     cfg.insert_json5("scouting/multicast/enabled", json.dumps(multicast))
     cfg.insert_json5("listen/endpoints", json.dumps(list(listen)))
     cfg.insert_json5("connect/endpoints", json.dumps(list(connect)))
