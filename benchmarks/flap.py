@@ -1,7 +1,7 @@
 """No flapping under load: false diagnoses and repairs of a healthy robot on a busy machine.
 
     .venv/bin/python -m benchmarks.flap [--quick] [--minutes M] [--idle-minutes M]
-        [--faults N] [--write]
+        [--faults N] [--keep DIR] [--write]
 
 The real daemon, ``dxboard run models/tedusar --emulate`` (a subprocess, as ``tests/daemon``:
 free ports, short device boot times, journal in a temporary folder; the board streams 10
@@ -20,7 +20,10 @@ drop of the board client itself (``LinkChange``: a reconnect), every diagnosis n
 component (a healthy robot has none: each is false) and every repair action started (each is
 a false repair). Target: 0 false
 diagnoses and 0 repairs under the hog. ``--write`` replaces the '## No flapping under load'
-section of benchmarks/RESULTS.md.
+section of benchmarks/RESULTS.md. ``--keep DIR`` runs in DIR (created) and leaves the daemon's
+journal (``journal.sqlite``) and its log (``daemon.err``: each silence with the publisher's own
+time and run-queue wait) there, to trace every false verdict; the log's silence lines are
+printed at the end.
 """
 
 from __future__ import annotations
@@ -38,7 +41,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from benchmarks.loop import Sample, ms, one_fault, pct, write_section
+from benchmarks.loop import Sample, TopicClock, ms, one_fault, pct, write_section
 from host.journal import ActionRecord, DiagnosisRecord, LinkChange, Observation
 from tests.daemon.runner import RunningDaemon, healthy_robot
 
@@ -55,6 +58,19 @@ class Phase:
     repairs: int = 0  # repair actions started
     link_drops: dict[str, int] = field(default_factory=dict)  # the client's, by reason
     named: set[str] = field(default_factory=set)
+    loads: list[float] = field(default_factory=list)  # the 1-minute load average, every 10 s
+
+    def load(self) -> str:
+        v = sorted(self.loads)
+        return f"{v[0]:.1f} / {v[len(v) // 2]:.1f} / {v[-1]:.1f}" if v else "-"
+
+
+def loadavg() -> float:
+    """The machine's 1-minute load average (never quiet: said beside every figure)."""
+    try:
+        return float(Path("/proc/loadavg").read_text().split()[0])
+    except (OSError, ValueError, IndexError):
+        return float("nan")
 
 
 @contextlib.contextmanager
@@ -77,10 +93,12 @@ def watch(d: RunningDaemon, name: str, seconds: float) -> Phase:
     mark = max((e.id for e in d.journal()), default=0)
     t0 = time.monotonic()
     end = t0 + seconds
+    loads = [loadavg()]
     while (left := end - time.monotonic()) > 0:
         time.sleep(min(left, 10.0))
+        loads.append(loadavg())
     d.caught_up()
-    ph = Phase(name, time.monotonic() - t0)
+    ph = Phase(name, time.monotonic() - t0, loads=loads)
     started: set[str] = set()
     for e in d.journal():
         if e.id <= mark:
@@ -103,19 +121,33 @@ def watch(d: RunningDaemon, name: str, seconds: float) -> Phase:
     print(f"  {name}: {ph.seconds:.0f} s, topic verdicts ~ok {sum(ph.flips.values())} "
           f"{ph.flips or ''}, other abnormal literals {ph.others or 0}, false diagnoses "
           f"{ph.diagnoses} naming {sorted(ph.named)}, repairs {ph.repairs}, the client's link "
-          f"drops {ph.link_drops or 0}", flush=True)
+          f"drops {ph.link_drops or 0}, load average (1 min) min/median/max {ph.load()}",
+          flush=True)
     return ph
 
 
-def run(idle_s: float, hog_s: float, n_faults: int) -> tuple[list[Phase], list[Sample]]:
+@contextlib.contextmanager
+def workdir(keep: Path | None) -> Iterator[Path]:
+    """``keep`` (created, left behind) or a temporary folder."""
+    if keep is not None:
+        keep.mkdir(parents=True, exist_ok=True)
+        yield keep
+        return
+    with tempfile.TemporaryDirectory() as tmpdir:
+        yield Path(tmpdir)
+
+
+def run(idle_s: float, hog_s: float, n_faults: int, keep: Path | None = None
+        ) -> tuple[list[Phase], list[Sample]]:
     phases: list[Phase] = []
     samples: list[Sample] = []
-    with tempfile.TemporaryDirectory() as tmpdir, healthy_robot(Path(tmpdir), 120) as d:
+    with workdir(keep) as tmp, healthy_robot(tmp, 120) as d:
         phases.append(watch(d, "idle machine", idle_s))
         with hogs(hog_s + n_faults * 120):
             phases.append(watch(d, f"CPU hog on {os.cpu_count()} cores", hog_s))
+            clock = TopicClock(d.zenoh, ["/scan"])
             for i in range(n_faults):
-                s = one_fault(d, "hang")
+                s = one_fault(d, "hang", "hokuyo", clock)
                 samples.append(s)
                 print(f"  fault {i + 1}/{n_faults} under the hog: diagnosis "
                       f"{ms(s.to_diagnosis)}, healthy {ms(s.to_healthy)}", flush=True)
@@ -124,15 +156,16 @@ def run(idle_s: float, hog_s: float, n_faults: int) -> tuple[list[Phase], list[S
 
 def report(phases: list[Phase], samples: list[Sample], args: argparse.Namespace) -> str:
     rows = ["| phase | minutes | topic verdicts ~ok (by topic) | other abnormal literals | "
-            "the client's link drops | false diagnoses (naming) | repairs |",
-            "|---|---|---|---|---|---|---|"]
+            "the client's link drops | false diagnoses (naming) | repairs | load (1 min) "
+            "min / median / max |",
+            "|---|---|---|---|---|---|---|---|"]
     for ph in phases:
         by = ", ".join(f"{k} {v}" for k, v in sorted(ph.flips.items())) or "none"
         other = ", ".join(f"`{k}` {v}" for k, v in sorted(ph.others.items())) or "none"
         drops = sum(ph.link_drops.values())
         rows.append(f"| {ph.name} | {ph.seconds / 60:.1f} | {sum(ph.flips.values())} ({by}) | "
                     f"{other} | {drops} | {ph.diagnoses} "
-                    f"({', '.join(sorted(ph.named)) or '-'}) | {ph.repairs} |")
+                    f"({', '.join(sorted(ph.named)) or '-'}) | {ph.repairs} | {ph.load()} |")
     diag = [s.to_diagnosis for s in samples if s.to_diagnosis is not None]
     heal = [s.to_healthy for s in samples if s.to_healthy is not None]
     hog = phases[-1]
@@ -172,15 +205,21 @@ def main() -> None:
     ap.add_argument("--minutes", type=float, default=None, help="under the hog (default 10)")
     ap.add_argument("--idle-minutes", type=float, default=None, help="baseline (default 3)")
     ap.add_argument("--faults", type=int, default=None, help="hangs under the hog (default 3)")
+    ap.add_argument("--keep", type=Path, default=None, metavar="DIR",
+                    help="run in DIR and keep the journal and the daemon's log there")
     ap.add_argument("--write", action="store_true", help="write benchmarks/RESULTS.md")
     args = ap.parse_args()
     args.minutes = args.minutes or (1.0 if args.quick else 10.0)
     args.idle_minutes = args.idle_minutes or (0.5 if args.quick else 3.0)
     n = args.faults if args.faults is not None else (1 if args.quick else 3)
     print(f"idle {args.idle_minutes:g} min, hog {args.minutes:g} min, {n} faults", flush=True)
-    phases, samples = run(args.idle_minutes * 60, args.minutes * 60, n)
+    phases, samples = run(args.idle_minutes * 60, args.minutes * 60, n, args.keep)
     text = report(phases, samples, args)
     print(text)
+    if args.keep is not None:
+        log = args.keep / "daemon.err"
+        lines = log.read_text(errors="replace").splitlines() if log.exists() else []
+        print(f"silences in {log}:", *[ln for ln in lines if ": silent" in ln], sep="\n  ")
     if args.write:
         write_section(text, "## No flapping under load")
     print(json.dumps({p.name: {"flips": sum(p.flips.values()), "diagnoses": p.diagnoses,

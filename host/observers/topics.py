@@ -45,7 +45,9 @@ Detection latency (from the fault to the literal, plus the hub's scheduling dela
 
 from __future__ import annotations
 
+import logging
 from collections import deque
+from typing import Protocol
 
 import host.atoms as A
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
@@ -53,13 +55,25 @@ from host.observers.payload import Message
 from host.observers.silence import (
     JITTER_GAIN,
     JITTER_MEMORY_S,
+    STARVED_CAP_S,
+    ChainState,
     Confirmation,
+    OwnTime,
     SlidingExtreme,
 )
+
+log = logging.getLogger(__name__)
 
 DEFAULT_SILENCE = 5.0  # periods without a message before a topic counts as silent
 JITTER_FLOOR_S = 0.1  # the least delay tolerated on the way from a publisher to us
 GAP = 1.5  # periods: a message after a longer gap may head a delayed burst
+
+
+class ChainReader(Protocol):
+    """A topic's publisher chain: its run-queue wait so far and its threads runnable now, or
+    None when it cannot be read (``host.observers.starvation.WaitProbe``)."""
+
+    def read(self) -> ChainState | None: ...
 
 
 class TopicObserver(Observer[Message]):
@@ -95,6 +109,11 @@ class FrequencyObserver(TopicObserver):
         self._fastest = SlidingExtreme(JITTER_MEMORY_S, greatest=False)  # arrival - stamp
         self._delays = SlidingExtreme(JITTER_MEMORY_S, greatest=True)  # delay beyond that
         self.frequency: float | None = None  # the last estimate, for journals and tests
+        #: the publisher chain's run-queue wait (``host.observers.starvation.WaitProbe``), set
+        #: by the daemon where it knows the publisher's processes; None: judged without it
+        self.probe: ChainReader | None = None
+        self._own = OwnTime()  # a silence confirmed in the publisher's own time
+        self._unprobed = False  # this gap: the probe could not be read, judged without it
 
     def atoms(self) -> list[str]:
         return [self.atom]
@@ -113,6 +132,8 @@ class FrequencyObserver(TopicObserver):
         gap = None if self._arrived is None else now - self._arrived
         self._arrived = now
         self._confirm.reset()
+        self._own.reset()
+        self._unprobed = False
         stamp = item.stamp
         stamped = stamp is not None
         t = stamp if stamp is not None else now
@@ -160,9 +181,44 @@ class FrequencyObserver(TopicObserver):
         since = self._silent_since()
         if since is None or self.asserted.get(self.atom) is False:
             return
+        if self._probed():
+            start, need, cap = self._own_bounds(since)
+            if now < start:
+                return
+            chain = self.probe.read() if self.probe is not None else None
+            if chain is not None:
+                if self._own.silent(now, chain, since, need, cap):
+                    self._say_why(now - since)
+                    self._silent(now)
+                return
+            self._unprobed = True  # no pid, or /proc unreadable: judged as without a probe
         if self._confirm.silent(now, since + self.max_gap + self.allowance,
                                 since + self.max_gap + self.window):
             self._silent(now)
+
+    def _own_bounds(self, since: float) -> tuple[float, float, float]:
+        """For a gap judged in the publisher's own time: when to read the probe first (half
+        the silence limit), the own time that is silence (the limit plus ``JITTER_S``), and
+        the cap in wall time."""
+        return (since + self.max_gap / 2, self.max_gap + self._own.confirm,
+                since + self.max_gap + STARVED_CAP_S)
+
+    def _say_why(self, gap: float) -> None:
+        """Log a silence judged in the publisher's own time: confirmed, or at the cap."""
+        own = self._own
+        level = logging.WARNING if self._arrived is not None else logging.INFO  # once heard
+        if own.own >= self.max_gap + own.confirm - 1e-9:
+            log.log(level, "%s: silent, no message for %.3f s (%.3f s of it the publisher's "
+                    "own time, %.3f s its run-queue wait)", self.name, gap, own.own,
+                    own.starved)
+        else:
+            log.log(level, "%s: silent at the cap, no message for %.3f s although the "
+                    "publisher was starved (%.3f s of it its run-queue wait)", self.name,
+                    gap, own.starved)
+
+    def _probed(self) -> bool:
+        """Is this gap judged in the publisher's own time?"""
+        return self.probe is not None and not self._unprobed
 
     def _silent(self, now: float) -> None:
         self.frequency = 0.0
@@ -172,7 +228,10 @@ class FrequencyObserver(TopicObserver):
         times = [] if self._judge_at is None else [self._judge_at]
         since = self._silent_since()
         if since is not None and self.asserted.get(self.atom) is not False:
-            times.append(self._confirm.deadline(since + self.max_gap + self.allowance))
+            if self._probed():
+                times.append(self._own.deadline(*self._own_bounds(since)))
+            else:
+                times.append(self._confirm.deadline(since + self.max_gap + self.allowance))
         return min(times) if times else None
 
 
