@@ -1,7 +1,7 @@
 """No flapping under load: false diagnoses and repairs of a healthy robot on a busy machine.
 
     .venv/bin/python -m benchmarks.flap [--quick] [--minutes M] [--idle-minutes M]
-        [--faults N] [--keep DIR] [--write]
+        [--faults N] [--idle-faults N] [--own-time on|off] [--keep DIR] [--write]
 
 The real daemon, ``dxboard run models/tedusar --emulate`` (a subprocess, as ``tests/daemon``:
 free ports, short device boot times, journal in a temporary folder; the board streams 10
@@ -20,10 +20,13 @@ drop of the board client itself (``LinkChange``: a reconnect), every diagnosis n
 component (a healthy robot has none: each is false) and every repair action started (each is
 a false repair). Target: 0 false
 diagnoses and 0 repairs under the hog. ``--write`` replaces the '## No flapping under load'
-section of benchmarks/RESULTS.md. ``--keep DIR`` runs in DIR (created) and leaves the daemon's
-journal (``journal.sqlite``) and its log (``daemon.err``: each silence with the publisher's own
-time and run-queue wait) there, to trace every false verdict; the log's silence lines are
-printed at the end.
+section of benchmarks/RESULTS.md. ``--idle-faults N`` adds N hangs on the idle machine (between
+phases 1 and 2): hang detection on the machine as quiet as it is. ``--own-time off`` judges
+every topic's silence as before this rule (``own_time: false`` in the robot copy's
+``system.yaml``): the baseline of the same session. ``--keep DIR`` runs in DIR (created) and
+leaves the daemon's journal (``journal.sqlite``) and its log (``daemon.err``: each silence
+with the publisher's own time and run-queue wait) there, to trace every false verdict; the
+log's silence lines are printed at the end.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ import contextlib
 import json
 import os
 import platform
+import re
 import subprocess
 import sys
 import tempfile
@@ -43,7 +47,7 @@ from pathlib import Path
 
 from benchmarks.loop import Sample, TopicClock, ms, one_fault, pct, write_section
 from host.journal import ActionRecord, DiagnosisRecord, LinkChange, Observation
-from tests.daemon.runner import RunningDaemon, healthy_robot
+from tests.daemon.runner import RunningDaemon, fast_copy, healthy, key_file
 
 HOG = "import time\nend = time.monotonic() + {s}\nwhile time.monotonic() < end:\n    pass\n"
 
@@ -137,24 +141,78 @@ def workdir(keep: Path | None) -> Iterator[Path]:
         yield Path(tmpdir)
 
 
-def run(idle_s: float, hog_s: float, n_faults: int, keep: Path | None = None
-        ) -> tuple[list[Phase], list[Sample]]:
+def without_own_time(system_dir: Path) -> None:
+    """Every topic of ``system_dir``'s observers judged as before (``own_time: false``)."""
+    f = system_dir / "system.yaml"
+    f.write_text(re.sub(r"(?m)^(    /[^:]+: \{[^}]*)\}", r"\1, own_time: false}",
+                        f.read_text()))
+
+
+@contextlib.contextmanager
+def robot(tmp: Path, own_time: bool) -> Iterator[RunningDaemon]:
+    """The fast virtual TEDUSAR robot (``tests.daemon.runner.healthy_robot``), its topics'
+    silences judged in the publishers' own time or not."""
+    system = fast_copy(tmp)
+    if not own_time:
+        without_own_time(system)
+    d = RunningDaemon(tmp, system, extra_args=("--key-file", str(key_file(tmp))))
+    try:
+        d.wait_for(healthy, 120, "the robot powered up and healthy")
+        yield d
+    finally:
+        d.close()
+
+
+SPACING_S = 65.0  # between two hangs of the lidar: the repair limiter's 60 s, and a margin
+
+
+def hangs(d: RunningDaemon, clock: TopicClock, n: int, where: str) -> list[Sample]:
+    """``n`` hokuyo hangs, each ``SPACING_S`` after the last (a repair of the same device
+    again within the limiter's minute counts as one that did not hold)."""
+    out: list[Sample] = []
+    last = time.monotonic() - SPACING_S
+    for i in range(n):
+        time.sleep(max(0.0, last + SPACING_S - time.monotonic()))
+        last = time.monotonic()
+        load = loadavg()
+        s = one_fault(d, "hang", "hokuyo", clock)
+        out.append(s)
+        print(f"  fault {i + 1}/{n} ({where}, load {load:.1f}): last /scan seen → ~ok "
+              f"{ms(s.silence)}, fault → diagnosis {ms(s.to_diagnosis)}, healthy "
+              f"{ms(s.to_healthy)}", flush=True)
+    return out
+
+
+def run(idle_s: float, hog_s: float, n_faults: int, keep: Path | None = None,
+        idle_faults: int = 0, own_time: bool = True
+        ) -> tuple[list[Phase], list[Sample], list[Sample]]:
     phases: list[Phase] = []
-    samples: list[Sample] = []
-    with workdir(keep) as tmp, healthy_robot(tmp, 120) as d:
-        phases.append(watch(d, "idle machine", idle_s))
-        with hogs(hog_s + n_faults * 120):
-            phases.append(watch(d, f"CPU hog on {os.cpu_count()} cores", hog_s))
-            clock = TopicClock(d.zenoh, ["/scan"])
-            for i in range(n_faults):
-                s = one_fault(d, "hang", "hokuyo", clock)
-                samples.append(s)
-                print(f"  fault {i + 1}/{n_faults} under the hog: diagnosis "
-                      f"{ms(s.to_diagnosis)}, healthy {ms(s.to_healthy)}", flush=True)
-    return phases, samples
+    with workdir(keep) as tmp, robot(tmp, own_time) as d:
+        clock = TopicClock(d.zenoh, ["/scan"])
+        try:
+            phases.append(watch(d, "idle machine", idle_s))
+            idle = hangs(d, clock, idle_faults, "idle machine")
+            with hogs(hog_s + n_faults * 120):
+                phases.append(watch(d, f"CPU hog on {os.cpu_count()} cores", hog_s))
+                hog = hangs(d, clock, n_faults, "under the hog")
+        finally:
+            clock.close()
+    return phases, idle, hog
 
 
-def report(phases: list[Phase], samples: list[Sample], args: argparse.Namespace) -> str:
+def hang_line(samples: list[Sample], where: str) -> str:
+    diag = [s.to_diagnosis for s in samples if s.to_diagnosis is not None]
+    heal = [s.to_healthy for s in samples if s.to_healthy is not None]
+    sil = [s.silence for s in samples if s.silence is not None]
+    return (f"- Injected faults {where}: {len(samples)} hokuyo hang(s), {len(diag)} diagnosed "
+            f"(last /scan seen → ~ok p50 {ms(pct(sil, 50))}, max {ms(max(sil) if sil else None)};"
+            f" fault → diagnosis p50 {ms(pct(diag, 50))}, max "
+            f"{ms(max(diag) if diag else None)}), {len(heal)} verified healthy again (p50 "
+            f"{ms(pct(heal, 50))}, max {ms(max(heal) if heal else None)}).")
+
+
+def report(phases: list[Phase], idle: list[Sample], samples: list[Sample],
+           args: argparse.Namespace) -> str:
     rows = ["| phase | minutes | topic verdicts ~ok (by topic) | other abnormal literals | "
             "the client's link drops | false diagnoses (naming) | repairs | load (1 min) "
             "min / median / max |",
@@ -166,11 +224,10 @@ def report(phases: list[Phase], samples: list[Sample], args: argparse.Namespace)
         rows.append(f"| {ph.name} | {ph.seconds / 60:.1f} | {sum(ph.flips.values())} ({by}) | "
                     f"{other} | {drops} | {ph.diagnoses} "
                     f"({', '.join(sorted(ph.named)) or '-'}) | {ph.repairs} | {ph.load()} |")
-    diag = [s.to_diagnosis for s in samples if s.to_diagnosis is not None]
-    heal = [s.to_healthy for s in samples if s.to_healthy is not None]
     hog = phases[-1]
     met = hog.diagnoses == 0 and hog.repairs == 0
-    cmd = " --quick" if args.quick else ""
+    cmd = (" --quick" if args.quick else "") + ("" if args.own_time == "on" else
+                                                  " --own-time off")
     return f"""## No flapping under load
 
 `.venv/bin/python -m benchmarks.flap{cmd} --minutes {args.minutes:g} --idle-minutes \
@@ -186,10 +243,8 @@ naming any component (each false: nothing is broken) and repair actions started.
 {chr(10).join(rows)}
 
 - Target under the hog: 0 false diagnoses and 0 repairs — {'**met**' if met else '**NOT met**'}.
-- Injected faults are still found under the hog: {len(samples)} hokuyo hang(s), \
-{len(diag)} diagnosed (fault → diagnosis p50 {ms(pct(diag, 50))}, max \
-{ms(max(diag) if diag else None)}), {len(heal)} verified healthy again (p50 \
-{ms(pct(heal, 50))}, max {ms(max(heal) if heal else None)}).
+{hang_line(idle, "on the idle machine") if idle else ""}
+{hang_line(samples, "under the hog")}
 - Before (issue 18): a headless browser starting beside the daemon flipped `ok(/imu_data)` \
 and `ok(/scan)` about 20 times in a second; only the repair debounce kept them from a repair. \
 The frequency observer now judges the rate on the publishers' stamps and confirms a silence \
@@ -207,14 +262,19 @@ def main() -> None:
     ap.add_argument("--faults", type=int, default=None, help="hangs under the hog (default 3)")
     ap.add_argument("--keep", type=Path, default=None, metavar="DIR",
                     help="run in DIR and keep the journal and the daemon's log there")
+    ap.add_argument("--idle-faults", type=int, default=0,
+                    help="hangs on the idle machine, before the hog (default 0)")
+    ap.add_argument("--own-time", choices=("on", "off"), default="on",
+                    help="off: every topic's silence judged as before (own_time: false)")
     ap.add_argument("--write", action="store_true", help="write benchmarks/RESULTS.md")
     args = ap.parse_args()
     args.minutes = args.minutes or (1.0 if args.quick else 10.0)
     args.idle_minutes = args.idle_minutes or (0.5 if args.quick else 3.0)
     n = args.faults if args.faults is not None else (1 if args.quick else 3)
     print(f"idle {args.idle_minutes:g} min, hog {args.minutes:g} min, {n} faults", flush=True)
-    phases, samples = run(args.idle_minutes * 60, args.minutes * 60, n, args.keep)
-    text = report(phases, samples, args)
+    phases, idle, samples = run(args.idle_minutes * 60, args.minutes * 60, n, args.keep,
+                                args.idle_faults, args.own_time == "on")
+    text = report(phases, idle, samples, args)
     print(text)
     if args.keep is not None:
         log = args.keep / "daemon.err"

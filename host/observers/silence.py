@@ -15,11 +15,12 @@ behind it — and both tolerate them the same way:
   is silence at once: a silent source is found within its bound.
 - ``OwnTime``: where the publisher's processes are known (``host.observers.starvation``), a gap
   is measured in the publisher chain's *own* time instead: the wall time minus the time its
-  processes spent runnable but waiting for a CPU, read from the first moment the gap looks
-  long, and confirmed only while none of them is runnable. A hung publisher sleeps, so its
-  own time runs with the wall clock and it is found at its limit plus ``JITTER_S``; a starved
-  one waits on the run queue, so its gap is excused while it waits — up to a cap
-  (``STARVED_CAP_S`` past the limit), after which it is silence all the same.
+  most starved thread spent runnable but waiting for a CPU, read from the first moment the
+  gap looks long, and confirmed only while none of its threads is stuck on the run queue. A
+  hung publisher sleeps, so its own time runs with the wall clock and it is found at its limit
+  plus ``JITTER_S``; a starved one waits on the run queue, so its gap is excused while it
+  waits — up to a cap (``STARVED_CAP_S`` past the limit), after which it is silence all the
+  same.
 
 Pure values, no clock: the observers pass ``now`` in (and ``OwnTime`` the probe's reading).
 """
@@ -37,10 +38,11 @@ STARVED_CAP_S = 2.0  # a gap this long past its limit is silence, however starve
 
 class ChainState(NamedTuple):
     """A reading of a publisher chain (``host.observers.starvation``): its run-queue wait so
-    far (seconds, never decreasing) and how many of its threads are runnable now."""
+    far (seconds, never decreasing) and how many of its threads are stuck on the run queue
+    (runnable at this reading and the previous one, with no CPU in between)."""
 
     wait: float
-    runnable: int
+    stuck: int
 
 
 class SlidingExtreme:
@@ -110,9 +112,9 @@ class OwnTime:
     ``silent(now, chain, since, need, cap)`` at each tick, with ``chain`` the probe's reading
     and ``since`` the last message. The first reading (at ``start``) takes the gap until then
     as the chain's own; from there, between two readings, its own time is the wall time minus
-    its wait (the wait of several threads at once bounded by the wall time). Linux adds a
-    thread's wait only once the thread gets the CPU, so a reading with a thread of the chain
-    runnable (maybe waiting right now) confirms nothing. A tick more than ``JITTER_S`` after its
+    its wait, bounded by the wall time; an interval with a thread stuck on the run queue (its
+    wait not yet counted: Linux adds it when the thread gets the CPU) is all starved and
+    confirms nothing. A tick more than ``JITTER_S`` after its
     deadline means the daemon's loop was stalled (messages may be queued behind it): whatever
     was counted, a further ``JITTER_S`` of own time is needed. At ``cap`` it is silence however
     starved the chain.
@@ -125,6 +127,7 @@ class OwnTime:
         self._at: float | None = None  # the last reading, and the wait then
         self._wait = 0.0
         self._due: float | None = None
+        self._since = 0.0
 
     def reset(self) -> None:
         """An input arrived: whatever gap was being counted has ended."""
@@ -135,11 +138,12 @@ class OwnTime:
                cap: float) -> bool:
         """At a tick at ``now``: is the gap since ``since`` a silence?"""
         late = self._due is not None and now > self._due + JITTER_S
+        self._since = since
         if self._at is None:
             self.own = now - since
         else:
             dt = now - self._at
-            starved = min(max(0.0, chain.wait - self._wait), dt)
+            starved = dt if chain.stuck else min(max(0.0, chain.wait - self._wait), dt)
             self.own += dt - starved
             self.starved += starved
         if late:
@@ -147,12 +151,16 @@ class OwnTime:
         self._at, self._wait = now, chain.wait
         if now >= cap:
             return True
-        return self.own >= need - 1e-9 and chain.runnable == 0
+        return self.own >= need - 1e-9 and not chain.stuck
 
     def deadline(self, start: float, need: float, cap: float) -> float:
         """When the next tick is due: the first reading, or the earliest the own time could
-        reach ``need`` (at least ``confirm / 2`` on: a starved chain is read every 10 ms)."""
-        step = max(need - self.own, self.confirm / 2)  # (few readings while it is starved)
-        due = start if self._at is None else min(cap, self._at + step)
+        reach ``need`` — while the chain is starved, at least ``confirm / 2`` and an eighth of
+        the gap so far on (a few dozen readings of /proc in a gap up to the cap)."""
+        if self._at is None:
+            due = start
+        else:
+            step = max(need - self.own, self.confirm / 2, (self._at - self._since) / 8)
+            due = min(cap, self._at + step)
         self._due = due
         return due

@@ -8,13 +8,14 @@ of ``/proc/<pid>/task/<tid>/schedstat`` (kernel ``sched_info``, present since 2.
 ``CONFIG_SCHED_INFO``, set by the common distributions). A hung publisher's count stands still;
 a starved one's grows with the wall clock.
 
-``run_queue_wait(pids)`` is that count, in seconds, summed over every thread of every pid given
-(a chain: the node that publishes a topic and the process that feeds its device); ``None`` when
-none of them could be read (no pid known, a process gone, another OS, another user's process
-without access). ``WaitProbe`` is what the frequency observer holds: it reads the pids from a
-lookup each time (a node restarted by the supervisor has a new pid) and keeps the count going
-up across such changes, so the observer only takes differences. No clock here: the observer
-bounds a difference by the wall time it passed in (several threads can wait at once).
+``read_threads(pids)`` reads those counts for every thread of every pid given (a chain: the
+nodes a topic depends on, the process that feeds their devices, the daemon itself);
+``run_queue_wait(pids)`` sums them. ``WaitProbe`` is what the frequency observer holds: it
+reads the pids from a lookup each time (a node restarted by the supervisor has a new pid) and
+says, reading after reading, how long the chain's most starved thread waited and which threads
+are stuck on the run queue right now; None when nothing can be read (no pid known, a process
+gone, another OS, another user's process without access), and the observer judges without it.
+No clock here: the observer bounds a wait by the wall time it passed in.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import logging
 import os
 import threading
 from collections.abc import Callable, Iterable, Mapping
+from typing import NamedTuple
 
 from host.diagnosis.model import SystemModel
 from host.observers.silence import ChainState
@@ -33,71 +35,64 @@ log = logging.getLogger(__name__)
 PROC = "/proc"
 
 
-def _read_pid(pid: int, proc: str, skip: int | None) -> tuple[int, int] | None:
-    """The run-queue wait of every thread of ``pid`` (ns) and how many are runnable now
-    (thread ``skip``, the caller's own, left out of that count); None if unreadable."""
-    tasks = os.path.join(proc, str(pid), "task")
-    try:
-        tids = os.listdir(tasks)
-    except OSError:
-        return None
-    total, runnable, seen = 0, 0, False
-    for tid in tids:
-        try:
-            with open(os.path.join(tasks, tid, "schedstat"), "rb") as f:
-                fields = f.read().split()
-            with open(os.path.join(tasks, tid, "stat"), "rb") as f:
-                state = f.read().rpartition(b")")[2].split(None, 1)[:1]
-        except OSError:
-            continue  # a thread that ended meanwhile
-        if len(fields) >= 2 and fields[1].isdigit():
-            total += int(fields[1])
-            seen = True
-            if state == [b"R"] and tid != str(skip):
-                runnable += 1
-    return (total, runnable) if seen else None
+class Thread(NamedTuple):
+    """One thread's scheduler counts (``schedstat``: ns on a CPU, ns waiting for one, times it
+    got one) and whether it is runnable now (``stat`` state R: running or waiting)."""
+
+    cpu_ns: int
+    wait_ns: int
+    slices: int
+    runnable: bool
 
 
-def read_chain(pids: Iterable[int], proc: str = PROC, skip: int | None = None
-               ) -> ChainState | None:
-    """The run-queue wait (s) of every thread of ``pids``, summed, and how many of those
-    threads are runnable now (running or waiting for a CPU; thread ``skip`` left out);
-    None if no pid could be read (the caller falls back to judging without it).
-
-    Linux adds a thread's wait to its count when the thread gets the CPU: a thread waiting
-    right now shows only as runnable, its wait comes later."""
-    total, runnable, seen = 0, 0, False
+def read_threads(pids: Iterable[int], proc: str = PROC) -> dict[tuple[int, int], Thread]:
+    """Every thread of ``pids`` that could be read, by (pid, tid); empty if none could."""
+    out: dict[tuple[int, int], Thread] = {}
     for pid in pids:
-        got = _read_pid(pid, proc, skip)
-        if got is not None:
-            total += got[0]
-            runnable += got[1]
-            seen = True
-    return ChainState(total / 1e9, runnable) if seen else None
+        tasks = os.path.join(proc, str(pid), "task")
+        try:
+            tids = os.listdir(tasks)
+        except OSError:
+            continue  # gone, or not ours to read
+        for tid in tids:
+            try:
+                with open(os.path.join(tasks, tid, "schedstat"), "rb") as f:
+                    fields = f.read().split()
+                with open(os.path.join(tasks, tid, "stat"), "rb") as f:
+                    state = f.read().rpartition(b")")[2].split(None, 1)[:1]
+            except OSError:
+                continue  # a thread that ended meanwhile
+            if len(fields) >= 3 and all(x.isdigit() for x in fields[:3]) and tid.isdigit():
+                out[pid, int(tid)] = Thread(int(fields[0]), int(fields[1]), int(fields[2]),
+                                            state == [b"R"])
+    return out
 
 
 def run_queue_wait(pids: Iterable[int], proc: str = PROC) -> float | None:
     """Seconds the threads of ``pids`` spent runnable but waiting for a CPU, summed; None if
     no pid could be read."""
-    state = read_chain(pids, proc)
-    return None if state is None else state.wait
+    threads = read_threads(pids, proc)
+    return sum(t.wait_ns for t in threads.values()) / 1e9 if threads else None
 
 
 class WaitProbe:
-    """The run-queue wait of a publisher chain whose pids ``lookup`` names (it may change).
+    """How starved a publisher chain is, the chain's pids named by ``lookup`` (it may change).
 
-    ``read()`` gives a running total in seconds that never goes backwards: when the chain's
-    pids change (a restart) or a process ends (its threads' counts vanish), the total carries
-    on from where it was rather than jumping; and the chain's threads runnable now (the
-    calling thread left out: the daemon reads its own process too). None when nothing can
+    ``read()`` compares each thread with the previous reading. The chain's wait grows by the
+    *most* any one thread waited in between (the publishing path is as late as its most
+    starved thread; a sum over dozens of threads that each waited a little would call a busy
+    but healthy chain starved), so it is a running total that never goes backwards, across
+    restarts (new pids) too. Linux adds a thread's wait to its count only when the thread gets
+    the CPU, so a thread runnable at both readings that got no CPU in between (same CPU time,
+    same count of times it ran) is *stuck* on the run queue: ``ChainState.stuck`` counts those
+    (the calling thread left out: the daemon reads its own process too). None when nothing can
     be read.
     """
 
     def __init__(self, lookup: Callable[[], Iterable[int]], proc: str = PROC) -> None:
         self.lookup = lookup
         self.proc = proc
-        self._pids: tuple[int, ...] = ()
-        self._last: float | None = None  # the raw sum at the last read, for these pids
+        self._threads: dict[tuple[int, int], Thread] = {}
         self._total = 0.0
 
     def pids(self) -> tuple[int, ...]:
@@ -105,16 +100,22 @@ class WaitProbe:
 
     def read(self) -> ChainState | None:
         pids = self.pids()
-        raw = read_chain(pids, self.proc, threading.get_native_id()) if pids else None
-        if raw is None:
-            self._last = None
+        threads = read_threads(pids, self.proc) if pids else {}
+        if not threads:
+            self._threads = {}
             return None
-        if pids == self._pids and self._last is not None and raw.wait >= self._last:
-            self._total += raw.wait - self._last
-        elif pids != self._pids:
-            log.debug("run-queue wait of pids %s (was %s)", pids, self._pids)
-        self._pids, self._last = pids, raw.wait
-        return ChainState(self._total, raw.runnable)
+        me = (os.getpid(), threading.get_native_id())
+        worst, stuck = 0, 0
+        for key, t in threads.items():
+            old = self._threads.get(key)
+            if old is None or key == me:
+                continue
+            worst = max(worst, t.wait_ns - old.wait_ns)
+            if t.runnable and old.runnable and (t.cpu_ns, t.slices) == (old.cpu_ns, old.slices):
+                stuck += 1
+        self._threads = threads
+        self._total += worst / 1e9
+        return ChainState(self._total, stuck)
 
     def wait(self) -> float | None:
         """The running total alone."""
@@ -155,7 +156,7 @@ def wire_probes(observers: Iterable[object], model: SystemModel,
     way = list(way_in)
     wired: dict[str, tuple[list[str], list[str]]] = {}
     for o in observers:
-        if not isinstance(o, FrequencyObserver):
+        if not isinstance(o, FrequencyObserver) or not o.own_time:
             continue
         topic = o.topics[0]
         nodes, devices = chain_of(model, topic)

@@ -27,7 +27,19 @@ Judged by the messages' own timing, so a busy machine is not a rate drop (no fla
   stalled (messages may be queued behind it), so the confirmation starts again. However
   stalled the loop, a gap of ``silence / mu + ω`` is judged silent at once: a silent or slow
   publisher is found within the window (``host.observers.silence``, shared with the board's
-  link rule).
+  link rule);
+- where the daemon knows the processes the topic's messages depend on (``probe``: the nodes
+  that publish it and its inputs, the process that feeds their devices, the daemon itself;
+  ``host.observers.starvation``) the silence is judged in the *publisher's own time*
+  instead, which tells a starved publisher from a hung one: the gap less the time those
+  processes' most starved thread spent runnable but waiting for a CPU (Linux schedstat) must
+  reach ``silence / mu + JITTER_S``, confirmed at a tick when none of their threads is stuck
+  on the run queue;
+  no learned allowance, no floor. A hung publisher sleeps, so it is found at that limit; a
+  starved one is excused while it waits on the run queue, up to ``STARVED_CAP_S`` (2 s) past
+  ``silence / mu`` — a publisher starved for seconds is reported all the same, and the log line
+  says which of the two it was. Where no process is known or ``/proc`` cannot be read, the
+  gap is judged by the allowance above; ``own_time: false`` in ``system.yaml`` asks for that.
 
 ``ResponseObserver`` is the multiple observer MObs: after a message on ``input``, a message on
 ``output`` must follow within ``within`` seconds; it emits ``ok(output)`` when one does and
@@ -35,9 +47,13 @@ Judged by the messages' own timing, so a busy machine is not a rate drop (no fla
 
 Detection latency (from the fault to the literal, plus the hub's scheduling delay):
 
-- topic silent: ``silence / mu + allowance + JITTER_S`` after the last message (5 periods by
-  default; on a quiet machine 170 ms at 100 Hz, 0.62 s at 10 Hz; at most ``silence / mu + ω``;
-  the original engine needed 2 s);
+- topic silent, judged in the publisher's own time: ``silence / mu + JITTER_S`` after the
+  last message while the publisher is not starved (5 periods by default: 145 ms at /scan's
+  40 Hz, 70 ms at 100 Hz), longer by the time it waits for a CPU, at most ``silence / mu +
+  STARVED_CAP_S``;
+- topic silent, judged without it: ``silence / mu + allowance + JITTER_S`` after the last
+  message (on a quiet machine 170 ms at 100 Hz, 0.62 s at 10 Hz; at most ``silence / mu +
+  ω``; the original engine needed 2 s);
 - rate wrong but not zero: one message interval once the window holds only the new regime,
   at most ``ω`` plus an interval;
 - response missing: exactly ``within`` after the unanswered input; a response: at once.
@@ -70,8 +86,8 @@ GAP = 1.5  # periods: a message after a longer gap may head a delayed burst
 
 
 class ChainReader(Protocol):
-    """A topic's publisher chain: its run-queue wait so far and its threads runnable now, or
-    None when it cannot be read (``host.observers.starvation.WaitProbe``)."""
+    """A topic's publisher chain: its run-queue wait so far and its threads stuck on the run
+    queue now, or None when it cannot be read (``host.observers.starvation.WaitProbe``)."""
 
     def read(self) -> ChainState | None: ...
 
@@ -89,7 +105,7 @@ class FrequencyObserver(TopicObserver):
     def __init__(self, topic: str, rate: float, tolerance: float, window: float = 1.0,
                  silence: float = DEFAULT_SILENCE, atom: str | None = None, *,
                  name: str | None = None, validity: float = DEFAULT_VALIDITY,
-                 refresh: float = DEFAULT_REFRESH) -> None:
+                 refresh: float = DEFAULT_REFRESH, own_time: bool = True) -> None:
         super().__init__(name or f"frequency:{topic}", validity, refresh)
         if rate <= 0 or tolerance <= 0 or window * rate < 2 or silence <= 0:
             raise ValueError(f"{self.name}: need rate > 0, tolerance > 0, silence > 0 and "
@@ -112,6 +128,7 @@ class FrequencyObserver(TopicObserver):
         #: the publisher chain's run-queue wait (``host.observers.starvation.WaitProbe``), set
         #: by the daemon where it knows the publisher's processes; None: judged without it
         self.probe: ChainReader | None = None
+        self.own_time = own_time  # False: never given a probe (system.yaml ``own_time``)
         self._own = OwnTime()  # a silence confirmed in the publisher's own time
         self._unprobed = False  # this gap: the probe could not be read, judged without it
 

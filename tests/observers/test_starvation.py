@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 
 from host.diagnosis import load_system
-from host.observers.starvation import WaitProbe, chain_of, read_chain, run_queue_wait
+from host.observers.starvation import WaitProbe, chain_of, run_queue_wait
 from tests.wait import wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -74,43 +74,63 @@ def test_a_process_gone_or_unknown_reads_as_none(procs: list[subprocess.Popen[st
     assert WaitProbe(lambda: [p.pid]).wait() is None
 
 
-def test_a_busy_thread_is_runnable_and_the_callers_own_is_left_out(
+def test_the_probe_of_a_starved_pair_grows_by_its_most_starved_thread(
         procs: list[subprocess.Popen[str]]) -> None:
-    busy = _start(BUSY, _cpu())
-    procs.append(busy)
-    state = wait_until(lambda: read_chain([busy.pid]), 60.0, "a reading of the busy loop")
-    assert state.runnable == 1  # a busy loop is always running or waiting to
-    me = read_chain([os.getpid()], skip=threading.get_native_id())
-    assert me is not None and me.runnable == 0  # this thread runs, the others sleep
+    procs.extend(_start(BUSY, _cpu()) for _ in range(2))
+    pids = [p.pid for p in procs]
+    probe = WaitProbe(lambda: pids)
+    first = run_queue_wait(pids)
+    assert probe.read() is not None and first is not None
+    wait_until(lambda: (probe.wait() or 0.0) > 0.3, 60.0, "the pair's worst wait to pass 0.3 s")
+    # the worst thread's wait, not the sum: less than what the two waited together meanwhile
+    both = (run_queue_wait(pids) or 0.0) - first
+    assert 0.3 < (probe.wait() or 0.0) < both
 
 
-def _fake_proc(root: Path, waits: dict[int, list[int]], runnable: tuple[int, ...] = ()) -> None:
-    """A /proc of ``pid -> [each thread's wait, ns]``; threads ``runnable`` (tids) in state R."""
-    for pid, threads in waits.items():
-        for i, ns in enumerate(threads):
-            tid = pid + i
-            d = root / str(pid) / "task" / str(tid)
-            d.mkdir(parents=True, exist_ok=True)
-            (d / "schedstat").write_text(f"123 {ns} 7\n")
-            state = "R" if tid in runnable else "S"
-            (d / "stat").write_text(f"{tid} (a (b) c) {state} 1 2 3\n")
+def _fake_proc(root: Path, threads: dict[tuple[int, int], tuple[int, int, int, bool]]) -> None:
+    """A /proc of ``(pid, tid) -> (ns on a CPU, ns waiting, times run, runnable)``."""
+    for (pid, tid), (cpu, wait, slices, runnable) in threads.items():
+        d = root / str(pid) / "task" / str(tid)
+        d.mkdir(parents=True, exist_ok=True)
+        (d / "schedstat").write_text(f"{cpu} {wait} {slices}\n")
+        (d / "stat").write_text(f"{tid} (a (b) c) {'R' if runnable else 'S'} 1 2 3\n")
 
 
-def test_the_probe_sums_threads_and_keeps_counting_across_a_restart(tmp_path: Path) -> None:
+def test_the_probe_takes_the_worst_thread_and_sees_one_stuck_on_the_run_queue(
+        tmp_path: Path) -> None:
     pids = [10, 20]
     probe = WaitProbe(lambda: pids, proc=str(tmp_path))
-    _fake_proc(tmp_path, {10: [1_000_000_000, 500_000_000], 20: [250_000_000]})
-    assert probe.wait() == 0.0  # a running total: it starts at the first reading
-    _fake_proc(tmp_path, {10: [1_200_000_000, 500_000_000], 20: [350_000_000]})
-    assert probe.wait() == pytest.approx(0.3)  # 0.2 + 0.1 s more, over both processes
-    _fake_proc(tmp_path, {10: [1_200_000_000, 500_000_000], 20: [350_000_000]}, (11, 20))
-    got = probe.read()
-    assert got is not None and got.runnable == 2 and got.wait == pytest.approx(0.3)
-    pids[1] = 30  # the node restarted: a new pid whose count starts anew
-    _fake_proc(tmp_path, {30: [5_000_000]})
-    assert probe.wait() == pytest.approx(0.3)  # no jump either way
-    _fake_proc(tmp_path, {30: [105_000_000]})
-    assert probe.wait() == pytest.approx(0.4)
+    ms = 1_000_000
+    _fake_proc(tmp_path, {(10, 10): (5 * ms, 1000 * ms, 9, False),
+                          (10, 11): (5 * ms, 500 * ms, 9, True),
+                          (20, 20): (5 * ms, 250 * ms, 9, True)})
+    assert probe.read() == (0.0, 0)  # a running total: it starts at the first reading
+    # thread 10/11 ran (more CPU, one more slice) and waited 200 ms on the way; 20/20 waited
+    # 100 ms; 10/10 slept: the chain waited as long as its worst thread
+    _fake_proc(tmp_path, {(10, 10): (5 * ms, 1000 * ms, 9, False),
+                          (10, 11): (9 * ms, 700 * ms, 10, True),
+                          (20, 20): (7 * ms, 350 * ms, 10, True)})
+    assert probe.read() == (pytest.approx(0.2), 0)
+    # 20/20 runnable at both readings and got no CPU in between: stuck, its wait not yet
+    # counted by Linux
+    _fake_proc(tmp_path, {(10, 10): (5 * ms, 1000 * ms, 9, False),
+                          (10, 11): (12 * ms, 700 * ms, 11, False),
+                          (20, 20): (7 * ms, 350 * ms, 10, True)})
+    assert probe.read() == (pytest.approx(0.2), 1)
+    pids[1] = 30  # the node restarted: a new pid, whose counts start with it
+    _fake_proc(tmp_path, {(30, 30): (1 * ms, 5 * ms, 1, True)})
+    assert probe.read() == (pytest.approx(0.2), 0)  # no jump either way
+    _fake_proc(tmp_path, {(30, 30): (2 * ms, 105 * ms, 2, False)})
+    assert probe.read() == (pytest.approx(0.3), 0)
+
+
+def test_the_callers_own_thread_is_never_stuck(tmp_path: Path) -> None:
+    me = (os.getpid(), threading.get_native_id())
+    probe = WaitProbe(lambda: [me[0]], proc=str(tmp_path))
+    _fake_proc(tmp_path, {me: (1, 2, 3, True), (me[0], 1): (1, 2, 3, True)})
+    assert probe.read() == (0.0, 0)
+    # runnable (it is reading) and, to its own eyes, no CPU in between; another thread the same
+    assert probe.read() == (0.0, 1)
 
 
 def test_a_topics_chain_is_its_publishers_their_inputs_and_their_devices() -> None:
