@@ -155,12 +155,14 @@ class OwnTime:
 
     def deadline(self, start: float, need: float, cap: float) -> float:
         """When the next tick is due: the first reading, or the earliest the own time could
-        reach ``need`` — while the chain is starved, at least ``confirm / 2`` and an eighth of
-        the gap so far on (a few dozen readings of /proc in a gap up to the cap)."""
+        reach ``need`` — at least ``confirm / 4`` on, and once the gap is past ``need`` in wall
+        time a quarter of the excess (a few dozen readings of /proc in a starved gap up to the
+        cap, not one every few milliseconds)."""
         if self._at is None:
             due = start
         else:
-            step = max(need - self.own, self.confirm / 2, (self._at - self._since) / 8)
+            excess = self._at - self._since - need
+            step = max(need - self.own, self.confirm / 4, excess / 4)
             due = min(cap, self._at + step)
         self._due = due
         return due

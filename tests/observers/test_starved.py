@@ -153,9 +153,9 @@ def test_a_hung_publisher_whose_chain_is_half_starved_is_found_in_its_own_time()
     # counted from the first reading (half the limit), its own time runs at half the wall
     # clock: the rest of the limit and the confirmation take twice as long, and no longer
     first = obs.max_gap / 2
-    # (ticks come as the own time could have got there, 10 ms apart at least)
+    # (ticks come as the own time could have got there, further apart the longer the gap)
     due = last + first + 2 * (obs.max_gap - first + JITTER_S)
-    assert due <= got[1][1] <= due + JITTER_S / 2
+    assert due <= got[1][1] <= due + JITTER_S
 
 
 def test_a_publisher_starved_for_seconds_is_silent_at_the_cap(
