@@ -32,6 +32,7 @@ log's silence lines are printed at the end.
 from __future__ import annotations
 
 import argparse
+import bisect
 import contextlib
 import json
 import os
@@ -41,7 +42,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -63,6 +64,7 @@ class Phase:
     link_drops: dict[str, int] = field(default_factory=dict)  # the client's, by reason
     named: set[str] = field(default_factory=set)
     loads: list[float] = field(default_factory=list)  # the 1-minute load average, every 10 s
+    abnormal: list[tuple[float, float, str]] = field(default_factory=list)  # wall, mono, lit
 
     def load(self) -> str:
         v = sorted(self.loads)
@@ -91,6 +93,50 @@ def hogs(seconds: float) -> Iterator[list[subprocess.Popen[bytes]]]:
             p.wait()
 
 
+class Arrivals(TopicClock):
+    """An independent Zenoh peer that keeps every arrival time (CLOCK_MONOTONIC, as the
+    journal's ``mono``) of the observed topics: was a gap the daemon called silent seen by
+    another subscriber too?"""
+
+    def __init__(self, endpoint: str, topics: list[str]) -> None:
+        self.times: dict[str, list[float]] = {t: [] for t in topics}
+        super().__init__(endpoint, topics)
+
+    def _stamper(self, topic: str) -> Callable[[object], None]:
+        times = self.times[topic]
+
+        def on_sample(_: object) -> None:
+            now = time.monotonic()
+            self.last[topic] = now
+            times.append(now)
+        return on_sample
+
+    def gap(self, topic: str, mono: float) -> tuple[float, float] | None:
+        """The gap around ``mono`` as this peer saw it: (last arrival before, next after)."""
+        times = self.times.get(topic, [])
+        i = bisect.bisect_right(times, mono)
+        return None if i == 0 or i == len(times) else (times[i - 1], times[i])
+
+
+def trace(ph: Phase, peer: Arrivals | None, log: Path | None) -> list[str]:
+    """One line per abnormal literal of a phase: what the independent peer saw of the topic
+    then, and the daemon's own log line about it."""
+    lines = log.read_text(errors="replace").splitlines() if log and log.exists() else []
+    out = []
+    for wall, mono, lit in ph.abnormal:
+        topic = lit[3:-1] if lit.startswith("ok(/") else None
+        seen = peer.gap(topic, mono) if peer is not None and topic else None
+        stamp = time.strftime("%H:%M:%S", time.gmtime(wall))
+        said = [ln for ln in lines if topic and f"frequency:{topic}:" in ln
+                and stamp in ln[:30]]
+        out.append(f"~{lit} at {stamp}: " + (
+            f"the peer saw no {topic} for {1000 * (seen[1] - seen[0]):.0f} ms "
+            f"({1000 * (mono - seen[0]):.0f} ms before the verdict to "
+            f"{1000 * (seen[1] - mono):.0f} ms after)" if seen else "no peer gap")
+            + (f"; daemon: {said[-1].split(': ', 2)[-1]}" if said else ""))
+    return out
+
+
 def watch(d: RunningDaemon, name: str, seconds: float) -> Phase:
     """Leave the healthy robot alone for ``seconds``; what the journal says happened."""
     d.caught_up()
@@ -110,9 +156,11 @@ def watch(d: RunningDaemon, name: str, seconds: float) -> Phase:
         p = e.payload
         if isinstance(p, Observation) and p.literal.startswith("ok(/") and p.value is False:
             ph.flips[p.literal] = ph.flips.get(p.literal, 0) + 1
+            ph.abnormal.append((e.wall, e.mono, p.literal))
         elif isinstance(p, Observation) and p.value is not None and \
                 p.value == p.literal.startswith("tripped("):  # an abnormal reading
             ph.others[p.literal] = ph.others.get(p.literal, 0) + 1
+            ph.abnormal.append((e.wall, e.mono, p.literal))
         elif isinstance(p, DiagnosisRecord) and any(p.diagnoses):
             ph.diagnoses += 1
             ph.named.update(c for bad in p.diagnoses for c in bad)
@@ -188,15 +236,19 @@ def run(idle_s: float, hog_s: float, n_faults: int, keep: Path | None = None,
         ) -> tuple[list[Phase], list[Sample], list[Sample]]:
     phases: list[Phase] = []
     with workdir(keep) as tmp, robot(tmp, own_time) as d:
-        clock = TopicClock(d.zenoh, ["/scan"])
+        clock = Arrivals(d.zenoh, ["/scan", "/imu_data", "/odom", "/cmd_vel", "/map",
+                                   "/thermal/image"])
         try:
             phases.append(watch(d, "idle machine", idle_s))
             idle = hangs(d, clock, idle_faults, "idle machine")
-            with hogs(hog_s + n_faults * 120):
+            with hogs(hog_s + n_faults * SPACING_S):
                 phases.append(watch(d, f"CPU hog on {os.cpu_count()} cores", hog_s))
                 hog = hangs(d, clock, n_faults, "under the hog")
         finally:
             clock.close()
+        for ph in phases:
+            for line in trace(ph, clock, tmp / "daemon.err"):
+                print(f"  trace ({ph.name}): {line}", flush=True)
     return phases, idle, hog
 
 

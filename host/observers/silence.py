@@ -34,6 +34,7 @@ JITTER_S = 0.02  # a silence is confirmed this long after it was noticed, by an 
 JITTER_GAIN = 2.0  # the delay tolerated: this times the worst seen lately
 JITTER_MEMORY_S = 60.0  # how long a delay seen is remembered (a busy spell)
 STARVED_CAP_S = 2.0  # a gap this long past its limit is silence, however starved its publisher
+CATCH_UP = 0.5  # own time a starved chain needs to catch up, per second it waited
 
 
 class ChainState(NamedTuple):
@@ -116,7 +117,10 @@ class OwnTime:
     wait not yet counted: Linux adds it when the thread gets the CPU) is all starved and
     confirms nothing. A tick more than ``JITTER_S`` after its
     deadline means the daemon's loop was stalled (messages may be queued behind it): whatever
-    was counted, a further ``JITTER_S`` of own time is needed. At ``cap`` it is silence however
+    was counted, a further ``JITTER_S`` of own time is needed. A chain that was starved has
+    work to catch up on once it runs again (the frames it missed; the emulator, which plays
+    every device, uses up to half a CPU): ``need`` grows by ``CATCH_UP`` times the wait seen.
+    At ``cap`` it is silence however
     starved the chain.
     """
 
@@ -147,11 +151,14 @@ class OwnTime:
             self.own += dt - starved
             self.starved += starved
         if late:
-            self.own = min(self.own, need - self.confirm)
+            self.own = min(self.own, self._need(need) - self.confirm)
         self._at, self._wait = now, chain.wait
         if now >= cap:
             return True
-        return self.own >= need - 1e-9 and not chain.stuck
+        return self.own >= self._need(need) - 1e-9 and not chain.stuck
+
+    def _need(self, need: float) -> float:
+        return need + CATCH_UP * self.starved
 
     def deadline(self, start: float, need: float, cap: float) -> float:
         """When the next tick is due: the first reading, or the earliest the own time could
@@ -161,6 +168,7 @@ class OwnTime:
         if self._at is None:
             due = start
         else:
+            need = self._need(need)
             excess = self._at - self._since - need
             step = max(need - self.own, self.confirm / 4, excess / 4)
             due = min(cap, self._at + step)

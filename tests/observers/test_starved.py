@@ -19,7 +19,7 @@ import host.atoms as A
 from host.observers import FrequencyObserver, Message
 from host.observers.base import Update
 from host.observers.payload import encode
-from host.observers.silence import JITTER_S, STARVED_CAP_S, ChainState
+from host.observers.silence import CATCH_UP, JITTER_S, STARVED_CAP_S, ChainState
 from host.observers.topics import JITTER_FLOOR_S
 from tests.observers.loaded import Loaded, stalls
 
@@ -118,6 +118,19 @@ def test_a_starved_publishers_gap_past_the_old_bound_is_no_silence(lagging: bool
     assert [ok for ok, _ in verdicts(before)] == [True, False, True]
 
 
+@pytest.mark.parametrize("catch_up", [CATCH_UP, 0.0])
+def test_a_starved_publisher_is_given_time_to_catch_up(
+        catch_up: float, monkeypatch: pytest.MonkeyPatch) -> None:
+    # starved 0.3 s, then 200 ms of its own time to send what it missed (an emulator playing
+    # every device catches up on 30 frames): its own time passes the bare limit meanwhile
+    monkeypatch.setattr("host.observers.silence.CATCH_UP", catch_up)
+    chain = Chain([(10.0, 10.3)])
+    sim = Loaded(scan(chain), [])
+    sim.run(publisher(chain, 0.0, 20.0, resume_s=0.2), 20.0)
+    # without the time to catch up it would be a false silence
+    assert [ok for ok, _ in verdicts(sim)] == ([True] if catch_up else [True, False, True])
+
+
 @pytest.mark.parametrize("seed", [3, 4])
 def test_a_publisher_starved_again_and_again_gets_its_messages_out(seed: int) -> None:
     # spells of up to 0.8 s starved, 0.1-0.5 s apart: long gaps, never a silence
@@ -151,10 +164,12 @@ def test_a_hung_publisher_whose_chain_is_half_starved_is_found_in_its_own_time()
     last = 5.0 - 1 / RATE
     assert [ok for ok, _ in got] == [True, False]
     # counted from the first reading (half the limit), its own time runs at half the wall
-    # clock: the rest of the limit and the confirmation take twice as long, and no longer
-    first = obs.max_gap / 2
+    # clock, and what it needs grows by CATCH_UP times its wait (the work it would catch up
+    # on): the rest of the limit and the confirmation take that much longer, and no longer
     # (ticks come as the own time could have got there, further apart the longer the gap)
-    due = last + first + 2 * (obs.max_gap - first + JITTER_S)
+    first = obs.max_gap / 2
+    net = (1 - 0.5) - CATCH_UP * 0.5  # own time gained less need grown, per second
+    due = last + first + (obs.max_gap - first + JITTER_S) / net
     assert due <= got[1][1] <= due + JITTER_S
 
 
