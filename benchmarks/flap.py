@@ -299,9 +299,10 @@ naming any component (each false: nothing is broken) and repair actions started.
 {hang_line(samples, "under the hog")}
 - Before (issue 18): a headless browser starting beside the daemon flipped `ok(/imu_data)` \
 and `ok(/scan)` about 20 times in a second; only the repair debounce kept them from a repair. \
-The frequency observer now judges the rate on the publishers' stamps and confirms a silence \
-only with its loop awake (`host/observers/topics.py`); the simulated-clock proof is \
-`tests/observers/test_jitter.py`. The board's link rule learns the gaps between readings the \
+The frequency observer now judges the rate on the publishers' stamps and a silence in the \
+publishers' own time, their run-queue wait left out (`host/observers/topics.py`, \
+`host/observers/starvation.py`); the simulated-clock proofs are \
+`tests/observers/test_jitter.py` and `tests/observers/test_starved.py`. The board's link rule learns the gaps between readings the \
 same way (`host/observers/hardware.py`, `tests/observers/test_link_jitter.py`).
 """
 
