@@ -302,8 +302,9 @@ and `ok(/scan)` about 20 times in a second; only the repair debounce kept them f
 The frequency observer now judges the rate on the publishers' stamps and a silence in the \
 publishers' own time, their run-queue wait left out (`host/observers/topics.py`, \
 `host/observers/starvation.py`); the simulated-clock proofs are \
-`tests/observers/test_jitter.py` and `tests/observers/test_starved.py`. The board's link rule learns the gaps between readings the \
-same way (`host/observers/hardware.py`, `tests/observers/test_link_jitter.py`).
+`tests/observers/test_jitter.py` and `tests/observers/test_starved.py`. The board's link \
+rule learns the gaps between readings (`host/observers/hardware.py`, \
+`tests/observers/test_link_jitter.py`).
 """
 
 
