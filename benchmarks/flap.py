@@ -64,7 +64,7 @@ class Phase:
     link_drops: dict[str, int] = field(default_factory=dict)  # the client's, by reason
     named: set[str] = field(default_factory=set)
     loads: list[float] = field(default_factory=list)  # the 1-minute load average, every 10 s
-    abnormal: list[tuple[float, float, str]] = field(default_factory=list)  # wall, mono, lit
+    abnormal: list[tuple[float, float, str]] = field(default_factory=list)  # wall, mono, ±lit
 
     def load(self) -> str:
         v = sorted(self.loads)
@@ -124,12 +124,12 @@ def trace(ph: Phase, peer: Arrivals | None, log: Path | None) -> list[str]:
     lines = log.read_text(errors="replace").splitlines() if log and log.exists() else []
     out = []
     for wall, mono, lit in ph.abnormal:
-        topic = lit[3:-1] if lit.startswith("ok(/") else None
+        topic = lit[4:-1] if lit.startswith("~ok(/") else None
         seen = peer.gap(topic, mono) if peer is not None and topic else None
         stamp = time.strftime("%H:%M:%S", time.gmtime(wall))
         said = [ln for ln in lines if topic and f"frequency:{topic}:" in ln
                 and stamp in ln[:30]]
-        out.append(f"~{lit} at {stamp}: " + (
+        out.append(f"{lit} at {stamp}: " + (
             f"the peer saw no {topic} for {1000 * (seen[1] - seen[0]):.0f} ms "
             f"({1000 * (mono - seen[0]):.0f} ms before the verdict to "
             f"{1000 * (seen[1] - mono):.0f} ms after)" if seen else "no peer gap")
@@ -156,11 +156,11 @@ def watch(d: RunningDaemon, name: str, seconds: float) -> Phase:
         p = e.payload
         if isinstance(p, Observation) and p.literal.startswith("ok(/") and p.value is False:
             ph.flips[p.literal] = ph.flips.get(p.literal, 0) + 1
-            ph.abnormal.append((e.wall, e.mono, p.literal))
+            ph.abnormal.append((e.wall, e.mono, "~" + p.literal))
         elif isinstance(p, Observation) and p.value is not None and \
                 p.value == p.literal.startswith("tripped("):  # an abnormal reading
             ph.others[p.literal] = ph.others.get(p.literal, 0) + 1
-            ph.abnormal.append((e.wall, e.mono, p.literal))
+            ph.abnormal.append((e.wall, e.mono, ("" if p.value else "~") + p.literal))
         elif isinstance(p, DiagnosisRecord) and any(p.diagnoses):
             ph.diagnoses += 1
             ph.named.update(c for bad in p.diagnoses for c in bad)
