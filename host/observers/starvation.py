@@ -152,7 +152,9 @@ def wire_probes(observers: Iterable[object], model: SystemModel,
     nodes (``node_pid``, asked at each reading: a restarted node has a new pid), of the
     processes that feed its devices (``device_pids``: the emulated board's, under
     ``--emulate``; empty for real devices) and ``way_in`` (the daemon's own: its middleware
-    threads receive the messages). Returns what each observed topic was wired to."""
+    threads receive the messages). While none of the publisher's side is known (its node not
+    found yet, no emulated device) the probe reads nothing and the topic is judged as
+    without it. Returns what each observed topic was wired to."""
     way = list(way_in)
     wired: dict[str, tuple[list[str], list[str]]] = {}
     for o in observers:
@@ -165,8 +167,9 @@ def wire_probes(observers: Iterable[object], model: SystemModel,
             continue  # nothing known: judged as before
 
         def lookup(nodes: list[str] = nodes, fed: list[str] = fed) -> list[int]:
-            pids = way + [device_pids[d] for d in fed]
-            return pids + [p for p in map(node_pid, nodes) if p is not None]
+            side = [device_pids[d] for d in fed]
+            side += [p for p in map(node_pid, nodes) if p is not None]
+            return way + side if side else []  # the way in alone says nothing of a publisher
 
         o.probe = WaitProbe(lookup)
         wired[topic] = (nodes, fed)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
@@ -170,8 +171,10 @@ def test_own_time_is_read_checked_and_keeps_a_topic_from_its_probe(tmp_path: Pat
     scan, odom = load_observers(f, model).observers
     assert isinstance(scan, FrequencyObserver) and isinstance(odom, FrequencyObserver)
     assert (scan.own_time, odom.own_time) == (False, True)
-    wired = wire_probes([scan, odom], model, lambda node: 4242, {})
+    wired = wire_probes([scan, odom], model, lambda node: None, {}, way_in=[os.getpid()])
     assert list(wired) == ["/odom"] and scan.probe is None and odom.probe is not None
+    # the daemon alone says nothing of /odom's publisher (jaguar_node, not found yet)
+    assert odom.probe.read() is None
     f = write(tmp_path, "observers:\n  topics:\n    /scan: {rate: 40, own_time: maybe}\n")
     with pytest.raises(ObserverConfigError, match=r"own_time 'maybe' is not true or false"):
         load_observers(f, model)
