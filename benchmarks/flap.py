@@ -46,7 +46,9 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from benchmarks.loop import Sample, TopicClock, ms, one_fault, pct, write_section
+import psutil
+
+from benchmarks.loop import Sample, TopicClock, cpu_of, ms, one_fault, pct, write_section
 from host.journal import ActionRecord, DiagnosisRecord, LinkChange, Observation
 from tests.daemon.runner import RunningDaemon, fast_copy, healthy, key_file
 
@@ -64,6 +66,7 @@ class Phase:
     link_drops: dict[str, int] = field(default_factory=dict)  # the client's, by reason
     named: set[str] = field(default_factory=set)
     loads: list[float] = field(default_factory=list)  # the 1-minute load average, every 10 s
+    daemon_cpu: float = 0.0  # the daemon process's CPU over the phase, percent of one core
     abnormal: list[tuple[float, float, str]] = field(default_factory=list)  # wall, mono, ±lit
 
     def load(self) -> str:
@@ -144,11 +147,14 @@ def watch(d: RunningDaemon, name: str, seconds: float) -> Phase:
     t0 = time.monotonic()
     end = t0 + seconds
     loads = [loadavg()]
+    proc = psutil.Process(d.proc.pid)
+    c0 = cpu_of([proc])
     while (left := end - time.monotonic()) > 0:
         time.sleep(min(left, 10.0))
         loads.append(loadavg())
     d.caught_up()
     ph = Phase(name, time.monotonic() - t0, loads=loads)
+    ph.daemon_cpu = 100 * (cpu_of([proc]) - c0) / ph.seconds
     started: set[str] = set()
     for e in d.journal():
         if e.id <= mark:
@@ -173,7 +179,8 @@ def watch(d: RunningDaemon, name: str, seconds: float) -> Phase:
     print(f"  {name}: {ph.seconds:.0f} s, topic verdicts ~ok {sum(ph.flips.values())} "
           f"{ph.flips or ''}, other abnormal literals {ph.others or 0}, false diagnoses "
           f"{ph.diagnoses} naming {sorted(ph.named)}, repairs {ph.repairs}, the client's link "
-          f"drops {ph.link_drops or 0}, load average (1 min) min/median/max {ph.load()}",
+          f"drops {ph.link_drops or 0}, load average (1 min) min/median/max {ph.load()}, "
+          f"the daemon's CPU {ph.daemon_cpu:.1f} % of one core",
           flush=True)
     return ph
 
