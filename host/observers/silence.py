@@ -132,6 +132,7 @@ class OwnTime:
         self._wait = 0.0
         self._due: float | None = None
         self._since = 0.0
+        self.capped = False  # the last silence was called at the cap, the chain starved
 
     def reset(self) -> None:
         """An input arrived: whatever gap was being counted has ended."""
@@ -153,9 +154,9 @@ class OwnTime:
         if late:
             self.own = min(self.own, self._need(need) - self.confirm)
         self._at, self._wait = now, chain.wait
-        if now >= cap:
-            return True
-        return self.own >= self._need(need) - 1e-9 and not chain.stuck
+        confirmed = self.own >= self._need(need) - 1e-9 and not chain.stuck
+        self.capped = now >= cap and not confirmed
+        return confirmed or now >= cap
 
     def _need(self, need: float) -> float:
         return need + CATCH_UP * self.starved

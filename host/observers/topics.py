@@ -33,12 +33,12 @@ Judged by the messages' own timing, so a busy machine is not a rate drop (no fla
   ``host.observers.starvation``) the silence is judged in the *publisher's own time*
   instead, which tells a starved publisher from a hung one: the gap less the time those
   processes' most starved thread spent runnable but waiting for a CPU (Linux schedstat) must
-  reach ``silence / mu + JITTER_S``, confirmed at a tick when none of their threads is stuck
-  on the run queue;
-  no learned allowance, no floor. A hung publisher sleeps, so it is found at that limit; a
-  starved one is excused while it waits on the run queue, up to ``STARVED_CAP_S`` (2 s) past
-  ``silence / mu`` — a publisher starved for seconds is reported all the same, and the log line
-  says which of the two it was. Where no process is known or ``/proc`` cannot be read, the
+  reach ``silence / mu + JITTER_S`` (plus ``CATCH_UP`` times the wait seen: what a starved
+  chain has to catch up on), confirmed at a tick when none of their threads is stuck on the
+  run queue; no learned allowance, no floor. A hung publisher sleeps, so it is found at that
+  limit; a starved one is excused while it waits on the run queue, up to ``STARVED_CAP_S``
+  (2 s) past ``silence / mu`` — a publisher starved for seconds is reported all the same, and
+  the log line says which of the two it was. Where no process is known or ``/proc`` cannot be read, the
   gap is judged by the allowance above; ``own_time: false`` in ``system.yaml`` asks for that.
 
 ``ResponseObserver`` is the multiple observer MObs: after a message on ``input``, a message on
@@ -224,7 +224,7 @@ class FrequencyObserver(TopicObserver):
         """Log a silence judged in the publisher's own time: confirmed, or at the cap."""
         own = self._own
         level = logging.WARNING if self._arrived is not None else logging.INFO  # once heard
-        if own.own >= self.max_gap + own.confirm - 1e-9:
+        if not own.capped:
             log.log(level, "%s: silent, no message for %.3f s (%.3f s of it the publisher's "
                     "own time, %.3f s its run-queue wait)", self.name, gap, own.own,
                     own.starved)
