@@ -38,8 +38,9 @@ Judged by the messages' own timing, so a busy machine is not a rate drop (no fla
   run queue; no learned allowance, no floor. A hung publisher sleeps, so it is found at that
   limit; a starved one is excused while it waits on the run queue, up to ``STARVED_CAP_S``
   (2 s) past ``silence / mu`` — a publisher starved for seconds is reported all the same, and
-  the log line says which of the two it was. Where no process is known or ``/proc`` cannot be read, the
-  gap is judged by the allowance above; ``own_time: false`` in ``system.yaml`` asks for that.
+  the log line says which of the two it was. Where no process is known or ``/proc`` cannot
+  be read, the gap is judged by the allowance above; ``own_time: false`` in ``system.yaml``
+  asks for that.
 
 ``ResponseObserver`` is the multiple observer MObs: after a message on ``input``, a message on
 ``output`` must follow within ``within`` seconds; it emits ``ok(output)`` when one does and
