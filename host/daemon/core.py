@@ -26,6 +26,7 @@ import asyncio
 import contextlib
 import dataclasses
 import logging
+import os
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -58,6 +59,7 @@ from host.journal.summary import Replay
 from host.observers import ObserverHub, check_atoms, load_observers
 from host.observers.base import Update
 from host.observers.config import ObserversConfig, SourceSpec
+from host.observers.starvation import wire_probes
 from host.operator.server import OperatorServer
 from host.repair import service
 from host.repair.planner import RepairPlanner
@@ -94,6 +96,7 @@ class DaemonOptions:
     max_parallel_steps: int | None = None  # repair steps at once; None: as the plan allows
     device_boot_s: Mapping[str, float] = field(default_factory=dict)  # settle times of devices
     operator: Path | None = None  # the operator socket (quarantine, hold); None: none
+    device_pids: Mapping[str, int] = field(default_factory=dict)  # process feeding a device
 
 
 @dataclass(frozen=True)
@@ -232,6 +235,12 @@ class Daemon:
                                                 self.lifecycle.reconfigure_node)
         await self.hub.start(self.source, self.observers_cfg.processes,
                              poll=self.observers_cfg.poll)
+        watcher = self.hub.watcher
+        wired = wire_probes(self.hub.observers, self.model,
+                            watcher.pid if watcher is not None else lambda _: None,
+                            opts.device_pids, way_in=[os.getpid()])
+        log.info("silences judged in the publishers' own time: %s", ", ".join(
+            f"{t} ({' '.join(n + f)})" for t, (n, f) in wired.items()) or "none")
         await self.repairs.adopt()
         self._tasks = [asyncio.ensure_future(t) for t in (
             self._board_task(), self.diagnosis.task(), self._sample_task())]

@@ -98,10 +98,11 @@ class LaunchedRobot:
                 _check_free(host, int(port), "--control")
         journal = Journal(opts.journal) if opts.journal is not None else None  # one writer
         try:
-            board_url, key, env, boot = await self._board(opts)
+            board_url, key, env, boot, fed = await self._board(opts)
             opts = dataclasses.replace(opts, board_url=board_url, key=key,
                                        node_env={**opts.node_env, **env},
-                                       device_boot_s={**boot, **opts.device_boot_s})
+                                       device_boot_s={**boot, **opts.device_boot_s},
+                                       device_pids={**fed, **opts.device_pids})
             self._daemon = Daemon(opts, files=files)
             if journal is not None:
                 self._daemon.attach_journal(journal)
@@ -116,11 +117,13 @@ class LaunchedRobot:
             raise
         return self
 
-    async def _board(self, opts: DaemonOptions
-                     ) -> tuple[str, bytes | None, dict[str, str], dict[str, float]]:
+    async def _board(self, opts: DaemonOptions) -> tuple[
+            str, bytes | None, dict[str, str], dict[str, float], dict[str, int]]:
+        """The board's URL and key, the nodes' environment, the devices' boot times and the
+        pid of the process that emulates each device (its starvation is the topics')."""
         la = self.launch
         if la.board_url is not None:
-            return la.board_url, la.key, {}, {}
+            return la.board_url, la.key, {}, {}, {}
         extra = la.emulate_args
         if (la.system_dir / "robot.yaml").is_file() and "--robot" not in extra:
             extra = ("--robot", *extra)
@@ -129,7 +132,7 @@ class LaunchedRobot:
         hello = await arequest(emu.control_url, {"op": "hello"})
         boot = {str(k): float(v) / 1000.0 for k, v in dict(hello.get("boot_ms", {})).items()}
         env = {"DXBOARD_DEVICES": json.dumps(emu.devices)} if emu.devices else {}
-        return emu.board_url, emu.key, env, boot
+        return emu.board_url, emu.key, env, boot, {d: emu.process.pid for d in emu.devices}
 
     async def __aexit__(self, exc_type: type[BaseException] | None,
                         exc: BaseException | None, tb: TracebackType | None) -> None:

@@ -18,6 +18,7 @@
         hokuyo_node: {graph: true}                    # ROS 2 source: present in the ROS 2 graph
       topics:                 # general observer: ok(/t) iff |f - rate| < tolerance over window
         /odom: {rate: 10, tolerance: 3, window: 1.0, silence: 5}   # silence in periods
+        /scan: {rate: 40, tolerance: 10, window: 0.5, own_time: false}   # see below
       trends:                 # qualitative observer: inc/dec/const(v), slope b per second
         odom_yaw_rate: {topic: /odom, key: twist.angular.z, window: 1.0, slope: 0.05}
       matched: [[odom_yaw_rate, imu_yaw_rate]]          # binary qualitative: matched(v1,v2)
@@ -28,6 +29,8 @@
       responses:              # multiple observer: output within a time limit of its input
         - {input: /cmd_vel, output: /odom, within: 0.5}               # -> ok(/odom)
 
+A topic's silence is judged in its publishers' own time where the daemon knows their processes
+(``host.observers.starvation``); ``own_time: false`` judges it by the delay seen lately alone.
 Any entry may override ``refresh`` and ``validity``. With a ``SystemModel`` the loader checks
 names against it (nodes are node components, topics are published, the hardware observer
 watches every switchable device with its channel and current band); without one,
@@ -353,7 +356,8 @@ class _Builder:
         out: list[Observer[Any]] = []
         for topic, spec in (topics or {}).items():
             p = ("topics", topic)
-            s = self.mapping(p, spec, {"rate", "tolerance", "window", "silence", *_TIMING},
+            s = self.mapping(p, spec, {"rate", "tolerance", "window", "silence", "own_time",
+                                       *_TIMING},
                              "{rate: 10, tolerance: 3, window: 1.0}")
             if s is None or self.topic(p, topic) is None:
                 continue
@@ -369,8 +373,14 @@ class _Builder:
                 self.err((*p, "window"), f"window {window:g} s holds fewer than 2 messages at "
                          f"{rate:g} Hz", f"give window: {2 / rate:g} or more")
                 continue
+            own_time = s.get("own_time", True)
+            if not isinstance(own_time, bool):
+                self.err((*p, "own_time"), f"own_time {own_time!r} is not true or false",
+                         "give own_time: false to judge silence without the publishers' "
+                         "run-queue wait, or leave it out")
+                continue
             out.append(FrequencyObserver(topic, rate, tol or rate * 0.3, window, silence,
-                                         **self.timing(p, s)))
+                                         own_time=own_time, **self.timing(p, s)))
         return out
 
     def _trends(self, value: Any, obs: list[Observer[Any]]) -> dict[str, tuple[ValueRef, dict[

@@ -27,7 +27,20 @@ Judged by the messages' own timing, so a busy machine is not a rate drop (no fla
   stalled (messages may be queued behind it), so the confirmation starts again. However
   stalled the loop, a gap of ``silence / mu + ω`` is judged silent at once: a silent or slow
   publisher is found within the window (``host.observers.silence``, shared with the board's
-  link rule).
+  link rule);
+- where the daemon knows the processes the topic's messages depend on (``probe``: the nodes
+  that publish it and its inputs, the process that feeds their devices, the daemon itself;
+  ``host.observers.starvation``) the silence is judged in the *publisher's own time*
+  instead, which tells a starved publisher from a hung one: the gap less the time those
+  processes' most starved thread spent runnable but waiting for a CPU (Linux schedstat) must
+  reach ``silence / mu + JITTER_S`` (plus ``CATCH_UP`` times the wait seen: what a starved
+  chain has to catch up on), confirmed at a tick when none of their threads is stuck on the
+  run queue; no learned allowance, no floor. A hung publisher sleeps, so it is found at that
+  limit; a starved one is excused while it waits on the run queue, up to ``STARVED_CAP_S``
+  (2 s) past ``silence / mu`` — a publisher starved for seconds is reported all the same, and
+  the log line says which of the two it was. Where no process is known or ``/proc`` cannot
+  be read, the gap is judged by the allowance above; ``own_time: false`` in ``system.yaml``
+  asks for that.
 
 ``ResponseObserver`` is the multiple observer MObs: after a message on ``input``, a message on
 ``output`` must follow within ``within`` seconds; it emits ``ok(output)`` when one does and
@@ -35,9 +48,13 @@ Judged by the messages' own timing, so a busy machine is not a rate drop (no fla
 
 Detection latency (from the fault to the literal, plus the hub's scheduling delay):
 
-- topic silent: ``silence / mu + allowance + JITTER_S`` after the last message (5 periods by
-  default; on a quiet machine 170 ms at 100 Hz, 0.62 s at 10 Hz; at most ``silence / mu + ω``;
-  the original engine needed 2 s);
+- topic silent, judged in the publisher's own time: ``silence / mu + JITTER_S`` after the
+  last message while the publisher is not starved (5 periods by default: 145 ms at /scan's
+  40 Hz, 70 ms at 100 Hz), longer by the time it waits for a CPU, at most ``silence / mu +
+  STARVED_CAP_S``;
+- topic silent, judged without it: ``silence / mu + allowance + JITTER_S`` after the last
+  message (on a quiet machine 170 ms at 100 Hz, 0.62 s at 10 Hz; at most ``silence / mu +
+  ω``; the original engine needed 2 s);
 - rate wrong but not zero: one message interval once the window holds only the new regime,
   at most ``ω`` plus an interval;
 - response missing: exactly ``within`` after the unanswered input; a response: at once.
@@ -45,7 +62,9 @@ Detection latency (from the fault to the literal, plus the hub's scheduling dela
 
 from __future__ import annotations
 
+import logging
 from collections import deque
+from typing import Protocol
 
 import host.atoms as A
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
@@ -53,13 +72,25 @@ from host.observers.payload import Message
 from host.observers.silence import (
     JITTER_GAIN,
     JITTER_MEMORY_S,
+    STARVED_CAP_S,
+    ChainState,
     Confirmation,
+    OwnTime,
     SlidingExtreme,
 )
+
+log = logging.getLogger(__name__)
 
 DEFAULT_SILENCE = 5.0  # periods without a message before a topic counts as silent
 JITTER_FLOOR_S = 0.1  # the least delay tolerated on the way from a publisher to us
 GAP = 1.5  # periods: a message after a longer gap may head a delayed burst
+
+
+class ChainReader(Protocol):
+    """A topic's publisher chain: its run-queue wait so far and its threads stuck on the run
+    queue now, or None when it cannot be read (``host.observers.starvation.WaitProbe``)."""
+
+    def read(self) -> ChainState | None: ...
 
 
 class TopicObserver(Observer[Message]):
@@ -75,7 +106,7 @@ class FrequencyObserver(TopicObserver):
     def __init__(self, topic: str, rate: float, tolerance: float, window: float = 1.0,
                  silence: float = DEFAULT_SILENCE, atom: str | None = None, *,
                  name: str | None = None, validity: float = DEFAULT_VALIDITY,
-                 refresh: float = DEFAULT_REFRESH) -> None:
+                 refresh: float = DEFAULT_REFRESH, own_time: bool = True) -> None:
         super().__init__(name or f"frequency:{topic}", validity, refresh)
         if rate <= 0 or tolerance <= 0 or window * rate < 2 or silence <= 0:
             raise ValueError(f"{self.name}: need rate > 0, tolerance > 0, silence > 0 and "
@@ -95,6 +126,12 @@ class FrequencyObserver(TopicObserver):
         self._fastest = SlidingExtreme(JITTER_MEMORY_S, greatest=False)  # arrival - stamp
         self._delays = SlidingExtreme(JITTER_MEMORY_S, greatest=True)  # delay beyond that
         self.frequency: float | None = None  # the last estimate, for journals and tests
+        #: the publisher chain's run-queue wait (``host.observers.starvation.WaitProbe``), set
+        #: by the daemon where it knows the publisher's processes; None: judged without it
+        self.probe: ChainReader | None = None
+        self.own_time = own_time  # False: never given a probe (system.yaml ``own_time``)
+        self._own = OwnTime()  # a silence confirmed in the publisher's own time
+        self._unprobed = False  # this gap: the probe could not be read, judged without it
 
     def atoms(self) -> list[str]:
         return [self.atom]
@@ -113,6 +150,8 @@ class FrequencyObserver(TopicObserver):
         gap = None if self._arrived is None else now - self._arrived
         self._arrived = now
         self._confirm.reset()
+        self._own.reset()
+        self._unprobed = False
         stamp = item.stamp
         stamped = stamp is not None
         t = stamp if stamp is not None else now
@@ -160,9 +199,44 @@ class FrequencyObserver(TopicObserver):
         since = self._silent_since()
         if since is None or self.asserted.get(self.atom) is False:
             return
+        if self._probed():
+            start, need, cap = self._own_bounds(since)
+            if now < start:
+                return
+            chain = self.probe.read() if self.probe is not None else None
+            if chain is not None:
+                if self._own.silent(now, chain, since, need, cap):
+                    self._say_why(now - since)
+                    self._silent(now)
+                return
+            self._unprobed = True  # no pid, or /proc unreadable: judged as without a probe
         if self._confirm.silent(now, since + self.max_gap + self.allowance,
                                 since + self.max_gap + self.window):
             self._silent(now)
+
+    def _own_bounds(self, since: float) -> tuple[float, float, float]:
+        """For a gap judged in the publisher's own time: when to read the probe first (half
+        the silence limit), the own time that is silence (the limit plus ``JITTER_S``), and
+        the cap in wall time."""
+        return (since + self.max_gap / 2, self.max_gap + self._own.confirm,
+                since + self.max_gap + STARVED_CAP_S)
+
+    def _say_why(self, gap: float) -> None:
+        """Log a silence judged in the publisher's own time: confirmed, or at the cap."""
+        own = self._own
+        level = logging.WARNING if self._arrived is not None else logging.INFO  # once heard
+        if not own.capped:
+            log.log(level, "%s: silent, no message for %.3f s (%.3f s of it the publisher's "
+                    "own time, %.3f s its run-queue wait)", self.name, gap, own.own,
+                    own.starved)
+        else:
+            log.log(level, "%s: silent at the cap, no message for %.3f s although the "
+                    "publisher was starved (%.3f s of it its run-queue wait)", self.name,
+                    gap, own.starved)
+
+    def _probed(self) -> bool:
+        """Is this gap judged in the publisher's own time?"""
+        return self.probe is not None and not self._unprobed
 
     def _silent(self, now: float) -> None:
         self.frequency = 0.0
@@ -172,7 +246,10 @@ class FrequencyObserver(TopicObserver):
         times = [] if self._judge_at is None else [self._judge_at]
         since = self._silent_since()
         if since is not None and self.asserted.get(self.atom) is not False:
-            times.append(self._confirm.deadline(since + self.max_gap + self.allowance))
+            if self._probed():
+                times.append(self._own.deadline(*self._own_bounds(since)))
+            else:
+                times.append(self._confirm.deadline(since + self.max_gap + self.allowance))
         return min(times) if times else None
 
 

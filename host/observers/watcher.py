@@ -95,6 +95,11 @@ class ProcessWatcher:
             return
         self._wake.set()
 
+    def pid(self, node: str) -> int | None:
+        """The pid of ``node``'s process as last found (None: not running, or not found yet)."""
+        t = self._tracked.get(node)
+        return None if t is None else t.proc.pid
+
     # -- the loop --------------------------------------------------------------------------
     async def _run(self) -> None:
         while True:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
@@ -160,3 +161,20 @@ def test_the_link_slack_is_read_and_checked(tmp_path: Path) -> None:
     # the default: the link limit may grow by 0.75 s on a busy machine
     hw = load_observers(TEDUSAR / "system.yaml", load_system(TEDUSAR)).observers[0]
     assert isinstance(hw, HardwareObserver) and hw.link_slack == 0.75
+
+
+def test_own_time_is_read_checked_and_keeps_a_topic_from_its_probe(tmp_path: Path) -> None:
+    from host.observers.starvation import wire_probes
+    f = write(tmp_path, "observers:\n  topics:\n    /scan: {rate: 40, own_time: false}\n"
+              "    /odom: {rate: 20}\n")
+    model = load_system(f)
+    scan, odom = load_observers(f, model).observers
+    assert isinstance(scan, FrequencyObserver) and isinstance(odom, FrequencyObserver)
+    assert (scan.own_time, odom.own_time) == (False, True)
+    wired = wire_probes([scan, odom], model, lambda node: None, {}, way_in=[os.getpid()])
+    assert list(wired) == ["/odom"] and scan.probe is None and odom.probe is not None
+    # the daemon alone says nothing of /odom's publisher (jaguar_node, not found yet)
+    assert odom.probe.read() is None
+    f = write(tmp_path, "observers:\n  topics:\n    /scan: {rate: 40, own_time: maybe}\n")
+    with pytest.raises(ObserverConfigError, match=r"own_time 'maybe' is not true or false"):
+        load_observers(f, model)
