@@ -6,7 +6,8 @@ received, in batches and however the bytes were cut (a burst far beyond the code
 one write); a frame cut off by the end of the connection is a truncated frame, then a lost
 link; a reset connection is a lost link naming the reset; reading pauses while nobody reads
 (back-pressure) and loses nothing; the key is proved at open; a write to a closed link is a
-lost link. Then the board client over ``tcp://`` against ``dxboard emulate``.
+lost link; a dropped connection is reconnected and the subscription restored. Then the board
+client over ``tcp://`` against ``dxboard emulate``.
 """
 
 from __future__ import annotations
@@ -19,14 +20,14 @@ from collections.abc import AsyncIterator, Awaitable, Callable
 
 import pytest
 
-from host.board import BoardClient, LinkDown, Reading
+from host.board import BoardClient, LinkDown, LinkUp, Reading, Rebooted
 from host.transports import open_transport
 from host.transports.errors import LinkLost
 from host.transports.tcp import QUEUE_HIGH, TcpTransport
 from protocol.connection import BOARD, Connection
 from protocol.constants import E_TRUNCATED
 from protocol.framing import BadFrame
-from protocol.messages import AuthPing, Measurement, Message, Ping, Pong
+from protocol.messages import Ack, AuthPing, Measurement, Message, Ping, Pong, Subscribe
 from tests.host.emulate import KEY_HEX, Emulate
 from tests.protocol.util import hello
 from tests.wait import wait_until_async
@@ -198,6 +199,67 @@ async def test_the_key_is_proved_at_open() -> None:
         assert t.key_check == "accepted"
         msg = await asyncio.wait_for(t.receive(), 60)  # the push was kept for the reader
         assert isinstance(msg, Measurement) and msg.seq == 1
+
+
+async def test_a_dropped_connection_is_reconnected_and_readings_resume() -> None:
+    sessions: list[Connection] = []
+
+    async def script(conn: Connection, reader: asyncio.StreamReader,
+                     writer: asyncio.StreamWriter) -> None:
+        first = not sessions
+        sessions.append(conn)
+        loop = asyncio.get_running_loop()
+
+        async def stream() -> None:  # 100 Hz, the board's clock running; the first drops at 20
+            for seq in range(1, 21 if first else 1 << 30):
+                uptime = int(loop.time() * 1000) + seq  # never repeats: news every time
+                writer.write(conn.send(Measurement(seq, uptime, 24000, 1, 0, [seq] * 10)))
+                await asyncio.sleep(0.01)
+
+        streaming: asyncio.Task[None] | None = None
+        try:
+            while data := await reader.read(4096):
+                conn.receive_data(data)
+                for ev in conn.events():
+                    if isinstance(ev, Subscribe):
+                        writer.write(conn.send(Ack(Subscribe.TYPE, req_id=ev.req_id)))
+                        if streaming is None:
+                            streaming = asyncio.create_task(stream())
+                    elif isinstance(ev, Ping):
+                        writer.write(conn.send(Pong(ev.token, 1, req_id=ev.req_id)))
+                if first and streaming is not None:
+                    await streaming
+                    return  # the connection drops (a pulled cable), the board keeps its boot
+        finally:
+            if streaming is not None:
+                streaming.cancel()
+
+    items: list[object] = []
+    async with serve(script) as url:
+        c = BoardClient(url, None, backoff_s=0.05, max_backoff_s=0.2)
+        await c.connect()
+        first_transport = c.transport
+
+        async def consume() -> None:
+            async for item in c.subscribe(100):
+                items.append(item)
+
+        task = asyncio.create_task(consume())
+        await wait_until_async(
+            lambda: LinkUp in [type(x) for x in items]
+            and sum(isinstance(x, Reading) for x in items) >= 40,
+            what="readings again after the reconnect", show=lambda: items[-3:])
+        task.cancel()
+        await c.close()
+    kinds = [type(x) for x in items]
+    down, up = kinds.index(LinkDown), kinds.index(LinkUp)
+    assert down < up and Rebooted not in kinds and c.reboots == 0
+    assert "closed the link" in items[down].reason  # type: ignore[attr-defined]
+    before = [x.seq for x in items[:down] if isinstance(x, Reading)]
+    after = [x.seq for x in items[down:] if isinstance(x, Reading)]
+    assert before == list(range(1, 21))  # every reading of the first connection
+    assert after == list(range(1, len(after) + 1))  # the new session's, from 1, no gap
+    assert c.transport is not first_transport and len(sessions) == 2
 
 
 async def test_the_board_client_over_tcp_against_the_emulator() -> None:
