@@ -1,9 +1,12 @@
 """``tcp://HOST:PORT``: the native protocol over TCP (the board's own network front end).
 
-URL grammar: ``tcp://HOST:PORT`` (HOST a name, an IPv4 address or ``[IPv6]``); a bare
-``HOST:PORT`` means the same. No query parameters. The board greets every new connection with
-HELLO, and one connection is one session: when the board reboots the connection drops, and the
-board client reconnects and sees the new boot id.
+URL grammar: ``tcp://HOST:PORT[?hold_ms=N]`` (HOST a name, an IPv4 address or ``[IPv6]``);
+a bare ``HOST:PORT`` means the same. ``hold_ms`` (0-100, default 0: off) trades latency for
+CPU: after each arrival the socket is left unread for N ms, so that what the board sends
+meanwhile arrives as one batch (at 100 Hz and 20 ms, two or three readings a wake-up instead
+of one); every message, a reply or an event too, may reach the host up to N ms later. The
+board greets every new connection with HELLO, and one connection is one session: when the board
+reboots the connection drops, and the board client reconnects and sees the new boot id.
 
 Theory of operation. The socket is an ``asyncio.Protocol`` (``_Link``), not a stream pair: a
 board pushes a hundred measurements a second, and every one that passed through a
@@ -16,6 +19,8 @@ while more than ``QUEUE_HIGH`` wait, until the queue drains to half (back-pressu
 (``BadFrame`` E_TRUNCATED, handed up first), then ends the pump and every read: ``LinkLost``,
 "the board closed the link" on an orderly end, the socket's error otherwise. Writes wait while
 the socket's send buffer is full (``pause_writing``) and fail once the connection is lost.
+With ``hold_ms``, reading pauses after each batch handed to the pump and resumes by a timer;
+the end of the connection is then seen when reading resumes.
 """
 
 from __future__ import annotations
@@ -66,8 +71,10 @@ class TcpTransport(StreamTransport):
 
     def __init__(self, url: BoardUrl, key: bytes | None = None) -> None:
         super().__init__(url, key)
-        url.check_params(())
+        url.check_params(("hold_ms",))
         self.address = url.need_host_port("tcp://HOST:PORT, e.g. tcp://192.168.0.7:4840")
+        self.hold_s = url.int_param("hold_ms", 0, 0, 100) / 1000
+        self._held: asyncio.TimerHandle | None = None  # reading held until this fires
         self._sock: asyncio.Transport | None = None
         self._error: OSError | None = None  # why the connection ended, if not orderly
         self._paused = False  # reading paused: too many messages queued
@@ -106,6 +113,9 @@ class TcpTransport(StreamTransport):
                 deliver(batch)
             except Exception as exc:  # the receiver's own failure ends its pump, not the loop
                 self._end_pump(exc)
+            if self.hold_s and self._held is None and self._sock is not None:
+                self._sock.pause_reading()
+                self._held = asyncio.get_running_loop().call_later(self.hold_s, self._release)
             return
         self._events.extend(batch)
         waiter = self._waiter
@@ -115,8 +125,17 @@ class TcpTransport(StreamTransport):
             self._paused = True
             self._sock.pause_reading()
 
+    def _release(self) -> None:
+        """The hold is over: read again (unless the queue holds reading back)."""
+        self._held = None
+        if self._sock is not None and not self._paused:
+            self._sock.resume_reading()
+
     def _lost(self, exc: Exception | None) -> None:
         self._sock = None
+        if self._held is not None:
+            self._held.cancel()
+            self._held = None
         self.conn.receive_data(b"")  # a frame cut off by the end of the connection
         tail = self.conn.events()
         if tail:
@@ -174,7 +193,8 @@ class TcpTransport(StreamTransport):
     def _resume_reading(self) -> None:
         if self._paused and len(self._events) <= QUEUE_HIGH // 2 and self._sock is not None:
             self._paused = False
-            self._sock.resume_reading()
+            if self._held is None:
+                self._sock.resume_reading()
 
     async def _pump(self, deliver: Callable[[Batch], None]) -> None:
         while self._events:  # what arrived before the pump started, first
@@ -207,6 +227,9 @@ class TcpTransport(StreamTransport):
 
     async def _disconnect(self) -> None:
         sock, self._sock = self._sock, None
+        if self._held is not None:
+            self._held.cancel()
+            self._held = None
         if sock is not None:
             sock.close()
         if self._gone is not None:

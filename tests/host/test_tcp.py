@@ -6,8 +6,9 @@ received, in batches and however the bytes were cut (a burst far beyond the code
 one write); a frame cut off by the end of the connection is a truncated frame, then a lost
 link; a reset connection is a lost link naming the reset; reading pauses while nobody reads
 (back-pressure) and loses nothing; the key is proved at open; a write to a closed link is a
-lost link; a dropped connection is reconnected and the subscription restored. Then the board
-client over ``tcp://`` against ``dxboard emulate``.
+lost link; a dropped connection is reconnected and the subscription restored; ``hold_ms``
+leaves the socket unread after each batch and loses nothing. Then the board client over
+``tcp://`` against ``dxboard emulate``.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ import pytest
 
 from host.board import BoardClient, LinkDown, LinkUp, Reading, Rebooted
 from host.transports import open_transport
-from host.transports.errors import LinkLost
+from host.transports.errors import BadUrl, LinkLost
 from host.transports.tcp import QUEUE_HIGH, TcpTransport
 from protocol.connection import BOARD, Connection
 from protocol.constants import E_TRUNCATED
@@ -260,6 +261,44 @@ async def test_a_dropped_connection_is_reconnected_and_readings_resume() -> None
     assert before == list(range(1, 21))  # every reading of the first connection
     assert after == list(range(1, len(after) + 1))  # the new session's, from 1, no gap
     assert c.transport is not first_transport and len(sessions) == 2
+
+
+async def test_hold_ms_leaves_the_socket_unread_after_each_batch_and_loses_nothing() -> None:
+    n = 60
+
+    async def script(conn: Connection, reader: asyncio.StreamReader,
+                     writer: asyncio.StreamWriter) -> None:
+        await reader.read(4096)  # the host's PING: it is pumping
+        for seq in range(1, n + 1):  # 100 Hz, as a board sends
+            writer.write(conn.send(measurement(seq)))
+            await asyncio.sleep(0.01)
+        await until_closed(reader)
+
+    with pytest.raises(BadUrl, match=r"hold_ms='500' is not a number in 0\.\.100"):
+        open_transport("tcp://127.0.0.1:9?hold_ms=500")
+    async with serve(script) as url:
+        t = open_transport(url + "?hold_ms=30")
+        assert isinstance(t, TcpTransport) and t.hold_s == 0.03
+        await t.open()
+        sock = t._sock
+        assert sock is not None
+        loop = asyncio.get_running_loop()
+        seqs: list[int] = []
+        reading_after: list[bool] = []  # was the socket read right after a batch?
+
+        def deliver(batch: list[Message | BadFrame]) -> None:
+            seqs.extend(m.seq for m in batch if isinstance(m, Measurement))
+            loop.call_soon(lambda: reading_after.append(sock.is_reading()))
+
+        await t.send(Ping(1, req_id=5))
+        pumping = asyncio.ensure_future(t.pump(deliver))
+        await wait_until_async(lambda: len(seqs) >= n, what=f"{n} readings",
+                               show=lambda: seqs[-3:])
+        pumping.cancel()
+        await asyncio.wait([pumping])
+        await t.close()
+    assert seqs == list(range(1, n + 1))
+    assert reading_after and not any(reading_after)  # held after every batch, then resumed
 
 
 async def test_the_board_client_over_tcp_against_the_emulator() -> None:
