@@ -1,7 +1,7 @@
 """Ten boards into one host: the daemon's per-board pipeline, its CPU beside one board's.
 
     .venv/bin/python -m benchmarks.boards [--boards N] [--seconds S] [--rounds R] [--rate HZ]
-        [--label TEXT] [--write]
+        [--hold-ms MS] [--label TEXT] [--write]
 
 The daemon handles one board; this measures what one board costs it, ten times over in one
 process, as the daemon wires it (``host.daemon.core``): per board a ``BoardClient`` subscribed
@@ -22,7 +22,8 @@ For each phase: this process's CPU (user + system, psutil, every thread: the dia
 too) as a share of one core, readings received a second, readings missed (the gaps in the
 boards' numbering plus those the host dropped, ``Reading.missed``); at the end of the last
 phase one injected overcurrent of laser_alignment per board: fault → the first diagnosis
-naming it. Target
+naming it. ``--hold-ms`` opens the boards as ``tcp://...?hold_ms=MS`` (reading held that long
+after each arrival: fewer wake-ups, that much more latency). Target
 (issue 18, item 2): ten boards x 10 channels x 100 Hz at <= 5 % of one core, 0 missed.
 ``--write`` replaces the '### Ten boards' part of the '## Daemon loop' section of
 benchmarks/RESULTS.md (or appends it there).
@@ -146,10 +147,11 @@ async def clear(control: str) -> None:
 
 
 async def phase(boards: list[tuple[subprocess.Popen[str], dict[str, str]]],
-                seconds: float, rate_hz: int, faults: bool) -> PhaseResult:
+                seconds: float, rate_hz: int, faults: bool, hold_ms: int = 0) -> PhaseResult:
     """The pipelines of ``boards`` for ``seconds``, then (``faults``) one fault per board."""
     res = PhaseResult(len(boards))
-    pipes = [Pipeline(urls["board"], rate_hz) for _, urls in boards]
+    hold = f"?hold_ms={hold_ms}" if hold_ms else ""
+    pipes = [Pipeline(urls["board"] + hold, rate_hz) for _, urls in boards]
     tasks = [asyncio.ensure_future(p.run()) for p in pipes]
     try:
         await asyncio.sleep(SETTLE_S)
@@ -184,7 +186,7 @@ async def phase(boards: list[tuple[subprocess.Popen[str], dict[str, str]]],
     return res
 
 
-async def run(n: int, seconds: float, rate_hz: int, rounds: int
+async def run(n: int, seconds: float, rate_hz: int, rounds: int, hold_ms: int = 0
               ) -> tuple[list[PhaseResult], list[PhaseResult]]:
     """``rounds`` times one board then every board, interleaved (the machine's load drifts:
     each kind sees the same drift); the faults at the very end (a tripped channel stays so)."""
@@ -194,9 +196,9 @@ async def run(n: int, seconds: float, rate_hz: int, rounds: int
     try:
         for r in range(rounds):
             last = r == rounds - 1
-            ones.append(await phase(boards[:1], seconds, rate_hz, False))
+            ones.append(await phase(boards[:1], seconds, rate_hz, False, hold_ms))
             print(f"  round {r + 1}, 1 board: {fmt(ones[-1])}", flush=True)
-            alls.append(await phase(boards, seconds, rate_hz, last))
+            alls.append(await phase(boards, seconds, rate_hz, last, hold_ms))
             print(f"  round {r + 1}, {n} boards: {fmt(alls[-1])}", flush=True)
         return ones, alls
     finally:
@@ -241,7 +243,7 @@ def report(ones: list[PhaseResult], alls: list[PhaseResult], args: argparse.Name
     return f"""{HEADING}
 
 `.venv/bin/python -m benchmarks.boards --boards {args.boards} --seconds {args.seconds:g} \
---rounds {args.rounds}` \
+--rounds {args.rounds}{f" --hold-ms {args.hold_ms}" if args.hold_ms else ""}` \
 ({platform.python_implementation()} {platform.python_version()}, {os.cpu_count()} cores \
 shared with other engineers' work; load average {load}).
 
@@ -272,12 +274,15 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=20.0, help="each phase (default 20)")
     ap.add_argument("--rate", type=int, default=100, help="subscription, Hz (default 100)")
     ap.add_argument("--rounds", type=int, default=3, help="of both phases (default 3)")
+    ap.add_argument("--hold-ms", type=int, default=0,
+                    help="tcp:// reading held this long after each arrival (default 0: off)")
     ap.add_argument("--label", default="this branch", help="the run's name in the table")
     ap.add_argument("--write", action="store_true", help="write benchmarks/RESULTS.md")
     args = ap.parse_args()
     load = " ".join(Path("/proc/loadavg").read_text().split()[:3])
     print(f"{args.boards} boards, {args.seconds:g} s a phase, load average {load}", flush=True)
-    ones, alls = asyncio.run(run(args.boards, args.seconds, args.rate, args.rounds))
+    ones, alls = asyncio.run(run(args.boards, args.seconds, args.rate, args.rounds,
+                                     args.hold_ms))
     load = load + " → " + " ".join(Path("/proc/loadavg").read_text().split()[:3])
     text = report(ones, alls, args, load, args.label)
     print(text)

@@ -2,7 +2,9 @@
 
 Theory of operation. ``BoardClient(url, key)`` opens the transport for the URL, checks the
 HELLO (protocol version, board id, boot id) and starts one reader task that owns every byte
-from the board: a reply is matched to its request by ``req_id`` and completes that request's
+from the board (it pumps the transport: messages are handed to it in batches, from the
+transport's data callback where it decodes there, so no task wakes per message): a reply is
+matched to its request by ``req_id`` and completes that request's
 future; a MEASUREMENT becomes a ``Reading`` and an EVENT a ``BoardEvent`` for every
 subscriber; an unexpected HELLO starts a new session. Requests have a timeout
 (``RequestTimeout``); an ERROR reply raises ``BoardRefused`` (``AuthRefused`` for a bad or
@@ -264,12 +266,14 @@ class BoardClient(LinkMixin, ActuateMixin, ConfigMixin):
                     return
                 lost = None
             try:
-                msg = await self.transport.receive()
+                await self.transport.pump(self._dispatch_all)
             except RemoteError as exc:  # any failure of the link is a lost link
                 if self._closing:
                     return
                 lost = str(exc)
-                continue
+
+    def _dispatch_all(self, batch: list[Message | BadFrame]) -> None:
+        for msg in batch:
             self._dispatch(msg)
 
     def _dispatch(self, msg: Message | BadFrame) -> None:

@@ -8,10 +8,12 @@ own wire format and turn what comes back into the same messages (a ``Hello`` on 
 
 Public methods own timeouts, logging and the translation of ``OSError`` into ``BoardUnreachable``;
 backends implement the private half: ``_open() -> Hello``, ``_send(msg)``, ``_receive()`` and
-``_close()``. ``open`` returns the board's HELLO; ``send`` takes a host message whose ``req_id``
-the caller set (replies carry it back); ``receive`` returns the next board message (a reply or a
-push) or a ``BadFrame``, and raises ``LinkLost`` when the link ends. ``close`` is idempotent.
-Transports are async context managers.
+``_close()``, and ``_pump`` where messages can be handed up as they are decoded. ``open``
+returns the board's HELLO; ``send`` takes a host message whose ``req_id`` the caller set
+(replies carry it back); ``receive`` returns the next board message (a reply or a push) or a
+``BadFrame``, and raises ``LinkLost`` when the link ends; ``pump(deliver)`` hands every message
+to ``deliver`` instead, in batches, until the link ends. ``close`` is idempotent. Transports
+are async context managers.
 
 ``CAPS`` says what a transport can do natively (the table in ``host/transports/__init__.py``).
 """
@@ -20,6 +22,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+from collections.abc import Callable
 from types import TracebackType
 from typing import ClassVar
 
@@ -111,6 +114,19 @@ class Transport:
             log.debug("%s -> %r", self.url.text, msg)
         return msg
 
+    async def pump(self, deliver: Callable[[list[Message | BadFrame]], None]) -> None:
+        """Hand everything from the board to ``deliver`` (a batch: what arrived together, in
+        order) until the link ends: ``LinkLost``, as ``receive`` would raise. A transport that
+        decodes as bytes arrive calls ``deliver`` from its data callback: no task wakes per
+        message (``_pump``); the default receives one message at a time."""
+        if not self.is_open:
+            raise LinkLost(f"{self.url.text}: link is not open", "reconnect")
+        try:
+            await self._pump(deliver)
+        except OSError as exc:
+            raise LinkLost(f"{self.url.text}: link lost: {exc}",
+                           "the board may have rebooted; reconnect") from exc
+
     async def close(self) -> None:
         """Close the link; safe to call more than once."""
         if self._closed:
@@ -146,3 +162,7 @@ class Transport:
 
     async def _close(self) -> None:
         raise NotImplementedError
+
+    async def _pump(self, deliver: Callable[[list[Message | BadFrame]], None]) -> None:
+        while True:
+            deliver([await self.receive()])

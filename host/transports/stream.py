@@ -103,14 +103,22 @@ class StreamTransport(Transport):
     async def _next_event(self) -> Message | BadFrame:
         while not self._events:
             if self._eof:
-                raise LinkLost(f"{self.url.text}: the board closed the link",
-                               "the board may have rebooted; reconnect")
-            data = await self._read()
-            if not data:
-                self._eof = True
-            self.conn.receive_data(data)
-            self._events.extend(self.conn.events())
+                raise self._closed_by_board()
+            await self._fill()
         return self._events.popleft()
+
+    def _closed_by_board(self) -> LinkLost:
+        return LinkLost(f"{self.url.text}: the board closed the link",
+                        "the board may have rebooted; reconnect")
+
+    async def _fill(self) -> None:
+        """Decode more events into ``_events``: one read from the backend (``_eof`` at the end
+        of the stream). A backend that decodes as bytes arrive waits here instead."""
+        data = await self._read()
+        if not data:
+            self._eof = True
+        self.conn.receive_data(data)
+        self._events.extend(self.conn.events())
 
     async def _send(self, msg: Message) -> None:
         await self._write(self.conn.send(msg))
