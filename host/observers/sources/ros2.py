@@ -9,10 +9,14 @@ serialized CDR bytes, stamped with the source's clock on the executor's thread a
 the asyncio loop with ``call_soon_threadsafe`` as a ``host.ros.message.RosMessage``. A
 frequency observer only counts them; value and diagnostic observers decode them on demand.
 
-QoS adapts to the publishers, as ``ros2 bag record`` does: keep last 10, reliable when every
+QoS adapts to the publishers, as ``ros2 bag record`` does: keep last ``DEPTH``, reliable when every
 publisher of the topic the graph shows is reliable (a large message, such as a 4 MB map, is
 then never lost to a dropped fragment), best effort otherwise (which matches any publisher);
 a topic subscribed through ``types`` before its publishers are known gets best effort.
+``DEPTH`` is 100, not ROS's usual 10: the reader holds what arrives while the executor is
+held up (a daemon descheduled on a busy machine), a second of a 100 Hz topic; with 10 a stall
+of 0.1 s dropped messages, which the frequency observer took for a rate drop. The messages
+stay serialized in DDS's history and take memory only while the executor lags.
 
 ``GRAPH`` (``/_graph/nodes``) is not a DDS topic: subscribing it delivers, every
 ``discovery_s``, a message whose values are ``{"nodes": [names...]}`` from the ROS 2 graph,
@@ -38,9 +42,10 @@ from host.ros.node import RosNode
 
 log = logging.getLogger(__name__)
 
-BEST_EFFORT = QoSProfile(history=QoSHistoryPolicy.KEEP_LAST, depth=10,
+DEPTH = 100  # messages kept per topic while the executor lags (see the module docstring)
+BEST_EFFORT = QoSProfile(history=QoSHistoryPolicy.KEEP_LAST, depth=DEPTH,
                          reliability=QoSReliabilityPolicy.BEST_EFFORT)
-RELIABLE = QoSProfile(history=QoSHistoryPolicy.KEEP_LAST, depth=10,
+RELIABLE = QoSProfile(history=QoSHistoryPolicy.KEEP_LAST, depth=DEPTH,
                       reliability=QoSReliabilityPolicy.RELIABLE)
 
 
