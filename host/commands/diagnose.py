@@ -16,8 +16,9 @@ contradict the model whatever is broken, or a bound cut the search before the fi
 on bad input. ``--json`` prints ``{"order": "probability", "diagnoses": [{"bad": [...],
 "probability": p, "cardinality": k}, ...], "complete": true|false, "cut_by": ...,
 "explainable": ...}``; ``--good`` adds each diagnosis' healthy components (``"good"``).
-A model file's parsed form is kept in ``$XDG_CACHE_HOME/dxboard/models`` (default
-``~/.cache/dxboard/models``) and read back while the file is unchanged; deleting it is safe.
+A model file's parsed form, compiled for the SAT engine (its clauses as numbers, its circuit
+structure), is kept in ``$XDG_CACHE_HOME/dxboard/models`` (default ``~/.cache/dxboard/models``)
+and read back while the file is unchanged; deleting it is safe.
 """
 
 from __future__ import annotations
@@ -88,12 +89,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from host.commands.model import print_notes
     from host.diagnosis.diagnoser import Diagnoser
-    from host.diagnosis.files import load_theory, read_observations
+    from host.diagnosis.files import load_encoded, read_observations
 
-    theory = load_theory(args.model, cache=True)
+    encoding = load_encoded(args.model)
+    theory = encoding.theory
     print_notes(theory)
     observations = read_observations(args.obs, theory)
-    with Diagnoser(theory, algorithm=args.algorithm) as diagnoser:
+    with Diagnoser(theory, algorithm=args.algorithm, encoding=encoding) as diagnoser:
         for obs in observations:
             diagnoser.observe(obs)
         result = diagnoser.diagnose(max_card=args.max_card, max_count=args.max_count,

@@ -1,18 +1,21 @@
-"""A cache of parsed model files, as Python's ``.pyc`` is of modules: ``dxboard diagnose`` reads
-a large tug model once, and later runs load the parsed ``Theory`` back instead of parsing YAML.
+"""A cache of parsed and encoded model files, as Python's ``.pyc`` is of modules: ``dxboard
+diagnose`` reads a large tug model once, and later runs load it back, parsed and compiled for
+the SAT engine (``encoding.Encoding``: the ``Theory``, its clauses as numbers and its circuit
+structure), instead of parsing YAML and encoding the theory again.
 
-``cached(path, build)`` returns ``build()``'s theory for the file ``path``, from the cache when
-an entry is there and still true, else built and stored. The entry lives in the user's cache
+``cached(path, build)`` returns the encoding of ``build()``'s theory for the file ``path``, from
+the cache when an entry is there and still true, else built (the structure inferred too) and
+stored. The entry lives in the user's cache
 directory (``$XDG_CACHE_HOME/dxboard/models``, else ``~/.cache/dxboard/models``), one file per
 model file, named by a hash of its absolute path. Each entry begins with its key: the path as
 given, the file's size and ``st_mtime_ns``, the stored form's ``VERSION``, the interpreter's
 cache tag and the size and ``st_mtime_ns`` of the loader's own source files (so a changed
 loader, as a changed dxboard, never reads an old entry). The key is read and compared first
-(a small pickle); only then the theory, whose entry also holds a CRC-32 of the model file's
+(a small pickle); only then the encoding, whose entry also holds a CRC-32 of the model file's
 bytes, compared too (a file rewritten with the same size within one tick of its clock is not
 trusted). The collector is paused while an entry is read (its objects hold no cycles; a
 collection in the middle took as long as the read). A stale, truncated or
-corrupt entry, or one that is not a theory, is rebuilt and overwritten; an unwritable or
+corrupt entry, or one that is not an encoding, is rebuilt and overwritten; an unwritable or
 missing cache directory only means that nothing is stored (logged at debug level). Entries are
 written to a temporary file and renamed into place, so a reader never sees half of one.
 
@@ -32,15 +35,17 @@ import zlib
 from collections.abc import Callable
 from pathlib import Path
 
+from host.diagnosis.encoding import Encoding, encode
 from host.diagnosis.logic import Theory
 
 log = logging.getLogger(__name__)
 
 #: the stored form; bump when what an entry holds changes
-VERSION = 1
-#: the loader's modules (beside this one): a change to any of them invalidates every entry
+VERSION = 2
+#: the loader's and the encoder's modules (beside this one): a change to any of them
+#: invalidates every entry
 LOADER_FILES = ("cache.py", "files.py", "logic.py", "tug.py", "yamlpos.py", "model.py",
-                "generation.py", "../atoms.py")
+                "generation.py", "../atoms.py", "encoding.py", "structure.py")
 _HERE = Path(__file__).resolve().parent
 
 
@@ -80,25 +85,25 @@ def _digest(path: Path) -> int:
     return zlib.crc32(path.read_bytes())
 
 
-def cached(path: Path, build: Callable[[], Theory]) -> Theory:
-    """The theory of the file ``path``: from its cache entry when that is still true, else
-    ``build()``'s, stored for the next time. Errors of ``build`` pass through (nothing is
-    stored for a file that does not load)."""
+def cached(path: Path, build: Callable[[], Theory]) -> Encoding:
+    """The encoded theory of the file ``path``: from its cache entry when that is still true,
+    else ``build()``'s, encoded and stored for the next time. Errors of ``build`` pass through
+    (nothing is stored for a file that does not load)."""
     try:
         st = os.stat(path)
     except OSError:
-        return build()  # the loader says what is wrong with the path
+        return encode(build())  # the loader says what is wrong with the path
     key = _key(path, st)
     entry = entry_path(path)
-    theory = _read(entry, key, path)
-    if theory is not None:
-        return theory
-    theory = build()
-    _write(entry, key, path, theory)
-    return theory
+    encoding = _read(entry, key, path)
+    if encoding is not None:
+        return encoding
+    encoding = encode(build(), structure=True)
+    _write(entry, key, path, encoding)
+    return encoding
 
 
-def _read(entry: Path, key: tuple[object, ...], path: Path) -> Theory | None:
+def _read(entry: Path, key: tuple[object, ...], path: Path) -> Encoding | None:
     collecting = gc.isenabled()
     gc.disable()
     try:
@@ -106,11 +111,12 @@ def _read(entry: Path, key: tuple[object, ...], path: Path) -> Theory | None:
             if pickle.load(f) != key:
                 log.debug("%s: cache entry %s is stale", path, entry)
                 return None
-            digest, theory = pickle.load(f)
-        if digest != _digest(path) or not isinstance(theory, Theory):
+            digest, encoding = pickle.load(f)
+        if (digest != _digest(path) or not isinstance(encoding, Encoding)
+                or not isinstance(encoding.theory, Theory)):
             log.debug("%s: cache entry %s does not match the file", path, entry)
             return None
-        return theory
+        return encoding
     except FileNotFoundError:
         return None
     # a damaged entry can fail in any way unpickling can (UnpicklingError, EOFError,
@@ -123,13 +129,13 @@ def _read(entry: Path, key: tuple[object, ...], path: Path) -> Theory | None:
             gc.enable()
 
 
-def _write(entry: Path, key: tuple[object, ...], path: Path, theory: Theory) -> None:
+def _write(entry: Path, key: tuple[object, ...], path: Path, encoding: Encoding) -> None:
     tmp = entry.with_name(f"{entry.name}.{os.getpid()}.tmp")
     try:
         entry.parent.mkdir(parents=True, exist_ok=True)
         with open(tmp, "wb") as f:
             pickle.dump(key, f, protocol=pickle.HIGHEST_PROTOCOL)
-            pickle.dump((_digest(path), theory), f, protocol=pickle.HIGHEST_PROTOCOL)
+            pickle.dump((_digest(path), encoding), f, protocol=pickle.HIGHEST_PROTOCOL)
         os.replace(tmp, entry)
     except OSError as exc:  # a read-only or full cache directory: work on, store nothing
         log.debug("%s: cannot write cache entry %s: %s", path, entry, exc)

@@ -6,6 +6,7 @@ hierarchy, over any propositions)::
     d = Diagnoser(theory)   # or algorithm= "cardinality" | "top-level" | "maxsat" |
                             # "hitting-set"; the default "auto" picks by size (search.py);
                             # min_card_only=True: diagnose() lists the smallest size only
+                            # encoding=: the theory's SAT encoding (encoding.py), if at hand
     d.observe("~on(jaguar)", now=12.5, source="hobs", validity=3.0)   # S ⊕ o
     d.expire(now=20.0)                           # silent observers' literals become unknown
     # lags={"ok(/map)": 6.0}: an observation judging a 6 s window is held back (unknown)
@@ -32,6 +33,7 @@ import logging
 import time
 from collections.abc import Iterable, Mapping
 
+from host.diagnosis.encoding import Encoding
 from host.diagnosis.lags import depends_on, held_atoms
 from host.diagnosis.logic import Literal, Theory
 from host.diagnosis.observations import Observation, ObservationSet
@@ -52,6 +54,7 @@ class Diagnoser:
         self, theory: Theory, algorithm: str = DEFAULT_ALGORITHM, solver: str = "g4",
         observations: ObservationSet | None = None,
         lags: Mapping[str, float] | None = None, min_card_only: bool = False,
+        encoding: Encoding | None = None,
     ) -> None:
         if algorithm not in ALGORITHMS:
             raise ValueError(f"unknown algorithm {algorithm!r}; use one of {sorted(ALGORITHMS)}")
@@ -59,7 +62,7 @@ class Diagnoser:
         self.algorithm = algorithm
         self.min_card_only = min_card_only  # the default of diagnose(): for huge models
         self._search = ALGORITHMS[algorithm]
-        self._ctx = SatContext(theory, solver)
+        self._ctx = SatContext(theory, solver, encoding)
         self._observable = theory.observable_atoms()
         self._priors = {c: theory.prior(c) for c in theory.components}
         self._universe = frozenset(theory.components)

@@ -4,9 +4,10 @@ observation files.
 ``load_theory(path)`` takes a robot directory (or its ``system.yaml``, or a file of that form
 under any name), validated and turned into clauses, or a tug model file (the original
 system's format, ``host.diagnosis.tug``); the file is parsed once, with libyaml, and a YAML
-error names the file and line. With ``cache=True`` (``dxboard diagnose``) a model file's parsed
-form is kept in the user's cache directory and read back, without PyYAML, while the file and
-the loader are unchanged (``host.diagnosis.cache``).
+error names the file and line. ``load_encoded(path)`` (``dxboard diagnose``) gives the theory
+compiled for the SAT engine too (``host.diagnosis.encoding``); a model file's is kept in the
+user's cache directory and read back, without PyYAML, while the file and the loader are
+unchanged (``host.diagnosis.cache``; ``load_theory(path, cache=True)`` reads it there too).
 
 ``read_observations(path, theory)`` reads an observation file, one observation a line
 (``#`` starts a comment)::
@@ -29,10 +30,14 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from host.diagnosis.logic import Literal, Theory
 from host.diagnosis.observations import Observation
 from host.errors import UserError
+
+if TYPE_CHECKING:
+    from host.diagnosis.encoding import Encoding
 
 _TUG = re.compile(r"^rules\s*:", re.MULTILINE)
 _TIME = re.compile(r"^(?P<body>.*?)\s*@\s*(?P<time>[-+0-9.eE]+)\s*$")
@@ -56,10 +61,21 @@ def load_theory(path: str | Path, cache: bool = False) -> Theory:
         raise UserError(f"{p}: no such file or directory",
                         "give a robot directory (with system.yaml) or a tug model file")
     if cache:
-        from host.diagnosis.cache import cached
-
-        return cached(p, lambda: _read_model_file(p))
+        return load_encoded(p).theory
     return _read_model_file(p)
+
+
+def load_encoded(path: str | Path) -> Encoding:
+    """``load_theory(path)``'s theory with its SAT encoding; a model file's both from the
+    cache while it is true (``host.diagnosis.cache``), a robot directory's built now."""
+    p = Path(path)
+    if p.is_dir() or p.name == SYSTEM_FILE or not p.exists():
+        from host.diagnosis.encoding import encode
+
+        return encode(load_theory(p))
+    from host.diagnosis.cache import cached
+
+    return cached(p, lambda: _read_model_file(p))
 
 
 def _read_model_file(p: Path) -> Theory:

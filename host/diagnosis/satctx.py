@@ -1,10 +1,11 @@
 """One incremental SAT solver holding a theory: the shared state every search algorithm uses.
 
-``SatContext`` encodes a ``Theory`` once (one variable per atom, from a PySAT-style pool) into
-an incremental PySAT solver. Observations are never added as clauses: they are passed as
-*assumptions* on each call, so a changed observation needs no rebuilding. A search may add
-clauses that hold for one run only by guarding them with a fresh activation variable
-(``new_run()``/``end_run()``): the run assumes it, and ``end_run`` disables the clauses for
+``SatContext`` loads a ``Theory``'s encoding (``encoding.py``: one variable per atom, the
+clauses as numbers, the circuit structure; built here unless the caller has it, e.g. from the
+model cache) into an incremental PySAT solver. Observations are never added as clauses: they
+are passed as *assumptions* on each call, so a changed observation needs no rebuilding. A
+search may add clauses that hold for one run only by guarding them with a fresh activation
+variable (``new_run()``/``end_run()``): the run assumes it, and ``end_run`` disables the clauses for
 good with a unit clause; the variable stays, so after ``RENEW_AFTER`` runs ``renew()`` (the
 diagnoser calls it between runs) starts a fresh solver. Cardinality bounds over the health
 variables come from an incremental totalizer (``pysat.card.ITotalizer``) grown on demand. A
@@ -23,10 +24,11 @@ from typing import Any
 from pysat.card import ITotalizer  # type: ignore[import-untyped]
 from pysat.solvers import Solver  # type: ignore[import-untyped]
 
+from host.diagnosis.encoding import Encoding, encode
 from host.diagnosis.logic import Literal, Theory, ab
 from host.diagnosis.quota import Quota
 from host.diagnosis.result import Bound, SearchOutcome
-from host.diagnosis.structure import Structure, infer_structure
+from host.diagnosis.structure import Structure
 
 
 class _Watchdog:
@@ -85,29 +87,31 @@ class SatContext:
     #: runs (activation variables, ``new_run``) after which ``renew`` starts a fresh solver
     RENEW_AFTER = 20_000
 
-    def __init__(self, theory: Theory, solver: str = "g4") -> None:
+    def __init__(self, theory: Theory, solver: str = "g4",
+                 encoding: Encoding | None = None) -> None:
+        """``encoding``: ``theory``'s (``encode(theory)``), when the caller has it already."""
+        if encoding is None:
+            encoding = encode(theory)
+        elif encoding.theory is not theory and encoding.theory != theory:
+            raise ValueError("the encoding is of another theory")
         self.theory = theory
-        self.vars: dict[str, int] = {}
-        self.top = 0
+        self.encoding = encoding
+        self.vars: dict[str, int] = dict(encoding.vars)  # grows: the encoding's stays as is
+        self.top = len(self.vars)
         self._solver_name = solver
         self.solver = Solver(name=solver)
         # CaDiCaL in PySAT cannot be interrupted: budgets are then checked between calls only
         self._interruptible = not solver.startswith(("cd", "cadical"))
-        self.ab_vars: list[int] = [self.var(ab(c)) for c in theory.components]
+        self.ab_vars: list[int] = [self.vars[ab(c)] for c in theory.components]
         self.index_of_ab = {v: i for i, v in enumerate(self.ab_vars)}
-        self._add_theory()
+        self.solver.append_formula(encoding.clauses)
         self._tot: ITotalizer | None = None
         self._deadline: float | None = None
         self._watchdog = _Watchdog(self.solver)
         self.calls = 0
         self.runs = 0  # since the solver was made
         self.renewed = 0
-        self._structure: Structure | bool | None = False  # False: not inferred yet
         self._atom_of: dict[int, str] | None = None
-
-    def _add_theory(self) -> None:
-        for clause in self.theory.clauses:
-            self.solver.add_clause([self.lit(lit) for lit in clause.lits])
 
     def renew(self) -> bool:
         """Start a fresh solver once ``RENEW_AFTER`` runs have used it; True when it did.
@@ -121,7 +125,7 @@ class SatContext:
         self.stop_budget()
         old, self.solver = self.solver, Solver(name=self._solver_name)
         self.top = max(self.vars.values(), default=0)
-        self._add_theory()
+        self.solver.append_formula(self.encoding.clauses)
         if self._tot is not None:
             self._tot.delete()
             self._tot = None
@@ -156,10 +160,7 @@ class SatContext:
 
     def structure(self) -> Structure | None:
         """The theory's circuit structure (``structure.infer_structure``), inferred once."""
-        if self._structure is False:
-            self._structure = infer_structure(self.theory)
-        assert not isinstance(self._structure, bool)
-        return self._structure
+        return self.encoding.structure()
 
     # -- runs, bounds and budget -----------------------------------------------------------
     def new_run(self) -> int:

@@ -133,8 +133,8 @@ def maxsat_search(
 ) -> SearchOutcome:
     out = SearchOutcome([])
     wcnf = WCNF()
-    for clause in ctx.theory.clauses:
-        wcnf.append([ctx.lit(lit) for lit in clause.lits])
+    for clause in ctx.encoding.clauses:
+        wcnf.append(clause)
     for lit in obs:
         wcnf.append([lit])
     for v in ctx.ab_vars:

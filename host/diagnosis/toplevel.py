@@ -94,8 +94,8 @@ def min_card_search(ctx: SatContext, obs: list[int], max_card: int | None,
     order = top_level_order(ctx, obs)
     regions = _regions(ctx, obs)
     wcnf = WCNF()
-    for clause in ctx.theory.clauses:
-        wcnf.append([ctx.lit(lit) for lit in clause.lits])
+    for clause in ctx.encoding.clauses:
+        wcnf.append(clause)
     for lit in obs:
         wcnf.append([lit])
     keep = set(order)

@@ -1,10 +1,11 @@
-"""The parsed-model cache (host/diagnosis/cache.py): a warm read gives the same theory without
-parsing; a changed file, a changed loader, a damaged entry and an unwritable cache directory
-each fall back to reading the file, quietly and correctly."""
+"""The model cache (host/diagnosis/cache.py): a warm read gives the same theory and encoding
+without parsing or encoding; a changed file, a changed loader or encoder, a damaged entry and an
+unwritable cache directory each fall back to reading the file, quietly and correctly."""
 
 from __future__ import annotations
 
 import os
+import random
 import subprocess
 import sys
 from pathlib import Path
@@ -12,7 +13,8 @@ from pathlib import Path
 import pytest
 
 from host.diagnosis import cache
-from host.diagnosis.files import load_theory
+from host.diagnosis.encoding import encode
+from host.diagnosis.files import load_encoded, load_theory
 from host.diagnosis.logic import Theory
 from host.diagnosis.tug import read_tug
 from tests.diagnosis.test_tug import ORIGINAL
@@ -44,7 +46,8 @@ def test_second_read_comes_from_the_cache(model: Path, _own_cache_dir: Path) -> 
     first = cache.cached(model, build)
     second = cache.cached(model, build)
     assert build.calls == 1
-    assert second == first == read_tug(model)
+    assert second.theory == first.theory == read_tug(model)
+    assert second == first == encode(read_tug(model))
     assert second is not first  # read back from the entry, not kept in memory
     entry = cache.entry_path(model)
     assert entry.is_file() and entry.is_relative_to(_own_cache_dir / "dxboard" / "models")
@@ -54,7 +57,7 @@ def test_a_changed_file_is_read_again(model: Path) -> None:
     build = Counting(model)
     cache.cached(model, build)
     model.write_text(ORIGINAL.replace("ok(/map)", "ok(/mop)"))
-    theory = cache.cached(model, build)
+    theory = cache.cached(model, build).theory
     assert build.calls == 2
     assert "ok(/mop)" in theory.observable_atoms()
 
@@ -66,7 +69,7 @@ def test_same_size_and_time_stamp_but_other_bytes_is_read_again(model: Path) -> 
     model.write_text(ORIGINAL.replace("ok(/map)", "ok(/mop)"))  # same length
     os.utime(model, ns=(st.st_atime_ns, st.st_mtime_ns))
     assert model.stat().st_size == st.st_size
-    theory = cache.cached(model, build)
+    theory = cache.cached(model, build).theory
     assert build.calls == 2
     assert "ok(/mop)" in theory.observable_atoms()
 
@@ -86,6 +89,7 @@ def test_a_changed_loader_source_is_not_trusted(model: Path,
                                                 monkeypatch: pytest.MonkeyPatch) -> None:
     build = Counting(model)
     cache.cached(model, build)
+    assert {"encoding.py", "structure.py"} <= set(cache.LOADER_FILES)  # the encoder's too
     stamp = cache._loader_stamp()
     assert [name for name, _size, _mtime in stamp][:4] == list(cache.LOADER_FILES[:4])
     changed = ((stamp[0][0], stamp[0][1] + 1, stamp[0][2]), *stamp[1:])
@@ -134,8 +138,8 @@ def test_an_unwritable_cache_directory_still_works(model: Path, tmp_path: Path,
     blocker.write_text("")
     monkeypatch.setenv("XDG_CACHE_HOME", str(blocker))
     build = Counting(model)
-    assert cache.cached(model, build) == read_tug(model)
-    assert cache.cached(model, build) == read_tug(model)
+    assert cache.cached(model, build).theory == read_tug(model)
+    assert cache.cached(model, build).theory == read_tug(model)
     assert build.calls == 2  # nothing stored, nothing broken
     assert blocker.read_text() == ""
 
@@ -153,7 +157,7 @@ def test_a_read_only_cache_directory_still_works(model: Path, tmp_path: Path,
             models.rmdir()
             models.write_text("")  # where the directory was, a file
         build = Counting(model)
-        assert cache.cached(model, build) == read_tug(model)
+        assert cache.cached(model, build).theory == read_tug(model)
         assert build.calls == 1
     finally:
         if models.is_dir():
@@ -166,6 +170,47 @@ def test_load_theory_uses_the_cache_only_when_asked(model: Path) -> None:
     theory = load_theory(model, cache=True)
     assert cache.entry_path(model).is_file()
     assert load_theory(model, cache=True) == theory == load_theory(model)
+
+
+def test_the_entry_holds_the_encoding_and_the_structure(tmp_path: Path) -> None:
+    """A circuit's entry carries its variable numbers, numeric clauses and circuit structure:
+    a warm read infers nothing (the structure is there before anyone asks for it), and a
+    diagnoser given that encoding answers as one that encodes the theory itself."""
+    from host.diagnosis import Diagnoser
+    from host.diagnosis.structure import infer_structure
+    from host.diagnosis.tug import write_tug
+    from tests.diagnosis.test_structure import random_circuit
+
+    theory, obs = random_circuit(random.Random(7))
+    f = tmp_path / "circuit.yaml"
+    write_tug(theory, f)
+    load_encoded(f)  # fills the entry
+    warm = load_encoded(f)
+    fresh = encode(warm.theory)
+    assert warm.vars == fresh.vars and warm.clauses == fresh.clauses
+    assert warm._structure is not False  # inferred when the entry was written
+    assert warm._structure == infer_structure(warm.theory) is not None
+    assert [warm.vars[f"AB({c})"] for c in warm.theory.components] == list(
+        range(1, len(warm.theory.components) + 1))
+    for algorithm in ("auto", "top-level", "cardinality", "maxsat"):
+        answers = []
+        for enc in (warm, None):
+            with Diagnoser(warm.theory, algorithm=algorithm, encoding=enc) as d:
+                for o in obs:
+                    d.observe(o)
+                answers.append(sorted(sorted(x.bad) for x in d.diagnose().diagnoses))
+        assert answers[0] == answers[1] and answers[0], algorithm
+
+
+def test_an_encoding_of_another_theory_is_refused(model: Path) -> None:
+    from host.diagnosis import Diagnoser
+
+    other = encode(read_tug(model))
+    theory = read_tug(model)
+    assert Diagnoser(theory, encoding=other).theory is theory  # equal: accepted
+    changed = Theory(theory.components[:-1], theory.clauses)
+    with pytest.raises(ValueError, match="another theory"):
+        Diagnoser(changed, encoding=other)
 
 
 def test_errors_are_not_cached(tmp_path: Path) -> None:
