@@ -13,12 +13,13 @@ table reports the mean and the *worst* instance, and how many missed 1 s / 5 s.
 c432, all subset-minimal diagnoses up to cardinality 1, 2, 3, against PyMBD's published
 figures and a plain Reiter HS-tree (same SAT oracle) measured here.
 
-The whole command: ``dxboard diagnose MODEL.yaml --obs FILE --json --min-card-only`` as a
-process, on circuits written as tug model files, against the engine alone on the same
-instance (``Diagnoser`` built, observations added, diagnosed: in process, the model loaded),
-in wall and in CPU time; ``--base DIR`` runs the command from another checkout too (the code
-before a change: ``git archive REV | tar -x -C DIR``), interleaved, and times the start-up
-(``dxboard diagnose --help``) of both.
+The whole command (benchmarks/command_bench.py): ``dxboard diagnose MODEL.yaml --obs FILE
+--json --min-card-only`` as a process, on circuits written as tug model files, against the
+engine alone on the same instance (in process, the model loaded; also given the encoding the
+command caches, and timed around its calls in a fresh process), in wall and in CPU time;
+``--base DIR`` runs the command from another checkout too (the code before a change:
+``git archive REV | tar -x -C DIR``), interleaved, and times the start-up (``dxboard diagnose
+--help``) of both.
 
 Synthetic robots: layered robot models of 100, 1,000 and 10,000 components in system.yaml
 form; with every observer reporting, one observation at a time flips and flips back; each
@@ -33,13 +34,10 @@ re-diagnosis (observe -> diagnose) is timed, p50/p99.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import random
-import resource
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -51,6 +49,14 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from command_bench import (  # noqa: E402
+    MAX_COUNT,
+    bench_command,
+    cpu_timed,
+    fmt,
+    mean_worst,
+    timed,
+)
 from iscas import (  # noqa: E402
     CIRCUITS,
     ISCAS,
@@ -70,11 +76,9 @@ from host.diagnosis import (  # noqa: E402
 )
 from host.diagnosis.satctx import SatContext  # noqa: E402
 from host.diagnosis.structure import infer_structure  # noqa: E402
-from host.diagnosis.tug import write_tug  # noqa: E402
 
 PYMBD_C432 = {1: 0.68, 2: 2.7, 3: 10.2}  # s, PyMBD's best algorithm, all min. diagnoses <= k
 MAX_CARD = 5
-MAX_COUNT = 1000
 
 
 # -- the baseline: a plain Reiter HS-tree ----------------------------------------------------
@@ -112,34 +116,6 @@ def hs_tree(ctx: SatContext, obs: list[int], max_card: int, min_card_only: bool,
 
 
 # -- running ------------------------------------------------------------------------------------
-def timed(fn, *args, **kw):  # type: ignore[no-untyped-def]
-    t = time.perf_counter()
-    r = fn(*args, **kw)
-    return time.perf_counter() - t, r
-
-
-def cpu_timed(fn, *args, **kw):  # type: ignore[no-untyped-def]
-    """Wall time, this process's CPU time (what a machine of its own would have taken, near
-    enough: the search is single-threaded) and the result."""
-    c = time.process_time()
-    t, r = timed(fn, *args, **kw)
-    return t, time.process_time() - c, r
-
-
-def fmt(s: float) -> str:
-    return f"{s * 1000:.1f} ms" if s < 1 else f"{s:.2f} s"
-
-
-def mean_worst(xs: list[float]) -> str:
-    """Mean and worst; instances a budget cut (``inf``) are left out of the mean and make
-    the worst read ``cut``."""
-    done = [x for x in xs if x != float("inf")]
-    if not xs:
-        return "-"
-    worst = "cut" if len(done) < len(xs) else fmt(max(done))
-    return f"{fmt(statistics.fmean(done)) if done else '-'} / {worst}"
-
-
 def worst(xs: list[float]) -> str:
     return mean_worst(xs).split(" / ")[-1]
 
@@ -264,161 +240,6 @@ def bench_c432(args: argparse.Namespace, lines: list[str]) -> None:
     lines.append("")
 
 
-def _run_child(cmd: list[str], env: dict[str, str] | None = None) -> tuple[
-        float, float, subprocess.CompletedProcess[str]]:
-    """Wall and CPU time (user + system, from the children's usage) of one process."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    start = time.perf_counter()
-    proc = subprocess.run(cmd, capture_output=True, text=True, check=False, env=env)
-    wall = time.perf_counter() - start
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), proc
-
-
-def _commands(args: argparse.Namespace) -> dict[str, list[str]]:
-    """The command's argv prefix, and the base checkout's (``--base``) when given."""
-    out = {"command": [str(Path(sys.executable).parent / "dxboard")]}
-    if args.base:
-        out["before"] = [sys.executable, "-c", "import sys; sys.path.insert(0, sys.argv.pop(1)); "
-                         "from host.cli import main; sys.exit(main())", str(args.base)]
-    return out
-
-
-def _child_env(tmp: Path) -> dict[str, str]:
-    """The commands' environment: a cache directory of their own (not the user's), and
-    Python's bytecode kept (in ``tmp``) as an installed program has it, whatever
-    ``PYTHONDONTWRITEBYTECODE`` says here: without it every run compiled dxboard's modules
-    from source again (about 30 ms a run), which no user's install does."""
-    env = {**os.environ, "XDG_CACHE_HOME": str(tmp / "cache"),
-           "PYTHONPYCACHEPREFIX": str(tmp / "pycache")}
-    env.pop("PYTHONDONTWRITEBYTECODE", None)
-    return env
-
-
-def bench_startup(args: argparse.Namespace, lines: list[str], env: dict[str, str]) -> None:
-    """``dxboard diagnose --help``: the interpreter, the imports, argparse; no model."""
-    runs = 5 if args.quick else 20
-    times: dict[str, list[float]] = {}
-    for _ in range(runs):  # interleaved: the machine's load falls on both alike
-        for label, prefix in _commands(args).items():
-            wall, _cpu, proc = _run_child([*prefix, "diagnose", "--help"], env)
-            assert proc.returncode == 0, proc.stderr
-            times.setdefault(label, []).append(wall)
-    said = "; ".join(f"{label} {fmt(statistics.median(xs))} (best {fmt(min(xs))})"
-                     for label, xs in times.items())
-    lines.append(f"Start-up, `dxboard diagnose --help`, median of {runs} runs: {said}.\n")
-    print(lines[-1], flush=True)
-
-
-def bench_command(args: argparse.Namespace, lines: list[str]) -> None:
-    """The whole ``dxboard diagnose`` process against the engine alone, same instances."""
-    rng = random.Random(args.seed + 1)
-    names = ["c6288"] if args.quick else ["c6288", "c7552"]
-    per = 3 if args.quick else 10
-    commands = _commands(args)
-    commands = {"command": commands["command"], "cold": commands["command"],
-                **{k: v for k, v in commands.items() if k != "command"}}
-    lines.append("### The whole command against the engine alone\n")
-    lines.append(f"`dxboard diagnose MODEL.yaml --obs FILE --json --min-card-only` (all minimal-"
-                 f"cardinality diagnoses, up to 1,000) as a process on the circuit written as a "
-                 f"tug model file, {per} instances per circuit (seed {args.seed + 1}), against "
-                 "the engine alone on the same instance (diagnoser built, observations added, "
-                 f"diagnosed; in process, model loaded); the best of {args.repeat} runs each. "
-                 "*overhead*: what the command adds (interpreter and imports, reading the "
-                 "model, writing JSON); *CPU*: the same ratio in processor time (user + system), "
-                 "which the machine's load changes less than wall time; *runs cut*: command "
-                 f"runs the time budget ({args.budget:g} s) cut (or whose engine run it cut), "
-                 "not compared; *warm*: the parsed model read from the command's cache (the "
-                 "first run of each circuit fills it; every figure is the best of several, so all "
-                 "are warm), *cold*: the same command with an empty cache directory each "
-                 "time (it parses the YAML and writes the cache entry); every process "
-                 "with Python's bytecode kept, as an installed program has it"
-                 + ("; *before*: the same command from the checkout `--base` names, run "
-                    "interleaved with it" if args.base else "") + ".\n")
-    before = "before, sum | before / engine | " if args.base else ""
-    with tempfile.TemporaryDirectory(prefix="dxboard-bench-") as tmp:
-        env = _child_env(Path(tmp))
-        bench_startup(args, lines, env)
-        lines.append(f"| circuit | model file | engine, sum | command (warm), sum | {before}"
-                     "command / engine | CPU, command / engine | cold / engine | CPU, cold / "
-                     "engine | overhead per run (warm), mean / worst | JSON, largest | load | "
-                     "runs cut |")
-        lines.append("|---|---|---|---|" + ("---|---|" if args.base else "") + "---|" * 8)
-        colds = 0
-        for name in names:
-            circuit = parse_bench(ISCAS / f"{name}.bench")
-            if args.circuits and name not in args.circuits:
-                list(sample(circuit, rng, per))  # drawn all the same: the others' sample stays
-                continue
-            theory = circuit_theory(circuit)
-            known = theory.observable_atoms()
-            model = Path(tmp) / f"{name}.yaml"
-            write_tug(theory, model)
-            engine: list[float] = []
-            engine_cpu: list[float] = []
-            wall: dict[str, list[float]] = {label: [] for label in commands}
-            cpu: dict[str, list[float]] = {label: [] for label in commands}
-            overhead: list[float] = []
-            size, cut = 0, 0
-            loads = [os.getloadavg()[0]]
-            for n, (_flips, obs) in enumerate(sample(circuit, rng, per)):
-                obs = [o for o in obs if o.atom in known]
-                obs_file = Path(tmp) / f"{name}-{n}.obs"
-                obs_file.write_text("".join(f"{o}\n" for o in obs))
-
-                def engine_run(obs: list[Literal] = obs, theory: Theory = theory) -> (
-                        DiagnosisResult):
-                    with Diagnoser(theory) as d:
-                        for o in obs:
-                            d.observe(o)
-                        return d.diagnose(min_card_only=True, max_count=MAX_COUNT,
-                                          time_budget_s=args.budget)
-
-                runs = [cpu_timed(engine_run) for _ in range(args.repeat)]  # the best
-                r = runs[0][2]
-                engine.append(min(t for t, _c, _r in runs))
-                engine_cpu.append(min(c for _t, c, _r in runs))
-                for label, prefix in commands.items():
-                    best, best_cpu = float("inf"), float("inf")
-                    for _ in range(args.repeat):
-                        if label == "cold":  # a cache directory of its own, empty
-                            colds += 1
-                            run_env = {**env, "XDG_CACHE_HOME": str(Path(tmp) / f"c{colds}")}
-                        t, c, proc = _run_child(
-                            [*prefix, "diagnose", str(model), "--obs", str(obs_file), "--json",
-                             "--min-card-only", "--time-budget", str(args.budget)],
-                            run_env if label == "cold" else env)
-                        best, best_cpu = min(best, t), min(best_cpu, c)
-                        assert proc.returncode in (0, 1), proc.stderr  # 1: cut before the first
-                        data = json.loads(proc.stdout)
-                        if "time_budget" in (data["cut_by"], r.cut_by):
-                            cut += 1  # the budget cut one of the two on a loaded machine
-                            continue
-                        if not data["complete"] or r.cut_by is not None:
-                            continue  # 1,000 kept of more: not compared (ties at the edge)
-                        assert sorted(map(tuple, (x["bad"] for x in data["diagnoses"]))) == (
-                            sorted(tuple(sorted(x.bad)) for x in r.diagnoses))
-                        if label == "command":
-                            size = max(size, len(proc.stdout))
-                    wall[label].append(best)
-                    cpu[label].append(best_cpu)
-                overhead.append(wall["command"][-1] - engine[-1])
-                loads.append(os.getloadavg()[0])
-            ratio = sum(wall["command"]) / sum(engine)
-            old = (f"{fmt(sum(wall['before']))} | {sum(wall['before']) / sum(engine):.2f}x | "
-                   if args.base else "")
-            lines.append(f"| {name} | {model.stat().st_size / 1e6:.1f} MB | {fmt(sum(engine))} | "
-                         f"{fmt(sum(wall['command']))} | {old}**{ratio:.2f}x** | "
-                         f"{sum(cpu['command']) / sum(engine_cpu):.2f}x | "
-                         f"{sum(wall['cold']) / sum(engine):.2f}x | "
-                         f"{sum(cpu['cold']) / sum(engine_cpu):.2f}x | "
-                         f"{mean_worst(overhead)} | {size / 1e3:.0f} kB | "
-                         f"{min(loads):.1f}-{max(loads):.1f} | {cut} |")
-            print(lines[-1], flush=True)
-    lines.append("")
-
-
-# -- synthetic robots ----------------------------------------------------------------------------
 def robot_yaml(n: int, rng: random.Random) -> dict[str, object]:
     comps: dict[str, dict[str, object]] = {}
     n_sh = max(1, n // 10)
