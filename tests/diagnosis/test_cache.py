@@ -49,6 +49,8 @@ def test_second_read_comes_from_the_cache(model: Path, _own_cache_dir: Path) -> 
     assert second.theory == first.theory == read_tug(model)
     assert second == first == encode(read_tug(model))
     assert second is not first  # read back from the entry, not kept in memory
+    lits = [x for c in second.theory.clauses for x in c.lits]
+    assert len({id(x) for x in lits}) == len(set(lits)) < len(lits)  # stored once each
     entry = cache.entry_path(model)
     assert entry.is_file() and entry.is_relative_to(_own_cache_dir / "dxboard" / "models")
 

@@ -66,6 +66,32 @@ def test_diagnose_json_lists_what_is_bad(capsys: pytest.CaptureFixture[str]) -> 
     assert len(data["diagnoses"][0]["good"]) == 16  # 14 of the paper's model, and the camera
 
 
+def test_diagnose_freezes_the_collector_only_while_it_runs(
+        monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    """The command hides the loaded model from the collector during the search
+    (``gc.freeze``) and gives everything back at the end, on success and on error."""
+    import gc
+
+    from host.diagnosis import diagnoser
+
+    seen: list[int] = []
+    real = diagnoser.Diagnoser.diagnose
+
+    def spy(self: diagnoser.Diagnoser, *a: object, **kw: object) -> object:
+        seen.append(gc.get_freeze_count())
+        return real(self, *a, **kw)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(diagnoser.Diagnoser, "diagnose", spy)
+    obs = SCENARIOS / "device-shut-down.obs"
+    assert gc.get_freeze_count() == 0
+    assert cli.main(["diagnose", str(TEDUSAR), "--obs", str(obs), "--json"]) == 0
+    assert seen and seen[0] > 0 and gc.get_freeze_count() == 0
+    bad = obs.parent.parent / "no-such.obs"
+    assert cli.main(["diagnose", str(TEDUSAR), "--obs", str(bad)]) == 2  # one line, exit 2
+    assert gc.get_freeze_count() == 0
+    capsys.readouterr()
+
+
 def test_no_consistent_diagnosis_says_so_and_exits_1(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
