@@ -119,17 +119,24 @@ def test_a_damaged_entry_is_rebuilt(model: Path, damage: object,
     assert build.calls == 2
 
 
-def test_an_entry_holding_something_else_is_rebuilt(model: Path) -> None:
+@pytest.mark.parametrize("held", ["list", "theory", "encoding of a list"])
+def test_an_entry_holding_something_else_is_rebuilt(model: Path, held: str) -> None:
+    """Under a valid key: not an encoding (a list; a bare theory, as the first version of
+    the cache stored), or an encoding whose theory is not one."""
     import pickle
+
+    from host.diagnosis.encoding import Encoding
 
     build = Counting(model)
     good = cache.cached(model, build)
     entry = cache.entry_path(model)
     with open(entry, "rb") as f:
         key = pickle.load(f)
+    wrong = {"list": ["not", "a", "theory"], "theory": good.theory,
+             "encoding of a list": Encoding(["x"], good.vars, good.clauses)}  # type: ignore[arg-type]
     with open(entry, "wb") as f:
         pickle.dump(key, f)
-        pickle.dump((cache._digest(model), ["not", "a", "theory"]), f)
+        pickle.dump((cache._digest(model), wrong[held]), f)
     assert cache.cached(model, build) == good
     assert build.calls == 2
 
