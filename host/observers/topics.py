@@ -49,11 +49,11 @@ Judged by the messages' own timing, so a busy machine is not a rate drop (no fla
 Detection latency (from the fault to the literal, plus the hub's scheduling delay):
 
 - topic silent, judged in the publisher's own time: ``silence / mu + JITTER_S`` after the
-  last message while the publisher is not starved (5 periods by default: 145 ms at /scan's
-  40 Hz, 70 ms at 100 Hz), longer by the time it waits for a CPU, at most ``silence / mu +
+  last message while the publisher is not starved (4 periods by default: 120 ms at /scan's
+  40 Hz, 60 ms at 100 Hz), longer by the time it waits for a CPU, at most ``silence / mu +
   STARVED_CAP_S``;
 - topic silent, judged without it: ``silence / mu + allowance + JITTER_S`` after the last
-  message (on a quiet machine 170 ms at 100 Hz, 0.62 s at 10 Hz; at most ``silence / mu +
+  message (on a quiet machine 160 ms at 100 Hz, 0.52 s at 10 Hz; at most ``silence / mu +
   ω``; the original engine needed 2 s);
 - rate wrong but not zero: one message interval once the window holds only the new regime,
   at most ``ω`` plus an interval;
@@ -81,7 +81,7 @@ from host.observers.silence import (
 
 log = logging.getLogger(__name__)
 
-DEFAULT_SILENCE = 5.0  # periods without a message before a topic counts as silent
+DEFAULT_SILENCE = 4.0  # periods without a message before a topic counts as silent
 JITTER_FLOOR_S = 0.1  # the least delay tolerated on the way from a publisher to us
 GAP = 1.5  # periods: a message after a longer gap may head a delayed burst
 
