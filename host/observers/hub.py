@@ -54,6 +54,11 @@ class ObserverHub:
         self._subs: list[Subscription] = []
         self.watcher: ProcessWatcher | None = None
 
+    def confirmed(self, atom: str) -> bool:
+        """Did the observer that asserts ``atom`` confirm it before saying it
+        (``Observer.confirmed``)? What the repair service need not debounce."""
+        return any(o.confirmed(atom) for o in self.observers)
+
     @property
     def topics(self) -> list[str]:
         return list(self._by_topic)

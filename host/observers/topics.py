@@ -132,9 +132,15 @@ class FrequencyObserver(TopicObserver):
         self.own_time = own_time  # False: never given a probe (system.yaml ``own_time``)
         self._own = OwnTime()  # a silence confirmed in the publisher's own time
         self._unprobed = False  # this gap: the probe could not be read, judged without it
+        self._own_silence = False  # the silence now asserted was confirmed in own time
 
     def atoms(self) -> list[str]:
         return [self.atom]
+
+    def confirmed(self, atom: str) -> bool:
+        """A silence judged in the publisher's own time and confirmed there (not at the cap,
+        starved; not by the allowance) is a hang, not a busy machine."""
+        return atom == self.atom and self._own_silence and self.asserted.get(atom) is False
 
     @property
     def allowance(self) -> float:
@@ -152,6 +158,7 @@ class FrequencyObserver(TopicObserver):
         self._confirm.reset()
         self._own.reset()
         self._unprobed = False
+        self._own_silence = False
         stamp = item.stamp
         stamped = stamp is not None
         t = stamp if stamp is not None else now
@@ -208,6 +215,7 @@ class FrequencyObserver(TopicObserver):
                 if self._own.silent(now, chain, since, need, cap):
                     self._say_why(now - since)
                     self._silent(now)
+                    self._own_silence = not self._own.capped
                 return
             self._unprobed = True  # no pid, or /proc unreadable: judged as without a probe
         if self._confirm.silent(now, since + self.max_gap + self.allowance,

@@ -214,3 +214,23 @@ def test_a_stalled_daemon_loop_is_no_silence_and_a_hang_is_still_found(seed: int
     assert [ok for ok, _ in got] == [True, False]
     last = 30.0 - 1 / RATE
     assert last + obs.max_gap <= got[1][1] <= sim.resumed(last + obs.max_gap + STARVED_CAP_S)
+
+
+def test_only_a_silence_confirmed_in_the_publishers_own_time_is_a_confirmed_finding() -> None:
+    # the repair service starts at once on a confirmed finding (``Observer.confirmed``)
+    atom = str(A.ok(TOPIC))
+    hung = scan(Chain([]))
+    Loaded(hung, []).run(publisher(Chain([]), 0.0, 5.0), 6.0)
+    assert hung.asserted[atom] is False and hung.confirmed(atom)
+    starved = Chain([(5.0, 100.0)])  # silent at the cap: the publisher was starved
+    capped = scan(starved)
+    Loaded(capped, []).run(publisher(starved, 0.0, 10.0), 10.0)
+    assert capped.asserted[atom] is False and not capped.confirmed(atom)
+    blind = Chain([])
+    blind.readable = False  # judged by the learned allowance: not in its own time
+    allowed = scan(blind)
+    Loaded(allowed, []).run(publisher(blind, 0.0, 5.0), 6.0)
+    assert allowed.asserted[atom] is False and not allowed.confirmed(atom)
+    # a message ends it: nothing abnormal stands
+    hung.feed(message(999, 7.0, 7.0), 7.0)
+    assert not hung.confirmed(atom)
