@@ -57,6 +57,7 @@ import psutil
 from benchmarks.loop import (
     Sample,
     TopicClock,
+    arrival_stamper,
     cpu_of,
     gap_around,
     ms,
@@ -124,13 +125,7 @@ class Arrivals(TopicClock):
         super().__init__(endpoint, topics)
 
     def _stamper(self, topic: str) -> Callable[[object], None]:
-        times = self.times[topic]
-
-        def on_sample(_: object) -> None:
-            now = time.monotonic()
-            self.last[topic] = now
-            times.append(now)
-        return on_sample
+        return arrival_stamper(self.last, self.times[topic], topic)
 
     def gap(self, topic: str, mono: float) -> tuple[float, float] | None:
         """The gap around ``mono`` as this peer saw it: (last arrival before, next after)."""

@@ -186,6 +186,17 @@ def gap_around(times: list[float], mono: float) -> tuple[float, float] | None:
     return None if i == 0 or i == len(times) else (times[i - 1], times[i])
 
 
+def arrival_stamper(last: dict[str, float], times: list[float], topic: str
+                    ) -> Callable[[object], None]:
+    """A subscriber's callback that stamps each arrival of ``topic`` (CLOCK_MONOTONIC, as the
+    journal's ``mono``) into ``last[topic]`` and ``times``."""
+    def on_message(_: object) -> None:
+        now = time.monotonic()
+        last[topic] = now
+        times.append(now)
+    return on_message
+
+
 def one_fault(d: RunningDaemon, kind: str, device: str, clock: TopicClock) -> Sample:
     names = {device, f"{device}_node"}
     with JournalReader(d.journal_path) as reader:

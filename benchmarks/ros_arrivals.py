@@ -15,8 +15,6 @@ from __future__ import annotations
 
 import contextlib
 import threading
-import time
-from collections.abc import Callable
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
@@ -30,7 +28,7 @@ from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import Imu, LaserScan
 from std_msgs.msg import String
 
-from benchmarks.loop import gap_around
+from benchmarks.loop import arrival_stamper, gap_around
 
 # the virtual robot's types (emulator/robot/ros_msgs.py documents them); others are strings
 TYPES: dict[str, type] = {"/scan": LaserScan, "/imu_data": Imu, "/odom": Odometry,
@@ -52,8 +50,8 @@ class RosArrivals:
                    signal_handler_options=SignalHandlerOptions.NO)
         self.node = Node("benchmark_arrivals", context=self.context)
         for t in topics:
-            self.node.create_subscription(TYPES.get(t, String), t, self._stamper(t), QOS,
-                                          raw=True)
+            on = arrival_stamper(self.last, self.times[t], t)
+            self.node.create_subscription(TYPES.get(t, String), t, on, QOS, raw=True)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
         self.thread = threading.Thread(target=self._spin, daemon=True)
@@ -62,15 +60,6 @@ class RosArrivals:
     def _spin(self) -> None:
         with contextlib.suppress(ExternalShutdownException):
             self.executor.spin()
-
-    def _stamper(self, topic: str) -> Callable[[object], None]:
-        times = self.times[topic]
-
-        def on_message(_: object) -> None:
-            now = time.monotonic()
-            self.last[topic] = now
-            times.append(now)
-        return on_message
 
     def gap(self, topic: str, mono: float) -> tuple[float, float] | None:
         return gap_around(self.times.get(topic, []), mono)
