@@ -265,8 +265,8 @@ def hangs(d: RunningDaemon, clock: Peer, n: int, where: str) -> list[Sample]:
         s = one_fault(d, "hang", "hokuyo", cast(TopicClock, clock))
         out.append(s)
         print(f"  fault {i + 1}/{n} ({where}, load {load:.1f}): last /scan seen → ~ok "
-              f"{ms(s.silence)}, fault → diagnosis {ms(s.to_diagnosis)}, healthy "
-              f"{ms(s.to_healthy)}", flush=True)
+              f"{ms(s.silence)}, fault → ~ok {ms(s.detect)}, fault → diagnosis "
+              f"{ms(s.to_diagnosis)}, healthy {ms(s.to_healthy)}", flush=True)
     return out
 
 
@@ -292,8 +292,10 @@ def hang_line(samples: list[Sample], where: str) -> str:
     diag = [s.to_diagnosis for s in samples if s.to_diagnosis is not None]
     heal = [s.to_healthy for s in samples if s.to_healthy is not None]
     sil = [s.silence for s in samples if s.silence is not None]
+    det = [s.detect for s in samples if s.detect is not None]
     return (f"- Injected faults {where}: {len(samples)} hokuyo hang(s), {len(diag)} diagnosed "
             f"(last /scan seen → ~ok p50 {ms(pct(sil, 50))}, max {ms(max(sil) if sil else None)};"
+            f" fault → ~ok p50 {ms(pct(det, 50))}, max {ms(max(det) if det else None)};"
             f" fault → diagnosis p50 {ms(pct(diag, 50))}, max "
             f"{ms(max(diag) if diag else None)}), {len(heal)} verified healthy again (p50 "
             f"{ms(pct(heal, 50))}, max {ms(max(heal) if heal else None)}).")
