@@ -35,7 +35,10 @@ Judged by the messages' own timing, so a busy machine is not a rate drop (no fla
   processes' most starved thread spent runnable but waiting for a CPU (Linux schedstat) must
   reach ``silence / mu + JITTER_S`` (plus ``CATCH_UP`` times the wait seen: what a starved
   chain has to catch up on), confirmed at a tick when none of their threads is stuck on the
-  run queue; no learned allowance, no floor. A hung publisher sleeps, so it is found at that
+  run queue; no learned allowance, no floor. While nothing came in on *any* observed topic for
+  ``silence / mu`` (``WayIn``, the hub's: a source held up inside the daemon, the process
+  feeding every device stalled) the time counts as waited too: one topic's hang leaves the
+  others flowing. A hung publisher sleeps, so it is found at that
   limit; a starved one is excused while it waits on the run queue, up to ``STARVED_CAP_S``
   (2 s) past ``silence / mu`` — a publisher starved for seconds is reported all the same, and
   the log line says which of the two it was. Where no process is known or ``/proc`` cannot
@@ -93,6 +96,19 @@ class ChainReader(Protocol):
     def read(self) -> ChainState | None: ...
 
 
+class WayIn:
+    """When a message of any observed topic last came in (the hub feeds it): a gap in which
+    nothing came in on any topic is the way in's (the daemon's source held up, or every
+    publisher at once), not one publisher's."""
+
+    def __init__(self) -> None:
+        self.last: float | None = None
+
+    def arrived(self, t: float) -> None:
+        if self.last is None or t > self.last:
+            self.last = t
+
+
 class TopicObserver(Observer[Message]):
     """An observer fed with the messages of ``topics``."""
 
@@ -133,6 +149,9 @@ class FrequencyObserver(TopicObserver):
         self._own = OwnTime()  # a silence confirmed in the publisher's own time
         self._unprobed = False  # this gap: the probe could not be read, judged without it
         self._own_silence = False  # the silence now asserted was confirmed in own time
+        #: messages of every observed topic (the hub's): while none came in for ``max_gap``,
+        #: the gap is the way in's, counted as the chain's wait (None: not known)
+        self.way_in: WayIn | None = None
 
     def atoms(self) -> list[str]:
         return [self.atom]
@@ -211,6 +230,8 @@ class FrequencyObserver(TopicObserver):
             if now < start:
                 return
             chain = self.probe.read() if self.probe is not None else None
+            if chain is not None and self._way_quiet(now):
+                chain = ChainState(chain.wait, chain.stuck + 1)  # excused as if starved
             if chain is not None:
                 if self._own.silent(now, chain, since, need, cap):
                     self._say_why(now - since)
@@ -221,6 +242,13 @@ class FrequencyObserver(TopicObserver):
         if self._confirm.silent(now, since + self.max_gap + self.allowance,
                                 since + self.max_gap + self.window):
             self._silent(now)
+
+    def _way_quiet(self, now: float) -> bool:
+        """Nothing came in on any observed topic for this topic's silence limit: the way in
+        stalled (a source held up inside the daemon, the process feeding every device), or
+        every publisher did — either way not this publisher's own silence."""
+        last = None if self.way_in is None else self.way_in.last
+        return last is not None and now - last >= self.max_gap
 
     def _own_bounds(self, since: float) -> tuple[float, float, float]:
         """For a gap judged in the publisher's own time: when to read the probe first (half
@@ -239,7 +267,8 @@ class FrequencyObserver(TopicObserver):
                     own.starved)
         else:
             log.log(level, "%s: silent at the cap, no message for %.3f s although the "
-                    "publisher was starved (%.3f s of it its run-queue wait)", self.name,
+                    "publisher was starved or nothing came in on any topic (%.3f s of it "
+                    "excused so)", self.name,
                     gap, own.starved)
 
     def _probed(self) -> bool:

@@ -20,7 +20,7 @@ from host.observers import FrequencyObserver, Message
 from host.observers.base import Update
 from host.observers.payload import encode
 from host.observers.silence import CATCH_UP, JITTER_S, STARVED_CAP_S, ChainState
-from host.observers.topics import DEFAULT_SILENCE, JITTER_FLOOR_S
+from host.observers.topics import DEFAULT_SILENCE, JITTER_FLOOR_S, WayIn
 from tests.observers.loaded import Loaded, stalls
 
 TOPIC = "/scan"
@@ -234,3 +234,69 @@ def test_only_a_silence_confirmed_in_the_publishers_own_time_is_a_confirmed_find
     # a message ends it: nothing abnormal stands
     hung.feed(message(999, 7.0, 7.0), 7.0)
     assert not hung.confirmed(atom)
+
+
+class Beside(Observed):
+    """The observer with a hub's ``WayIn``: fed its own arrivals and those of another topic
+    (``others``, arrival times), as the hub feeds every topic's messages."""
+
+    others: list[float]
+
+    def _take(self, now: float) -> None:
+        assert self.way_in is not None
+        while self.others and self.others[0] <= now:
+            self.way_in.arrived(self.others.pop(0))
+
+    def feed(self, item: Message, now: float) -> list[Update]:
+        self._take(now)
+        assert self.way_in is not None
+        self.way_in.arrived(now)
+        return super().feed(item, now)
+
+    def tick(self, now: float) -> list[Update]:
+        self._take(now)
+        return super().tick(now)
+
+
+def beside(others: list[float]) -> Beside:
+    obs = Beside(TOPIC, rate=RATE, tolerance=10, window=WINDOW)
+    obs.chain = Chain([])
+    obs.probe = obs.chain
+    obs.way_in = WayIn()
+    obs.others = others
+    return obs
+
+
+def imu(start: float, end: float, held: tuple[float, float] = (0.0, 0.0)) -> list[float]:
+    """Arrivals of another topic at 100 Hz; those due while ``held`` arrive at its end."""
+    return [held[1] if held[0] <= t < held[1] else t
+            for t in (start + k / 100 for k in range(int((end - start) * 100)))]
+
+
+def test_a_way_in_held_up_for_every_topic_is_no_silence() -> None:
+    # ROS 2, a managed driver reconfigured: the daemon's source delivered nothing on any topic
+    # for 0.3 s, its publishers never waited for a CPU (the run-queue wait says nothing)
+    held = (10.0, 10.3)
+    sim = Loaded(beside(imu(0.0, 20.0, held)), [], delayed=[held])
+    sim.run(publisher(Chain([]), 0.0, 20.0), 20.0)
+    assert [ok for ok, _ in verdicts(sim)] == [True]
+    # judged without the way in, the same gap is a silence in the publisher's own time
+    alone = Loaded(scan(Chain([])), [], delayed=[held])
+    alone.run(publisher(Chain([]), 0.0, 20.0), 20.0)
+    assert [ok for ok, _ in verdicts(alone)] == [True, False, True]
+
+
+def test_a_hang_beside_a_flowing_topic_is_found_at_the_limit_and_a_total_stop_at_the_cap(
+) -> None:
+    flowing = beside(imu(0.0, 10.0))
+    sim = Loaded(flowing, [])
+    sim.run(publisher(Chain([]), 0.0, 5.0), 6.0)
+    last = 5.0 - 1 / RATE
+    assert verdicts(sim)[-1] == (False, pytest.approx(last + flowing.max_gap + JITTER_S))
+    assert flowing.confirmed(str(A.ok(TOPIC)))
+    # nothing else comes in either: excused as a stalled way in, silent at the cap all the same
+    stopped = beside(imu(0.0, 5.0))
+    sim = Loaded(stopped, [])
+    sim.run(publisher(Chain([]), 0.0, 5.0), 8.0)
+    assert verdicts(sim)[-1] == (False, pytest.approx(last + stopped.max_gap + STARVED_CAP_S))
+    assert not stopped.confirmed(str(A.ok(TOPIC)))
