@@ -1,16 +1,22 @@
 """No flapping under load: false diagnoses and repairs of a healthy robot on a busy machine.
 
-    .venv/bin/python -m benchmarks.flap [--quick] [--minutes M] [--idle-minutes M]
-        [--faults N] [--idle-faults N] [--own-time on|off] [--keep DIR] [--write]
+    .venv/bin/python -m benchmarks.flap [--quick] [--middleware zenoh|ros2] [--minutes M]
+        [--idle-minutes M] [--faults N] [--idle-faults N] [--own-time on|off] [--keep DIR]
+        [--write]
 
 The real daemon, ``dxboard run models/tedusar --emulate`` (a subprocess, as ``tests/daemon``:
 free ports, short device boot times, journal in a temporary folder; the board streams 10
-channels at 100 Hz, the nodes run as real processes), is left alone with a healthy robot:
+channels at 100 Hz, the nodes run as real processes), is left alone with a healthy robot.
+``--middleware ros2`` runs the ROS 2 robot as ``make run`` starts it (``dxboard run
+--middleware ros2``: the nodes real ROS 2 nodes, the lidar's driver a managed one), on a DDS
+domain of the benchmark's own (``tests.ros.domain``), watched by an independent rclpy peer
+(``benchmarks.ros_arrivals``) instead of a Zenoh one; default: the Zenoh robot.
 
 1. baseline, the idle machine (``--idle-minutes``, default 3; quick 0.5);
 2. the same with a CPU hog on every core beside it (``--minutes``, default 10; quick 1): one
    busy-looping process per core (``os.cpu_count()``), each ending by itself after the phase
-   and killed by the benchmark at its end in any case;
+   and killed by the benchmark at its end in any case (``--minutes 0``: no hog at all, for
+   hang figures on the idle machine alone);
 3. still under the hog, ``--faults`` hokuyo hangs (default 3; quick 1), each found through
    /scan falling silent and repaired: fault → diagnosis and fault → verified healthy.
 
@@ -32,7 +38,6 @@ log's silence lines are printed at the end.
 from __future__ import annotations
 
 import argparse
-import bisect
 import contextlib
 import json
 import os
@@ -45,12 +50,26 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Protocol, cast
 
 import psutil
 
-from benchmarks.loop import Sample, TopicClock, cpu_of, ms, one_fault, pct, write_section
+from benchmarks.loop import (
+    Sample,
+    TopicClock,
+    arrival_stamper,
+    cpu_of,
+    gap_around,
+    ms,
+    one_fault,
+    pct,
+    write_section,
+)
 from host.journal import ActionRecord, DiagnosisRecord, LinkChange, Observation
 from tests.daemon.runner import RunningDaemon, fast_copy, healthy, key_file
+from tests.ros.domain import claim_domain, domain_env
+
+TOPICS = ["/scan", "/imu_data", "/odom", "/cmd_vel", "/map", "/thermal/image"]
 
 HOG = "import time\nend = time.monotonic() + {s}\nwhile time.monotonic() < end:\n    pass\n"
 
@@ -106,22 +125,24 @@ class Arrivals(TopicClock):
         super().__init__(endpoint, topics)
 
     def _stamper(self, topic: str) -> Callable[[object], None]:
-        times = self.times[topic]
-
-        def on_sample(_: object) -> None:
-            now = time.monotonic()
-            self.last[topic] = now
-            times.append(now)
-        return on_sample
+        return arrival_stamper(self.last, self.times[topic], topic)
 
     def gap(self, topic: str, mono: float) -> tuple[float, float] | None:
         """The gap around ``mono`` as this peer saw it: (last arrival before, next after)."""
-        times = self.times.get(topic, [])
-        i = bisect.bisect_right(times, mono)
-        return None if i == 0 or i == len(times) else (times[i - 1], times[i])
+        return gap_around(self.times.get(topic, []), mono)
 
 
-def trace(ph: Phase, peer: Arrivals | None, log: Path | None) -> list[str]:
+class Peer(Protocol):
+    """An independent subscriber of the robot's topics (Zenoh or ROS 2)."""
+
+    last: dict[str, float]
+
+    def gap(self, topic: str, mono: float) -> tuple[float, float] | None: ...
+
+    def close(self) -> None: ...
+
+
+def trace(ph: Phase, peer: Peer | None, log: Path | None) -> list[str]:
     """One line per abnormal literal of a phase: what the independent peer saw of the topic
     then, and the daemon's own log line about it."""
     lines = log.read_text(errors="replace").splitlines() if log and log.exists() else []
@@ -204,24 +225,35 @@ def without_own_time(system_dir: Path) -> None:
 
 
 @contextlib.contextmanager
-def robot(tmp: Path, own_time: bool) -> Iterator[RunningDaemon]:
-    """The fast virtual TEDUSAR robot (``tests.daemon.runner.healthy_robot``), its topics'
-    silences judged in the publishers' own time or not."""
+def robot(tmp: Path, own_time: bool, middleware: str = "zenoh"
+          ) -> Iterator[tuple[RunningDaemon, Peer]]:
+    """The fast virtual TEDUSAR robot (``tests.daemon.runner.healthy_robot``) on
+    ``middleware`` (on ROS 2 in a DDS domain of its own), its topics' silences judged in the
+    publishers' own time or not; and an independent peer watching its topics."""
     system = fast_copy(tmp)
     if not own_time:
         without_own_time(system)
-    d = RunningDaemon(tmp, system, extra_args=("--key-file", str(key_file(tmp))))
-    try:
+    with contextlib.ExitStack() as stack:
+        domain = stack.enter_context(claim_domain()) if middleware == "ros2" else None
+        env = domain_env(domain) if domain is not None else {}
+        d = RunningDaemon(tmp, system, env=env, extra_args=(
+            "--key-file", str(key_file(tmp)), "--middleware", middleware))
+        stack.callback(d.close)
         d.wait_for(healthy, 120, "the robot powered up and healthy")
-        yield d
-    finally:
-        d.close()
+        peer: Peer
+        if domain is not None:
+            from benchmarks.ros_arrivals import RosArrivals
+            peer = RosArrivals(domain, TOPICS)
+        else:
+            peer = Arrivals(d.zenoh, TOPICS)
+        stack.callback(peer.close)
+        yield d, peer
 
 
 SPACING_S = 65.0  # between two hangs of the lidar: the repair limiter's 60 s, and a margin
 
 
-def hangs(d: RunningDaemon, clock: TopicClock, n: int, where: str) -> list[Sample]:
+def hangs(d: RunningDaemon, clock: Peer, n: int, where: str) -> list[Sample]:
     """``n`` hokuyo hangs, each ``SPACING_S`` after the last (a repair of the same device
     again within the limiter's minute counts as one that did not hold)."""
     out: list[Sample] = []
@@ -230,29 +262,26 @@ def hangs(d: RunningDaemon, clock: TopicClock, n: int, where: str) -> list[Sampl
         time.sleep(max(0.0, last + SPACING_S - time.monotonic()))
         last = time.monotonic()
         load = loadavg()
-        s = one_fault(d, "hang", "hokuyo", clock)
+        s = one_fault(d, "hang", "hokuyo", cast(TopicClock, clock))
         out.append(s)
         print(f"  fault {i + 1}/{n} ({where}, load {load:.1f}): last /scan seen → ~ok "
-              f"{ms(s.silence)}, fault → diagnosis {ms(s.to_diagnosis)}, healthy "
-              f"{ms(s.to_healthy)}", flush=True)
+              f"{ms(s.silence)}, fault → ~ok {ms(s.detect)}, fault → diagnosis "
+              f"{ms(s.to_diagnosis)}, healthy {ms(s.to_healthy)}", flush=True)
     return out
 
 
 def run(idle_s: float, hog_s: float, n_faults: int, keep: Path | None = None,
-        idle_faults: int = 0, own_time: bool = True
+        idle_faults: int = 0, own_time: bool = True, middleware: str = "zenoh"
         ) -> tuple[list[Phase], list[Sample], list[Sample]]:
     phases: list[Phase] = []
-    with workdir(keep) as tmp, robot(tmp, own_time) as d:
-        clock = Arrivals(d.zenoh, ["/scan", "/imu_data", "/odom", "/cmd_vel", "/map",
-                                   "/thermal/image"])
-        try:
-            phases.append(watch(d, "idle machine", idle_s))
-            idle = hangs(d, clock, idle_faults, "idle machine")
+    hog: list[Sample] = []
+    with workdir(keep) as tmp, robot(tmp, own_time, middleware) as (d, clock):
+        phases.append(watch(d, "idle machine", idle_s))
+        idle = hangs(d, clock, idle_faults, "idle machine")
+        if hog_s > 0 or n_faults > 0:
             with hogs(hog_s + n_faults * SPACING_S):
                 phases.append(watch(d, f"CPU hog on {os.cpu_count()} cores", hog_s))
                 hog = hangs(d, clock, n_faults, "under the hog")
-        finally:
-            clock.close()
         for ph in phases:
             for line in trace(ph, clock, tmp / "daemon.err"):
                 print(f"  trace ({ph.name}): {line}", flush=True)
@@ -263,8 +292,10 @@ def hang_line(samples: list[Sample], where: str) -> str:
     diag = [s.to_diagnosis for s in samples if s.to_diagnosis is not None]
     heal = [s.to_healthy for s in samples if s.to_healthy is not None]
     sil = [s.silence for s in samples if s.silence is not None]
+    det = [s.detect for s in samples if s.detect is not None]
     return (f"- Injected faults {where}: {len(samples)} hokuyo hang(s), {len(diag)} diagnosed "
             f"(last /scan seen → ~ok p50 {ms(pct(sil, 50))}, max {ms(max(sil) if sil else None)};"
+            f" fault → ~ok p50 {ms(pct(det, 50))}, max {ms(max(det) if det else None)};"
             f" fault → diagnosis p50 {ms(pct(diag, 50))}, max "
             f"{ms(max(diag) if diag else None)}), {len(heal)} verified healthy again (p50 "
             f"{ms(pct(heal, 50))}, max {ms(max(heal) if heal else None)}).")
@@ -287,23 +318,25 @@ def report(phases: list[Phase], idle: list[Sample], samples: list[Sample],
     met = hog.diagnoses == 0 and hog.repairs == 0
     cmd = (" --quick" if args.quick else "") + ("" if args.own_time == "on" else
                                                   " --own-time off")
+    cmd += f" --middleware {args.middleware}" if args.middleware != "zenoh" else ""
     return f"""## No flapping under load
 
 `.venv/bin/python -m benchmarks.flap{cmd} --minutes {args.minutes:g} --idle-minutes \
 {args.idle_minutes:g} --write` ({platform.python_implementation()} \
 {platform.python_version()}, {os.cpu_count()} cores shared with other engineers' work). The \
-real `dxboard run models/tedusar --emulate` with a healthy robot (board at 10 channels x \
-100 Hz, 9 node processes publishing /imu_data at 100 Hz, /scan 40, /odom 20, /cmd_vel 10, \
-/map 0.5), left alone on the idle machine (the baseline), then beside one busy-looping process \
-per core. Counted from the journal: frequency verdicts `~ok(/t)`, other abnormal literals \
-(`~link(board)` among them), the board client's own link drops (a reconnect), diagnoses \
-naming any component (each false: nothing is broken) and repair actions started.
+real `dxboard run models/tedusar --emulate --middleware {args.middleware}` with a healthy \
+robot (board at 10 channels x 100 Hz, 9 node processes publishing /imu_data at 100 Hz, \
+/scan 40, /odom 20, /cmd_vel 10, /map 0.5), left alone on the idle machine (the baseline), \
+then beside one busy-looping process per core. Counted from the journal: frequency verdicts \
+`~ok(/t)`, other abnormal literals (`~link(board)` among them), the board client's own \
+link drops (a reconnect), diagnoses naming any component (each false: nothing is broken) \
+and repair actions started.
 
 {chr(10).join(rows)}
 
 - Target under the hog: 0 false diagnoses and 0 repairs — {'**met**' if met else '**NOT met**'}.
 {hang_line(idle, "on the idle machine") if idle else ""}
-{hang_line(samples, "under the hog")}
+{hang_line(samples, "under the hog") if samples else ""}
 - Before (issue 18): a headless browser starting beside the daemon flipped `ok(/imu_data)` \
 and `ok(/scan)` about 20 times in a second; only the repair debounce kept them from a repair. \
 The frequency observer now judges the rate on the publishers' stamps and a silence in the \
@@ -327,14 +360,18 @@ def main() -> None:
                     help="hangs on the idle machine, before the hog (default 0)")
     ap.add_argument("--own-time", choices=("on", "off"), default="on",
                     help="off: every topic's silence judged as before (own_time: false)")
+    ap.add_argument("--middleware", choices=("zenoh", "ros2"), default="zenoh",
+                    help="the robot's middleware (ros2: as `make run` starts it)")
     ap.add_argument("--write", action="store_true", help="write benchmarks/RESULTS.md")
     args = ap.parse_args()
-    args.minutes = args.minutes or (1.0 if args.quick else 10.0)
-    args.idle_minutes = args.idle_minutes or (0.5 if args.quick else 3.0)
+    if args.minutes is None:
+        args.minutes = 1.0 if args.quick else 10.0
+    if args.idle_minutes is None:
+        args.idle_minutes = 0.5 if args.quick else 3.0
     n = args.faults if args.faults is not None else (1 if args.quick else 3)
     print(f"idle {args.idle_minutes:g} min, hog {args.minutes:g} min, {n} faults", flush=True)
     phases, idle, samples = run(args.idle_minutes * 60, args.minutes * 60, n, args.keep,
-                                args.idle_faults, args.own_time == "on")
+                                args.idle_faults, args.own_time == "on", args.middleware)
     text = report(phases, idle, samples, args)
     print(text)
     if args.keep is not None:

@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import bisect
 import contextlib
 import json
 import os
@@ -176,6 +177,24 @@ class TopicClock:
         for sub in self._subs:
             sub.undeclare()
         self._session.close()
+
+
+def gap_around(times: list[float], mono: float) -> tuple[float, float] | None:
+    """The gap around ``mono`` in sorted arrival ``times``: (last arrival before, next
+    after), or None at either end."""
+    i = bisect.bisect_right(times, mono)
+    return None if i == 0 or i == len(times) else (times[i - 1], times[i])
+
+
+def arrival_stamper(last: dict[str, float], times: list[float], topic: str
+                    ) -> Callable[[object], None]:
+    """A subscriber's callback that stamps each arrival of ``topic`` (CLOCK_MONOTONIC, as the
+    journal's ``mono``) into ``last[topic]`` and ``times``."""
+    def on_message(_: object) -> None:
+        now = time.monotonic()
+        last[topic] = now
+        times.append(now)
+    return on_message
 
 
 def one_fault(d: RunningDaemon, kind: str, device: str, clock: TopicClock) -> Sample:

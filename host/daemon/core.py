@@ -172,7 +172,8 @@ class Daemon:
                  "DXBOARD_ROBOT": str(opts.system_dir.resolve()), **opts.node_env},
             device_boot_s=opts.device_boot_s, on_start=self._started, dry_run=opts.dry_run,
             clock=clock, max_parallel=opts.max_parallel_steps,
-            debounce_s=opts.repair_debounce_s, board=self.model.board or "board")
+            debounce_s=opts.repair_debounce_s, board=self.model.board or "board",
+            confirmed=self.hub.confirmed)
         self.journal: Journal | None = None
         self.run_id = ""  # set by start()
         self.web: WebServer | None = None

@@ -147,6 +147,12 @@ class Observer(ABC, Generic[In]):
     def atoms(self) -> list[str]:
         """Every atom this observer can emit (to check against the diagnosis model)."""
 
+    def confirmed(self, atom: str) -> bool:
+        """Is what this observer asserts of ``atom`` now an abnormal finding it confirmed
+        before saying it (a silence in the publisher's own time, a trip the board's readings
+        bore out), so that a repair need not wait to see it hold? The default: no."""
+        return False
+
     # -- the private half ------------------------------------------------------------------
     @abstractmethod
     def _feed(self, item: In, now: float) -> None: ...

@@ -17,7 +17,7 @@
         jaguar_node: {supervised: true}               # the daemon starts it and tracks its pid
         hokuyo_node: {graph: true}                    # ROS 2 source: present in the ROS 2 graph
       topics:                 # general observer: ok(/t) iff |f - rate| < tolerance over window
-        /odom: {rate: 10, tolerance: 3, window: 1.0, silence: 5}   # silence in periods
+        /odom: {rate: 10, tolerance: 3, window: 1.0, silence: 4}   # silence in periods (default 4)
         /scan: {rate: 40, tolerance: 10, window: 0.5, own_time: false}   # see below
       trends:                 # qualitative observer: inc/dec/const(v), slope b per second
         odom_yaw_rate: {topic: /odom, key: twist.angular.z, window: 1.0, slope: 0.05}

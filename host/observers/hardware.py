@@ -196,6 +196,12 @@ class HardwareObserver(Observer[BoardInput]):
             out += [on, tripped, in_band] if d.band is not None else [on, tripped]
         return out
 
+    def confirmed(self, atom: str) -> bool:
+        """A trip is said only once the settled readings (or the board's own state) bear it
+        out: ``tripped(d)`` asserted is confirmed."""
+        return self.asserted.get(atom) is True and any(
+            atom == self._atoms[d][1] for d in self.devices)
+
     def stop(self, now: float) -> list[Update]:
         self._steady = None
         return super().stop(now)

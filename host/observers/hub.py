@@ -25,7 +25,7 @@ from host.observers.hardware import BoardInput, HardwareObserver
 from host.observers.payload import Message
 from host.observers.processes import ProcessObserver, ProcessSample
 from host.observers.sources.base import Subscription, TopicSource
-from host.observers.topics import TopicObserver
+from host.observers.topics import FrequencyObserver, TopicObserver, WayIn
 from host.observers.watcher import ProcessSpec, ProcessWatcher
 
 log = logging.getLogger(__name__)
@@ -50,9 +50,18 @@ class ObserverHub:
                 self._by_node.setdefault(o.node, []).append(o)
             elif isinstance(o, HardwareObserver):
                 self._hardware.append(o)
+        self.way_in = WayIn()  # any topic's latest message: a stalled way in is no silence
+        for o in self.observers:
+            if isinstance(o, FrequencyObserver):
+                o.way_in = self.way_in
         self._timers: dict[int, tuple[float, asyncio.TimerHandle]] = {}
         self._subs: list[Subscription] = []
         self.watcher: ProcessWatcher | None = None
+
+    def confirmed(self, atom: str) -> bool:
+        """Did the observer that asserts ``atom`` confirm it before saying it
+        (``Observer.confirmed``)? What the repair service need not debounce."""
+        return any(o.confirmed(atom) for o in self.observers)
 
     @property
     def topics(self) -> list[str]:
@@ -95,6 +104,7 @@ class ObserverHub:
 
     # -- inputs ----------------------------------------------------------------------------
     def feed_message(self, msg: Message) -> None:
+        self.way_in.arrived(msg.time)
         for o in self._by_topic.get(msg.topic, ()):
             self._deliver(o, o.feed(msg, msg.time))
 

@@ -35,7 +35,10 @@ Judged by the messages' own timing, so a busy machine is not a rate drop (no fla
   processes' most starved thread spent runnable but waiting for a CPU (Linux schedstat) must
   reach ``silence / mu + JITTER_S`` (plus ``CATCH_UP`` times the wait seen: what a starved
   chain has to catch up on), confirmed at a tick when none of their threads is stuck on the
-  run queue; no learned allowance, no floor. A hung publisher sleeps, so it is found at that
+  run queue; no learned allowance, no floor. While nothing came in on *any* observed topic for
+  ``silence / mu`` (``WayIn``, the hub's: a source held up inside the daemon, the process
+  feeding every device stalled) the time counts as waited too: one topic's hang leaves the
+  others flowing. A hung publisher sleeps, so it is found at that
   limit; a starved one is excused while it waits on the run queue, up to ``STARVED_CAP_S``
   (2 s) past ``silence / mu`` — a publisher starved for seconds is reported all the same, and
   the log line says which of the two it was. Where no process is known or ``/proc`` cannot
@@ -49,11 +52,11 @@ Judged by the messages' own timing, so a busy machine is not a rate drop (no fla
 Detection latency (from the fault to the literal, plus the hub's scheduling delay):
 
 - topic silent, judged in the publisher's own time: ``silence / mu + JITTER_S`` after the
-  last message while the publisher is not starved (5 periods by default: 145 ms at /scan's
-  40 Hz, 70 ms at 100 Hz), longer by the time it waits for a CPU, at most ``silence / mu +
+  last message while the publisher is not starved (4 periods by default: 120 ms at /scan's
+  40 Hz, 60 ms at 100 Hz), longer by the time it waits for a CPU, at most ``silence / mu +
   STARVED_CAP_S``;
 - topic silent, judged without it: ``silence / mu + allowance + JITTER_S`` after the last
-  message (on a quiet machine 170 ms at 100 Hz, 0.62 s at 10 Hz; at most ``silence / mu +
+  message (on a quiet machine 160 ms at 100 Hz, 0.52 s at 10 Hz; at most ``silence / mu +
   ω``; the original engine needed 2 s);
 - rate wrong but not zero: one message interval once the window holds only the new regime,
   at most ``ω`` plus an interval;
@@ -81,7 +84,7 @@ from host.observers.silence import (
 
 log = logging.getLogger(__name__)
 
-DEFAULT_SILENCE = 5.0  # periods without a message before a topic counts as silent
+DEFAULT_SILENCE = 4.0  # periods without a message before a topic counts as silent
 JITTER_FLOOR_S = 0.1  # the least delay tolerated on the way from a publisher to us
 GAP = 1.5  # periods: a message after a longer gap may head a delayed burst
 
@@ -91,6 +94,19 @@ class ChainReader(Protocol):
     queue now, or None when it cannot be read (``host.observers.starvation.WaitProbe``)."""
 
     def read(self) -> ChainState | None: ...
+
+
+class WayIn:
+    """When a message of any observed topic last came in (the hub feeds it): a gap in which
+    nothing came in on any topic is the way in's (the daemon's source held up, or every
+    publisher at once), not one publisher's."""
+
+    def __init__(self) -> None:
+        self.last: float | None = None
+
+    def arrived(self, t: float) -> None:
+        if self.last is None or t > self.last:
+            self.last = t
 
 
 class TopicObserver(Observer[Message]):
@@ -132,9 +148,18 @@ class FrequencyObserver(TopicObserver):
         self.own_time = own_time  # False: never given a probe (system.yaml ``own_time``)
         self._own = OwnTime()  # a silence confirmed in the publisher's own time
         self._unprobed = False  # this gap: the probe could not be read, judged without it
+        self._own_silence = False  # the silence now asserted was confirmed in own time
+        #: messages of every observed topic (the hub's): while none came in for ``max_gap``,
+        #: the gap is the way in's, counted as the chain's wait (None: not known)
+        self.way_in: WayIn | None = None
 
     def atoms(self) -> list[str]:
         return [self.atom]
+
+    def confirmed(self, atom: str) -> bool:
+        """A silence judged in the publisher's own time and confirmed there (not at the cap,
+        starved; not by the allowance) is a hang, not a busy machine."""
+        return atom == self.atom and self._own_silence and self.asserted.get(atom) is False
 
     @property
     def allowance(self) -> float:
@@ -152,6 +177,7 @@ class FrequencyObserver(TopicObserver):
         self._confirm.reset()
         self._own.reset()
         self._unprobed = False
+        self._own_silence = False
         stamp = item.stamp
         stamped = stamp is not None
         t = stamp if stamp is not None else now
@@ -204,15 +230,25 @@ class FrequencyObserver(TopicObserver):
             if now < start:
                 return
             chain = self.probe.read() if self.probe is not None else None
+            if chain is not None and self._way_quiet(now):
+                chain = ChainState(chain.wait, chain.stuck + 1)  # excused as if starved
             if chain is not None:
                 if self._own.silent(now, chain, since, need, cap):
                     self._say_why(now - since)
                     self._silent(now)
+                    self._own_silence = not self._own.capped
                 return
             self._unprobed = True  # no pid, or /proc unreadable: judged as without a probe
         if self._confirm.silent(now, since + self.max_gap + self.allowance,
                                 since + self.max_gap + self.window):
             self._silent(now)
+
+    def _way_quiet(self, now: float) -> bool:
+        """Nothing came in on any observed topic for this topic's silence limit: the way in
+        stalled (a source held up inside the daemon, the process feeding every device), or
+        every publisher did — either way not this publisher's own silence."""
+        last = None if self.way_in is None else self.way_in.last
+        return last is not None and now - last >= self.max_gap
 
     def _own_bounds(self, since: float) -> tuple[float, float, float]:
         """For a gap judged in the publisher's own time: when to read the probe first (half
@@ -231,7 +267,8 @@ class FrequencyObserver(TopicObserver):
                     own.starved)
         else:
             log.log(level, "%s: silent at the cap, no message for %.3f s although the "
-                    "publisher was starved (%.3f s of it its run-queue wait)", self.name,
+                    "publisher was starved or nothing came in on any topic (%.3f s of it "
+                    "excused so)", self.name,
                     gap, own.starved)
 
     def _probed(self) -> bool:

@@ -7,7 +7,13 @@ stale data — knowing nothing of the daemon that feeds it.
   after ``debounce_s`` (a component that keeps entering and leaving the diagnosis faster than
   that is reported, ``host.repair.unsettled``) — unless a newer diagnosis superseded it, the
   board link is down (then every board literal is unknown: nothing to act on), or a repair is
-  already running (the running loop re-diagnoses after each plan, so it sees the change);
+  already running (the running loop re-diagnoses after each plan, so it sees the change).
+  The debounce keeps a repair off what does not hold: a reading that flickers, a verdict a
+  busy machine overturns a moment later. Evidence its observer already confirmed before
+  saying it needs no second wait (``confirmed(atom)``, the observer hub's: a silence judged in
+  the publisher's own time, a trip the board's readings bore out): a diagnosis that changed
+  with such a finding new since the last one starts its repair after ``confirmed_debounce_s``
+  (default 0); any other change, a flapping diagnosis among them, still waits ``debounce_s``;
 - ``link(client)``: the board link it acts through (``None``: the link is down);
 - ``diagnose``: given at construction, an async callable returning a fresh diagnosis of the
   observations now (the daemon runs it off its loop); ``observations``: the daemon's one
@@ -76,6 +82,7 @@ BOARD_POLL_S = 0.5
 FOREIGN_WINDOW_S = 5.0  # a switch command this host sent that long ago is still its own
 SHED_HOLD = "shed by the board to stay under its total-current limit"
 Emit = Callable[[Event], None]
+Confirmed = Callable[[str], bool]  # is what is said of this atom a confirmed abnormal finding?
 FreshDiagnosis = Callable[[], Awaitable[DiagnosisResult]]
 
 
@@ -87,12 +94,16 @@ def is_healthy(result: DiagnosisResult | None) -> bool:
 class RepairService:
     def __init__(self, planner: RepairPlanner, executor: Executor, *, diagnose: FreshDiagnosis,
                  observations: ObservationSet, emit: Emit, board: str = "board",
-                 debounce_s: float = 0.5) -> None:
+                 debounce_s: float = 0.5, confirmed: Confirmed | None = None,
+                 confirmed_debounce_s: float = 0.0) -> None:
         self.planner = planner
         self.executor = executor
         self.observations = observations
         self.board_component = board
         self.debounce_s = debounce_s
+        self.confirmed = confirmed
+        self.confirmed_debounce_s = confirmed_debounce_s
+        self._seen: frozenset[Literal] = frozenset()  # the literals at the last diagnosis
         self._fresh = diagnose
         self._emit = emit
         executor.report = self._report
@@ -115,12 +126,26 @@ class RepairService:
         named = set().union(*result.bad_sets()) if result.bad_sets() else set()
         for flip in self.unsettled.diagnosed(named, self.executor.clock(), not self.busy):
             self._emit(Note(flip.text(), "warning"))
+        firm = self._confirmed_news()
         if self._pending is not None:
             self._pending.cancel()
             self._pending = None
         if is_healthy(result) or self.busy:
             return  # nothing to do, or the running loop re-diagnoses by itself
-        self._pending = asyncio.ensure_future(self._after_debounce(result))
+        wait = self.debounce_s
+        if firm:
+            wait = self.confirmed_debounce_s
+            self._emit(Note(f"repair after {wait:g} s, not the {self.debounce_s:g} s debounce: "
+                            f"{', '.join(firm)} confirmed by its observer"))
+        self._pending = asyncio.ensure_future(self._after_debounce(result, wait))
+
+    def _confirmed_news(self) -> list[str]:
+        """The literals new since the last diagnosis that their observers confirmed."""
+        now = frozenset(self.observations.literals())
+        new, self._seen = now - self._seen, now
+        if self.confirmed is None:
+            return []
+        return sorted(str(x) for x in new if self.confirmed(x.atom))
 
     @property
     def busy(self) -> bool:
@@ -133,8 +158,8 @@ class RepairService:
         return self.busy or (self._pending is not None and not self._pending.done())
 
     # --- repairing ----------------------------------------------------------------------
-    async def _after_debounce(self, result: DiagnosisResult) -> None:
-        await asyncio.sleep(self.debounce_s)
+    async def _after_debounce(self, result: DiagnosisResult, wait: float) -> None:
+        await asyncio.sleep(wait)
         now = self._latest
         if now is None or now.bad_sets() != result.bad_sets() or self.busy:
             return  # superseded
@@ -331,7 +356,7 @@ def build(planner: RepairPlanner, model: SystemModel, procs: Mapping[str, Proces
           device_boot_s: Mapping[str, float], on_start: Callable[[str, int], None] | None = None,
           dry_run: bool = False, clock: Callable[[], float] | None = None,
           max_parallel: int | None = None, debounce_s: float = 0.5,
-          board: str = "board") -> RepairService:
+          board: str = "board", confirmed: Confirmed | None = None) -> RepairService:
     """A repair service for a robot: its planner, model and ``processes:`` (see the module
     docstring)."""
     supervisor = ProcessSupervisor(procs, logs_dir, on_start=on_start, env=dict(env))
@@ -343,4 +368,4 @@ def build(planner: RepairPlanner, model: SystemModel, procs: Mapping[str, Proces
         limiter=AttemptLimiter(3, 600.0), dry_run=dry_run, observable=observable,
         max_parallel=max_parallel, **kw)
     return RepairService(planner, executor, diagnose=diagnose, observations=observations,
-                         emit=emit, board=board, debounce_s=debounce_s)
+                         emit=emit, board=board, debounce_s=debounce_s, confirmed=confirmed)

@@ -66,7 +66,7 @@ def test_tedusar_observers_of_the_paper(tmp_path: Path) -> None:
     assert hw.devices["hokuyo"].channel == 3 and hw.devices["hokuyo"].band == (0.2, 1.2)
     scan = next(o for o in cfg.observers if isinstance(o, FrequencyObserver)
                 and o.topics == ("/scan",))
-    assert scan.rate == 40 and scan.max_gap == pytest.approx(5 / 40)
+    assert scan.rate == 40 and scan.max_gap == pytest.approx(4 / 40)  # 4 periods: default
     assert cfg.processes["hector_mapping"].match == "hector_mapping"
     assert cfg.processes["jaguar_node"].supervised
     assert all(isinstance(o, NodeObserver) for o in cfg.observers if o.kind == "node")

@@ -121,10 +121,14 @@ def test_a_real_trip_is_confirmed_by_the_readings() -> None:
     # read-back lags a tick), then readings with the switch off and the fault live
     h = healthy_hokuyo()
     assert h.feed(event(EV_TRIP, 3, ST_ON, ST_TRIPPED), 1.50) == []
+    assert not h.confirmed("tripped(hokuyo)")  # a claim is no finding yet
     out = h.feed(reading(7, {3: 2500}, 1.505, faults=1 << 3), 1.505)
     out += feed_readings(h, 1.51, 3, {}, faults=1 << 3)
     assert ("tripped(hokuyo)", 1.53) in lits(out)  # the third reading off with the fault
     assert ("~on(hokuyo)", 1.53) in lits(out)
+    # a confirmed finding: the repair service need not debounce it (``Observer.confirmed``)
+    assert h.confirmed("tripped(hokuyo)") and not h.confirmed("on(hokuyo)")
+    assert not h.confirmed("tripped(jaguar)")
     out = h.feed(event(EV_STATE, 3, ST_TRIPPED, ST_LATCHED), 1.54)
     out += feed_readings(h, 1.55, 3, {}, faults=1 << 3)
     assert out == []  # still tripped (now latched)

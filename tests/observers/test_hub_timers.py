@@ -13,7 +13,8 @@ import asyncio
 import pytest
 
 from host.board.types import Reading
-from host.observers import Device, HardwareObserver, ObserverHub, Update
+from host.observers import Device, FrequencyObserver, HardwareObserver, Message, ObserverHub, Update
+from host.observers.payload import encode
 from host.observers.silence import JITTER_S
 
 pytestmark = pytest.mark.looptime
@@ -67,4 +68,15 @@ async def test_a_receding_link_deadline_ticks_only_when_due() -> None:
     # (noticed, then confirmed) — not one per reading
     assert all(t >= t0 for t in h.ticks) and len(h.ticks) <= 8
     assert handles <= 20  # a timer per second or so, not one per reading (200)
+    await hub.close()
+
+
+async def test_every_topic_message_is_the_way_in_of_every_frequency_observer() -> None:
+    loop = asyncio.get_running_loop()
+    scan = FrequencyObserver("/scan", rate=40, tolerance=10, window=0.5)
+    imu = FrequencyObserver("/imu_data", rate=100, tolerance=25, window=0.5)
+    hub = ObserverHub([scan, imu], lambda _: None, clock=loop.time)
+    assert scan.way_in is hub.way_in and imu.way_in is hub.way_in
+    hub.feed_message(Message(loop.time() + 0.5, "/imu_data", encode({"stamp": 0.5})))
+    assert scan.way_in is not None and scan.way_in.last == pytest.approx(loop.time() + 0.5)
     await hub.close()

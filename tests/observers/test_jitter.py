@@ -50,7 +50,7 @@ def stream(start: float, end: float, rate: float, stamped: bool = True
 
 
 def imu() -> FrequencyObserver:
-    return FrequencyObserver(TOPIC, rate=RATE, tolerance=25, window=0.5, silence=5)
+    return FrequencyObserver(TOPIC, rate=RATE, tolerance=25, window=0.5)  # silence: default
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])

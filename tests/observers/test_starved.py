@@ -20,13 +20,13 @@ from host.observers import FrequencyObserver, Message
 from host.observers.base import Update
 from host.observers.payload import encode
 from host.observers.silence import CATCH_UP, JITTER_S, STARVED_CAP_S, ChainState
-from host.observers.topics import JITTER_FLOOR_S
+from host.observers.topics import DEFAULT_SILENCE, JITTER_FLOOR_S, WayIn
 from tests.observers.loaded import Loaded, stalls
 
 TOPIC = "/scan"
 RATE = 40.0  # the Hokuyo's, as system.yaml observes it
 WINDOW = 0.5
-BOUND = 5 / RATE + WINDOW  # the observer's bound without a probe: silent however stalled
+BOUND = DEFAULT_SILENCE / RATE + WINDOW  # the bound without a probe: silent however stalled
 
 
 class Chain:
@@ -70,7 +70,8 @@ class Observed(FrequencyObserver):
 
 
 def scan(chain: Chain | None) -> Observed:
-    obs = Observed(TOPIC, rate=RATE, tolerance=10, window=WINDOW, silence=5)
+    """The /scan observer as ``system.yaml`` configures it: the default silence periods."""
+    obs = Observed(TOPIC, rate=RATE, tolerance=10, window=WINDOW)
     obs.chain = chain or Chain([])
     obs.probe = chain
     return obs
@@ -151,7 +152,9 @@ def test_a_hung_publisher_is_found_at_the_limit_plus_its_own_confirmation() -> N
                              (False, pytest.approx(last + obs.max_gap + JITTER_S))]
     # faster than without a probe: no learned allowance, no floor
     assert last + obs.max_gap + JITTER_S < last + obs.max_gap + JITTER_FLOOR_S
-    assert obs.max_gap + JITTER_S <= 0.150  # a hung /scan within 150 ms of its last scan
+    # a hung /scan within 4 periods (100 ms) and the confirmation of its last scan: the
+    # 150 ms target from the fault, with room for the hub's scheduling and the inject
+    assert obs.max_gap + JITTER_S == pytest.approx(0.120)
 
 
 def test_a_hung_publisher_whose_chain_is_half_starved_is_found_in_its_own_time() -> None:
@@ -211,3 +214,89 @@ def test_a_stalled_daemon_loop_is_no_silence_and_a_hang_is_still_found(seed: int
     assert [ok for ok, _ in got] == [True, False]
     last = 30.0 - 1 / RATE
     assert last + obs.max_gap <= got[1][1] <= sim.resumed(last + obs.max_gap + STARVED_CAP_S)
+
+
+def test_only_a_silence_confirmed_in_the_publishers_own_time_is_a_confirmed_finding() -> None:
+    # the repair service starts at once on a confirmed finding (``Observer.confirmed``)
+    atom = str(A.ok(TOPIC))
+    hung = scan(Chain([]))
+    Loaded(hung, []).run(publisher(Chain([]), 0.0, 5.0), 6.0)
+    assert hung.asserted[atom] is False and hung.confirmed(atom)
+    starved = Chain([(5.0, 100.0)])  # silent at the cap: the publisher was starved
+    capped = scan(starved)
+    Loaded(capped, []).run(publisher(starved, 0.0, 10.0), 10.0)
+    assert capped.asserted[atom] is False and not capped.confirmed(atom)
+    blind = Chain([])
+    blind.readable = False  # judged by the learned allowance: not in its own time
+    allowed = scan(blind)
+    Loaded(allowed, []).run(publisher(blind, 0.0, 5.0), 6.0)
+    assert allowed.asserted[atom] is False and not allowed.confirmed(atom)
+    # a message ends it: nothing abnormal stands
+    hung.feed(message(999, 7.0, 7.0), 7.0)
+    assert not hung.confirmed(atom)
+
+
+class Beside(Observed):
+    """The observer with a hub's ``WayIn``: fed its own arrivals and those of another topic
+    (``others``, arrival times), as the hub feeds every topic's messages."""
+
+    others: list[float]
+
+    def _take(self, now: float) -> None:
+        assert self.way_in is not None
+        while self.others and self.others[0] <= now:
+            self.way_in.arrived(self.others.pop(0))
+
+    def feed(self, item: Message, now: float) -> list[Update]:
+        self._take(now)
+        assert self.way_in is not None
+        self.way_in.arrived(now)
+        return super().feed(item, now)
+
+    def tick(self, now: float) -> list[Update]:
+        self._take(now)
+        return super().tick(now)
+
+
+def beside(others: list[float]) -> Beside:
+    obs = Beside(TOPIC, rate=RATE, tolerance=10, window=WINDOW)
+    obs.chain = Chain([])
+    obs.probe = obs.chain
+    obs.way_in = WayIn()
+    obs.others = others
+    return obs
+
+
+def imu(start: float, end: float, held: tuple[float, float] = (0.0, 0.0)) -> list[float]:
+    """Arrivals of another topic at 100 Hz; those due while ``held`` arrive at its end."""
+    return [held[1] if held[0] <= t < held[1] else t
+            for t in (start + k / 100 for k in range(int((end - start) * 100)))]
+
+
+def test_a_way_in_held_up_for_every_topic_is_no_silence() -> None:
+    # ROS 2, a managed driver reconfigured: the daemon's source delivered nothing on any topic
+    # for 0.3 s, its publishers never waited for a CPU (the run-queue wait says nothing)
+    held = (10.0, 10.3)
+    sim = Loaded(beside(imu(0.0, 20.0, held)), [], delayed=[held])
+    sim.run(publisher(Chain([]), 0.0, 20.0), 20.0)
+    assert [ok for ok, _ in verdicts(sim)] == [True]
+    # judged without the way in, the same gap is a silence in the publisher's own time
+    alone = Loaded(scan(Chain([])), [], delayed=[held])
+    alone.run(publisher(Chain([]), 0.0, 20.0), 20.0)
+    assert [ok for ok, _ in verdicts(alone)] == [True, False, True]
+
+
+def test_a_hang_beside_a_flowing_topic_is_found_at_the_limit_and_a_total_stop_at_the_cap(
+) -> None:
+    flowing = beside(imu(0.0, 10.0))
+    sim = Loaded(flowing, [])
+    sim.run(publisher(Chain([]), 0.0, 5.0), 6.0)
+    last = 5.0 - 1 / RATE
+    assert verdicts(sim)[-1] == (False, pytest.approx(last + flowing.max_gap + JITTER_S))
+    assert flowing.confirmed(str(A.ok(TOPIC)))
+    # nothing else comes in either: excused as a stalled way in, silent at the cap all the same
+    stopped = beside(imu(0.0, 5.0))
+    sim = Loaded(stopped, [])
+    sim.run(publisher(Chain([]), 0.0, 5.0), 8.0)
+    assert verdicts(sim)[-1] == (False, pytest.approx(last + stopped.max_gap + STARVED_CAP_S))
+    assert not stopped.confirmed(str(A.ok(TOPIC)))
