@@ -50,9 +50,11 @@ class ObserverHub:
                 self._by_node.setdefault(o.node, []).append(o)
             elif isinstance(o, HardwareObserver):
                 self._hardware.append(o)
-        self.way_in = WayIn()  # any topic's latest message: a stalled way in is no silence
+        # any topic's latest message: a stalled way in is no silence — where another topic
+        # could have come in; with one topic observed, its gap is its own
+        self.way_in = WayIn()
         for o in self.observers:
-            if isinstance(o, FrequencyObserver):
+            if isinstance(o, FrequencyObserver) and len(self._by_topic) > 1:
                 o.way_in = self.way_in
         self._timers: dict[int, tuple[float, asyncio.TimerHandle]] = {}
         self._subs: list[Subscription] = []

@@ -80,3 +80,13 @@ async def test_every_topic_message_is_the_way_in_of_every_frequency_observer() -
     hub.feed_message(Message(loop.time() + 0.5, "/imu_data", encode({"stamp": 0.5})))
     assert scan.way_in is not None and scan.way_in.last == pytest.approx(loop.time() + 0.5)
     await hub.close()
+
+
+async def test_one_observed_topic_has_no_way_in_to_excuse_its_silence() -> None:
+    """With one topic observed, "nothing came in on any topic" is that topic's own silence: a
+    hang of its only publisher must not wait for the starvation cap."""
+    loop = asyncio.get_running_loop()
+    scan = FrequencyObserver("/scan", rate=40, tolerance=10, window=0.5)
+    hub = ObserverHub([scan], lambda _: None, clock=loop.time)
+    assert scan.way_in is None
+    await hub.close()
