@@ -38,7 +38,8 @@ Judged by the messages' own timing, so a busy machine is not a rate drop (no fla
   run queue; no learned allowance, no floor. While nothing came in on *any* observed topic for
   ``silence / mu`` (``WayIn``, the hub's: a source held up inside the daemon, the process
   feeding every device stalled) the time counts as waited too: one topic's hang leaves the
-  others flowing (the hub shares it only when it observes two topics or more). A hung publisher sleeps, so it is found at that
+  others flowing (the hub shares it only when it observes two topics or more). A hung
+  publisher sleeps, so it is found at that
   limit; a starved one is excused while it waits on the run queue, up to ``STARVED_CAP_S``
   (2 s) past ``silence / mu`` — a publisher starved for seconds is reported all the same, and
   the log line says which of the two it was. Where no process is known or ``/proc`` cannot
