@@ -11,7 +11,7 @@ from protocol import messages as m
 from protocol.connection import BOARD, HOST, Connection
 from protocol.framing import BadFrame
 from tests.protocol.mutations import mutated
-from tests.protocol.samples import samples
+from tests.protocol.samples import later_samples, samples
 from tests.protocol.util import KEY, hello
 
 FRAMES_PER_EXAMPLE = 40
@@ -22,7 +22,7 @@ _host = Connection(HOST, KEY)
 _host.receive_data(_board.send(hello()))
 _host.events()
 # Valid frames of every message in both directions, signed ones included.
-VALID = [(_board if s.DIR == "B" else _host).send(s) for s in samples()]
+VALID = [(_board if s.DIR == "B" else _host).send(s) for s in samples() + later_samples()]
 TRAILER = _board.send(m.Pong(0xABCD, 1, req_id=1))
 
 
