@@ -60,6 +60,7 @@ from host.events import DiagnosisRecord, Event
 from host.observers import ObserverHub, load_observers
 from host.observers.base import Update
 from host.observers.hardware import HardwareObserver
+from host.transports.errors import BoardRefused
 from tests.daemon.runner import KEY, TEDUSAR
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -106,7 +107,10 @@ class Pipeline:
         try:
             async with BoardClient(self.url, KEY) as client:
                 for name in DEVICES_ON:
-                    await client.clear(name)  # a channel tripped by an earlier phase's fault
+                    # tripped, or latched, by an earlier phase's fault: clear, off, on
+                    with contextlib.suppress(BoardRefused):
+                        await client.clear(name)
+                    await client.switch(name, False)
                     await client.switch(name, True)
                 self.hub.feed_board(await client.state())
                 async for item in client.subscribe(self.rate_hz):
