@@ -200,6 +200,7 @@ class BoardClient(LinkMixin, ActuateMixin, ConfigMixin):
         self._closing = False
         self._last_seq = 0
         self._seen_uptime = (0, 0.0)  # (uptime ms, host monotonic s) last seen
+        self._stamped = 0.0  # host monotonic time of the last reading handed out
         self._tasks: set[asyncio.Task[None]] = set()
         self._link_init()
 
@@ -334,29 +335,39 @@ class BoardClient(LinkMixin, ActuateMixin, ConfigMixin):
         """Readings that arrived together (one, or a MEASUREMENT_BATCH's, oldest first), each
         stamped with when it was sampled: the arrival time less its uptime's distance to the
         last one's (at most the batch's span at the subscribed rate: a board's uptime cannot
-        move the stamps further)."""
+        move the stamps further), never before a reading handed out earlier (batches read
+        together after a stall of the host)."""
         if len(batch[0].currents_ma) != channels:
             log.warning("%s: a measurement of %d channels from a board of %d: dropped",
                         self.url, len(batch[0].currents_ma), channels)
             return
         mono = self.clock()
         last = batch[-1].uptime_ms
+        if len(batch) > 1:
+            self._news(batch[0].uptime_ms, mono)
+        self._news(last, mono)
         span = len(batch) / self._rate if self._rate else 0.0
+        floor = self._stamped
         subs = self._subs
+        reading = None
         for msg in batch:
-            back = ((last - msg.uptime_ms) & 0xFFFFFFFF) / 1000 if msg.uptime_ms != last else 0.0
-            if back > span:
-                back = span
-            self._news(msg.uptime_ms, mono)
-            self._seen_uptime = (msg.uptime_ms, mono - back)
+            at = mono
+            if msg.uptime_ms != last:
+                back = ((last - msg.uptime_ms) & 0xFFFFFFFF) / 1000
+                at = mono - (back if back < span else span)
+                if at < floor:
+                    at = floor
+            floor = at
             missed = msg.seq - self._last_seq - 1 if self._last_seq else 0
             self._last_seq = msg.seq
-            reading = Reading(now - back, mono - back, boot, msg.seq, msg.uptime_ms,
+            reading = Reading(now - (mono - at), at, boot, msg.seq, msg.uptime_ms,
                               msg.input_mv, msg.on_mask, msg.fault_mask,
                               tuple(msg.currents_ma), missed if missed > 0 else 0)
-            self.latest = reading
             for sub in subs:
                 sub.put(reading)
+        self._stamped = floor
+        self._seen_uptime = (last, mono)
+        self.latest = reading
 
     def _subscription(self, rate_hz: int) -> Subscribe:
         """The SUBSCRIBE for ``rate_hz``: with ``per_frame`` where the board can batch."""

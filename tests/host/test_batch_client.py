@@ -17,8 +17,8 @@ import itertools
 import pytest
 
 from host.board import BoardClient
-from host.board.client import default_per_frame
-from host.board.types import LinkDown, Reading
+from host.board.client import _Subscriber, default_per_frame
+from host.board.types import BoardInfo, LinkDown, Reading
 from host.transports import open_transport
 from host.transports.errors import BadUrl
 from protocol.constants import CAP_BATCH
@@ -133,3 +133,36 @@ async def test_a_reconnect_asks_again_and_withheld_readings_are_missed() -> None
             assert b.seq - a.seq - 1 == b.missed
         second = [x for x in items[cut:] if isinstance(x, Reading)]
         assert [r.seq for r in second] == list(range(1, len(second) + 1))  # a new session
+
+
+def test_stamps_follow_the_uptimes_and_never_go_back() -> None:
+    """The stamping rule alone: batches handed to the client together (a host that stalled)
+    get stamps that never go backwards; a lying uptime moves a stamp by at most the batch's
+    span at the subscribed rate."""
+    now = [500.0]
+    c = BoardClient("memory://stamps", KEY, clock=lambda: now[0], wall=lambda: now[0] + 1e9)
+    c.info = BoardInfo("memory://stamps", "memory", 1, "b", "f", 2, BATCH_CAPS, 7, 0, 0,
+                       frozenset())
+    c._subscribed(100, 4)
+    sub = _Subscriber(c.url)
+    c._subs.append(sub)
+
+    def batch(first_seq: int, first_up: int, step: int = 10) -> MeasurementBatch:
+        return MeasurementBatch([Measurement(first_seq + i, first_up + step * i, 24000, 0, 0,
+                                             [1, 2]) for i in range(4)])
+
+    c._dispatch_all([batch(1, 1000)])
+    now[0] += 0.1  # the next two batches arrive together, late
+    c._dispatch_all([batch(5, 1040), batch(9, 1080)])
+    now[0] += 0.04
+    c._dispatch_all([batch(13, 1120, step=100_000)])  # an uptime that lies
+    got = [x for x in sub.items if isinstance(x, Reading)]
+    assert [r.seq for r in got] == list(range(1, 17))
+    monos = [r.host_mono for r in got]
+    assert monos[:4] == pytest.approx([499.97, 499.98, 499.99, 500.0])
+    assert all(b >= a for a, b in itertools.pairwise(monos))
+    assert monos[4] == pytest.approx(500.07) and monos[7] == pytest.approx(500.1)
+    assert monos[8:12] == pytest.approx([500.1] * 4)  # would be before the last: held there
+    assert monos[12] >= 500.14 - 0.04 - 1e-9  # at most 4 periods back, however it lies
+    assert all(r.host_time - r.host_mono == pytest.approx(1e9) for r in got)
+    assert c.latest is got[-1]
