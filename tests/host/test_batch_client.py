@@ -24,6 +24,7 @@ from host.transports.errors import BadUrl
 from protocol.constants import CAP_BATCH
 from protocol.messages import Measurement, MeasurementBatch
 from tests.host.memboard import CAPS, KEY, MemoryBoard, tedusar
+from tests.host.test_client import readings as collect
 from tests.host.test_client import reconnected
 
 pytestmark = pytest.mark.looptime
@@ -34,15 +35,6 @@ BATCH_CAPS = CAPS | CAP_BATCH
 def client(url: str) -> BoardClient:
     loop = asyncio.get_running_loop()
     return BoardClient(url, KEY, clock=loop.time, wall=loop.time)
-
-
-async def collect(c: BoardClient, n: int, rate: int = 100) -> list[object]:
-    out: list[object] = []
-    async for item in c.subscribe(rate):
-        out.append(item)
-        if sum(isinstance(x, Reading) for x in out) >= n:
-            break
-    return out
 
 
 def spy_on(c: BoardClient) -> list[int]:
