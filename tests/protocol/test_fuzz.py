@@ -1,7 +1,8 @@
 # cpython-only: hypothesis does not run on MicroPython
 """Property test: at least 100,000 random and mutated frames, split at random, never make
 the codec raise; every event is a message or a ``BadFrame``; the messages found do not
-depend on how the bytes were split; and a good frame after the damage is still decoded.
+depend on how the bytes were split; a good frame after the damage is still decoded; and a
+MEASUREMENT_BATCH that decodes is a whole one (1-10 readings of one channel count).
 """
 
 from hypothesis import HealthCheck, given, settings
@@ -66,6 +67,9 @@ def test_nothing_escapes(frames: "list[bytes]", cuts: "list[int]", role: str) ->
     whole = _decode(role, data, [])
     for ev in split:
         assert isinstance(ev, (m.Message, BadFrame))
+        if isinstance(ev, m.MeasurementBatch):  # whole or not at all: never a partial batch
+            assert 1 <= len(ev.readings) <= 10
+            assert len({len(r.currents_ma) for r in ev.readings}) == 1
     assert [e for e in split if isinstance(e, m.Message)] == [
         e for e in whole if isinstance(e, m.Message)
     ]
