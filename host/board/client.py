@@ -17,8 +17,9 @@ of the rate (readings held on the board at most ``DEFAULT_HOLD_MS``: k = 4 at 10
 34 Hz); a board without it, and every translating transport, is asked nothing new. Each
 reading of a MEASUREMENT_BATCH is handed out as a MEASUREMENT's would be, in order, and
 stamped with the time it was sampled, not the batch's arrival: the last reading gets the
-arrival time, each earlier one that minus the difference of their uptimes (so observers see
-readings spaced as sampled, not k at one instant). EVENTs are never held by the board.
+arrival time, each earlier one that minus the difference of their uptimes (``host_time`` and
+``host_mono`` spaced as sampled, not k at one instant; never before a reading handed out
+earlier). EVENTs are never held by the board.
 
 Whether the link is alive is judged in ``host.board.link`` (``LinkMixin``): a link that ends, a
 subscription that falls silent for ``silence_limit`` seconds or an unanswered keepalive PING is a
