@@ -62,7 +62,8 @@ def _native_valid(rng: random.Random) -> bytes:
     rid = rng.randint(0, 0xFFFF)
     ch = rng.choice((rng.randrange(10), rng.randrange(256)))
     plain = (m.GetState(req_id=rid), m.Ping(rng.getrandbits(32), req_id=rid),
-             m.HelloRequest(req_id=rid), m.Subscribe(rng.randrange(120), req_id=rid),
+             m.HelloRequest(req_id=rid),
+             m.Subscribe(rng.randrange(120), rng.choice((1, rng.randrange(16))), req_id=rid),
              m.GetConfig(ch, req_id=rid))
     if rng.random() < 0.5:
         msg = rng.choice(plain)

@@ -33,6 +33,7 @@ from firmware.net import MAX_CLIENTS, READ_TIMEOUT_MS, Net
 from firmware.session import FIRMWARE_VERSION
 from protocol.constants import (
     CAP_AUTH,
+    CAP_BATCH,
     CAP_CAN,
     CAP_CONFIG,
     CAP_EVENTS,
@@ -41,7 +42,7 @@ from protocol.constants import (
     CAP_VOLTAGE,
 )
 
-BASE_CAPS = CAP_AUTH | CAP_SUBSCRIBE | CAP_EVENTS | CAP_CONFIG | CAP_VOLTAGE
+BASE_CAPS = CAP_AUTH | CAP_SUBSCRIBE | CAP_EVENTS | CAP_CONFIG | CAP_VOLTAGE | CAP_BATCH
 
 
 def capabilities(modbus: bool, can: bool) -> int:

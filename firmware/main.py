@@ -25,6 +25,7 @@ from firmware.net import Net
 from firmware.session import FIRMWARE_VERSION
 from protocol.constants import (
     CAP_AUTH,
+    CAP_BATCH,
     CAP_CONFIG,
     CAP_EVENTS,
     CAP_MODBUS,
@@ -42,7 +43,8 @@ UART_ID = 1
 UART_BAUD = 115200
 TUG_PORT = 0  # 5000 serves the original TEDUSAR format (the original board's port); 0: off
 TUG_SWITCH = False  # let tug clients switch channels (never a protected one off)
-CAPS = CAP_AUTH | CAP_SUBSCRIBE | CAP_EVENTS | CAP_CONFIG | CAP_MODBUS | CAP_VOLTAGE
+CAPS = (CAP_AUTH | CAP_SUBSCRIBE | CAP_EVENTS | CAP_CONFIG | CAP_MODBUS | CAP_VOLTAGE
+        | CAP_BATCH)
 
 
 def listen_address(app: App) -> str:

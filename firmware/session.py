@@ -23,10 +23,14 @@ clock (time comes in as ``now_ms``, on the HAL clock the board ticks on). The fr
     board's host dead-man (``board.host_seen``); a PING of anyone else does not.
 ``poll(now_ms, send_measurement=True) -> bytes``
     the pushes due now: every new board event as EVENT (its log ``seq``; ``dropped`` = events
-    this session lost to the ring since the last EVENT), then a MEASUREMENT when the
+    this session lost to the ring since the last EVENT), then a reading when the
     subscription (SUBSCRIBE 1-100 Hz, 0 stops) is due, numbered from 1 per session. A front end
-    whose client cannot keep up passes ``send_measurement=False``: the due measurement is
+    whose client cannot keep up passes ``send_measurement=False``: the due reading is
     skipped but its number is used, so the client sees the gap. Events are never skipped.
+    With SUBSCRIBE's ``per_frame`` k > 1 the readings are held and sent k at a time as one
+    MEASUREMENT_BATCH: the batch goes out at every k-th due reading (fewer in it when some were
+    skipped), so none is held longer than k - 1 periods; readings held are sent first, in
+    order, before an EVENT and before the answer to any request.
 ``next_due(now_ms) -> int``
     when ``poll`` next has something to send (``now_ms`` if events are waiting).
 ``idle_ms(now_ms) -> int``
@@ -53,6 +57,7 @@ from protocol.auth import NONCE_LEN
 from protocol.connection import BOARD, Connection
 from protocol.constants import BOARD_CHANNEL, E_BAD_VALUE, ERROR_TEXT, PROTOCOL_VERSION
 from protocol.framing import BadFrame
+from protocol.measurements import MAX_PER_FRAME
 from protocol.messages import (
     Ack,
     AuthPing,
@@ -67,6 +72,7 @@ from protocol.messages import (
     Hello,
     HelloRequest,
     Measurement,
+    MeasurementBatch,
     Ping,
     Pong,
     PowerCycle,
@@ -122,6 +128,9 @@ class Session:
         self.period = 0
         self.meas_at = 0
         self.meas_seq = 0
+        self.per_frame = 1  # readings a frame (SUBSCRIBE's per_frame)
+        self.held: list = []  # type: ignore[type-arg]  # readings not yet sent, oldest first
+        self.batch_left = 0  # due readings until the held ones go out
         self.closed = False
 
     # --- session ----------------------------------------------------------------------
@@ -133,6 +142,8 @@ class Session:
         self.authenticated = False
         self.rate_hz = 0
         self.meas_seq = 0
+        self.per_frame = 1
+        self.held = []
         self.cursor = b.events.seq  # type: ignore[attr-defined]
         self.lost = 0
         nonce = self.random_bytes(NONCE_LEN)  # type: ignore[operator]
@@ -177,6 +188,8 @@ class Session:
             ev = conn.next_event()
             if ev is None:
                 break
+            if self.held:  # whatever is answered comes after the readings taken before it
+                out.append(self._flush())
             if isinstance(ev, BadFrame):
                 reply = conn.error_reply(ev)
             else:
@@ -212,9 +225,10 @@ class Session:
             return send(Pong(msg.token, _uptime(b), rid))
         if isinstance(msg, Subscribe):
             rate = msg.rate_hz
-            if rate > MAX_RATE_HZ:
+            if rate > MAX_RATE_HZ or not 1 <= msg.per_frame <= MAX_PER_FRAME:
                 return self._error(E_BAD_VALUE, msg)
             self.rate_hz = rate
+            self.per_frame = self.batch_left = msg.per_frame
             if rate:
                 self.period = 1000 // rate
                 self.meas_at = now_ms
@@ -295,6 +309,8 @@ class Session:
         out = []
         log = b.events  # type: ignore[attr-defined]
         if log.seq > self.cursor:
+            if self.held:
+                out.append(self._flush())
             evs, self.cursor, lost = log.read(self.cursor, EVENTS_PER_POLL)
             self.lost += lost
             for e in evs:
@@ -307,9 +323,25 @@ class Session:
             self.meas_at += self.period
             if self.meas_at <= now_ms:  # late: no burst to catch up
                 self.meas_at = now_ms + self.period
-            if send_measurement:
-                out.append(self.conn.send(self.measurement()))
+            if self.per_frame == 1:
+                if send_measurement:
+                    out.append(self.conn.send(self.measurement()))
+            else:
+                if send_measurement:
+                    self.held.append(self.measurement())
+                self.batch_left -= 1
+                if self.batch_left <= 0:
+                    if self.held:
+                        out.append(self._flush())
+                    else:
+                        self.batch_left = self.per_frame
         return b"".join(out)
+
+    def _flush(self) -> bytes:
+        """The held readings as one MEASUREMENT_BATCH; the next batch starts empty."""
+        held, self.held = self.held, []
+        self.batch_left = self.per_frame
+        return self.conn.send(MeasurementBatch(held))
 
     def measurement(self) -> Measurement:
         b = self.board

@@ -86,7 +86,9 @@ CAP_CONFIG = const(0x0008)  # get/set/save configuration
 CAP_MODBUS = const(0x0010)  # serves Modbus TCP
 CAP_CAN = const(0x0020)  # speaks CAN per dxboard.dbc
 CAP_VOLTAGE = const(0x0040)  # measures input voltage
-CAPABILITY_NAMES = ("auth", "subscribe", "events", "config", "modbus", "can", "voltage")
+CAP_BATCH = const(0x0080)  # SUBSCRIBE's per_frame: several readings a MEASUREMENT_BATCH
+CAPABILITY_NAMES = ("auth", "subscribe", "events", "config", "modbus", "can", "voltage",
+                    "batch")
 
 # --- error codes (u16) in ERROR replies -----------------------------------------------
 # 1xx: the frame; 2xx: authentication; 3xx: the command; 4xx: the board.

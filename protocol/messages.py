@@ -5,51 +5,17 @@ Every message has ``TYPE`` (the frame's type byte), ``FIELDS`` (its payload layo
 §5), ``DIR`` (who sends it: "H" host to board, "B" board to host) and a ``req_id`` (the
 frame's request id: a reply carries its request's id; pushes carry 0). Messages compare by
 value, and ``to_dict``/``message_from_dict`` give the JSON form used by the golden vectors.
+The base class is ``protocol/message.py``; the measurement pushes are in
+``protocol/measurements.py`` and listed here with the rest.
 """
 
-import struct
-
 from protocol import settings
-from protocol.fields import Record, from_dict_values, pack, to_dict, unpack
+from protocol.fields import Record
+from protocol.measurements import Measurement, MeasurementBatch
+from protocol.message import Message
 
 if False:  # typing only; MicroPython never imports typing
     from typing import Any
-
-
-class Message:
-    TYPE = 0
-    FIELDS: "tuple[tuple[str, Any], ...]" = ()
-    AUTH = False
-    DIR = "H"
-
-    req_id = 0
-
-    def payload(self) -> bytes:
-        return pack(self, self.FIELDS)
-
-    @classmethod
-    def from_payload(cls, payload: bytes, req_id: int) -> "Message":
-        values, end = unpack(payload, cls.FIELDS)
-        if end != len(payload):
-            raise ValueError("%d unexpected bytes after the payload" % (len(payload) - end))
-        msg = cls(**values)
-        msg.req_id = req_id
-        return msg
-
-    def to_dict(self) -> "dict[str, Any]":
-        return to_dict(self)
-
-    def __eq__(self, other: object) -> bool:
-        return (
-            type(other) is type(self)
-            and self.req_id == getattr(other, "req_id", None)
-            and to_dict(self) == to_dict(other)
-        )
-
-    def __repr__(self) -> str:
-        args = ["%s=%r" % (n, getattr(self, n)) for n, _ in self.FIELDS]
-        args.append("req_id=%d" % self.req_id)
-        return "%s(%s)" % (type(self).__name__, ", ".join(args))
 
 
 # --- session and link ------------------------------------------------------------------
@@ -231,72 +197,21 @@ class State(Message):
 
 
 class Subscribe(Message):
-    """Host -> board: send MEASUREMENT at ``rate_hz`` (1-100) on this session; 0 stops."""
+    """Host -> board: sample at ``rate_hz`` (1-100) on this session, 0 stops; ``per_frame``
+    (optional, 1-10, to a board with capability ``batch``): send the readings up to that many
+    at a time, as MEASUREMENT_BATCH (1, the default, is not sent: one MEASUREMENT each)."""
 
     TYPE = 0x12
     FIELDS = (("rate_hz", "B"),)
+    OPTIONAL = (("per_frame", 1),)
 
-    def __init__(self, rate_hz: int, req_id: int = 0) -> None:
+    def __init__(self, rate_hz: int, per_frame: int = 1, req_id: int = 0) -> None:
         self.rate_hz = rate_hz
+        self.per_frame = per_frame
         self.req_id = req_id
 
 
-class Measurement(Message):
-    """Board -> host push: every channel's current, numbered so gaps show."""
-
-    TYPE = 0x13
-    DIR = "B"
-    FIELDS = (
-        ("seq", "I"),
-        ("uptime_ms", "I"),
-        ("input_mv", "H"),
-        ("on_mask", "H"),
-        ("fault_mask", "H"),
-        ("currents_ma", "[i"),
-    )
-
-    def __init__(
-        self,
-        seq: int,
-        uptime_ms: int,
-        input_mv: int,
-        on_mask: int,
-        fault_mask: int,
-        currents_ma: "list[int]",
-        req_id: int = 0,
-    ) -> None:
-        self.seq = seq
-        self.uptime_ms = uptime_ms
-        self.input_mv = input_mv
-        self.on_mask = on_mask
-        self.fault_mask = fault_mask
-        self.currents_ma = currents_ma
-        self.req_id = req_id
-
-    @classmethod
-    def from_payload(cls, payload: bytes, req_id: int) -> "Message":
-        """One ``struct`` unpack (a hundred a second from every board): the layout of
-        ``FIELDS`` read whole, its format kept per channel count; what ``unpack`` would
-        refuse is refused here too (``ValueError``)."""
-        n = len(payload)
-        if n < _MEASUREMENT_HEAD:
-            raise ValueError("payload too short")
-        count = payload[_MEASUREMENT_HEAD - 1]
-        end = _MEASUREMENT_HEAD + 4 * count
-        if end > n:
-            raise ValueError("list runs past the payload")
-        if end != n:
-            raise ValueError("%d unexpected bytes after the payload" % (n - end))
-        fmt = _MEASUREMENT_FORMATS.get(count)
-        if fmt is None:
-            fmt = ">IIHHHB%di" % count
-            _MEASUREMENT_FORMATS[count] = fmt
-        v = struct.unpack_from(fmt, payload, 0)
-        return cls(v[0], v[1], v[2], v[3], v[4], list(v[6:]), req_id)
-
-
-_MEASUREMENT_HEAD = 15  # seq, uptime_ms, input_mv, on_mask, fault_mask, the count
-_MEASUREMENT_FORMATS: "dict[int, str]" = {}
+# MEASUREMENT (0x13) and MEASUREMENT_BATCH (0x15): protocol/measurements.py
 
 
 class Event(Message):
@@ -536,6 +451,7 @@ ALL = (
     Subscribe,
     Measurement,
     Event,
+    MeasurementBatch,
     Switch,
     Switched,
     PowerCycle,
@@ -556,10 +472,8 @@ BY_NAME = {cls.__name__: cls for cls in ALL}
 
 def message_from_dict(name: str, data: "dict[str, Any]", req_id: int = 0) -> Message:
     """Build a message from its class name and a dict as made by ``Message.to_dict``."""
-    cls = BY_NAME[name]
-    msg = cls(**from_dict_values(data, cls.FIELDS))
-    msg.req_id = req_id
-    return msg
+    return BY_NAME[name].from_dict(data, req_id)
 
 
-__all__ = ["ALL", "BY_NAME", "BY_TYPE", "ChannelStatus", "Message", "message_from_dict"]
+__all__ = ["ALL", "BY_NAME", "BY_TYPE", "ChannelStatus", "Measurement", "MeasurementBatch",
+           "Message", "message_from_dict"]

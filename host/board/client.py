@@ -11,6 +11,16 @@ subscriber; an unexpected HELLO starts a new session. Requests have a timeout
 missing key) and changes nothing on the board. Actuation checks the read-back: a board that
 acknowledges "on" but reads the switch back off raises ``ReadbackMismatch``.
 
+Readings a frame. A board with capability ``batch`` is asked (SUBSCRIBE's ``per_frame``) to
+send its readings k at a time: the URL's ``per_frame=K`` if it says, else ``default_per_frame``
+of the rate (readings held on the board at most ``DEFAULT_HOLD_MS``: k = 4 at 100 Hz, 1 below
+34 Hz); a board without it, and every translating transport, is asked nothing new. Each
+reading of a MEASUREMENT_BATCH is handed out as a MEASUREMENT's would be, in order, and
+stamped with the time it was sampled, not the batch's arrival: the last reading gets the
+arrival time, each earlier one that minus the difference of their uptimes (``host_time`` and
+``host_mono`` spaced as sampled, not k at one instant; never before a reading handed out
+earlier). EVENTs are never held by the board.
+
 Whether the link is alive is judged in ``host.board.link`` (``LinkMixin``): a link that ends, a
 subscription that falls silent for ``silence_limit`` seconds or an unanswered keepalive PING is a
 lost link (``LinkDown``, pending requests fail with ``LinkLost``); with ``reconnect=True`` the
@@ -73,6 +83,7 @@ from host.transports.errors import (
 )
 from protocol.constants import (
     BOARD_CHANNEL,
+    CAP_BATCH,
     E_AUTH_REQUIRED,
     E_BAD_TAG,
     E_NO_SESSION,
@@ -90,6 +101,7 @@ from protocol.messages import (
     GetState,
     Hello,
     Measurement,
+    MeasurementBatch,
     Message,
     Ping,
     Pong,
@@ -101,6 +113,14 @@ log = logging.getLogger(__name__)
 
 AUTH_CODES = (E_AUTH_REQUIRED, E_BAD_TAG, E_REPLAYED, E_NO_SESSION)
 QUEUE_LIMIT = 4096  # items a subscriber may fall behind before the oldest are dropped
+DEFAULT_HOLD_MS = 30  # by default a reading waits on the board at most this long for its frame
+MAX_PER_FRAME = 10  # SUBSCRIBE's per_frame 1-10 (PROTOCOL.md §4.2)
+
+
+def default_per_frame(rate_hz: int) -> int:
+    """Readings a frame asked by default at ``rate_hz``: as many as are sampled within
+    ``DEFAULT_HOLD_MS`` (the first of a frame waits for the other k - 1), at least 1."""
+    return max(1, min(MAX_PER_FRAME, 1 + rate_hz * DEFAULT_HOLD_MS // 1000))
 
 
 class _Subscriber:
@@ -181,6 +201,7 @@ class BoardClient(LinkMixin, ActuateMixin, ConfigMixin):
         self._closing = False
         self._last_seq = 0
         self._seen_uptime = (0, 0.0)  # (uptime ms, host monotonic s) last seen
+        self._stamped = 0.0  # host monotonic time of the last reading handed out
         self._tasks: set[asyncio.Task[None]] = set()
         self._link_init()
 
@@ -290,21 +311,9 @@ class BoardClient(LinkMixin, ActuateMixin, ConfigMixin):
         boot = info.boot_id if info else 0
         channels = info.channels if info else 0
         if isinstance(msg, Measurement):
-            if len(msg.currents_ma) != channels:
-                log.warning("%s: a measurement of %d channels from a board of %d: dropped",
-                            self.url, len(msg.currents_ma), channels)
-                return
-            mono = self.clock()
-            self._news(msg.uptime_ms, mono)
-            self._seen_uptime = (msg.uptime_ms, mono)
-            missed = msg.seq - self._last_seq - 1 if self._last_seq else 0
-            self._last_seq = msg.seq
-            reading = Reading(now, mono, boot, msg.seq, msg.uptime_ms, msg.input_mv,
-                              msg.on_mask, msg.fault_mask, tuple(msg.currents_ma),
-                              missed if missed > 0 else 0)
-            self.latest = reading
-            for sub in self._subs:
-                sub.put(reading)
+            self._readings([msg], now, boot, channels)
+        elif isinstance(msg, MeasurementBatch):
+            self._readings(msg.readings, now, boot, channels)
         elif isinstance(msg, Event):
             if msg.channel >= channels and msg.channel != BOARD_CHANNEL:
                 log.warning("%s: an event for channel %d of a board of %d: dropped", self.url,
@@ -322,6 +331,56 @@ class BoardClient(LinkMixin, ActuateMixin, ConfigMixin):
             self._new_hello(msg)
         else:
             log.debug("%s: unsolicited %r dropped", self.url, msg)
+
+    def _readings(self, batch: list[Measurement], now: float, boot: int, channels: int) -> None:
+        """Readings that arrived together (one, or a MEASUREMENT_BATCH's, oldest first), each
+        stamped with when it was sampled: the arrival time less its uptime's distance to the
+        last one's (at most the batch's span at the subscribed rate: a board's uptime cannot
+        move the stamps further), never before a reading handed out earlier (batches read
+        together after a stall of the host)."""
+        if len(batch[0].currents_ma) != channels:
+            log.warning("%s: a measurement of %d channels from a board of %d: dropped",
+                        self.url, len(batch[0].currents_ma), channels)
+            return
+        mono = self.clock()
+        last = batch[-1].uptime_ms
+        if len(batch) > 1:
+            self._news(batch[0].uptime_ms, mono)
+        self._news(last, mono)
+        span = len(batch) / self._rate if self._rate else 0.0
+        floor = self._stamped
+        subs = self._subs
+        reading = None
+        for msg in batch:
+            at = mono
+            if msg.uptime_ms != last:
+                back = ((last - msg.uptime_ms) & 0xFFFFFFFF) / 1000
+                at = mono - (back if back < span else span)
+                if at < floor:
+                    at = floor
+            floor = at
+            missed = msg.seq - self._last_seq - 1 if self._last_seq else 0
+            self._last_seq = msg.seq
+            reading = Reading(now - (mono - at), at, boot, msg.seq, msg.uptime_ms,
+                              msg.input_mv, msg.on_mask, msg.fault_mask,
+                              tuple(msg.currents_ma), missed if missed > 0 else 0)
+            for sub in subs:
+                sub.put(reading)
+        self._stamped = floor
+        self._seen_uptime = (last, mono)
+        self.latest = reading
+
+    def _subscription(self, rate_hz: int) -> Subscribe:
+        """The SUBSCRIBE for ``rate_hz``: with ``per_frame`` where the board can batch."""
+        info = self.info
+        if not rate_hz or info is None or not info.capabilities & CAP_BATCH:
+            return Subscribe(rate_hz)
+        return Subscribe(rate_hz, self.transport.per_frame or default_per_frame(rate_hz))
+
+    @property
+    def per_frame(self) -> int:
+        """Readings a frame the board was asked for (1 when not batching)."""
+        return self._per_frame
 
     def _note_uptime(self, uptime_ms: int) -> None:
         self._seen_uptime = (uptime_ms, self.clock())
@@ -450,8 +509,9 @@ class BoardClient(LinkMixin, ActuateMixin, ConfigMixin):
         self._subs.append(sub)
         try:
             if rate_hz > self._rate:
-                await self._expect(Subscribe(rate_hz), Ack)
-                self._subscribed(rate_hz)
+                ask = self._subscription(rate_hz)
+                await self._expect(ask, Ack)
+                self._subscribed(rate_hz, ask.per_frame)
             while True:
                 yield await sub.get()
         finally:

@@ -5,8 +5,9 @@ to the board is alive and brings it back. The link is *lost* when
 
 - the transport says so (the stream ended, a write failed: the reader gets ``BoardUnreachable``);
 - nothing arrives for ``silence_limit`` seconds while subscribed (a frozen link, a board held in
-  reset or hung): ``silence_s`` if given, else ``SILENCE_PERIODS`` periods of the subscription,
-  at least ``SILENCE_MIN_S`` and at most one keepalive period plus the request timeout (the
+  reset or hung): ``silence_s`` if given, else ``SILENCE_PERIODS`` periods of the subscription
+  (plus the k - 1 periods a board batching k readings a frame waits between frames), at least
+  ``SILENCE_MIN_S`` and at most one keepalive period plus the request timeout (the
   keepalive would tell by then anyway);
 - a keepalive PING (every ``keepalive_s`` while up, PROTOCOL.md §3) gets no answer within the
   request timeout: the only judge while nothing is subscribed.
@@ -93,6 +94,7 @@ class LinkMixin:
         self._heard = asyncio.Event()  # this session's board was heard running
         self._rearm = asyncio.Event()  # the silence rule changed (a session, a subscription)
         self._down_since = 0.0
+        self._per_frame = 1  # readings a frame the board was asked for
         self.down_reason = ""  # why the link is down ("" while up)
 
     # --- the rules ----------------------------------------------------------------------
@@ -107,7 +109,8 @@ class LinkMixin:
             return self.silence_s
         most = self.transport.MAX_PUSH_HZ
         rate = min(self._rate, most) if most else self._rate
-        derived = max(SILENCE_MIN_S, SILENCE_PERIODS / rate)
+        # a board sending k readings a frame is silent k - 1 periods between frames
+        derived = max(SILENCE_MIN_S, (SILENCE_PERIODS + self._per_frame - 1) / rate)
         return min(derived, self.keepalive_s + self.timeout_s)
 
     def _new_session(self) -> None:
@@ -130,9 +133,10 @@ class LinkMixin:
         if last is not None and uptime_ms != last and not self._heard.is_set():
             self._heard.set()
 
-    def _subscribed(self, rate_hz: int) -> None:
+    def _subscribed(self, rate_hz: int, per_frame: int = 1) -> None:
         """The subscription's rate changed: the silence rule starts from now."""
         self._rate = rate_hz
+        self._per_frame = per_frame
         self._last_rx = self.clock()
         self._rearm.set()
 
@@ -287,8 +291,10 @@ class LinkMixin:
         return None
 
     async def _resubscribe(self) -> None:
+        ask = self._subscription(self._rate)
         try:
-            await self._request_now(Subscribe(self._rate))
+            await self._request_now(ask)
+            self._per_frame = ask.per_frame
         except (BoardUnreachable, BoardRefused) as exc:
             log.warning("%s: resubscribing failed: %s", self.url, exc)
 
@@ -298,6 +304,9 @@ class LinkMixin:
         raise NotImplementedError
 
     async def ping(self, token: int = 0) -> int:
+        raise NotImplementedError
+
+    def _subscription(self, rate_hz: int) -> Subscribe:
         raise NotImplementedError
 
     def _publish(self, item: StreamItem) -> None:

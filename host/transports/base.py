@@ -55,6 +55,9 @@ class Transport:
     def __init__(self, url: BoardUrl, key: bytes | None = None) -> None:
         self.url = url
         self.key = key
+        # readings a frame the URL asks of a board that can batch them (``?per_frame=K`` on the
+        # native transports); 0: not asked, the board client chooses
+        self.per_frame = 0
         # what the board said of the key at open: "accepted", "refused: <why>", or "" (not
         # known: no key, or a wire that cannot ask before a command)
         self.key_check = ""

@@ -1,6 +1,6 @@
 """``memory://NAME``: the native protocol over an in-process byte pipe, the default test target.
 
-URL grammar: ``memory://NAME`` where NAME is what the board side registered with
+URL grammar: ``memory://NAME[?per_frame=K]`` where NAME is what the board side registered with
 ``listen(NAME, accept)`` (STYLE.md 7, after pyserial's ``loop://`` and python-can's
 ``VirtualBus``). Opening the URL makes a ``pipe()`` (two ``MemoryEnd`` objects joined by
 asyncio queues), hands one end to ``accept`` (the board side: a test or an emulator helper
@@ -17,7 +17,7 @@ import logging
 from collections.abc import Callable
 
 from host.transports.errors import BoardUnreachable
-from host.transports.stream import StreamTransport
+from host.transports.stream import PER_FRAME, StreamTransport
 from host.transports.url import BoardUrl
 
 log = logging.getLogger(__name__)
@@ -87,7 +87,7 @@ class MemoryTransport(StreamTransport):
 
     def __init__(self, url: BoardUrl, key: bytes | None = None) -> None:
         super().__init__(url, key)
-        url.check_params(())
+        url.check_params((PER_FRAME,))
         self.name = url.host or url.path.strip("/")
         self.end: MemoryEnd | None = None
 

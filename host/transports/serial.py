@@ -1,7 +1,8 @@
 """``serial:///dev/ttyACM0?baud=115200``: the native protocol over a serial line (pyserial).
 
-URL grammar: ``serial://DEVICE[?baud=N]`` with DEVICE an absolute path (so three slashes:
-``serial:///dev/ttyACM0``), baud 300..4000000, default 115200; 8N1, no flow control. A serial
+URL grammar: ``serial://DEVICE[?baud=N][&per_frame=K]`` with DEVICE an absolute path (so three
+slashes: ``serial:///dev/ttyACM0``), baud 300..4000000, default 115200; 8N1, no flow control;
+``per_frame`` as for ``tcp://`` (``host/transports/stream.py``). A serial
 line has no connection: the board may have greeted long ago, so the host asks for a fresh HELLO
 (HELLO_REQUEST) when none arrives at once. A board that reboots greets again; the board client
 sees the new boot id in that HELLO. POSIX only: reads wait on the file descriptor with the
@@ -15,7 +16,7 @@ import logging
 
 import serial as pyserial
 
-from host.transports.stream import READ_SIZE, StreamTransport
+from host.transports.stream import PER_FRAME, READ_SIZE, StreamTransport
 from host.transports.url import BoardUrl
 
 log = logging.getLogger(__name__)
@@ -29,7 +30,7 @@ class SerialTransport(StreamTransport):
 
     def __init__(self, url: BoardUrl, key: bytes | None = None) -> None:
         super().__init__(url, key)
-        url.check_params(("baud",))
+        url.check_params(("baud", PER_FRAME))
         self.device = url.need_path("device", "serial:///dev/ttyACM0?baud=115200")
         self.baud = url.int_param("baud", DEFAULT_BAUD, 300, 4_000_000)
         self._port: pyserial.Serial | None = None

@@ -12,7 +12,9 @@ yields an event, and turns the end of the stream into ``LinkLost``. A frame left
 when the stream ends becomes a ``BadFrame`` (E_TRUNCATED), never an exception.
 
 Backends implement ``_connect()``, ``_read() -> bytes`` (``b""`` at the end of the stream),
-``_write(data)`` and ``_disconnect()``.
+``_write(data)`` and ``_disconnect()``. Every native URL takes ``per_frame=K`` (1-10): the
+readings a frame the board client asks of a board with capability ``batch`` (SUBSCRIBE's
+``per_frame``, PROTOCOL.md §4.2); without it the client chooses (``host/board/client.py``).
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ CLAIM_WAIT_S = 2.0
 CLAIM_REQ_ID = 0xFFFF  # the board client numbers its own requests from 1
 KEY_REFUSED = (E_BAD_TAG, E_AUTH_REQUIRED)  # the key is wrong, or the board has none
 READ_SIZE = 4096
+PER_FRAME = "per_frame"  # the URL parameter every native transport takes (1-10)
 
 
 class StreamTransport(Transport):
@@ -45,6 +48,7 @@ class StreamTransport(Transport):
 
     def __init__(self, url: object, key: bytes | None = None) -> None:
         super().__init__(url, key)  # type: ignore[arg-type]
+        self.per_frame = self.url.int_param(PER_FRAME, 0, 1, 10)
         self.conn = Connection(HOST, key)
         self._events: collections.deque[Message | BadFrame] = collections.deque()
         self._eof = False

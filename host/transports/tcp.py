@@ -1,7 +1,9 @@
 """``tcp://HOST:PORT``: the native protocol over TCP (the board's own network front end).
 
-URL grammar: ``tcp://HOST:PORT[?hold_ms=N]`` (HOST a name, an IPv4 address or ``[IPv6]``);
-a bare ``HOST:PORT`` means the same. ``hold_ms`` (0-100, default 0: off) trades latency for
+URL grammar: ``tcp://HOST:PORT[?hold_ms=N][&per_frame=K]`` (HOST a name, an IPv4 address or
+``[IPv6]``); a bare ``HOST:PORT`` means the same. ``per_frame`` (1-10): readings a frame asked
+of a board that can batch them (``host/transports/stream.py``; default: the client's choice).
+``hold_ms`` (0-100, default 0: off) trades latency for
 CPU: after each arrival the socket is left unread for N ms, so that what the board sends
 meanwhile arrives as one batch (at 100 Hz and 20 ms, two or three readings a wake-up instead
 of one); every message, a reply or an event too, may reach the host up to N ms later. The
@@ -30,7 +32,7 @@ import contextlib
 import logging
 from collections.abc import Callable
 
-from host.transports.stream import READ_SIZE, StreamTransport
+from host.transports.stream import PER_FRAME, READ_SIZE, StreamTransport
 from host.transports.url import BoardUrl
 from protocol.framing import BadFrame
 from protocol.messages import Message
@@ -71,7 +73,7 @@ class TcpTransport(StreamTransport):
 
     def __init__(self, url: BoardUrl, key: bytes | None = None) -> None:
         super().__init__(url, key)
-        url.check_params(("hold_ms",))
+        url.check_params(("hold_ms", PER_FRAME))
         self.address = url.need_host_port("tcp://HOST:PORT, e.g. tcp://192.168.0.7:4840")
         self.hold_s = url.int_param("hold_ms", 0, 0, 100) / 1000
         self._held: asyncio.TimerHandle | None = None  # reading held until this fires

@@ -20,6 +20,7 @@ from protocol.messages import (
     AuthPing,
     GetState,
     Measurement,
+    MeasurementBatch,
     Ping,
     Pong,
     State,
@@ -148,16 +149,26 @@ class _Blocked:
         pass
 
 
-def _seqs(conn: Connection, data: bytes) -> list[int]:
+def _seqs(conn: Connection, data: bytes, sizes: list[int] | None = None) -> list[int]:
+    """The seq of every reading in ``data`` (MEASUREMENT or MEASUREMENT_BATCH); ``sizes``
+    gets the number of readings in each frame."""
     out = []
     for i in range(0, len(data), 1024):
         conn.receive_data(data[i:i + 1024])
-        out.extend(m.seq for m in conn.events() if isinstance(m, Measurement))
+        for m in conn.events():
+            got = m.readings if isinstance(m, MeasurementBatch) else [m] if isinstance(
+                m, Measurement) else []
+            out.extend(r.seq for r in got)
+            if got and sizes is not None:
+                sizes.append(len(got))
     return out
 
 
-async def test_net_skips_measurements_for_a_stuck_writer_only() -> None:
-    """Net over in-memory streams, on the test HAL's simulated clock."""
+@pytest.mark.parametrize("per_frame", [1, 4])
+async def test_net_skips_measurements_for_a_stuck_writer_only(per_frame: int) -> None:
+    """Net over in-memory streams, on the test HAL's simulated clock; with ``per_frame`` 4
+    the free writer gets its readings four a frame, none lost, and the stuck one's gap shows
+    in its batches as well."""
     from firmware.net import HARD_CAP, Net
     from tests.firmware.testhal import Rig
 
@@ -172,7 +183,7 @@ async def test_net_skips_measurements_for_a_stuck_writer_only() -> None:
         conn = Connection(HOST, KEY)
         tasks.append(asyncio.create_task(net.serve_stream(reader, w)))
         await asyncio.sleep(0)
-        reader.feed_data(conn.send(Subscribe(100, req_id=1)))
+        reader.feed_data(conn.send(Subscribe(100, per_frame, req_id=1)))
         conns.append(conn)
     for _ in range(1000):  # 10 simulated seconds
         rig.run(10)
@@ -181,10 +192,12 @@ async def test_net_skips_measurements_for_a_stuck_writer_only() -> None:
     stuck_client = next(c for c in net.clients if c.writer is stuck)
     assert stuck_client.skipped > 900
     assert stuck_client.n <= HARD_CAP and not stuck_client.closed
-    seqs = _seqs(conns[1], bytes(free.data))
+    sizes: list[int] = []
+    seqs = _seqs(conns[1], bytes(free.data), sizes)
     assert seqs == list(range(1, 1001))
+    assert sizes == [per_frame] * (1000 // per_frame)
     stuck.go.set()  # the peer reads at last: what it gets shows the gap
-    for _ in range(5):
+    for _ in range(8):
         rig.run(10)
         net.pump(rig.hal.now)
         await asyncio.sleep(0)
@@ -193,3 +206,12 @@ async def test_net_skips_measurements_for_a_stuck_writer_only() -> None:
     assert any(b - a > 1 for a, b in itertools.pairwise(got))
     for t in tasks:
         t.cancel()
+
+
+def test_the_emulator_offers_batched_readings() -> None:
+    """The emulated board's HELLO has capability batch (SUBSCRIBE's per_frame), whatever
+    front ends it serves."""
+    from emulator.frontends import capabilities
+    from protocol.constants import CAP_BATCH
+
+    assert all(capabilities(m, c) & CAP_BATCH for m in (False, True) for c in (False, True))

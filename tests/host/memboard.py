@@ -6,7 +6,9 @@
 due. A reboot of the emulated board ends the link, as it ends a TCP connection on hardware.
 ``drop_links()`` ends every link without a reboot (a pulled cable); ``skip = N`` withholds the
 next N measurements, as the firmware's front end does for a client that cannot keep up;
-``freeze(s)`` holds every link for ``s`` seconds, both ways, new ones included (the emulator's
+``caps`` are the capabilities its HELLO announces (without ``batch`` by default: a board
+that sends one reading a frame, as boards before it did); ``freeze(s)`` holds every link for
+``s`` seconds, both ways, new ones included (the emulator's
 ``link_freeze``: bytes wait, none are lost); ``mute = True`` keeps the sessions answering but
 measuring nothing (a board whose network lives while its main loop does not).
 """
@@ -39,8 +41,9 @@ def tedusar(key: bytes | None = KEY) -> Emulator:
 
 
 class MemoryBoard:
-    def __init__(self, emu: Emulator, name: str = "board") -> None:
+    def __init__(self, emu: Emulator, name: str = "board", caps: int = CAPS) -> None:
         self.emu = emu
+        self.caps = caps  # the HELLO's capabilities (CAP_BATCH: SUBSCRIBE's per_frame used)
         self.name = name
         self.url = f"memory://{name}"
         self.links: list[memory.MemoryEnd] = []
@@ -93,7 +96,7 @@ class MemoryBoard:
         emu = self.emu
         firmware = emu.firmware
         board = emu.board
-        session = Session(board, board_key(board), emu.hal.random_bytes, "emulator", CAPS,
+        session = Session(board, board_key(board), emu.hal.random_bytes, "emulator", self.caps,
                           emu.hal.ticks_ms())
         self.sessions += 1
         await self._thaw()

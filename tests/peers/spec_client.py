@@ -3,7 +3,8 @@
 It imports nothing of ``protocol/``, ``firmware/`` or ``host/``: framing (§2: marker 0xDB 0x58,
 version 1, type, req_id, length, payload, CRC-32 over version..payload, big-endian), the
 handshake (§3), the messages it needs (§4: HELLO, HELLO_REQUEST, PING/PONG, GET_STATE/STATE,
-SUBSCRIBE/ACK, MEASUREMENT, EVENT, SWITCH/SWITCHED, ERROR) and authentication (§5: counter u32
+SUBSCRIBE/ACK with its optional per_frame, MEASUREMENT, MEASUREMENT_BATCH, EVENT,
+SWITCH/SWITCHED, ERROR) and authentication (§5: counter u32
 and the first 16 bytes of HMAC-SHA256(key, nonce ‖ frame from the marker through the
 counter)) are written out here from the text, with the standard library only. ``SpecPeer``
 runs over any pair of byte functions (``send(bytes)``, ``recv(timeout) -> bytes``), so the
@@ -25,8 +26,11 @@ MARKER = b"\xdb\x58"
 VERSION = 1
 HELLO, HELLO_REQUEST, PING, PONG = 0x01, 0x02, 0x03, 0x04
 GET_STATE, STATE, SUBSCRIBE, MEASUREMENT, EVENT = 0x10, 0x11, 0x12, 0x13, 0x14
+MEASUREMENT_BATCH = 0x15
+CAP_BATCH = 0x0080  # §10: SUBSCRIBE takes per_frame
 SWITCH, SWITCHED = 0x20, 0x21
 ACK, ERROR = 0x7E, 0x7F
+PUSHES = (MEASUREMENT, MEASUREMENT_BATCH, EVENT)  # req_id 0: never a reply
 
 
 def frame(type_: int, req_id: int, payload: bytes) -> bytes:
@@ -111,6 +115,24 @@ def parse_measurement(p: bytes) -> dict[str, Any]:
             "fault_mask": faults, "currents_ma": currents}
 
 
+def parse_batch(p: bytes) -> list[dict[str, Any]]:
+    """§4.2 MEASUREMENT_BATCH: count u8, channels u8, then count readings of 14 + 4 x channels
+    bytes, read with one format; ValueError for anything §4.2 calls malformed."""
+    if len(p) < 2:
+        raise ValueError("MEASUREMENT_BATCH shorter than its header")
+    count, channels = p[0], p[1]
+    if not 1 <= count <= 10:
+        raise ValueError(f"MEASUREMENT_BATCH count {count} is not 1-10")
+    size = 14 + 4 * channels
+    if len(p) != 2 + count * size:
+        raise ValueError(f"MEASUREMENT_BATCH of {count} x {size} bytes in {len(p) - 2}")
+    v = struct.unpack(">" + f"IIHHH{channels}i" * count, p[2:])
+    step = 5 + channels
+    return [{"seq": v[i], "uptime_ms": v[i + 1], "input_mv": v[i + 2], "on_mask": v[i + 3],
+             "fault_mask": v[i + 4], "currents_ma": list(v[i + 5:i + step])}
+            for i in range(0, len(v), step)]
+
+
 def parse_error(p: bytes) -> dict[str, Any]:
     code, of_type = struct.unpack_from(">HB", p, 0)
     text, _ = _str(p, 3)
@@ -162,7 +184,7 @@ class SpecPeer:
     def request(self, type_: int, payload: bytes = b"", timeout: float = 5.0) -> Frame:
         rid = self.next_id()
         self._send(frame(type_, rid, payload))
-        return self.wait(lambda f: f.req_id == rid and f.type != MEASUREMENT, timeout)
+        return self.wait(lambda f: f.req_id == rid and f.type not in PUSHES, timeout)
 
     def signed(self, type_: int, payload: bytes, timeout: float = 5.0) -> Frame:
         """An authenticated request (§5); needs ``key`` and a session's nonce."""
@@ -188,15 +210,21 @@ class SpecPeer:
         assert got.type == STATE, got
         return parse_state(got.payload)
 
-    def subscribe(self, rate_hz: int) -> Frame:
-        return self.request(SUBSCRIBE, bytes([rate_hz]))
+    def subscribe(self, rate_hz: int, per_frame: int | None = None) -> Frame:
+        """SUBSCRIBE; ``per_frame`` (§4.2) is sent as the optional second byte when given."""
+        extra = b"" if per_frame is None else bytes([per_frame])
+        return self.request(SUBSCRIBE, bytes([rate_hz]) + extra)
 
     def switch(self, channel: int, on: bool, force: bool = False) -> Frame:
         return self.signed(SWITCH, bytes([channel, int(on), int(force)]))
 
     def measurements(self, n: int, timeout: float = 10.0) -> list[dict[str, Any]]:
-        out = []
+        """At least ``n`` readings, from MEASUREMENT or MEASUREMENT_BATCH frames, in order."""
+        out: list[dict[str, Any]] = []
         while len(out) < n:
-            got = self.wait(lambda f: f.type == MEASUREMENT, timeout)
-            out.append(parse_measurement(got.payload))
+            got = self.wait(lambda f: f.type in (MEASUREMENT, MEASUREMENT_BATCH), timeout)
+            if got.type == MEASUREMENT:
+                out.append(parse_measurement(got.payload))
+            else:
+                out += parse_batch(got.payload)
         return out

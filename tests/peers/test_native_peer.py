@@ -9,10 +9,12 @@ without a subscription and counts its measurements from 1.
 
 from __future__ import annotations
 
+import re
 import socket
 import struct
 import time
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 import serial
@@ -155,3 +157,65 @@ def test_serial_partial_frame_is_dropped_after_silence(board: Emulate) -> None:
         assert peer.ping(7)[0] == 7
     finally:
         link.close()
+
+
+def test_the_spec_example_batch_decodes_as_the_text_says() -> None:
+    """PROTOCOL.md §7's MEASUREMENT_BATCH example, read by the peer written from §4.2."""
+    text = (Path(__file__).resolve().parents[2] / "protocol" / "PROTOCOL.md").read_text()
+    after = text[text.index("MEASUREMENT_BATCH of 2 readings"):]
+    hexline = re.search(r"```\n([0-9a-f]+)\n```", after)
+    assert hexline is not None
+    frames = sc.Decoder().feed(bytes.fromhex(hexline.group(1)))
+    assert [f.type for f in frames] == [sc.MEASUREMENT_BATCH]
+    got = sc.parse_batch(frames[0].payload)
+    assert [(r["seq"], r["uptime_ms"], r["input_mv"]) for r in got] == [
+        (17, 61260, 24090), (18, 61270, 24085)]
+    assert got[0]["currents_ma"] == [1510, -3, 0, 702, 0, 0, 0, 4980, 0, 0]
+    for bad in (b"\x00\x01", b"\x03\x01" + bytes(36), b"\x02\x01" + bytes(35),
+                frames[0].payload + b"\x00"):
+        with pytest.raises(ValueError):
+            sc.parse_batch(bad)
+
+
+@pytest.mark.parametrize("how", ["tcp", "serial"])
+def test_spec_peer_reads_batches_and_answers_come_after_them(board: Emulate, how: str) -> None:
+    peer, link = open_peer(board, how)
+    try:
+        assert peer.hello is not None and peer.hello["capabilities"] & sc.CAP_BATCH
+        for k in (0, 11):  # §4.2: per_frame 1-10
+            got = peer.subscribe(100, k)
+            assert got.type == sc.ERROR and sc.parse_error(got.payload)["code"] == 303
+        assert peer.subscribe(100, 4).type == sc.ACK
+        readings = peer.measurements(60)
+        seqs = [r["seq"] for r in readings]
+        assert seqs == list(range(seqs[0], seqs[0] + len(seqs)))
+        assert sc.MEASUREMENT not in [f.type for f in peer.backlog]  # batched
+        # PINGs: every reading sampled before a PONG arrives before it, none is lost or
+        # reordered, and (10 a frame: readings are held 90 % of the time) a PONG finds some
+        assert peer.subscribe(100, 10).type == sc.ACK
+        frames = list(peer.backlog)
+        pongs: list[int] = []  # indices into frames
+        for token in range(5):
+            rid = peer.next_id()
+            link.send(sc.frame(sc.PING, rid, struct.pack(">I", token)))  # type: ignore[attr-defined]
+            end = time.monotonic() + 10
+            while not any(f.type == sc.PONG and f.req_id == rid for f in frames):
+                assert time.monotonic() < end, frames
+                frames += peer.decoder.feed(link.recv(0.2))  # type: ignore[attr-defined]
+            pongs.append(next(i for i, f in enumerate(frames) if f.req_id == rid))
+            time.sleep(0.037)  # a PING at another phase of the batch (the stimulus)
+        frames += peer.decoder.feed(link.recv(0.3))  # type: ignore[attr-defined]
+        batches = [(i, sc.parse_batch(f.payload)) for i, f in enumerate(frames)
+                   if f.type == sc.MEASUREMENT_BATCH]
+        assert all(len(b) <= 10 for _, b in batches)
+        seqs = [r["seq"] for _, b in batches for r in b]
+        assert seqs == list(range(seqs[0], seqs[0] + len(seqs)))
+        for at in pongs:
+            up = struct.unpack(">II", frames[at].payload)[1]
+            assert all(r["uptime_ms"] <= up for i, b in batches if i < at for r in b)
+            assert all(r["uptime_ms"] >= up for i, b in batches if i > at for r in b)
+        assert any(frames[at - 1].type == sc.MEASUREMENT_BATCH for at in pongs)
+        peer.backlog = []
+        assert peer.subscribe(0).type == sc.ACK
+    finally:
+        link.close()  # type: ignore[attr-defined]

@@ -12,7 +12,7 @@ from pathlib import Path
 from protocol import messages as m
 from protocol.connection import BOARD, HOST, Connection
 from protocol.framing import encode_frame, seal
-from tests.protocol.samples import samples
+from tests.protocol.samples import later_samples, samples
 from tests.protocol.util import KEY, NONCE, hello
 
 OUT = Path(__file__).resolve().parents[2] / "protocol" / "vectors" / "golden.json"
@@ -57,6 +57,13 @@ def main() -> None:
         ("tag does not match", "board", seal(bytes(forged[:-4]))),
         ("replayed counter", "board", switch + switch),
         ("actuation without a tag", "board", encode_frame(0x20, 10, b"\x03\x01\x00")),
+        # added later: malformed MEASUREMENT_BATCH payloads (count 0; 3 readings of 1 channel
+        # where the payload holds 2; the second record one byte short)
+        ("batch of no readings", "host", encode_frame(0x15, 0, b"\x00\x01") + pong),
+        ("batch count past the payload", "host",
+         encode_frame(0x15, 0, b"\x03\x01" + bytes(36)) + pong),
+        ("batch record cut short", "host",
+         encode_frame(0x15, 0, b"\x02\x01" + bytes(35)) + pong),
     ]
     errors = []
     for name, role, data in cases:
@@ -80,10 +87,14 @@ def main() -> None:
             }
         )
     # messages added later go last, so that the vectors above never change
-    for msg in (m.AuthPing(0xC0FFEE, req_id=30),):
-        wire = host.send(msg)
-        frames.append({"message": type(msg).__name__, "req_id": msg.req_id,
-                       "fields": msg.to_dict(), "hex": wire.hex(), "counter": host.counter})
+    for msg in later_samples():
+        sender = board if msg.DIR == "B" else host
+        wire = sender.send(msg)
+        entry = {"message": type(msg).__name__, "req_id": msg.req_id,
+                 "fields": msg.to_dict(), "hex": wire.hex()}
+        if msg.AUTH:
+            entry["counter"] = host.counter
+        frames.append(entry)
     doc = {
         "about": "dxboard protocol golden vectors; see protocol/PROTOCOL.md section 7",
         "key": KEY.hex(),

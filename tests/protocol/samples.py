@@ -132,3 +132,17 @@ def samples() -> "list[m.Message]":
         m.Error(E_LATCHED, 0x20, "channel latched: clear it first", req_id=14),
         m.Switched(2, False, False, ST_OFF, req_id=7),
     ]
+
+
+def later_samples() -> "list[m.Message]":
+    """Messages (and optional fields) added after the first vectors: last in golden.json."""
+    return [
+        m.AuthPing(0xC0FFEE, req_id=30),
+        m.Subscribe(100, per_frame=4, req_id=31),
+        m.MeasurementBatch([
+            m.Measurement(17, 61260, 24090, 0x0089, 0x0002,
+                          [1510, -3, 0, 702, 0, 0, 0, 4980, 0, 0]),
+            m.Measurement(18, 61270, 24085, 0x0089, 0x0002,
+                          [1498, -3, 0, 711, 0, 0, 0, 5012, 0, 0]),
+        ]),
+    ]

@@ -25,7 +25,7 @@ from protocol.constants import (
 )
 from protocol.errors import LocalProtocolError
 from protocol.framing import BUFFER_CAP, MAGIC, MAX_PAYLOAD, BadFrame, encode_frame, seal
-from tests.protocol.samples import samples
+from tests.protocol.samples import later_samples, samples
 from tests.protocol.util import FEEDS, KEY, feed, hello, pair
 
 
@@ -37,7 +37,7 @@ class TestRoundTrip(unittest.TestCase):
     def test_every_message_every_feed(self) -> None:
         for how in FEEDS:
             board, host = pair()
-            for msg in samples():
+            for msg in samples() + later_samples():
                 with self.subTest(msg=type(msg).__name__, how=how):
                     if msg.DIR == "B":
                         got = feed(host, board.send(msg), how)
@@ -47,7 +47,7 @@ class TestRoundTrip(unittest.TestCase):
 
     def test_many_frames_in_one_chunk(self) -> None:
         board, host = pair()
-        msgs = [s for s in samples() if s.DIR == "B"]
+        msgs = [s for s in samples() + later_samples() if s.DIR == "B"]
         data = b"".join(board.send(x) for x in msgs)
         for how in FEEDS:
             with self.subTest(how=how):

@@ -1,7 +1,8 @@
 # cpython-only: hypothesis does not run on MicroPython
 """Property test: at least 100,000 random and mutated frames, split at random, never make
 the codec raise; every event is a message or a ``BadFrame``; the messages found do not
-depend on how the bytes were split; and a good frame after the damage is still decoded.
+depend on how the bytes were split; a good frame after the damage is still decoded; and a
+MEASUREMENT_BATCH that decodes is a whole one (1-10 readings of one channel count).
 """
 
 from hypothesis import HealthCheck, given, settings
@@ -11,7 +12,7 @@ from protocol import messages as m
 from protocol.connection import BOARD, HOST, Connection
 from protocol.framing import BadFrame
 from tests.protocol.mutations import mutated
-from tests.protocol.samples import samples
+from tests.protocol.samples import later_samples, samples
 from tests.protocol.util import KEY, hello
 
 FRAMES_PER_EXAMPLE = 40
@@ -22,7 +23,7 @@ _host = Connection(HOST, KEY)
 _host.receive_data(_board.send(hello()))
 _host.events()
 # Valid frames of every message in both directions, signed ones included.
-VALID = [(_board if s.DIR == "B" else _host).send(s) for s in samples()]
+VALID = [(_board if s.DIR == "B" else _host).send(s) for s in samples() + later_samples()]
 TRAILER = _board.send(m.Pong(0xABCD, 1, req_id=1))
 
 
@@ -66,6 +67,9 @@ def test_nothing_escapes(frames: "list[bytes]", cuts: "list[int]", role: str) ->
     whole = _decode(role, data, [])
     for ev in split:
         assert isinstance(ev, (m.Message, BadFrame))
+        if isinstance(ev, m.MeasurementBatch):  # whole or not at all: never a partial batch
+            assert 1 <= len(ev.readings) <= 10
+            assert len({len(r.currents_ma) for r in ev.readings}) == 1
     assert [e for e in split if isinstance(e, m.Message)] == [
         e for e in whole if isinstance(e, m.Message)
     ]
