@@ -17,7 +17,9 @@ the diagnoser ranks them (cardinality, then probability) and ties by name, so th
 
 ``bag_observers`` picks what a bag can feed: the topic observers of the robot's ``observers:``
 section, its hardware observer (fed the board's items from ``/board_stream``, which a
-``dxboard run`` on ROS 2 publishes: ``host.ros.boardstream``, each at its own stamp) and node
+``dxboard run`` on ROS 2 publishes: ``host.ros.boardstream``, each at its own stamp; it calls
+the link lost only at its cap, ``link_timeout + link_slack``, since a shorter gap in the stream
+may be the daemon's own scheduling, which the daemon excuses and a bag cannot tell) and node
 presence from the graph (fed the graph samples the recorder wrote on ``/dxboard/graph``:
 ``host.ros.graphlog``), without process observers (the supervisor is not in a bag). Its
 ``topics`` are the bag's names (``/dxboard/graph`` for the graph).
@@ -50,8 +52,21 @@ MIN_STEP_S = 0.001  # a deadline that does not move after its tick is retried th
 
 
 def bag_observers(observers: Sequence[Observer[Any]]) -> list[Observer[Any]]:
-    """The observers a bag can feed: topic observers (of the graph too), the hardware one."""
-    return [o for o in observers if isinstance(o, (TopicObserver, HardwareObserver))]
+    """The observers a bag can feed: topic observers (of the graph too), the hardware one
+    judging the link at its cap (``stream_link``)."""
+    return [stream_link(o) if isinstance(o, HardwareObserver) else o
+            for o in observers if isinstance(o, (TopicObserver, HardwareObserver))]
+
+
+def stream_link(o: HardwareObserver) -> HardwareObserver:
+    """A hardware observer like ``o`` that calls the link lost only at ``o``'s cap
+    (``link_timeout + link_slack``, 1 s by default): a bag sees the board through the daemon's
+    ``/board_stream``, and a shorter gap in it may be the daemon's loop held up, which the
+    daemon's own observer excuses and a recorder cannot tell. The daemon's ``LinkDown`` items
+    still count at once."""
+    return HardwareObserver(o.devices, o.link_timeout + o.link_slack, o.settle, o.link_atom,
+                            link_slack=0.0, name=o.name, validity=o.validity,
+                            refresh=o.refresh)
 
 
 class ClockedObservers:

@@ -21,7 +21,7 @@ from host.observers import Device, HardwareObserver, Retraction, Update
 from host.observers.silence import JITTER_S
 from host.ros import boardstream
 from host.ros.message import RosMessage
-from host.ros.offline import ClockedObservers, Reorder
+from host.ros.offline import ClockedObservers, Reorder, bag_observers
 from protocol.constants import EV_TRIP, ST_ON, ST_TRIPPED
 from tests.observers.test_hardware import event, reading, state
 
@@ -98,3 +98,34 @@ def test_a_hardware_observer_on_the_bags_clock_sees_a_trip_and_the_link_go() -> 
     assert [t for a, t in out if a == "on(hokuyo)"][-1] == ns(gone)  # unknown
     assert [a for a, _ in out].index("tripped(hokuyo)") < [a for a, _ in out].index(
         "~link(board)")
+
+
+def test_a_bags_hardware_observer_takes_a_gap_in_the_daemons_stream_for_its_scheduling() -> None:
+    """The recorder sees the board through the daemon: a gap in ``/board_stream`` shorter than
+    the daemon's own cap (``link_timeout + link_slack``) may be the daemon's loop held up, which
+    the daemon's observer excuses and a recorder cannot tell; found under a CPU hog, where the
+    recorder called the link lost for a 0.3 s gap the daemon never saw as one, and blamed the
+    tripped device twice. A stream that stops is still a lost link, at the cap."""
+    robot = HardwareObserver({"hokuyo": Device("hokuyo", 3, (0.2, 1.2))}, link_timeout=0.25,
+                             link_slack=0.75)
+    [hw] = bag_observers([robot])
+    assert isinstance(hw, HardwareObserver) and hw is not robot  # the robot's stays as it is
+    assert (robot.link_timeout, robot.link_slack) == (0.25, 0.75)
+    out: list[tuple[str, float]] = []
+
+    def sink(updates: list[Update], t: float) -> None:
+        out.extend((u.atom if isinstance(u, Retraction) else str(u.literal), t)
+                   for u in updates)
+
+    clocked = ClockedObservers([hw], sink)
+    clocked.start(100.0)
+    # readings at 100 Hz, a 0.4 s gap in the daemon's feed (its loop held up), then more
+    stamps = [100.0 + i * 0.01 for i in range(20)] + [100.59 + i * 0.01 for i in range(20)]
+    for i, t in enumerate(stamps):
+        clocked.advance(t)  # other topics' arrivals drive the clock through the gap
+        clocked.feed(wire(reading(i, {3: 500}, t)))
+    assert ("~link(board)", pytest.approx(100.19 + 0.25 + JITTER_S)) not in out
+    assert all(a != "~link(board)" for a, _ in out), out
+    clocked.advance(102.0)  # the stream stops: the link is gone at the cap
+    gone = [t for a, t in out if a == "~link(board)"]
+    assert gone == [pytest.approx(stamps[-1] + 1.0)], out
