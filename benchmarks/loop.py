@@ -84,6 +84,7 @@ from host.journal import (
 from host.observers import load_observers
 from host.observers.base import Update
 from host.observers.hardware import HardwareObserver
+from host.observers.topics import DEFAULT_SILENCE, FrequencyObserver
 from host.repair.limits import DEFAULT_STABLE_S
 from tests.daemon.runner import (
     KEY,
@@ -462,7 +463,8 @@ def table(res: Results) -> str:
             ("hang: last message seen → ~ok (the silence limit as applied)", "silence", True),
             ("diagnosis (that observation → diagnosis naming it)", "diagnose", False),
             ("fault → diagnosis", "to_diagnosis", False),
-            ("fault → repair start (0.5 s debounce included)", "to_repair", False),
+            ("fault → repair start (a confirmed finding skips the 0.5 s debounce)",
+             "to_repair", False),
             ("fault → verified healthy", "to_healthy", True)):
         for label, keep in groups if per_device else groups[:len(KINDS)]:
             xs = [getattr(s, attr) for s in res.samples if keep(s)
@@ -471,6 +473,35 @@ def table(res: Results) -> str:
                 rows.append(f"| {name} | {label} | {len(xs)} | {ms(pct(xs, 50))} | "
                             f"{ms(pct(xs, 99))} | {ms(max(xs))} |")
     return "\n".join(rows)
+
+
+def topic_rates() -> dict[str, float]:
+    """Each observed topic's own rate (Hz), as the robot's ``system.yaml`` gives it."""
+    return {o.topics[0]: o.rate for o in load_observers(TEDUSAR, load_system(TEDUSAR)).observers
+            if isinstance(o, FrequencyObserver)}
+
+
+def hang_targets(res: Results) -> str:
+    """A hang's fault → diagnosis per device against < 150 ms, and in its topic's periods: a
+    silence is known no sooner than a few periods of the topic's own rate, so 150 ms is
+    within reach at /scan's 40 Hz (6 periods), not at /thermal/image's 9 Hz (1.35)."""
+    rates = topic_rates()
+    lines = []
+    for device in KINDS["hang"]:
+        xs = [s.to_diagnosis for s in res.samples if s.kind == "hang" and s.device == device
+              and s.to_diagnosis is not None]
+        topic = TOPIC[device]
+        rate = rates.get(topic)
+        if not xs or rate is None:
+            continue
+        p99 = pct(xs, 99) or 0.0
+        verdict = "met" if p99 < 0.15 else (
+            "NOT met" if 0.15 * rate >= DEFAULT_SILENCE else
+            f"out of reach of the {DEFAULT_SILENCE:g} silence periods that keep a busy machine "
+            f"from false alarms: 150 ms is {0.15 * rate:.2g} of its periods")
+        lines.append(f"- hang {device} ({topic} at {rate:g} Hz): fault → diagnosis p99 "
+                     f"{ms(p99)}, {p99 * rate:.1f} periods (target < 150 ms: {verdict}).")
+    return "\n".join(lines)
 
 
 def report(res: Results, args: argparse.Namespace) -> str:
@@ -498,9 +529,9 @@ topic seen by a Zenoh peer of the benchmark's own to the observation (CLOCK_MONO
 {table(res)}
 
 - fault → diagnosis, trip: p99 {ms(pct(trips, 99))} (target < 50 ms: \
-{'met' if trips and (pct(trips, 99) or 1) < 0.05 else 'NOT met'}); hang: p99 \
-{ms(pct(hangs, 99))} (target < 150 ms: \
-{'met' if hangs and (pct(hangs, 99) or 1) < 0.15 else 'NOT met'}).
+{'met' if trips and (pct(trips, 99) or 1) < 0.05 else 'NOT met'}); hang, all devices: p99 \
+{ms(pct(hangs, 99))}.
+{hang_targets(res)}
 - the daemon over the fault series ({res.run_s:.0f} s): {res.run_cpu * 100:.1f} % of one core, \
 resident memory {min(rss):.0f}-{max(rss):.0f} MB (after each fault).
 
