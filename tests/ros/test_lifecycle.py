@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import asyncio
 import shutil
+import socket
 import time
 from pathlib import Path
 
@@ -58,6 +59,33 @@ async def test_a_lifecycle_repair_brings_the_hokuyo_driver_back_after_a_power_cy
         with pytest.raises(LifecycleError, match="transition configure failed; the node is "
                                                  "unconfigured"):
             await lifecycle.reconfigure("hokuyo_node")
+    finally:
+        ros.close()
+
+
+async def test_a_configure_begun_while_the_device_is_still_off_waits_for_it(
+        domain: int, robot: Robot, peer: Peer, ros_nodes: RosNodes) -> None:
+    # The repair reconfigures the driver as soon as the power cycle has acted; on a loaded
+    # machine the board's on-edge may come later than the host counts (here: an off time of
+    # 3 s, the reconfigure begun at once): configure retries the device, as the plain driver
+    # does, rather than fail the transition (it gave up after 2 s).
+    peer.listen("/scan", LaserScan)
+    robot.board("on", "hokuyo")
+    ros_nodes.start_managed("hokuyo_node")
+    ros = RosNode("dxboard_repair", domain)
+    lifecycle = LifecycleClient(ros, timeout_s=60.0)
+    try:
+        await wait_until_async(
+            lambda: _is(lifecycle, "hokuyo_node", "active"), 60.0, "autostart to active")
+        await wait_until_async(lambda: len(peer.messages("/scan")) >= 10, 60.0, "scans")
+        robot.board("cycle", "hokuyo", "--off-s", "3")  # returns once the channel is off
+        with pytest.raises(ConnectionRefusedError):  # still off: configure is refused
+            socket.create_connection(("127.0.0.1", robot.port("hokuyo")), 5.0).close()
+        steps = await lifecycle.reconfigure("hokuyo_node")
+        assert steps == ["deactivate", "cleanup", "configure", "activate"]
+        n = len(peer.messages("/scan"))
+        await wait_until_async(lambda: len(peer.messages("/scan")) >= n + 10, 60.0,
+                               "scans once the lidar has booted")
     finally:
         ros.close()
 
