@@ -16,7 +16,7 @@ import asyncio
 from pathlib import Path
 
 from host.events import ActionState
-from host.repair.executor import Outcome, StepReport
+from host.repair.executor import ExecutionResult, Outcome, StepReport
 from host.repair.plan import Plan, Step
 from tests.executor.conftest import TEDUSAR, Rig, robot_dir
 
@@ -77,6 +77,16 @@ async def _blind_driver(rig: Rig, flag: Path) -> Reconfigure:
     return reconf
 
 
+def _rig(tmp_path: Path, endpoint: str, **kw: float) -> Rig:
+    return Rig(_robot(tmp_path, endpoint), ["hokuyo"], ["hokuyo_node"], ["/scan"], endpoint,
+               **kw)
+
+
+async def _execute(rig: Rig, plan: Plan = CYCLE_THEN_RECONFIGURE) -> ExecutionResult:
+    async with asyncio.timeout(120):  # a deadline for a broken executor, not a measure
+        return await rig.executor.execute(plan)
+
+
 def _order(rig: Rig) -> list[tuple[str, ActionState]]:
     return [(str(e.step), e.state) for e in rig.events if isinstance(e, StepReport)]
 
@@ -87,11 +97,9 @@ async def test_a_reconfigure_starts_once_the_power_cycle_acted_and_waits_for_its
     # repair of the lidar's driver began only after the lidar's boot was verified, so the
     # driver's transitions came on top of the boot instead of during it.
     flag = tmp_path / "connected"
-    async with Rig(_robot(tmp_path, endpoint), ["hokuyo"], ["hokuyo_node"], ["/scan"],
-                   endpoint) as rig:
+    async with _rig(tmp_path, endpoint) as rig:
         reconf = await _blind_driver(rig, flag)
-        async with asyncio.timeout(120):  # a deadline for a broken executor, not a measure
-            res = await rig.executor.execute(CYCLE_THEN_RECONFIGURE)
+        res = await _execute(rig)
         assert res.outcome is Outcome.DONE, res.reason
         order = _order(rig)
         # started while the lidar still "booted" (before its power cycle was verified) ...
@@ -115,11 +123,9 @@ async def test_a_reconfigure_ends_on_its_output_not_on_a_refresh_of_its_running_
     # running(hokuyo_node): the same process throughout, its running is kept, not new. Here
     # observers repeat unchanged literals only every 60 s: one awaited would fail the step.
     flag = tmp_path / "connected"
-    async with Rig(_robot(tmp_path, endpoint), ["hokuyo"], ["hokuyo_node"], ["/scan"],
-                   endpoint, refresh=60.0) as rig:
+    async with _rig(tmp_path, endpoint, refresh=60.0) as rig:
         await _blind_driver(rig, flag)
-        async with asyncio.timeout(120):  # a deadline for a broken executor, not a measure
-            res = await rig.executor.execute(CYCLE_THEN_RECONFIGURE)
+        res = await _execute(rig)
         assert res.outcome is Outcome.DONE, res.reason
         assert _order(rig)[-1] == ("reconfigure_node(hokuyo_node)", ActionState.SUCCEEDED)
         # the process must still run: a reconfigure of a node that died does not pass
@@ -127,8 +133,7 @@ async def test_a_reconfigure_ends_on_its_output_not_on_a_refresh_of_its_running_
         await rig.until({"running(hokuyo_node)": False})
         flag.unlink()
         plan = Plan((Step(0, "reconfigure_node", ("hokuyo_node",)),), (frozenset(),))
-        async with asyncio.timeout(120):
-            res = await rig.executor.execute(plan)
+        res = await _execute(rig, plan)
         assert res.outcome is Outcome.FAILED
         assert "running(hokuyo_node) false" in res.reason
 
@@ -136,12 +141,10 @@ async def test_a_reconfigure_ends_on_its_output_not_on_a_refresh_of_its_running_
 async def test_a_reconfigure_fails_when_the_power_cycle_is_not_verified(
         tmp_path: Path, endpoint: str) -> None:
     flag = tmp_path / "connected"
-    async with Rig(_robot(tmp_path, endpoint), ["hokuyo"], ["hokuyo_node"], ["/scan"],
-                   endpoint) as rig:
+    async with _rig(tmp_path, endpoint) as rig:
         reconf = await _blind_driver(rig, flag)
         rig.board.emu.inject("hokuyo", "open_load", {})  # draws nothing: never in band
-        async with asyncio.timeout(120):  # a deadline for a broken executor, not a measure
-            res = await rig.executor.execute(CYCLE_THEN_RECONFIGURE)
+        res = await _execute(rig)
         assert res.outcome is Outcome.FAILED
         assert res.failed == CYCLE_THEN_RECONFIGURE.steps[0], res.reason
         final = {str(e.step): e for e in rig.events
