@@ -4,7 +4,9 @@
 rclpy ``LifecycleNode`` whose transitions are its device connection::
 
     transition   what the driver does                                     fails when
-    configure    connects to its device (tries for CONNECT_S)             the device refuses
+    configure    connects to its device (tries every CONNECT_RETRY_S      the device refuses
+                 for CONNECT_S: it may still be off, a power cycle's       for CONNECT_S
+                 off time not yet over on the board)
     activate     publishes what the device sends
     deactivate   stops publishing (stays connected)
     cleanup      closes the connection                                    -
@@ -42,8 +44,9 @@ from emulator.robot.ros_bus import RosBus
 
 log = logging.getLogger("emulator.robot.managed")
 
-CONNECT_S = 2.0  # configure: how long to try the device
-RETRY_S = 0.5
+CONNECT_S = 5.0  # configure: how long to try the device (a power cycle's off time, and more)
+CONNECT_RETRY_S = 0.05  # a refused local connection is cheap to try again: no time lost
+RETRY_S = 0.5  # autostart: configure again after a failed one
 CALLBACK_S = 10.0  # a transition's coroutine must finish within this
 MAX_LINE = 65536
 
@@ -121,7 +124,7 @@ class ManagedDriver:
                     log.info("configure: %s at %s:%d refuses (%s)", self.device, *self.address,
                              exc.strerror or exc)
                     return False
-                await asyncio.sleep(RETRY_S)
+                await asyncio.sleep(CONNECT_RETRY_S)
         self.status.connected = True
         self._reading = asyncio.ensure_future(
             self.read_frames(reader, self._publish, self.topic, self.status))

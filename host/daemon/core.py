@@ -147,6 +147,7 @@ class Daemon:
         self.clock = clock
         robot = files or load_robot(opts.system_dir, opts.zenoh_listen, opts.middleware)
         self.model, self.theory, self.observers_cfg = robot.model, robot.theory, robot.observers
+        self._managed = managed_nodes(robot.processes, robot.observers.source.kind)
         self.stream = EventStream(clock, wall)
         self.emit = self.stream.emit
         self.status = MemoryStatusSource(Status(robot=self.model.name))
@@ -231,7 +232,8 @@ class Daemon:
             from host.ros.publisher import RosPublisher
             self.ros_out = RosPublisher(list(self.model.components), spec.domain)
             self.stream.subscribe(self.ros_out)
-            self.lifecycle = LifecycleActuator(spec.domain)  # reconfigure_node(n)
+            self.lifecycle = LifecycleActuator(spec.domain, self._managed)  # reconfigure_node
+            self.lifecycle.open()  # its node now, each managed node's services once seen
             self.repairs.executor.actuators.add("reconfigure_node",
                                                 self.lifecycle.reconfigure_node)
         await self.hub.start(self.source, self.observers_cfg.processes,

@@ -13,6 +13,11 @@ observation literals that must hold once it has worked:
 ``stop_node(n)``    ``~running(n)``
 ==================  ==========================================================================
 
+``kept(step)`` are the expected literals the step does not change but keeps: ``running(n)`` of
+a ``reconfigure_node`` (the same process throughout). They must still hold when the rest is
+seen, not be observed anew: a steady process is reported again only at its observer's next
+refresh, up to a second later, for nothing.
+
 Only atoms some observer actually reports are expected (``observable``; None: all): a topic no
 observer watches cannot be verified, and waiting for it would fail every repair. The effect is
 checked in observations made at least ``settle`` seconds after the step ended — the device's
@@ -66,6 +71,14 @@ def expected_effects(step: Step, model: SystemModel,
     if observable is not None:
         out = {a: v for a, v in out.items() if a in observable}
     return out
+
+
+def kept(step: Step) -> frozenset[str]:
+    """The expected literals ``step`` keeps rather than brings about (see the module
+    docstring): checked for their value, whenever observed."""
+    if step.action == "reconfigure_node" and step.args:
+        return frozenset({str(A.running(step.args[0]))})
+    return frozenset()
 
 
 def contradictions(step: Step, observable: Collection[str] | None = None) -> dict[str, bool]:

@@ -3,7 +3,8 @@
 ``Executor.execute(plan)`` runs the plan's steps as its partial order allows: every step whose
 predecessors are done starts at once, so independent steps run in parallel (the actuators
 still space switch-ons on the board); ``max_parallel=1`` runs them one at a time, in the
-plan's order (``dxboard experiment`` compares the two). A ``start_node`` does not wait for
+plan's order (``dxboard experiment`` compares the two). A ``start_node`` or
+``reconfigure_node`` (``EARLY``: a node that connects to what it needs) does not wait for
 the verification of the steps that bring up what it needs (``ENABLING``: a device's power-up
 or power cycle, the start of a node publishing its inputs): it starts once they have acted
 (a power cycle's off time over), like a driver that retries while its device boots, and its
@@ -22,11 +23,12 @@ sum of every step's settle time. Each step:
    it before the actuator returns); a state alone (``running(n)``, ``on(d)``, ``in_band(d)``)
    in one made since the step began that still stands once the step has settled (a process
    that dies at once, a device that trips while it boots do not pass: observers report such
-   a change at once). The deadline is settle + ``verify_s`` (``Beliefs.wait_for``), the
-   settle counted again from the moment the steps it waits for were verified if that was
-   later (a node whose input came late gets its own time after it) — after it ``failed``
-   with what was seen instead, and at once when the board trips the channel the
-   step switched on; then ``succeeded``.
+   a change at once); what the step only keeps (``kept``: a reconfigured node's process) in
+   any observation that still stands. The deadline is settle + ``verify_s``
+   (``Beliefs.wait_for``), the settle counted again from the moment the steps it waits for
+   were verified if that was later (a node whose input came late gets its own time after
+   it) — after it ``failed`` with what was seen instead, and at once when the board trips
+   the channel the step switched on; then ``succeeded``.
 
 On the first failed step nothing new starts; steps already running finish, and ``execute``
 returns ``ExecutionResult(outcome=FAILED, failed=step, reason=...)`` so the caller
@@ -53,6 +55,7 @@ from __future__ import annotations
 import asyncio
 import itertools
 import logging
+import math
 import time
 from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -67,6 +70,7 @@ from host.repair.effects import (
     IMMEDIATE,
     contradictions,
     expected_effects,
+    kept,
 )
 from host.repair.limits import AttemptLimiter, Quarantine, Quarantined
 from host.repair.plan import Plan, Step
@@ -79,6 +83,9 @@ QUARANTINE_PLAN = "quarantine"
 #: steps after which a node may start before their effects are verified: what they bring up
 #: comes on by itself (a device boots, a driver's first output flows); the node retries
 ENABLING = frozenset({"power_up", "power_cycle", "start_node"})
+#: steps that may start once the ENABLING steps before them have acted: a node started, or a
+#: managed node's lifecycle transitions (a fresh connection to a device that still boots)
+EARLY = frozenset({"start_node", "reconfigure_node"})
 TRIP_MARGIN_S = 0.05  # a wait that ended this much before its deadline was ended by a trip
 
 
@@ -309,7 +316,7 @@ class Executor:
         for s in plan.steps:
             if s.id in started or s.id in done:
                 continue
-            early = s.action == "start_node"
+            early = s.action in EARLY
             if all(p in done or (early and plan.steps[p].action in ENABLING and p in prog.due)
                    for p in plan.after[s.id]):
                 out.append(s)
@@ -406,9 +413,14 @@ class Executor:
                     await self.beliefs.wait_for(abort, end, due - self.clock())
                 else:
                     await asyncio.sleep(max(0.0, due - self.clock()))
-            if not await self.beliefs.wait_for(expected, fresh, deadline - self.clock(),
-                                               abort=abort, abort_after=end):
-                seen = self.beliefs.missing(expected, fresh)
+            # what the step keeps (a reconfigured node's process) must hold, not be new
+            keeps = {a: v for a, v in expected.items() if a in kept(step)}
+            new = {a: v for a, v in expected.items() if a not in keeps}
+            if not (await self.beliefs.wait_for(new, fresh, deadline - self.clock(),
+                                                abort=abort, abort_after=end)
+                    and not self.beliefs.missing(keeps, -math.inf)):
+                seen = {**self.beliefs.missing(new, fresh),
+                        **self.beliefs.missing(keeps, -math.inf)}
                 why = "effect not observed within {:g} s: {}".format(
                     deadline - end, "; ".join(f"{a} {v}" for a, v in seen.items()))
                 waited = self.clock() - end
