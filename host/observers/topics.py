@@ -17,6 +17,16 @@ Judged by the messages' own timing, so a busy machine is not a rate drop (no fla
 - without stamps ``f`` is on arrival times, and a message that ends a gap (more than 1.5
   periods) may be the head of such a burst: its verdict waits for a tick at its own arrival
   time, which the hub runs after the messages already queued, so the whole burst is counted;
+- where the daemon knows the publisher chain's run-queue wait (``probe``, below), a rate
+  *too low* is judged again in the publisher's own time before it is said: the window's span
+  less the chain's wait within it (``host.observers.owntime``: read ``READS`` times a window
+  as messages come, and at the verdict). A publisher that stamps a message when it publishes
+  it (hector, teleop, a real robot's nodes; on ROS 2 every node but a driver, whose messages
+  carry their device's time) and was held on the run queue shows a gap and then a burst,
+  not a slower rate; so does a topic judged on arrival times. A rate *too high* (the same
+  publisher's backlog, in the window after its wait) is judged over the span plus the wait
+  just before it. Either way nothing is said; a publisher that really slowed down sleeps, its
+  own time is the wall time, and it is found as before;
 - a silence is a gap of ``silence / mu`` plus the delay on the way tolerated (``allowance``):
   twice the worst delay seen in the last minute — on stamps, how much later than the fastest
   message a message arrived; without, how much a gap exceeded one period — at least
@@ -72,6 +82,7 @@ from typing import Protocol
 
 import host.atoms as A
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
+from host.observers.owntime import WindowWait
 from host.observers.payload import Message
 from host.observers.silence import (
     JITTER_GAIN,
@@ -153,6 +164,8 @@ class FrequencyObserver(TopicObserver):
         #: messages of every observed topic (the hub's): while none came in for ``max_gap``,
         #: the gap is the way in's, counted as the chain's wait (None: not known)
         self.way_in: WayIn | None = None
+        self._lever = WindowWait(window)  # the chain's wait in the window, for a low rate
+        self._excusing = False  # the last low rate was excused (logged once a spell)
 
     def atoms(self) -> list[str]:
         return [self.atom]
@@ -191,6 +204,10 @@ class FrequencyObserver(TopicObserver):
         while times[0] + self.window < t:
             times.popleft()
         self._learn_delay(now, stamp, gap)
+        if self.probe is not None and self._lever.due(now):
+            chain = self.probe.read()
+            if chain is not None:
+                self._lever.add(now, chain)
         if not stamped and gap is not None and gap * self.rate > GAP:
             self._judge_at = now  # maybe the head of a delayed burst: judge after it
         elif self._judge_at is None:
@@ -211,8 +228,41 @@ class FrequencyObserver(TopicObserver):
         if len(times) < 2:
             return  # one message says nothing about a rate; silence is judged by _check
         span = times[-1] - times[0]
-        self.frequency = (len(times) - 1) / span if span > 0 else float("inf")
-        self._say(self.atom, abs(self.frequency - self.rate) < self.tolerance, now)
+        self.frequency = f = (len(times) - 1) / span if span > 0 else float("inf")
+        ok = abs(f - self.rate) < self.tolerance
+        if not ok and self.asserted.get(self.atom) is not False and self._held_up(now, span):
+            return  # a publisher held up, not slowed down or sped up: nothing said
+        self._excusing = False
+        self._say(self.atom, ok, now)
+
+    def _held_up(self, now: float, span: float) -> bool:
+        """Is the rate wrong over ``span`` right in the publisher's own time
+        (``host.observers.owntime``)? Too low: the span less the time the publisher chain
+        waited on the run queue in it; too high (its backlog after a wait): the span plus what
+        it waited just before."""
+        if self.probe is None:
+            return False
+        start = (now if self._stamped else self._times[-1]) - span
+        low = self.frequency is not None and self.frequency < self.rate
+        if low:
+            chain = self.probe.read()
+            waited = 0.0 if chain is None else self._lever.within(start, now, chain)
+        else:
+            waited = self._lever.before(start - self.window, start)
+        if waited <= 0:
+            return False
+        n = len(self._times) - 1
+        own = span - waited if low else span + waited
+        if own > 0 and (n / own <= self.rate - self.tolerance if low
+                        else n / own >= self.rate + self.tolerance):
+            return False  # slower (faster) in its own time too
+        if not self._excusing:
+            log.info("%s: %d messages in %.3f s, but its publisher chain waited %.3f s on the "
+                     "run queue %s: %s Hz in its own time, no rate verdict", self.name, n + 1,
+                     span, waited, "in it" if low else "just before it",
+                     f"{n / own:.1f}" if own > 0 else "any")
+        self._excusing = True
+        return True
 
     def _silent_since(self) -> float | None:
         return self._arrived if self._arrived is not None else self._start
