@@ -165,7 +165,7 @@ class FrequencyObserver(TopicObserver):
         #: the gap is the way in's, counted as the chain's wait (None: not known)
         self.way_in: WayIn | None = None
         self._lever = WindowWait(window)  # the chain's wait in the window, for a low rate
-        self._excusing = False  # the last low rate was excused (logged once a spell)
+        self._excusing = False  # the last wrong rate was excused (logged once a spell)
 
     def atoms(self) -> list[str]:
         return [self.atom]
@@ -257,10 +257,10 @@ class FrequencyObserver(TopicObserver):
                         else n / own >= self.rate + self.tolerance):
             return False  # slower (faster) in its own time too
         if not self._excusing:
-            log.info("%s: %d messages in %.3f s, but its publisher chain waited %.3f s on the "
-                     "run queue %s: %s Hz in its own time, no rate verdict", self.name, n + 1,
-                     span, waited, "in it" if low else "just before it",
-                     f"{n / own:.1f}" if own > 0 else "any")
+            log.warning("%s: %d messages in %.3f s, but its publisher chain waited %.3f s on "
+                        "the run queue %s: %s Hz in its own time, no rate verdict", self.name,
+                        n + 1, span, waited, "in it" if low else "just before it",
+                        f"{n / own:.1f}" if own > 0 else "any")
         self._excusing = True
         return True
 
