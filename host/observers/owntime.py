@@ -11,7 +11,7 @@ publisher was held up within the window.
 ``WindowWait`` holds the publisher chain's run-queue wait (``host.observers.starvation``'s
 ``WaitProbe``, the same that excuses silences), read as messages come, ``READS`` times a window,
 and once more at the verdict. The wait within the window is the chain's wait since the last
-reading at or before the window's start (while messages come, at most a quarter of a window
+reading at or before the window's start (while messages come, at most half a window
 earlier: what is counted may include that much before the window), plus, when a thread of the
 chain is stuck on the run queue now, the time since the previous reading (Linux adds a wait
 when the thread gets the CPU), at most the window's span.
@@ -31,7 +31,7 @@ from collections import deque
 
 from host.observers.silence import ChainState
 
-READS = 4  # probe readings per window while messages come
+READS = 2  # probe readings per window while messages come (each reads /proc for the chain)
 
 
 class WindowWait:

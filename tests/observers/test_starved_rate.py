@@ -99,7 +99,7 @@ def test_a_publisher_that_really_slowed_down_is_found_within_the_window(share: f
 
 
 def test_the_wait_within_a_window_counts_from_the_last_reading_before_it() -> None:
-    w = WindowWait(0.4)  # a reading due every 0.1 s
+    w = WindowWait(0.2)  # a reading due every 0.1 s
     assert w.due(0.0)
     w.add(0.0, ChainState(1.0, 0))
     assert not w.due(0.05) and w.due(0.1)
