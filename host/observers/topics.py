@@ -25,8 +25,12 @@ Judged by the messages' own timing, so a busy machine is not a rate drop (no fla
   carry their device's time) and was held on the run queue shows a gap and then a burst,
   not a slower rate; so does a topic judged on arrival times. A rate *too high* (the same
   publisher's backlog, in the window after its wait) is judged over the span plus the wait
-  just before it. Either way nothing is said; a publisher that really slowed down sleeps, its
-  own time is the wall time, and it is found as before;
+  just before it. Judged on arrival times, a spell in which nothing came in on *any* observed
+  topic (``WayIn``: the daemon's source held up, as by a ROS 2 lifecycle transition) counts
+  as such a wait too: the backlog it lets in at once is the way in's, not the publisher's
+  (one topic's own slowdown leaves the others flowing). Either way nothing is said; a
+  publisher that really slowed down sleeps, its own time is the wall time, and it is found
+  as before;
 - a silence is a gap of ``silence / mu`` plus the delay on the way tolerated (``allowance``):
   twice the worst delay seen in the last minute — on stamps, how much later than the fastest
   message a message arrived; without, how much a gap exceeded one period — at least
@@ -99,6 +103,8 @@ log = logging.getLogger(__name__)
 DEFAULT_SILENCE = 4.0  # periods without a message before a topic counts as silent
 JITTER_FLOOR_S = 0.1  # the least delay tolerated on the way from a publisher to us
 GAP = 1.5  # periods: a message after a longer gap may head a delayed burst
+WAY_GAP_S = 0.03  # the way in's gaps kept: nothing on any topic for this long
+WAY_MEMORY = 256  # the most of them kept
 
 
 class ChainReader(Protocol):
@@ -111,14 +117,30 @@ class ChainReader(Protocol):
 class WayIn:
     """When a message of any observed topic last came in (the hub feeds it): a gap in which
     nothing came in on any topic is the way in's (the daemon's source held up, or every
-    publisher at once), not one publisher's."""
+    publisher at once), not one publisher's. The recent gaps of ``WAY_GAP_S`` or more are
+    kept (``quiet``) for the rate of a topic judged on arrival times."""
 
     def __init__(self) -> None:
         self.last: float | None = None
+        self.gaps: deque[tuple[float, float]] = deque(maxlen=WAY_MEMORY)
 
     def arrived(self, t: float) -> None:
-        if self.last is None or t > self.last:
+        last = self.last
+        if last is None or t > last:
+            if last is not None and t - last >= WAY_GAP_S:
+                self.gaps.append((last, t))
             self.last = t
+
+    def quiet(self, start: float, end: float, longer: float) -> float:
+        """How long nothing came in on any topic between ``start`` and ``end``, counting the
+        gaps longer than ``longer`` seconds only."""
+        total = 0.0
+        for a, b in reversed(self.gaps):
+            if b <= start:
+                break
+            if b - a >= longer:
+                total += max(0.0, min(b, end) - max(a, start))
+        return total
 
 
 class TopicObserver(Observer[Message]):
@@ -239,16 +261,20 @@ class FrequencyObserver(TopicObserver):
         """Is the rate wrong over ``span`` right in the publisher's own time
         (``host.observers.owntime``)? Too low: the span less the time the publisher chain
         waited on the run queue in it; too high (its backlog after a wait): the span plus what
-        it waited just before."""
-        if self.probe is None:
-            return False
-        start = (now if self._stamped else self._times[-1]) - span
+        it waited just before. Judged on arrival times, a spell in which nothing came in on
+        any topic (``WayIn.quiet``, longer than ``GAP`` periods) counts as such a wait."""
+        end = now if self._stamped else self._times[-1]
+        start = end - span
         low = self.frequency is not None and self.frequency < self.rate
-        if low:
+        a, b = (start, end) if low else (start - self.window, start)
+        waited = 0.0
+        if self.probe is not None and low:
             chain = self.probe.read()
             waited = 0.0 if chain is None else self._lever.within(start, now, chain)
-        else:
-            waited = self._lever.before(start - self.window, start)
+        elif self.probe is not None:
+            waited = self._lever.before(a, b)
+        if not self._stamped and self.way_in is not None:
+            waited = max(waited, self.way_in.quiet(a, b, GAP / self.rate))
         if waited <= 0:
             return False
         n = len(self._times) - 1
@@ -257,9 +283,10 @@ class FrequencyObserver(TopicObserver):
                         else n / own >= self.rate + self.tolerance):
             return False  # slower (faster) in its own time too
         if not self._excusing:
-            log.warning("%s: %d messages in %.3f s, but its publisher chain waited %.3f s on "
-                        "the run queue %s: %s Hz in its own time, no rate verdict", self.name,
-                        n + 1, span, waited, "in it" if low else "just before it",
+            log.warning("%s: %d messages in %.3f s, but its publisher was held up %.3f s "
+                        "%s (its chain's run-queue wait, or nothing came in on any topic): "
+                        "%s Hz in its own time, no rate verdict", self.name, n + 1, span,
+                        waited, "in it" if low else "just before it",
                         f"{n / own:.1f}" if own > 0 else "any")
         self._excusing = True
         return True

@@ -6,7 +6,9 @@ queue publishes nothing while it waits and then its backlog in a burst, each mes
 it goes out. Until the burst is out the window holds the gap and too few messages: a rate drop
 on the stamps, though the publisher only waited. With its chain's run-queue wait known
 (``probe``), the window's span less that wait is its own time, and the rate there is judged.
-A publisher that really slowed
+A topic without stamps is judged on arrival times, and a spell in which nothing came in on any
+topic (the daemon's source held up: ``WayIn``) is the way in's, not its publisher's. A
+publisher that really slowed
 down sleeps, and is still found within the window. No wall clock: verdicts and their
 simulated times are the result.
 """
@@ -22,8 +24,9 @@ from host.observers import FrequencyObserver, Message
 from host.observers.owntime import WindowWait
 from host.observers.payload import encode
 from host.observers.silence import ChainState
+from host.observers.topics import WayIn
 from tests.observers.loaded import Loaded, Send, stalls
-from tests.observers.test_starved import Chain, scan
+from tests.observers.test_starved import Beside, Chain, scan
 
 RATE = 40.0
 WINDOW = 0.5
@@ -96,6 +99,56 @@ def test_a_publisher_that_really_slowed_down_is_found_within_the_window(share: f
     got = verdicts(sim)
     assert [ok for ok, _ in got] == [True, False]
     assert 10.0 < got[1][1] <= 10.0 + WINDOW + 1 / 20.0
+
+
+def thermal(others: list[float]) -> Beside:
+    """/thermal/image as system.yaml observes it (9 Hz; on ROS 2 a String: no stamp, judged
+    on arrival times), beside another topic arriving at ``others``."""
+    obs = Beside("/thermal/image", rate=9.0, tolerance=3.0, window=1.0)
+    obs.chain = Chain([])  # its publisher never waits for a CPU
+    obs.probe = obs.chain
+    obs.way_in = WayIn()
+    obs.others = others
+    return obs
+
+
+def held_up(held: tuple[float, float], rate: float, end: float, every: float = 0.0
+            ) -> list[float]:
+    """Arrivals at ``rate`` of which those due while the way in was ``held`` come in at its
+    end, one every ``every`` s."""
+    out: list[float] = []
+    for due in (k / rate for k in range(int(end * rate))):
+        at = held[1] if held[0] <= due < held[1] else due
+        out.append(max(at, out[-1] + every) if out and at < out[-1] + every else at)
+    return out
+
+
+@pytest.mark.parametrize("held", [(9.89, 10.29), (9.95, 10.35)])
+@pytest.mark.parametrize("every", [0.0, 0.005, 0.02])
+def test_a_way_in_held_up_is_no_rate_fault_on_arrival_times(
+        held: tuple[float, float], every: float) -> None:
+    # ROS 2, the first lidar reconfigure: nothing came in on any topic for 0.3-0.4 s (no
+    # silence yet: 4 periods of 9 Hz are 0.44 s), then the backlog; /thermal/image carries no
+    # stamp. Its head shows too few messages, the window after it too many
+    sends = [(t, functools.partial(message, "/thermal/image", k, None))
+             for k, t in enumerate(held_up(held, 9.0, 20.0, every))]
+    sim = Loaded(thermal(held_up(held, 100.0, 20.0)), [])
+    sim.run(sends, 20.0)
+    assert [ok for ok, _ in verdicts(sim, "/thermal/image")] == [True]
+    # every other topic flowed: the backlog is the thermal camera's own, and said
+    alone = Loaded(thermal(held_up((0.0, 0.0), 100.0, 20.0)), [])
+    alone.run(sends, 20.0)
+    assert False in [ok for ok, _ in verdicts(alone, "/thermal/image")]
+
+
+def test_the_way_ins_quiet_spells_are_counted_within_a_window() -> None:
+    way = WayIn()
+    for t in (0.0, 0.01, 0.02, 0.3, 0.31, 0.35, 1.0):
+        way.arrived(t)
+    assert way.quiet(0.0, 1.0, 0.1) == pytest.approx(0.28 + 0.65)
+    assert way.quiet(0.0, 1.0, 0.5) == pytest.approx(0.65)
+    assert way.quiet(0.5, 0.8, 0.1) == pytest.approx(0.3)
+    assert way.quiet(1.0, 2.0, 0.1) == 0.0
 
 
 def test_the_wait_within_a_window_counts_from_the_last_reading_before_it() -> None:
