@@ -12,9 +12,9 @@ publisher was held up within the window.
 ``WaitProbe``, the same that excuses silences), read as messages come, ``READS`` times a window,
 and once more at the verdict. The wait within the window is the chain's wait since the last
 reading at or before the window's start (while messages come, at most half a window
-earlier: what is counted may include that much before the window), plus, when a thread of the
-chain is stuck on the run queue now, the time since the previous reading (Linux adds a wait
-when the thread gets the CPU), at most the window's span.
+earlier: what is counted may include that much before the window), an interval in which a
+thread of the chain was stuck on the run queue counted whole (Linux adds a wait when the
+thread gets the CPU), at most the window's span.
 
 The same publisher, once it runs again, publishes its backlog: the window that starts after its
 wait holds more messages than its span had room for, a rate too *high*. A high rate is judged
@@ -28,6 +28,7 @@ CPU: its own time is the wall time and the low rate is said at once. Pure values
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Callable
 
 from host.observers.silence import ChainState
 
@@ -36,12 +37,19 @@ READS = 2  # probe readings per window while messages come (each reads /proc for
 
 class WindowWait:
     """The publisher chain's run-queue wait within the last ``window`` seconds (readings
-    ``add``ed as messages come, ``READS`` a window; see the module docstring)."""
+    ``add``ed as messages come, ``READS`` a window; see the module docstring).
+
+    Between two readings the chain was held up for its wait's growth, at most the time
+    between them — or all of that time when a thread of it is stuck on the run queue now (its
+    wait not yet counted: Linux adds it when the thread gets the CPU), as ``OwnTime`` counts a
+    silence's. The readings keep the running total of that."""
 
     def __init__(self, window: float) -> None:
         self.every = window / READS
         self.memory = 2 * window + self.every  # a window and the one before it
-        self._readings: deque[tuple[float, float]] = deque()  # (time, the chain's wait)
+        self._readings: deque[tuple[float, float]] = deque()  # (time, held up so far)
+        self._wait = 0.0  # the chain's wait at the last reading
+        self._total = 0.0
 
     def due(self, now: float) -> bool:
         """Is a reading due at ``now``?"""
@@ -50,36 +58,44 @@ class WindowWait:
 
     def add(self, now: float, chain: ChainState) -> None:
         r = self._readings
-        if r and (now < r[-1][0] or chain.wait < r[-1][1]):
-            r.clear()  # another probe, or time went back: start afresh
-        r.append((now, chain.wait))
+        if r and now >= r[-1][0]:
+            dt = now - r[-1][0]
+            self._total += dt if chain.stuck else min(max(0.0, chain.wait - self._wait), dt)
+        elif r:
+            r.clear()  # time went back: start afresh
+        self._wait = chain.wait
+        if r and now == r[-1][0]:
+            r.pop()
+        r.append((now, self._total))
         while len(r) > 1 and r[1][0] <= now - self.memory:
             r.popleft()
 
     def _at(self, t: float) -> float:
-        """The chain's wait at the last reading at or before ``t`` (the earliest there is)."""
+        """Held up so far at the last reading at or before ``t`` (the earliest there is)."""
         r = self._readings
         base = r[0][1]
-        for at, wait in r:
+        for at, total in r:
             if at > t:
                 break
-            base = wait
+            base = total
         return base
 
     def before(self, start: float, end: float) -> float:
-        """The chain's wait between ``start`` and ``end`` (past times) from the readings: from
-        the last reading at or before each."""
+        """How long the chain was held up between ``start`` and ``end`` (past times), from
+        the readings: from the last reading at or before each."""
         if not self._readings:
             return 0.0
         return max(0.0, min(self._at(end) - self._at(start), end - start))
 
-    def within(self, start: float, now: float, chain: ChainState) -> float:
-        """The chain's wait between ``start`` and ``now`` with ``chain`` read at ``now``: since
-        the last reading at or before ``start`` (the earliest there is: less may be counted),
-        at most ``now - start``."""
-        self.add(now, chain)
+    def within(self, start: float, now: float, read: Callable[[], ChainState | None]
+               ) -> float:
+        """How long the chain was held up between ``start`` and ``now``, ``read`` at ``now``
+        unless it was already: since the last reading at or before ``start`` (the earliest
+        there is: less may be counted), at most ``now - start``; 0 when it cannot be read."""
         r = self._readings
-        waited = chain.wait - self._at(start)
-        if chain.stuck and len(r) > 1:
-            waited += now - r[-2][0]  # stuck on the run queue since then, not yet counted
-        return max(0.0, min(waited, now - start))
+        if not r or r[-1][0] != now:
+            chain = read()
+            if chain is None:
+                return 0.0
+            self.add(now, chain)
+        return max(0.0, min(self._total - self._at(start), now - start))

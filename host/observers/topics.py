@@ -25,7 +25,8 @@ Judged by the messages' own timing, so a busy machine is not a rate drop (no fla
   carry their device's time) and was held on the run queue shows a gap and then a burst,
   not a slower rate; so does a topic judged on arrival times. A rate *too high* (the same
   publisher's backlog, in the window after its wait) is judged over the span plus the wait
-  just before it. Judged on arrival times, a spell in which nothing came in on *any* observed
+  just before it; excused for ``STARVED_CAP_S`` (2 s) at most, as a silence. Judged on
+  arrival times, a spell in which nothing came in on *any* observed
   topic (``WayIn``: the daemon's source held up, as by a ROS 2 lifecycle transition) counts
   as such a wait too: the backlog it lets in at once is the way in's, not the publisher's
   (one topic's own slowdown leaves the others flowing). Either way nothing is said; a
@@ -187,7 +188,7 @@ class FrequencyObserver(TopicObserver):
         #: the gap is the way in's, counted as the chain's wait (None: not known)
         self.way_in: WayIn | None = None
         self._lever = WindowWait(window)  # the chain's wait in the window, for a low rate
-        self._excusing = False  # the last wrong rate was excused (logged once a spell)
+        self._excused: float | None = None  # since when every wrong rate was excused
 
     def atoms(self) -> list[str]:
         return [self.atom]
@@ -254,7 +255,10 @@ class FrequencyObserver(TopicObserver):
         ok = abs(f - self.rate) < self.tolerance
         if not ok and self.asserted.get(self.atom) is not False and self._held_up(now, span):
             return  # a publisher held up, not slowed down or sped up: nothing said
-        self._excusing = False
+        if not ok and self._excused is not None:
+            log.warning("%s: a wrong rate excused for %.3f s (its publisher held up): said "
+                        "all the same", self.name, now - self._excused)
+        self._excused = None
         self._say(self.atom, ok, now)
 
     def _held_up(self, now: float, span: float) -> bool:
@@ -269,8 +273,7 @@ class FrequencyObserver(TopicObserver):
         a, b = (start, end) if low else (start - self.window, start)
         waited = 0.0
         if self.probe is not None and low:
-            chain = self.probe.read()
-            waited = 0.0 if chain is None else self._lever.within(start, now, chain)
+            waited = self._lever.within(start, now, self.probe.read)
         elif self.probe is not None:
             waited = self._lever.before(a, b)
         if not self._stamped and self.way_in is not None:
@@ -282,14 +285,14 @@ class FrequencyObserver(TopicObserver):
         if own > 0 and (n / own <= self.rate - self.tolerance if low
                         else n / own >= self.rate + self.tolerance):
             return False  # slower (faster) in its own time too
-        if not self._excusing:
+        if self._excused is None:
+            self._excused = now
             log.warning("%s: %d messages in %.3f s, but its publisher was held up %.3f s "
                         "%s (its chain's run-queue wait, or nothing came in on any topic): "
                         "%s Hz in its own time, no rate verdict", self.name, n + 1, span,
                         waited, "in it" if low else "just before it",
                         f"{n / own:.1f}" if own > 0 else "any")
-        self._excusing = True
-        return True
+        return now - self._excused < STARVED_CAP_S  # held up for seconds: said all the same
 
     def _silent_since(self) -> float | None:
         return self._arrived if self._arrived is not None else self._start

@@ -23,7 +23,7 @@ import host.atoms as A
 from host.observers import FrequencyObserver, Message
 from host.observers.owntime import WindowWait
 from host.observers.payload import encode
-from host.observers.silence import ChainState
+from host.observers.silence import STARVED_CAP_S, ChainState
 from host.observers.topics import WayIn
 from tests.observers.loaded import Loaded, Send, stalls
 from tests.observers.test_starved import Beside, Chain, scan
@@ -101,6 +101,20 @@ def test_a_publisher_that_really_slowed_down_is_found_within_the_window(share: f
     assert 10.0 < got[1][1] <= 10.0 + WINDOW + 1 / 20.0
 
 
+def test_a_wrong_rate_excused_for_seconds_is_said_at_the_cap() -> None:
+    # from t = 10 the chain is stuck on the run queue for good (Linux counts no wait until the
+    # thread runs), and its publisher gets out only 20 messages a second: excused as held up,
+    # for STARVED_CAP_S, then said all the same
+    chain = Chain([(10.0, 100.0)])
+    chain.lagging = True
+    sim = Loaded(scan(chain), [])
+    sim.run(publishing(Chain([]), 0.0, 10.0) + publishing(Chain([]), 10.0, 20.0, rate=20.0),
+            20.0)
+    got = verdicts(sim)
+    assert [ok for ok, _ in got] == [True, False]
+    assert 10.0 + STARVED_CAP_S < got[1][1] <= 10.0 + STARVED_CAP_S + WINDOW + 1 / 20.0
+
+
 def thermal(others: list[float]) -> Beside:
     """/thermal/image as system.yaml observes it (9 Hz; on ROS 2 a String: no stamp, judged
     on arrival times), beside another topic arriving at ``others``."""
@@ -158,12 +172,18 @@ def test_the_wait_within_a_window_counts_from_the_last_reading_before_it() -> No
     assert not w.due(0.05) and w.due(0.1)
     for i in range(1, 10):
         w.add(i / 10, ChainState(1.0 + i / 100, 0))
-    # window 0.55 .. 1.0: from the reading at 0.5 (wait 1.05) to 1.2 now
-    assert w.within(0.55, 1.0, ChainState(1.2, 0)) == pytest.approx(0.15)
+    # window 0.55 .. 1.0: from the reading at 0.5 (0.05 waited so far) to 1.0 now, where
+    # the wait grew by 0.11 in 0.1 s: no more than the time between counts
+    assert w.within(0.55, 1.0, lambda: ChainState(1.2, 0)) == pytest.approx(0.04 + 0.1)
+    # read already at that time: not again
+    assert w.within(0.55, 1.0, lambda: None) == pytest.approx(0.14)
     # stuck on the run queue since the previous reading (at 1.0): all of it counted
-    assert w.within(0.65, 1.1, ChainState(1.2, 1)) == pytest.approx(0.14 + 0.1)
-    # never more than the window
-    assert w.within(1.05, 1.1, ChainState(9.0, 0)) == pytest.approx(0.05)
+    assert w.within(0.65, 1.1, lambda: ChainState(1.2, 1)) == pytest.approx(0.13 + 0.1)
+    # never more than the window; and what happened before a window, for a backlog
+    assert w.within(1.05, 1.1, lambda: ChainState(9.0, 0)) == pytest.approx(0.05)
+    assert w.before(0.7, 1.0) == pytest.approx(0.12)
+    # the probe unreadable: nothing known
+    assert WindowWait(0.2).within(0.0, 1.0, lambda: None) == 0.0
 
 
 def test_an_unreadable_probe_judges_the_rate_as_without_one() -> None:
