@@ -75,7 +75,8 @@ Detection latency (from the fault to the literal, plus the hub's scheduling dela
   message (on a quiet machine 160 ms at 100 Hz, 0.52 s at 10 Hz; at most ``silence / mu +
   ω``; the original engine needed 2 s);
 - rate wrong but not zero: one message interval once the window holds only the new regime,
-  at most ``ω`` plus an interval;
+  at most ``ω`` plus an interval (while the publisher is held up the rate in its own time
+  decides, and a wrong rate excused so is said ``STARVED_CAP_S`` after it was first seen);
 - response missing: exactly ``within`` after the unanswered input; a response: at once.
 """
 
