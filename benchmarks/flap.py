@@ -31,8 +31,9 @@ phases 1 and 2): hang detection on the machine as quiet as it is. ``--own-time o
 every topic's silence as before this rule (``own_time: false`` in the robot copy's
 ``system.yaml``): the baseline of the same session. ``--keep DIR`` runs in DIR (created) and
 leaves the daemon's journal (``journal.sqlite``) and its log (``daemon.err``: each silence
-with the publisher's own time and run-queue wait) there, to trace every false verdict; the
-log's silence lines are printed at the end.
+with the publisher's own time and run-queue wait; each rate verdict withheld because the
+publisher was held on the run queue) there, to trace every false verdict; the log's silence
+and withheld-rate lines are printed at the end.
 """
 
 from __future__ import annotations
@@ -378,6 +379,8 @@ def main() -> None:
         log = args.keep / "daemon.err"
         lines = log.read_text(errors="replace").splitlines() if log.exists() else []
         print(f"silences in {log}:", *[ln for ln in lines if ": silent" in ln], sep="\n  ")
+        print(f"rate verdicts withheld (publisher held up) in {log}:",
+              *[ln for ln in lines if "no rate verdict" in ln], sep="\n  ")
     if args.write:
         write_section(text, "## No flapping under load")
     print(json.dumps({p.name: {"flips": sum(p.flips.values()), "diagnoses": p.diagnoses,

@@ -10,6 +10,18 @@ loop with ``call_soon_threadsafe``, in order. rclpy's signal handlers are not in
 node program's asyncio loop owns SIGTERM and SIGINT.
 
 QoS: reliable, keep last 10 (the default profile), which every default subscriber matches.
+
+Stamps: a message's ``header.stamp`` is when its data was taken, as a real driver stamps it
+(urg_node stamps a scan with its acquisition time, the device's clock mapped onto the host's):
+
+- a driver's message (its values carry the device frame's ``t_ms``, the emulator's clock:
+  ``emulator.robot.devices``) gets the device's time mapped onto the node's ROS clock by an
+  offset ``DeviceClock`` estimates from the frames: the smallest arrival-minus-device-time seen
+  since the device's clock (re)started (its ``t_ms`` or ``seq`` went back). Stamps so keep the
+  device's spacing whatever held up the driver (a burst read after it was descheduled carries
+  the times its frames were taken), and never lie in the future of the node's clock;
+- every other message (a node computing on its inputs: hector, teleop) is stamped when it is
+  published, as theirs are.
 """
 
 from __future__ import annotations
@@ -26,6 +38,7 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.signals import SignalHandlerOptions
+from rclpy.time import Time
 
 from emulator.robot.bus import Handler
 from emulator.robot.ros_msgs import topic_type
@@ -33,6 +46,32 @@ from emulator.robot.ros_msgs import topic_type
 log = logging.getLogger(__name__)
 
 DEPTH = 10
+
+
+def _number(v: Any) -> float | None:
+    return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else None
+
+
+class DeviceClock:
+    """A device's clock (``t_ms``) mapped onto a node's (ns): by the smallest offset seen."""
+
+    def __init__(self) -> None:
+        self.offset_ns: int | None = None  # node time - device time, the least seen
+        self._last: tuple[float, float] | None = None  # the last frame's (t_ms, seq)
+
+    def stamp(self, t_ms: float, seq: float | None, now_ns: int) -> int:
+        """The node-clock time (ns) of a frame taken at ``t_ms``, read at ``now_ns``."""
+        last = self._last
+        if last is not None and (t_ms < last[0] or (seq is not None and seq < last[1])):
+            log.info("the device's clock restarted (t_ms %s after %s): offset afresh",
+                     t_ms, last[0])
+            self.offset_ns = None
+        self._last = (t_ms, seq if seq is not None else float("-inf"))
+        device_ns = round(t_ms * 1e6)
+        offset = now_ns - device_ns
+        if self.offset_ns is None or offset < self.offset_ns:
+            self.offset_ns = offset
+        return device_ns + self.offset_ns
 
 
 class RosBus:
@@ -50,6 +89,7 @@ class RosBus:
         self.context = context
         self.node = node
         self._pubs: dict[str, Publisher[Any]] = {}
+        self._clocks: dict[str, DeviceClock] = {}  # per topic a driver publishes
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(node)
         self._thread = threading.Thread(target=self._spin, name=f"rclpy-{name}", daemon=True)
@@ -64,7 +104,19 @@ class RosBus:
         pub = self._pubs.get(topic)
         if pub is None:
             pub = self._pubs[topic] = self.node.create_publisher(kind.type, topic, DEPTH)
-        pub.publish(kind.to_msg(values, self.node.get_clock().now().to_msg()))
+        pub.publish(kind.to_msg(values, self.stamp(topic, values)))
+
+    def stamp(self, topic: str, values: dict[str, Any]) -> Any:
+        """The header stamp of ``values`` (see the module docstring)."""
+        now = self.node.get_clock().now()
+        t_ms = _number(values.get("t_ms"))
+        if t_ms is None:
+            return now.to_msg()
+        clock = self._clocks.get(topic)
+        if clock is None:
+            clock = self._clocks[topic] = DeviceClock()
+        ns = clock.stamp(t_ms, _number(values.get("seq")), now.nanoseconds)
+        return Time(nanoseconds=ns, clock_type=now.clock_type).to_msg()
 
     def subscribe(self, topic: str, handler: Handler) -> None:
         """Call ``handler(topic, values)`` on the running loop for every message."""

@@ -17,6 +17,21 @@ Judged by the messages' own timing, so a busy machine is not a rate drop (no fla
 - without stamps ``f`` is on arrival times, and a message that ends a gap (more than 1.5
   periods) may be the head of such a burst: its verdict waits for a tick at its own arrival
   time, which the hub runs after the messages already queued, so the whole burst is counted;
+- where the daemon knows the publisher chain's run-queue wait (``probe``, below), a rate
+  *too low* is judged again in the publisher's own time before it is said: the window's span
+  less the chain's wait within it (``host.observers.owntime``: read ``READS`` times a window
+  as messages come, and at the verdict). A publisher that stamps a message when it publishes
+  it (hector, teleop, a real robot's nodes; on ROS 2 every node but a driver, whose messages
+  carry their device's time) and was held on the run queue shows a gap and then a burst,
+  not a slower rate; so does a topic judged on arrival times. A rate *too high* (the same
+  publisher's backlog, in the window after its wait) is judged over the span plus the wait
+  just before it; excused for ``STARVED_CAP_S`` (2 s) at most, as a silence. Judged on
+  arrival times, a spell in which nothing came in on *any* observed
+  topic (``WayIn``: the daemon's source held up, as by a ROS 2 lifecycle transition) counts
+  as such a wait too: the backlog it lets in at once is the way in's, not the publisher's
+  (one topic's own slowdown leaves the others flowing). Either way nothing is said; a
+  publisher that really slowed down sleeps, its own time is the wall time, and it is found
+  as before;
 - a silence is a gap of ``silence / mu`` plus the delay on the way tolerated (``allowance``):
   twice the worst delay seen in the last minute — on stamps, how much later than the fastest
   message a message arrived; without, how much a gap exceeded one period — at least
@@ -60,7 +75,8 @@ Detection latency (from the fault to the literal, plus the hub's scheduling dela
   message (on a quiet machine 160 ms at 100 Hz, 0.52 s at 10 Hz; at most ``silence / mu +
   ω``; the original engine needed 2 s);
 - rate wrong but not zero: one message interval once the window holds only the new regime,
-  at most ``ω`` plus an interval;
+  at most ``ω`` plus an interval (while the publisher is held up the rate in its own time
+  decides, and a wrong rate excused so is said ``STARVED_CAP_S`` after it was first seen);
 - response missing: exactly ``within`` after the unanswered input; a response: at once.
 """
 
@@ -72,6 +88,7 @@ from typing import Protocol
 
 import host.atoms as A
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
+from host.observers.owntime import WindowWait
 from host.observers.payload import Message
 from host.observers.silence import (
     JITTER_GAIN,
@@ -88,6 +105,8 @@ log = logging.getLogger(__name__)
 DEFAULT_SILENCE = 4.0  # periods without a message before a topic counts as silent
 JITTER_FLOOR_S = 0.1  # the least delay tolerated on the way from a publisher to us
 GAP = 1.5  # periods: a message after a longer gap may head a delayed burst
+WAY_GAP_S = 0.03  # the way in's gaps kept: nothing on any topic for this long
+WAY_MEMORY = 256  # the most of them kept
 
 
 class ChainReader(Protocol):
@@ -100,14 +119,30 @@ class ChainReader(Protocol):
 class WayIn:
     """When a message of any observed topic last came in (the hub feeds it): a gap in which
     nothing came in on any topic is the way in's (the daemon's source held up, or every
-    publisher at once), not one publisher's."""
+    publisher at once), not one publisher's. The recent gaps of ``WAY_GAP_S`` or more are
+    kept (``quiet``) for the rate of a topic judged on arrival times."""
 
     def __init__(self) -> None:
         self.last: float | None = None
+        self.gaps: deque[tuple[float, float]] = deque(maxlen=WAY_MEMORY)
 
     def arrived(self, t: float) -> None:
-        if self.last is None or t > self.last:
+        last = self.last
+        if last is None or t > last:
+            if last is not None and t - last >= WAY_GAP_S:
+                self.gaps.append((last, t))
             self.last = t
+
+    def quiet(self, start: float, end: float, longer: float) -> float:
+        """How long nothing came in on any topic between ``start`` and ``end``, counting the
+        gaps longer than ``longer`` seconds only."""
+        total = 0.0
+        for a, b in reversed(self.gaps):
+            if b <= start:
+                break
+            if b - a >= longer:
+                total += max(0.0, min(b, end) - max(a, start))
+        return total
 
 
 class TopicObserver(Observer[Message]):
@@ -153,6 +188,8 @@ class FrequencyObserver(TopicObserver):
         #: messages of every observed topic (the hub's): while none came in for ``max_gap``,
         #: the gap is the way in's, counted as the chain's wait (None: not known)
         self.way_in: WayIn | None = None
+        self._lever = WindowWait(window)  # the chain's wait in the window, for a low rate
+        self._excused: float | None = None  # since when every wrong rate was excused
 
     def atoms(self) -> list[str]:
         return [self.atom]
@@ -191,6 +228,10 @@ class FrequencyObserver(TopicObserver):
         while times[0] + self.window < t:
             times.popleft()
         self._learn_delay(now, stamp, gap)
+        if self.probe is not None and self._lever.due(now):
+            chain = self.probe.read()
+            if chain is not None:
+                self._lever.add(now, chain)
         if not stamped and gap is not None and gap * self.rate > GAP:
             self._judge_at = now  # maybe the head of a delayed burst: judge after it
         elif self._judge_at is None:
@@ -211,8 +252,48 @@ class FrequencyObserver(TopicObserver):
         if len(times) < 2:
             return  # one message says nothing about a rate; silence is judged by _check
         span = times[-1] - times[0]
-        self.frequency = (len(times) - 1) / span if span > 0 else float("inf")
-        self._say(self.atom, abs(self.frequency - self.rate) < self.tolerance, now)
+        self.frequency = f = (len(times) - 1) / span if span > 0 else float("inf")
+        ok = abs(f - self.rate) < self.tolerance
+        if not ok and self.asserted.get(self.atom) is not False and self._held_up(now, span):
+            return  # a publisher held up, not slowed down or sped up: nothing said
+        if not ok and self._excused is not None:
+            log.warning("%s: a wrong rate excused for %.3f s (its publisher held up): said "
+                        "all the same", self.name, now - self._excused)
+        self._excused = None
+        self._say(self.atom, ok, now)
+
+    def _held_up(self, now: float, span: float) -> bool:
+        """Is the rate wrong over ``span`` right in the publisher's own time
+        (``host.observers.owntime``)? Too low: the span less the time the publisher chain
+        waited on the run queue in it; too high (its backlog after a wait): the span plus what
+        it waited just before. Judged on arrival times, a spell in which nothing came in on
+        any topic (``WayIn.quiet``, longer than ``GAP`` periods) counts as such a wait."""
+        end = now if self._stamped else self._times[-1]
+        start = end - span
+        low = self.frequency is not None and self.frequency < self.rate
+        a, b = (start, end) if low else (start - self.window, start)
+        waited = 0.0
+        if self.probe is not None and low:
+            waited = self._lever.within(start, now, self.probe.read)
+        elif self.probe is not None:
+            waited = self._lever.before(a, b)
+        if not self._stamped and self.way_in is not None:
+            waited = max(waited, self.way_in.quiet(a, b, GAP / self.rate))
+        if waited <= 0:
+            return False
+        n = len(self._times) - 1
+        own = span - waited if low else span + waited
+        if own > 0 and (n / own <= self.rate - self.tolerance if low
+                        else n / own >= self.rate + self.tolerance):
+            return False  # slower (faster) in its own time too
+        if self._excused is None:
+            self._excused = now
+            log.warning("%s: %d messages in %.3f s, but its publisher was held up %.3f s "
+                        "%s (its chain's run-queue wait, or nothing came in on any topic): "
+                        "%s Hz in its own time, no rate verdict", self.name, n + 1, span,
+                        waited, "in it" if low else "just before it",
+                        f"{n / own:.1f}" if own > 0 else "any")
+        return now - self._excused < STARVED_CAP_S  # held up for seconds: said all the same
 
     def _silent_since(self) -> float | None:
         return self._arrived if self._arrived is not None else self._start
