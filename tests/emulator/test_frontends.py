@@ -22,7 +22,7 @@ from protocol.messages import (
     Switch,
     Switched,
 )
-from tests.emulator.wire import Emulate, Wire
+from tests.emulator.wire import READ_SIZE, Emulate, Wire
 from tests.rates import assert_no_gaps, assert_rate
 from tests.wait import wait_until_async
 
@@ -94,7 +94,7 @@ async def _collect(w: Wire, n: int, timeout: float = 60.0) -> list[Measurement]:
 
     async def more() -> bool:
         try:
-            data = await asyncio.wait_for(w.reader.read(65536), 1.0)
+            data = await asyncio.wait_for(w.reader.read(READ_SIZE), 1.0)
         except TimeoutError:
             return False
         assert data, "board closed a subscribed client"

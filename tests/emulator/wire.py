@@ -21,6 +21,10 @@ from protocol.framing import BadFrame
 from protocol.messages import Hello, Message
 from tests.ports import clashed
 
+#: the most fed to a ``Connection`` at once, as the host's transports do: a read after the
+#: client was descheduled may hold more than a ``Decoder`` takes undrained (``BUFFER_CAP``)
+READ_SIZE = 4096
+
 ROOT = Path(__file__).resolve().parents[2]
 TEDUSAR = ROOT / "models" / "tedusar"
 KEY = bytes(range(32))
@@ -109,7 +113,7 @@ class Wire:
             if left <= 0:
                 raise AssertionError(f"nothing matching within {timeout} s: {self.backlog!r}")
             try:
-                data = await asyncio.wait_for(self.reader.read(65536), left)
+                data = await asyncio.wait_for(self.reader.read(READ_SIZE), left)
             except TimeoutError:
                 continue  # the deadline: said above, with what arrived
             if not data:
