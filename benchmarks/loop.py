@@ -73,7 +73,6 @@ from host.diagnosis import Diagnoser, generate, load_system
 from host.diagnosis.diagnoser import UnknownLiteral
 from host.diagnosis.observations import Observation as DiagObservation
 from host.events import RepairEnded
-from host.experiment.robot import free_port
 from host.journal import (
     ActionRecord,
     DiagnosisRecord,
@@ -81,6 +80,7 @@ from host.journal import (
     Observation,
     Telemetry,
 )
+from host.launch.ports import free_port
 from host.observers import load_observers
 from host.observers.base import Update
 from host.observers.hardware import HardwareObserver

@@ -2,13 +2,12 @@
 
 Most servers in the tests listen on port 0 and print the port they got; that is always safe.
 A few must be told a port first (a zenoh endpoint that other processes connect to, an emulator
-restarted on the address its client keeps dialling, a UDP multicast bus). ``free_port()``
-picks a random port *below* the kernel's ephemeral range (``ip_local_port_range``), free at
-the moment of asking: the kernel never hands such a port to anybody's ``bind(0)`` or
-``connect()``, so only another explicit chooser can take it between our check and our bind.
-For that rare case (and for products that pick a port so themselves: the micropython runtime
-of the emulator, the experiments' zenoh port), ``CLASH`` is the text every listener here
-reports and ``clashed(text)`` lets a starter retry on a fresh port.
+restarted on the address its client keeps dialling, a UDP multicast bus). ``free_port()`` is
+the launcher's (``host.launch.ports``): a random port *below* the kernel's ephemeral range,
+free at the moment of asking, which only another explicit chooser can take before our bind.
+For that rare case (and for the micropython runtime of the emulator, which picks its ports
+itself), ``CLASH`` is the text every listener here reports and ``clashed(text)`` lets a
+starter retry on a fresh port.
 
 ``reserved_udp_port()`` holds a UDP port for the duration of a test (a socket bound with
 SO_REUSEADDR, which the python-can multicast bus also sets): Linux delivers multicast to every
@@ -18,39 +17,12 @@ socket bound to the port whatever group it joined, so two suites must never shar
 from __future__ import annotations
 
 import contextlib
-import random
 import socket
 from collections.abc import Iterator
-from pathlib import Path
+
+from host.launch.ports import free_port
 
 CLASH = ("Address already in use", "EADDRINUSE")  # CPython and Rust; MicroPython
-LOWEST = 20000
-
-
-def _ephemeral_low() -> int:
-    try:
-        return int(Path("/proc/sys/net/ipv4/ip_local_port_range").read_text().split()[0])
-    except (OSError, ValueError, IndexError):
-        return 32768
-
-
-def _free(port: int, kind: socket.SocketKind) -> bool:
-    with socket.socket(socket.AF_INET, kind) as s:
-        try:
-            s.bind(("", port))  # any address: taken if bound on any of them
-        except OSError:
-            return False
-        return True
-
-
-def free_port(kind: socket.SocketKind = socket.SOCK_STREAM) -> int:
-    """A random port below the ephemeral range that nothing is bound to right now."""
-    high = _ephemeral_low()
-    for _ in range(1000):
-        port = random.randrange(LOWEST, high)
-        if _free(port, kind):
-            return port
-    raise RuntimeError(f"no free port between {LOWEST} and {high}")
 
 
 def zenoh_endpoint() -> str:

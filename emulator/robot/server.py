@@ -66,6 +66,16 @@ def device_state(emu: Emulator, channel: int | None) -> tuple[str, int]:
     return (HUNG if load.hung else BOOTING), load.on_since
 
 
+def _exclusive(sock: Any, on: bool) -> None:
+    """Make a bound, not listening socket the port's only holder, or undo it before listening.
+
+    Bound with SO_REUSEADDR (as servers bind, past the TIME_WAITs of earlier connections), a
+    socket that does not listen lets another SO_REUSEADDR socket bind the port and listen on
+    it (zenoh's, asyncio's): the device could then never listen again, and its clients would
+    reach that server. Linux refuses such a bind while the holder has the option cleared."""
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 0 if on else 1)
+
+
 class DeviceServer:
     def __init__(self, device: D.Device, emu: Emulator, host: str) -> None:
         self.device = device
@@ -97,17 +107,22 @@ class DeviceServer:
             self.server = await asyncio.start_server(self._client, self.host, self.port,
                                                      limit=MAX_LINE, start_serving=False)
         self.port = self.server.sockets[0].getsockname()[1]
+        for sock in self.server.sockets:
+            _exclusive(sock, True)
 
     async def open(self) -> None:
         if self.server is None:
             await self.bind()
         assert self.server is not None
+        for sock in self.server.sockets:
+            _exclusive(sock, False)  # as any server listens (past the port's TIME_WAITs)
         await self.server.start_serving()
 
     def close(self, keep_port: bool = True) -> None:
         """Stop serving (powered off). The port stays bound, not listening: connections are
-        refused, and no other program is given the port meanwhile (its ``bind(0)`` or
-        ``connect()``), so the device comes back on its printed URL."""
+        refused, and no other program is given the port meanwhile (its ``bind(0)``,
+        ``connect()``, or a listener's bind with SO_REUSEADDR: ``_exclusive``), so the device
+        comes back on its printed URL."""
         if self.server is not None:
             family = self.server.sockets[0].family
             self.server.close()
@@ -130,6 +145,7 @@ class DeviceServer:
             log.warning("%s: cannot keep port %d while off: %s", self.name, self.port, exc)
             held.close()
             return None
+        _exclusive(held, True)
         return held
 
     async def update(self) -> None:

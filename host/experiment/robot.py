@@ -10,7 +10,6 @@ boot times.
 from __future__ import annotations
 
 import shutil
-import socket
 from pathlib import Path
 
 import yaml
@@ -35,10 +34,3 @@ def fast_model(system_dir: Path, dest: Path) -> Path:
             ch["boot_ms"] = FAST_BOOT_MS[ch["name"]]
     emu_file.write_text(yaml.safe_dump(emu))
     return d
-
-
-def free_port() -> int:
-    """A TCP port that was free a moment ago on 127.0.0.1."""
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])

@@ -27,10 +27,10 @@ from typing import Any
 from host.board import BoardClient
 from host.daemon.core import Daemon, DaemonOptions
 from host.errors import UserError
-from host.experiment.robot import free_port
 from host.journal import Entry, JournalReader
 from host.launch.control import arequest
 from host.launch.emulated import EmulatedBoard
+from host.launch.ports import free_port
 from host.launch.robot import Launch, LaunchedRobot
 
 

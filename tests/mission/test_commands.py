@@ -47,8 +47,10 @@ def test_a_fault_free_mission_completes_on_the_virtual_robot(tmp_path: Path) -> 
 
 def test_m1_the_lidar_hang_is_handled_below_the_mission_layer(tmp_path: Path) -> None:
     journal = tmp_path / "m1.sqlite"
+    # a run that cannot come up or end fails with the command's own message (its phases take
+    # about 10 and 45 s), within the suite's 300 s for the three runs
     out = dxboard("experiment", "mission-fault", "models/tedusar", "--fast", "--json",
-                  "--journal", str(journal), "--timeout", "240")
+                  "--journal", str(journal), "--timeout", "150")
     assert out.returncode == 0, out.stderr[-3000:]
     runs = json.loads(out.stdout)["runs"]
     free, layered, flat = runs["fault-free"], runs["layered"], runs["flat"]

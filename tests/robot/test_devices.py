@@ -82,6 +82,28 @@ def test_an_unpowered_device_keeps_its_port(robot: Robot) -> None:
     wait_until(refused, what="jaguar refusing connections")
     with socket.socket() as other, pytest.raises(OSError, match="in use"):
         other.bind(("127.0.0.1", robot.port("jaguar")))
+    assert_not_taken_by_a_reusing_listener(robot.port("jaguar"))
+    robot.board("on", "jaguar")
+    serving(robot, "jaguar").close()  # back on the URL it printed
+
+
+def test_a_device_never_powered_yet_keeps_its_port_from_a_reusing_listener(robot: Robot
+                                                                           ) -> None:
+    """The ports are taken at start, devices still off: a server that binds with SO_REUSEADDR
+    (zenoh's, asyncio's) on one of them meanwhile is refused, so the device listens on it
+    once powered (a zenoh endpoint on the off jaguar's port once made jaguar_node connect to
+    zenoh, and the robot never came up)."""
+    assert_not_taken_by_a_reusing_listener(robot.port("hokuyo"))
+    robot.board("on", "hokuyo")
+    serving(robot, "hokuyo").close()
+
+
+def assert_not_taken_by_a_reusing_listener(port: int) -> None:
+    with socket.socket() as other:
+        other.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        with pytest.raises(OSError, match="in use"):
+            other.bind(("127.0.0.1", port))
+            other.listen()
 
 
 def test_base_follows_velocity_commands_and_rejects_bad_ones(robot: Robot) -> None:
