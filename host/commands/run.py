@@ -9,8 +9,10 @@ virtual devices when the robot has them) and prints its board and fault-injectio
 URLs. It prints one URL a line (``board:``, ``control:``, ``device:``, ``web:``, ``journal:``),
 then the run's id (for ``dxboard report --run``) and one line per change of diagnosis, plan,
 step result, quarantine and hold, and the board link going down or up (``-q``: only the URLs),
-and runs until Ctrl-C, which stops everything cleanly. The robot directory and the addresses
-are checked before anything starts.
+and runs until Ctrl-C, which stops everything cleanly (it prints ``stopping``, and every 5 s
+of a slow stop what it still waits for). The robot directory and the addresses are checked
+before anything starts. ``kill -USR1 PID`` prints where every thread is, on stderr, for a
+report of a daemon that seems stuck.
 
 The key for switching comes from ``$DXBOARD_KEY`` or ``--key-file``; with ``--emulate`` the
 emulated board gets the ``--key-file`` key, or a fresh one. ``--dry-run`` diagnoses and plans
@@ -24,6 +26,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import faulthandler
 import logging
 import os
 import signal
@@ -89,13 +92,16 @@ async def _main(args: argparse.Namespace, system_dir: Path, web: tuple[str, int]
     from host.daemon import memprobe
     from host.daemon.core import DaemonOptions
     from host.launch.robot import Launch, LaunchedRobot
+    from host.launch.stopping import Stopping
     from host.operator.client import default_socket
 
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
     terminal: TerminalLines | None = None
+    stopping: Stopping | None = None
     for sig in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(sig, stop.set)
+    faulthandler.register(signal.SIGUSR1, all_threads=True)  # where it is, for a bug report
     memprobe.install(loop)  # off unless $DXBOARD_MEMPROBE is set
     try:
         key = load_key(args.key_file) if (args.key_file or not args.emulate) else None
@@ -124,8 +130,14 @@ async def _main(args: argparse.Namespace, system_dir: Path, web: tuple[str, int]
                     task.cancel()
             if waiter in done:
                 waiter.result()  # a failed task: raise it
+            if terminal is not None:
+                terminal.say("stopping")
+            stopping = Stopping(lambda: robot.closing)  # says what a slow stop waits for
+            stopping.start()
         return 0
     finally:
+        if stopping is not None:
+            stopping.done()
         if terminal is not None:
             terminal.close()
         for sig in (signal.SIGINT, signal.SIGTERM):

@@ -15,6 +15,7 @@ counted (the count is said with the next line that gets through).
 
 from __future__ import annotations
 
+import contextlib
 import queue
 import sys
 import threading
@@ -70,6 +71,11 @@ class TerminalLines:
                 self.dropped = 0
             except queue.Full:
                 self.dropped += 1
+
+    def say(self, text: str) -> None:
+        """A line of the command's own, stamped now, after the lines queued before it."""
+        with contextlib.suppress(queue.Full):
+            self._queue.put_nowait(f"{time.strftime('%H:%M:%S')} {text}")
 
     def resume(self) -> None:
         """Start writing (a paused terminal queues its lines until then)."""

@@ -187,6 +187,7 @@ class Daemon:
         self._telemetry = TelemetryDownsampler(period_s=1.0)
         self.ros_out: Any = None  # the ROS 2 publisher, with a ros2 source
         self.lifecycle: Any = None  # the lifecycle actuator, with a ros2 source
+        self.closing = ""  # what close() is closing now
 
     @property
     def result(self) -> Any:
@@ -288,7 +289,14 @@ class Daemon:
         self._stop.set()
 
     async def close(self) -> None:
-        """Stop everything, in the reverse order of starting; idempotent."""
+        """Stop everything, in the reverse order of starting; idempotent. Each step names
+        itself in ``self.closing`` (``host.launch.stopping`` says which one a slow stop waits
+        for)."""
+
+        def stage(name: str) -> None:
+            self.closing = name
+
+        stage("the daemon's tasks")
         for task in self._tasks:
             task.cancel()
         for task in self._tasks:
@@ -296,17 +304,24 @@ class Daemon:
                 await task
         self._tasks = []
         if self.operator is not None:
+            stage("the operator socket")
             await self.operator.close()
             self.operator = None
+        stage("the repairs and the nodes they started")
         await self.repairs.close()
+        stage("the observers")
         await self.hub.close()
+        stage("the topic source")
         with contextlib.suppress(Exception):
             self.source.close()
         if self.ros_out is not None:
+            stage("the ROS 2 publishers")
             self.ros_out.close()
         if self.lifecycle is not None:
+            stage("the lifecycle client")
             self.lifecycle.close()
         if self.web is not None:
+            stage("the web page")
             await self.web.close()
             self.web = None
         telemetry = self._telemetry.flush()
@@ -314,6 +329,7 @@ class Daemon:
             self.emit(telemetry)
         self.emit(Note("dxboard run stopped"))
         if self.journal is not None:
+            stage("the journal's last commit")
             try:  # a journal whose disk failed must not keep the daemon from stopping
                 await asyncio.wait_for(self.journal.flush(), CLOSE_FLUSH_S)
             except TimeoutError:
@@ -321,7 +337,9 @@ class Daemon:
                           self.journal.path, CLOSE_FLUSH_S)
             self.journal.close()
             self.journal = None
+        stage("the diagnosis engine")
         self.diagnosis.close()
+        stage("nothing more of the daemon")
 
     # --- observations and diagnoses -----------------------------------------------------
 

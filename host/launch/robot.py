@@ -75,6 +75,8 @@ class LaunchedRobot:
         self.launch = launch
         self.emulated: EmulatedBoard | None = None
         self._daemon: Daemon | None = None
+        self._closing_daemon: Daemon | None = None
+        self._closing = "nothing yet"
 
     @property
     def daemon(self) -> Daemon:
@@ -138,16 +140,26 @@ class LaunchedRobot:
                         exc: BaseException | None, tb: TracebackType | None) -> None:
         await self.close()
 
+    @property
+    def closing(self) -> str:
+        """What ``close()`` is closing now (``host.launch.stopping`` reports it)."""
+        d = self._closing_daemon
+        return self._closing if d is None else f"the daemon to close {d.closing}"
+
     async def close(self) -> None:
         """Stop the daemon (and its nodes), then the emulator; idempotent."""
         try:
             if self._daemon is not None:
                 daemon, self._daemon = self._daemon, None
+                self._closing_daemon = daemon
                 await daemon.close()
         finally:
+            self._closing_daemon = None
             if self.emulated is not None:
                 emu, self.emulated = self.emulated, None
+                self._closing = "the emulated board"
                 await emu.stop()
+            self._closing = "nothing more"
 
     def lines(self) -> list[str]:
         """The ``name: url`` lines a person needs to reach the robot."""

@@ -157,9 +157,21 @@ class RunningDaemon:
         self.proc.kill()
         self.proc.wait(10)
 
-    def interrupt(self, timeout: float = 20.0) -> int:
+    def interrupt(self, timeout: float = MIN_WAIT_S) -> int:
+        """Ctrl-C; its exit code (a stop takes about 2 s on a quiet machine, over 20 s in a
+        suite run nice'd beside CPU hogs). A daemon still running ``timeout`` s later fails
+        the test with what it said on stderr (what its stop waits for,
+        ``host.launch.stopping``) and where each of its threads is (SIGUSR1)."""
         self.proc.send_signal(signal.SIGINT)
-        return self.proc.wait(timeout)
+        try:
+            return self.proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            self.proc.send_signal(signal.SIGUSR1)
+            with contextlib.suppress(AssertionError):
+                wait_until(lambda: "most recent call first" in self.err_path.read_text(), 10,
+                           "the daemon's stacks")
+            raise AssertionError(f"dxboard run did not stop {timeout:g} s after SIGINT:\n"
+                                 + self.err_path.read_text()[-8000:]) from None
 
     def close(self) -> None:
         if self.proc.poll() is None:  # stop it as a person would; kill only if it hangs

@@ -66,6 +66,8 @@ def test_ctrl_c_stops_cleanly_and_the_journal_holds_every_step(daemon: RunningDa
     daemon.wait_for(lambda s: s["board_link_up"] and bad_sets(s) == [PAPER_POWER_UP],
                     label="the power-up diagnosis")
     assert daemon.interrupt() == 0
+    daemon.close()  # its terminal read to the end
+    assert any(line.endswith(" stopping") for line in daemon.lines)  # said on Ctrl-C
     entries = daemon.journal()
     payloads = [e.payload for e in entries]
     first = payloads[0]  # the run begins with its id (host.journal.runs)
