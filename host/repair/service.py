@@ -14,7 +14,9 @@ stale data — knowing nothing of the daemon that feeds it.
   the publisher's own time, a trip the board's readings bore out): a diagnosis that changed
   with such a finding new since the last one starts its repair after ``confirmed_debounce_s``
   (default 0); any other change, a flapping diagnosis among them, still waits ``debounce_s``;
-- ``link(client)``: the board link it acts through (``None``: the link is down);
+- ``link(client)``: the board link it acts through (``None``: the link is down); back up,
+  it starts the repair of what the latest diagnosis names after ``debounce_s``, so a repair
+  refused while the link was down is not forgotten;
 - ``diagnose``: given at construction, an async callable returning a fresh diagnosis of the
   observations now (the daemon runs it off its loop); ``observations``: the daemon's one
   observation set, whose literals go into each repair problem;
@@ -116,9 +118,16 @@ class RepairService:
 
     # --- inputs -------------------------------------------------------------------------
     def link(self, client: BoardClient | None) -> None:
-        """The board link repairs act through; None while it is down."""
+        """The board link repairs act through; None while it is down. Back up, it starts the
+        repair of what the latest diagnosis names, after the debounce, unless one is running
+        or due: one refused while the link was down would otherwise wait for the diagnosis to
+        change (a reboot's devices, found off a moment before the new boot's state)."""
+        back = self._client is None and client is not None
         self._client = client
         self.executor.actuators.board = client
+        latest = self._latest
+        if back and latest is not None and not is_healthy(latest) and not self.active:
+            self._pending = asyncio.ensure_future(self._after_debounce(latest, self.debounce_s))
 
     def diagnosed(self, result: DiagnosisResult) -> None:
         """A diagnosis changed: start a repair after the debounce if it names anything."""
