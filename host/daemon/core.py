@@ -339,7 +339,7 @@ class Daemon:
             self.journal = None
         stage("the diagnosis engine")
         self.diagnosis.close()
-        stage("nothing more of the daemon")
+        stage("the rest")
 
     # --- observations and diagnoses -----------------------------------------------------
 

@@ -159,7 +159,7 @@ class LaunchedRobot:
                 emu, self.emulated = self.emulated, None
                 self._closing = "the emulated board"
                 await emu.stop()
-            self._closing = "nothing more"
+            self._closing = "the process to exit"
 
     def lines(self) -> list[str]:
         """The ``name: url`` lines a person needs to reach the robot."""
