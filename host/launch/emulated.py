@@ -3,8 +3,9 @@
 ``EmulatedBoard.start(system_dir, control=...)`` runs ``dxboard emulate SYSTEM_DIR`` (this
 interpreter, ``-m host.cli``) with the given key, or a fresh random one, in its environment,
 reads the URLs it prints (``board:``, ``control:``, ``device: NAME URL`` lines) until the board
-is up, and keeps the process (which dies with the daemon, even a killed one); ``stop()`` sends
-SIGTERM and waits (SIGKILL after a grace period). The host never imports the emulator: this is
+is up, and keeps the process (in a session of its own, so a terminal's Ctrl-C reaches the
+daemon alone, and dying with the daemon, even a killed one); ``stop()`` sends SIGTERM and waits
+(SIGKILL after a grace period). The host never imports the emulator: this is
 the same process boundary a real board has.
 """
 
@@ -57,9 +58,12 @@ class EmulatedBoard:
         argv = [sys.executable, "-m", "host.cli", "emulate", str(system_dir),
                 "--listen", "127.0.0.1:0", "--control", control, *extra]
         log.info("starting the emulated board: %s", " ".join(argv))
+        # a session of its own: Ctrl-C on the terminal reaches the daemon alone, which stops
+        # its nodes and then this board, in order (the board gone first read as a lost link
+        # at every stop); it still dies with the daemon (_die_with_parent)
         proc = await asyncio.create_subprocess_exec(
             *argv, env=env, stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE,
-            preexec_fn=_die_with_parent,
+            preexec_fn=_die_with_parent, start_new_session=True,
         )
         board = cls(proc, key)
         try:

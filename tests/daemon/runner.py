@@ -71,8 +71,10 @@ class RunningDaemon:
     def _start(self, argv: list[str]) -> bool:
         """Start ``dxboard run``; True once it printed every URL, False if it exited."""
         with self.err_path.open("ab") as err:
+            # a process group of its own, as a shell gives a command it runs: Ctrl-C on a
+            # terminal signals the whole group (``ctrl_c``)
             self.proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=err,
-                                         text=True, env=self.env)
+                                         text=True, env=self.env, start_new_session=True)
         self.urls: dict[str, str] = {}
         assert self.proc.stdout is not None
         while "journal" not in self.urls:
@@ -156,6 +158,11 @@ class RunningDaemon:
         """``kill -9`` the daemon: no clean-up of any kind."""
         self.proc.kill()
         self.proc.wait(10)
+
+    def ctrl_c(self, timeout: float = MIN_WAIT_S) -> int:
+        """Ctrl-C on its terminal: SIGINT to its whole process group; its exit code."""
+        os.killpg(self.proc.pid, signal.SIGINT)
+        return self.proc.wait(timeout)
 
     def interrupt(self, timeout: float = MIN_WAIT_S) -> int:
         """Ctrl-C; its exit code (a stop takes about 2 s on a quiet machine, over 20 s in a
