@@ -13,46 +13,22 @@ from __future__ import annotations
 import asyncio
 from pathlib import Path
 
-from host.diagnosis.model import load_system
 from host.diagnosis.observations import Observation, ObservationSet
-from host.diagnosis.result import Diagnosis, DiagnosisResult
-from host.events import Event, Note, PlanRecord
+from host.diagnosis.result import DiagnosisResult
+from host.events import Event, Note
 from host.repair import service
-from host.repair.planner import RepairPlanner
-from host.repair.processes import load_processes
+from tests.repair.dryrun import plans, result, service_for
 from tests.wait import wait_until_async
 
-TEDUSAR = Path(__file__).resolve().parents[2] / "models" / "tedusar"
 HOUR = 3600.0
-
-
-def result(*bad: str) -> DiagnosisResult:
-    return DiagnosisResult((Diagnosis(frozenset(bad), probability=1.0),), True)
 
 
 def make(tmp: Path, obs: ObservationSet, events: list[Event], firm: set[str],
          diagnosis: list[DiagnosisResult]) -> service.RepairService:
-    model = load_system(TEDUSAR / "system.yaml")
-
-    async def diagnose() -> DiagnosisResult:
-        return diagnosis[0]
-
-    svc = service.build(
-        RepairPlanner.for_system(TEDUSAR), model, load_processes(TEDUSAR / "system.yaml", model),
-        observations=obs, observable=set(), diagnose=diagnose, emit=events.append,
-        logs_dir=tmp, env={}, device_boot_s={}, dry_run=True, debounce_s=HOUR,
-        confirmed=lambda atom: atom in firm)
+    svc = service_for(tmp, obs, events, diagnosis, debounce_s=HOUR,
+                      confirmed=lambda atom: atom in firm)
     svc.link(object())  # type: ignore[arg-type]  # a link is up; a dry run sends nothing
-    svc._board_busy = _idle  # type: ignore[method-assign]  # the board's protection is idle
     return svc
-
-
-async def _idle() -> str:
-    return ""
-
-
-def plans(events: list[Event]) -> list[PlanRecord]:
-    return [e for e in events if isinstance(e, PlanRecord)]
 
 
 def test_a_confirmed_silence_starts_its_repair_without_the_debounce(tmp_path: Path) -> None:

@@ -13,45 +13,20 @@ from __future__ import annotations
 import asyncio
 from pathlib import Path
 
-from host.diagnosis.model import load_system
 from host.diagnosis.observations import Observation, ObservationSet
-from host.diagnosis.result import Diagnosis, DiagnosisResult
-from host.events import Event, Note, PlanRecord
+from host.diagnosis.result import DiagnosisResult
+from host.events import Event, Note
 from host.repair import service
-from host.repair.planner import RepairPlanner
-from host.repair.processes import load_processes
+from tests.repair.dryrun import plans, result, service_for
 from tests.wait import wait_until_async
 
-TEDUSAR = Path(__file__).resolve().parents[2] / "models" / "tedusar"
 DEBOUNCE_S = 0.2
-
-
-def result(*bad: str) -> DiagnosisResult:
-    return DiagnosisResult((Diagnosis(frozenset(bad), probability=1.0),), True)
-
-
-async def _idle() -> str:
-    return ""
 
 
 def make(tmp: Path, obs: ObservationSet, events: list[Event],
          diagnosis: list[DiagnosisResult]) -> service.RepairService:
-    model = load_system(TEDUSAR / "system.yaml")
-
-    async def diagnose() -> DiagnosisResult:
-        return diagnosis[0]
-
-    svc = service.build(
-        RepairPlanner.for_system(TEDUSAR), model, load_processes(TEDUSAR / "system.yaml", model),
-        observations=obs, observable=set(), diagnose=diagnose, emit=events.append,
-        logs_dir=tmp, env={}, device_boot_s={}, dry_run=True, debounce_s=DEBOUNCE_S,
-        confirmed=lambda atom: atom == "ok(/map)")
-    svc._board_busy = _idle  # type: ignore[method-assign]  # the board's protection is idle
-    return svc
-
-
-def plans(events: list[Event]) -> list[PlanRecord]:
-    return [e for e in events if isinstance(e, PlanRecord)]
+    return service_for(tmp, obs, events, diagnosis, debounce_s=DEBOUNCE_S,
+                       confirmed=lambda atom: atom == "ok(/map)")
 
 
 def test_a_repair_refused_while_the_link_was_down_starts_when_it_is_back(tmp_path: Path
