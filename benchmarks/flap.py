@@ -17,7 +17,8 @@ domain of the benchmark's own (``tests.ros.domain``), watched by an independent 
    busy-looping process per core (``os.cpu_count()``), each ending by itself after the phase
    and killed by the benchmark at its end in any case (``--minutes 0``: no hog at all, for
    hang figures on the idle machine alone);
-3. still under the hog, ``--faults`` hokuyo hangs (default 3; quick 1), each found through
+3. still under the hog, ``--faults`` hokuyo hangs (default 3; quick 1; with ``--minutes 0``
+   none unless asked, which starts the hog for them), each found through
    /scan falling silent and repaired: fault → diagnosis and fault → verified healthy.
 
 For phases 1 and 2, from the journal: every topic observation that went false (``~ok(/t)``:
@@ -354,7 +355,8 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="a fast check: 1 min, 1 fault")
     ap.add_argument("--minutes", type=float, default=None, help="under the hog (default 10)")
     ap.add_argument("--idle-minutes", type=float, default=None, help="baseline (default 3)")
-    ap.add_argument("--faults", type=int, default=None, help="hangs under the hog (default 3)")
+    ap.add_argument("--faults", type=int, default=None,
+                    help="hangs under the hog (default 3; 0 with --minutes 0)")
     ap.add_argument("--keep", type=Path, default=None, metavar="DIR",
                     help="run in DIR and keep the journal and the daemon's log there")
     ap.add_argument("--idle-faults", type=int, default=0,
@@ -369,7 +371,8 @@ def main() -> None:
         args.minutes = 1.0 if args.quick else 10.0
     if args.idle_minutes is None:
         args.idle_minutes = 0.5 if args.quick else 3.0
-    n = args.faults if args.faults is not None else (1 if args.quick else 3)
+    n = args.faults if args.faults is not None else (
+        0 if args.minutes == 0 else 1 if args.quick else 3)  # --minutes 0: no hog at all
     print(f"idle {args.idle_minutes:g} min, hog {args.minutes:g} min, {n} faults", flush=True)
     phases, idle, samples = run(args.idle_minutes * 60, args.minutes * 60, n, args.keep,
                                 args.idle_faults, args.own_time == "on", args.middleware)
