@@ -6,7 +6,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test lint pytest mpytest bench browser clean
+.PHONY: run test check lint pytest mpytest bench browser clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -28,14 +28,31 @@ run: $(STAMP)
 	$(BIN)/dxboard run models/tedusar --emulate --middleware $(DXBOARD_MIDDLEWARE) \
 		--control $(CONTROL) --web $(WEB) --journal dxboard-journal.sqlite --key-file $(DEV_KEY)
 
-test: $(STAMP) lint pytest mpytest
+# pytest-xdist: most tests wait on processes they start, so more workers than cores pay off;
+# --dist loadfile keeps a file's tests (and its module fixtures) on one worker.
+PYTEST_WORKERS ?= 4
+
+# Every part runs even when an earlier one fails (a red pytest must not hide the MicroPython
+# run); the exit status is a failure if any part failed.
+test: $(STAMP)
+	@status=0; \
+	$(MAKE) --no-print-directory lint || status=1; \
+	$(MAKE) --no-print-directory pytest || status=1; \
+	$(MAKE) --no-print-directory mpytest || status=1; \
+	if [ $$status -ne 0 ]; then echo "make test: a part failed (see above)" >&2; fi; \
+	exit $$status
+
+# The fast tier: lint and the tests that start no process (a test that would start one is
+# skipped there; `make test` runs it). Minutes, not tens of minutes.
+check: $(STAMP) lint
+	$(BIN)/pytest --in-process -n $(PYTEST_WORKERS) --dist loadfile
 
 lint: $(STAMP)
 	$(BIN)/ruff check protocol firmware emulator host tests benchmarks
 	$(BIN)/mypy
 
 pytest: $(STAMP) browser
-	$(BIN)/pytest
+	$(BIN)/pytest -n $(PYTEST_WORKERS) --dist loadfile
 
 # Debian's headless Chromium, for the web page's tests (installed when root and missing).
 browser:

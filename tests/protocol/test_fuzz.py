@@ -5,6 +5,7 @@ depend on how the bytes were split; a good frame after the damage is still decod
 MEASUREMENT_BATCH that decodes is a whole one (1-10 readings of one channel count).
 """
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -50,6 +51,9 @@ def _decode(role: str, data: bytes, cuts: "list[int]") -> "list[object]":
     return events
 
 
+# 100,000 frames are CPU work: on a shared machine at a load of 30 they take minutes, so
+# this test gets a longer limit than the suite's 300 s.
+@pytest.mark.timeout(1800)
 @settings(
     max_examples=EXAMPLES,
     derandomize=True,

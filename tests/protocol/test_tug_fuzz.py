@@ -7,6 +7,7 @@ payload) still decodes; and on the board's side no CHANNEL frame with a valid st
 out that was not sent whole.
 """
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -36,6 +37,9 @@ def decode(accept: tuple[int, ...], data: bytes, cuts: list[int]) -> list[object
     return out
 
 
+# 100,000 frames are CPU work: on a shared machine at a load of 30 they take minutes, so
+# this test gets a longer limit than the suite's 300 s.
+@pytest.mark.timeout(1800)
 @settings(max_examples=EXAMPLES, derandomize=True, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(data=st.data(), cuts=st.lists(st.integers(0, 1 << 16), max_size=10),

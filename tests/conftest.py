@@ -1,0 +1,78 @@
+"""The suite's two tiers: everything (``make test``) and the in-process tests (``make check``).
+
+About a third of the tests start real processes (the emulated board, the daemon, the robot's
+nodes, MicroPython) and spend their time in start-ups and waits; the rest run inside pytest in
+seconds. ``pytest --in-process`` runs only the latter, with no list to keep: any test that
+starts a process (``subprocess``, asyncio's subprocesses, ``os.fork``, ``os.posix_spawn``) is
+stopped at that moment and reported as skipped with the reason "starts a process". ``make
+test`` never passes the option, so every test runs there, with its real peers.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import subprocess
+from typing import Any
+
+import pytest
+
+_REASON = "starts a process: make test runs it (make check runs only in-process tests)"
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption(
+        "--in-process",
+        action="store_true",
+        help="run only the tests that start no process; a test that starts one is skipped",
+    )
+
+
+_IN_TEST = [False]  # set while a test's setup, call or teardown runs
+
+
+def _guarded(original: Any) -> Any:
+    def guard(*args: Any, **kwargs: Any) -> Any:
+        if _IN_TEST[0]:
+            pytest.skip(_REASON)
+        return original(*args, **kwargs)
+
+    return guard
+
+
+def _guarded_async(original: Any) -> Any:
+    async def guard(*args: Any, **kwargs: Any) -> Any:
+        if _IN_TEST[0]:
+            pytest.skip(_REASON)
+        return await original(*args, **kwargs)
+
+    return guard
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """With --in-process, refuse every process start inside a test (its fixtures of every scope
+    included). Outside tests (pytest's and xdist's own start-up) processes start as usual."""
+    if not config.getoption("--in-process"):
+        return
+    if getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput"):
+        return  # the xdist controller: it only starts the workers
+    targets: list[tuple[Any, str]] = [(subprocess.Popen, "_execute_child")]
+    targets += [(os, n) for n in ("fork", "posix_spawn", "posix_spawnp")]
+    for owner, name in targets:
+        original = getattr(owner, name)
+        setattr(owner, name, _guarded(original))
+    # asyncio's subprocesses are refused before the loop makes a transport for them: a
+    # transport whose process never started would keep the loop (and a fixture's teardown)
+    # waiting for it.
+    for name in ("subprocess_exec", "subprocess_shell"):
+        setattr(asyncio.base_events.BaseEventLoop, name, _guarded_async(
+            getattr(asyncio.base_events.BaseEventLoop, name)))
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None) -> Any:
+    _IN_TEST[0] = True
+    try:
+        return (yield)
+    finally:
+        _IN_TEST[0] = False
