@@ -35,7 +35,7 @@ lint: $(STAMP)
 	$(BIN)/mypy
 
 pytest: $(STAMP) browser
-	$(BIN)/pytest
+	scripts/ensure-prometheus && $(BIN)/pytest
 
 # Debian's headless Chromium, for the web page's tests (installed when root and missing).
 browser:
