@@ -3,8 +3,9 @@
 Three lightweight robots (``tests/fleet/lite.py``: board emulator plus daemon each, no nodes)
 run as ``dxboard run --emulate --robot rover-N --site lab``; Prometheus scrapes them every
 second and evaluates the shipped rules (a copy with the fault alert's ``for:`` cut to a few
-seconds), sending alerts to Alertmanager. The tests read the fleet through ``dxboard fleet``'s
-page and break one robot (an open load on its Hokuyo, injected on the board's control port):
+seconds), sending alerts to Alertmanager; ``dxboard fleet`` serves its page from that
+Prometheus, read here with the standard library's HTML parser. The tests read the fleet's page
+and break one robot (an open load on its Hokuyo, injected on the board's control port):
 the fault alert reaches Alertmanager's API (``/api/v2/alerts``) naming that robot and the
 component, none for the others, and it resolves after the repair.
 """
@@ -12,10 +13,16 @@ component, none for the others, and it resolves after the repair.
 from __future__ import annotations
 
 import contextlib
+import json
+import signal
+import subprocess
+import sys
 import time
+import urllib.request
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from html.parser import HTMLParser
 from pathlib import Path
 from typing import Any
 
@@ -39,6 +46,63 @@ class Fleet:
     robots: dict[str, RunningDaemon]
     prometheus: str
     alertmanager: str
+    view: str  # dxboard fleet's page
+
+
+class Table(HTMLParser):
+    """The rows of the page's table, read with the standard library's parser only."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.rows: list[list[str]] = []
+        self._cell: list[str] | None = None
+
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+        if tag == "tr":
+            self.rows.append([])
+        elif tag == "td":
+            self._cell = []
+
+    def handle_endtag(self, tag: str) -> None:
+        if tag == "td" and self._cell is not None:
+            self.rows[-1].append("".join(self._cell))
+            self._cell = None
+
+    def handle_data(self, data: str) -> None:
+        if self._cell is not None:
+            self._cell.append(data)
+
+
+def page(url: str) -> dict[str, list[str]]:
+    """dxboard fleet's page: robot -> [site, robot, headline, abnormal, out of repair]."""
+    with urllib.request.urlopen(url, timeout=30) as r:
+        table = Table()
+        table.feed(r.read().decode())
+    return {row[1]: row for row in table.rows if row}
+
+
+@contextlib.contextmanager
+def fleet_view(tmp: Path, prometheus_url: str) -> Iterator[str]:
+    """``dxboard fleet --prometheus URL --web 127.0.0.1:0`` as a person runs it; its URL."""
+    with (tmp / "fleet.err").open("wb") as err:
+        proc = subprocess.Popen([sys.executable, "-m", "host.cli", "fleet", "--prometheus",
+                                 prometheus_url, "--web", "127.0.0.1:0"], cwd=ROOT,
+                                stdout=subprocess.PIPE, stderr=err, text=True)
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        assert line.startswith("fleet: http://"), line + (tmp / "fleet.err").read_text()
+        yield line.split(": ", 1)[1].strip()
+    finally:
+        proc.send_signal(signal.SIGINT)
+        try:
+            assert proc.wait(30) == 0
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+            if proc.stdout is not None:
+                proc.stdout.close()
 
 
 def short_rules(tmp: Path) -> Path:
@@ -82,7 +146,8 @@ def fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Fleet]:
         wait_until(lambda: len(query(prom, 'robot:dxboard_headline:max == 0')) == 3,
                    DEADLINE_S, "three healthy robots in Prometheus", interval=0.5,
                    show=lambda: query(prom, "robot:dxboard_headline:max"))
-        yield Fleet(robots, prom, am)
+        view = stack.enter_context(fleet_view(tmp, prom))
+        yield Fleet(robots, prom, am, view)
 
 
 def alerts(am: str, name: str) -> list[dict[str, Any]]:
@@ -90,6 +155,15 @@ def alerts(am: str, name: str) -> list[dict[str, Any]]:
     out = get_json(f"{am}/api/v2/alerts?active=true&silenced=false&inhibited=false")
     return [a for a in out if a["labels"].get("alertname") == name
             and a["status"]["state"] == "active"]
+
+
+def test_the_fleet_page_lists_every_robot_with_its_headline(fleet: Fleet) -> None:
+    rows = page(fleet.view)
+    assert {r: rows[r][:3] for r in rows} == {r: ["lab", r, "healthy"] for r in ROBOTS}
+    with urllib.request.urlopen(fleet.view + "api/fleet", timeout=30) as resp:
+        body = json.load(resp)
+    assert sorted((r["robot"], r["site"], r["headline"], r["abnormal"])
+                  for r in body["robots"]) == [(r, "lab", "healthy", []) for r in ROBOTS]
 
 
 def test_a_broken_robot_alerts_alertmanager_with_its_name_and_resolves(fleet: Fleet) -> None:
@@ -109,6 +183,10 @@ def test_a_broken_robot_alerts_alertmanager_with_its_name_and_resolves(fleet: Fl
     assert alert["annotations"]["runbook_url"] == \
         "https://docs.example.org/dxboard/runbooks/#dxboardfaultnotrepaired"
     assert took >= FOR_S  # not before the rule's for: (pending first)
+    rows = page(fleet.view)  # the fleet page says the same, from Prometheus
+    assert rows["rover-2"][2] in ("repairing", "needs a person")
+    assert "hokuyo" in rows["rover-2"][3]
+    assert rows["rover-1"][2] == rows["rover-3"][2] == "healthy"
     # the repair: the fault gone, the daemon's next power cycle makes it healthy (or, had it
     # quarantined the Hokuyo meanwhile, a person clears the quarantine and it powers it up)
     broken.inject("clear")

@@ -86,3 +86,16 @@ def test_the_example_configurations_are_valid(tmp_path: Path) -> None:
                          str(DEPLOY / "alertmanager" / "alertmanager.yml")],
                         capture_output=True, text=True, timeout=60)
     assert am.returncode == 0, am.stdout + am.stderr
+
+
+def test_the_fleet_page_computes_the_recording_rules_headline() -> None:
+    from host.fleet.view import HEADLINE
+
+    doc = yaml.safe_load(RULES.read_text())
+    rule = next(r for g in doc["groups"] for r in g["rules"]
+                if r.get("record") == "robot:dxboard_headline:max")
+
+    def squash(text: str) -> str:
+        return re.sub(r"\s+", "", text)
+
+    assert squash(rule["expr"]) == squash(HEADLINE)
