@@ -47,19 +47,19 @@ def start(tmp: Path, i: int, rate: int) -> RunningDaemon:
 
 @contextlib.contextmanager
 def fleet(tmp: Path, n: int, rate: int) -> Iterator[list[RunningDaemon]]:
-    robots: list[RunningDaemon] = []
+    """``n`` robots, started 8 at a time; every one that started is stopped on the way out,
+    also when another failed or the run is interrupted (Ctrl-C) while they start."""
+    pool = ThreadPoolExecutor(8)
+    futures = [pool.submit(start, tmp, i, rate) for i in range(1, n + 1)]
     try:
-        with ThreadPoolExecutor(8) as pool:
-            futures = [pool.submit(start, tmp, i, rate) for i in range(1, n + 1)]
-            for f in futures:
-                with contextlib.suppress(Exception):
-                    robots.append(f.result())
-        if len(robots) < n:
-            raise SystemExit(f"only {len(robots)} of {n} daemons started")
+        robots = [f.result() for f in futures]
         yield robots
     finally:
-        with ThreadPoolExecutor(8) as pool:
-            list(pool.map(lambda r: r.close(), robots))
+        pool.shutdown(wait=True, cancel_futures=True)
+        started = [f.result() for f in futures
+                   if f.done() and not f.cancelled() and f.exception() is None]
+        with ThreadPoolExecutor(8) as closer:
+            list(closer.map(lambda r: r.close(), started))
 
 
 def cpu_s(procs: list[psutil.Process]) -> list[float]:

@@ -122,3 +122,24 @@ def prometheus(tmp: Path, targets: Sequence[str], *, rules: Sequence[Path] = (),
             f"--storage.tsdb.path={tmp / 'data'}", "--web.listen-address=127.0.0.1:{port}",
             "--rules.alert.resend-delay=1s", *extra], tmp / "prometheus.log") as url:
         yield url
+
+
+@contextlib.contextmanager
+def prometheus_agent(tmp: Path, targets: Sequence[str], remote_write: str,
+                     scrape_s: float = 1.0) -> Iterator[str]:
+    """Prometheus in agent mode (as on a robot behind NAT): scrapes ``targets`` and
+    remote-writes everything to ``remote_write`` (a receiver's ``/api/v1/write``)."""
+    tmp.mkdir(parents=True, exist_ok=True)
+    config = {
+        "global": {"scrape_interval": f"{scrape_s:g}s", "scrape_timeout": f"{scrape_s:g}s"},
+        "scrape_configs": [{"job_name": "dxboard", "honor_labels": True,
+                            "static_configs": [{"targets": list(targets)}]}],
+        "remote_write": [{"url": remote_write,
+                          "queue_config": {"batch_send_deadline": "1s"}}],
+    }
+    (tmp / "agent.yml").write_text(yaml.safe_dump(config))
+    with _server("prometheus agent", [
+            tool("prometheus"), "--enable-feature=agent", f"--config.file={tmp / 'agent.yml'}",
+            f"--storage.agent.path={tmp / 'data'}", "--web.listen-address=127.0.0.1:{port}"],
+            tmp / "agent.log") as url:
+        yield url
