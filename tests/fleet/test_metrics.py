@@ -3,6 +3,7 @@ served by the web server, and a real scrape of a running daemon checked by ``pro
 
 from __future__ import annotations
 
+import sqlite3
 import subprocess
 import sys
 import time
@@ -186,3 +187,30 @@ def test_a_bad_robot_or_site_name_is_one_line_and_exit_2(flag: str) -> None:
     assert out.returncode == 2
     assert out.stderr.strip().count("\n") == 0 and flag in out.stderr
     assert "Traceback" not in out.stderr
+
+
+def test_a_journal_that_cannot_commit_shows_failures_backlog_and_drops(tmp_path: Path) -> None:
+    path = tmp_path / "j.sqlite"
+    Journal(path).close()
+    blocker = sqlite3.connect(path, isolation_level=None)
+    blocker.execute("BEGIN EXCLUSIVE")  # another writer holds the file: every commit fails
+    journal = Journal(path, max_pending=5, busy_timeout_s=0.05)
+    metrics = FleetMetrics(MemoryStatusSource(), robot="rover-1", site="lab", journal=journal)
+    try:
+        for i in range(8):
+            journal.record(Observation(f"ok(c{i})", True), wall=1000.0 + i, mono=float(i))
+
+        def failing() -> dict[str, float] | None:
+            got = samples(metrics.render().decode())
+            return got if got[f"dxboard_journal_write_failures_total{{{R}}}"] >= 2 else None
+
+        got = wait_until(failing, 60, "two failed commits in the metrics")
+        assert got[f"dxboard_journal_backlog_entries{{{R}}}"] == 5
+        assert got[f"dxboard_journal_dropped_entries_total{{{R}}}"] == 3
+        blocker.execute("COMMIT")
+        journal.flush_blocking(timeout=60)
+        assert samples(metrics.render().decode())[f"dxboard_journal_backlog_entries{{{R}}}"] \
+            <= 1  # at most the note about the loss, recorded after the flush
+    finally:
+        blocker.close()
+        journal.close()
