@@ -4,11 +4,13 @@
 Debian's binaries on free loopback ports (``host.launch.ports``; a port taken meanwhile by
 another process is retried on a fresh one) with their data in ``tmp``, wait until the server
 says it is ready (``/-/ready``, polled until a generous deadline), yield its base URL, and in a
-``finally`` stop it (SIGTERM, then SIGKILL if it hangs) whatever happened. Alertmanager runs
-alone (no cluster port). Prometheus scrapes ``targets`` (``host:port`` of daemons, keeping
-their ``robot`` and ``site`` labels) every ``scrape_s`` and evaluates ``rules`` as often; it
-sends alerts to ``alertmanager`` with a resend delay of one second, so a test sees an alert
-and its end quickly. ``query(url, promql)`` is the instant query of Prometheus's HTTP API.
+``finally`` stop it (SIGTERM, then SIGKILL if it hangs) whatever happened. The configurations
+are the shipped ones in deploy/ (the Prometheus ones with the test's targets and intervals).
+Alertmanager runs alone (no cluster port). Prometheus scrapes ``targets`` (``host:port`` of
+daemons, keeping their ``robot`` and ``site`` labels) every ``scrape_s`` and evaluates
+``rules`` as often; it sends alerts to ``alertmanager`` with a resend delay of one second, so a
+test sees an alert and its end quickly. ``query(url, promql)`` is the instant query of
+Prometheus's HTTP API.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from tests.ports import clashed
 from tests.wait import wait_until
 
 READY_S = 120.0  # a busy machine starts Prometheus in seconds; this only bounds a failure
+DEPLOY = Path(__file__).resolve().parents[2] / "deploy"
 
 
 def get_json(url: str, timeout: float = 10.0) -> Any:
@@ -88,13 +91,11 @@ def _server(name: str, argv: Sequence[str], log: Path) -> Iterator[str]:
 
 @contextlib.contextmanager
 def alertmanager(tmp: Path) -> Iterator[str]:
+    """The shipped deploy/alertmanager/alertmanager.yml as it is (its webhooks lead nowhere
+    here: notifications fail, the API still holds every alert)."""
     tmp.mkdir(parents=True, exist_ok=True)
-    config = {"route": {"receiver": "null", "group_wait": "1s", "group_interval": "1s",
-                        "repeat_interval": "1h"},
-              "receivers": [{"name": "null"}]}
-    (tmp / "alertmanager.yml").write_text(yaml.safe_dump(config))
     with _server("alertmanager", [
-            tool("alertmanager"), f"--config.file={tmp / 'alertmanager.yml'}",
+            tool("alertmanager"), f"--config.file={DEPLOY / 'alertmanager' / 'alertmanager.yml'}",
             f"--storage.path={tmp / 'data'}", "--web.listen-address=127.0.0.1:{port}",
             "--cluster.listen-address="], tmp / "alertmanager.log") as url:
         yield url
@@ -104,18 +105,19 @@ def alertmanager(tmp: Path) -> Iterator[str]:
 def prometheus(tmp: Path, targets: Sequence[str], *, rules: Sequence[Path] = (),
                alertmanager: str | None = None, scrape_s: float = 1.0,
                extra: Sequence[str] = ()) -> Iterator[str]:
+    """The shipped deploy/prometheus/prometheus.yml with this test's intervals, targets, rule
+    files and Alertmanager."""
     tmp.mkdir(parents=True, exist_ok=True)
-    config: dict[str, Any] = {
-        "global": {"scrape_interval": f"{scrape_s:g}s", "evaluation_interval": f"{scrape_s:g}s",
-                   "scrape_timeout": f"{scrape_s:g}s",
-                   "external_labels": {"dxboard_docs": "https://docs.example.org/dxboard"}},
-        "rule_files": [str(r) for r in rules],
-        "scrape_configs": [{"job_name": "dxboard", "honor_labels": True,
-                            "static_configs": [{"targets": list(targets)}]}],
-    }
+    config: dict[str, Any] = yaml.safe_load((DEPLOY / "prometheus" / "prometheus.yml").read_text())
+    config["global"].update(scrape_interval=f"{scrape_s:g}s", scrape_timeout=f"{scrape_s:g}s",
+                            evaluation_interval=f"{scrape_s:g}s")
+    config["rule_files"] = [str(r) for r in rules]
+    config["scrape_configs"][0]["static_configs"] = [{"targets": list(targets)}]
     if alertmanager is not None:
         host = alertmanager.removeprefix("http://")
         config["alerting"] = {"alertmanagers": [{"static_configs": [{"targets": [host]}]}]}
+    else:
+        del config["alerting"]
     (tmp / "prometheus.yml").write_text(yaml.safe_dump(config))
     with _server("prometheus", [
             tool("prometheus"), f"--config.file={tmp / 'prometheus.yml'}",
@@ -130,13 +132,12 @@ def prometheus_agent(tmp: Path, targets: Sequence[str], remote_write: str,
     """Prometheus in agent mode (as on a robot behind NAT): scrapes ``targets`` and
     remote-writes everything to ``remote_write`` (a receiver's ``/api/v1/write``)."""
     tmp.mkdir(parents=True, exist_ok=True)
-    config = {
-        "global": {"scrape_interval": f"{scrape_s:g}s", "scrape_timeout": f"{scrape_s:g}s"},
-        "scrape_configs": [{"job_name": "dxboard", "honor_labels": True,
-                            "static_configs": [{"targets": list(targets)}]}],
-        "remote_write": [{"url": remote_write,
-                          "queue_config": {"batch_send_deadline": "1s"}}],
-    }
+    config: dict[str, Any] = yaml.safe_load(
+        (DEPLOY / "prometheus" / "robot-agent.yml").read_text())  # the shipped one, adjusted
+    config["global"].update(scrape_interval=f"{scrape_s:g}s", scrape_timeout=f"{scrape_s:g}s")
+    config["scrape_configs"][0]["static_configs"] = [{"targets": list(targets)}]
+    config["remote_write"][0].update(url=remote_write,
+                                     queue_config={"batch_send_deadline": "1s"})
     (tmp / "agent.yml").write_text(yaml.safe_dump(config))
     with _server("prometheus agent", [
             tool("prometheus"), "--enable-feature=agent", f"--config.file={tmp / 'agent.yml'}",
