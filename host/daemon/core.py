@@ -15,7 +15,8 @@ Theory of operation. ``Daemon`` builds the pieces from the robot directory and o
 
 Tasks on one asyncio loop: the board task keeps a ``BoardClient`` subscribed (reconnecting with
 backoff) and feeds every reading, event and link notice to the hub and the ``BoardView``; the
-diagnosis runner's task; the sample task that emits the channels a few times a second. Nothing
+diagnosis runner's task; the sample task that emits the channels a few times a second; the
+lag probe of the metrics (``host.fleet.metrics.LagProbe``: how late the loop runs). Nothing
 below the daemon reads the clock: the daemon owns one monotonic clock (``clock``) for
 observations and deadlines and one wall clock (``wall``) for the journal and the page.
 """

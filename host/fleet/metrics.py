@@ -23,9 +23,8 @@ from __future__ import annotations
 
 import asyncio
 import logging
-import time
 from collections import deque
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from typing import Protocol
 
 from prometheus_client import CollectorRegistry, disable_created_metrics, generate_latest
@@ -67,12 +66,11 @@ class JournalStats(Protocol):
 
 class LagProbe:
     """How late the daemon's loop runs: a task sleeps ``interval_s`` again and again and keeps
-    the overshoot of the last ``keep`` wakes; ``lag_s`` is the worst of them."""
+    the overshoot of the last ``keep`` wakes, on the loop's own clock (the one its sleeps
+    use); ``lag_s`` is the worst of them."""
 
-    def __init__(self, interval_s: float = 0.5, keep: int = 10,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+    def __init__(self, interval_s: float = 0.5, keep: int = 10) -> None:
         self.interval_s = interval_s
-        self.clock = clock
         self._lags: deque[float] = deque([0.0], maxlen=keep)
 
     @property
@@ -80,10 +78,11 @@ class LagProbe:
         return max(self._lags)
 
     async def run(self) -> None:
+        loop = asyncio.get_running_loop()
         while True:
-            start = self.clock()
+            start = loop.time()
             await asyncio.sleep(self.interval_s)
-            self._lags.append(max(0.0, self.clock() - start - self.interval_s))
+            self._lags.append(max(0.0, loop.time() - start - self.interval_s))
 
 
 class _Snapshot(Collector):

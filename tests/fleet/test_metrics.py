@@ -3,6 +3,7 @@ served by the web server, and a real scrape of a running daemon checked by ``pro
 
 from __future__ import annotations
 
+import asyncio
 import sqlite3
 import subprocess
 import sys
@@ -32,7 +33,7 @@ from host.web.status import ChannelStatus, Status
 from tests.daemon.runner import RunningDaemon
 from tests.fleet.lite import lite_model
 from tests.fleet.tools import promtool, samples
-from tests.wait import wait_until
+from tests.wait import wait_until, wait_until_async
 from tests.web.demo import demo_status
 
 R = 'robot="rover-1",site="lab"'
@@ -214,3 +215,16 @@ def test_a_journal_that_cannot_commit_shows_failures_backlog_and_drops(tmp_path:
     finally:
         blocker.close()
         journal.close()
+
+
+async def test_the_lag_probe_sees_a_loop_that_was_blocked() -> None:
+    probe = LagProbe(interval_s=0.2)
+    task = asyncio.ensure_future(probe.run())
+    try:
+        await asyncio.sleep(0)  # the probe is asleep now
+        assert probe.lag_s == 0.0
+        time.sleep(0.6)  # a blocking call on the loop: the probe wakes at least 0.4 s late
+        await wait_until_async(lambda: probe.lag_s > 0, 60, "the probe's next wake")
+        assert probe.lag_s >= 0.35
+    finally:
+        task.cancel()
