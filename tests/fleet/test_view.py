@@ -11,6 +11,8 @@ import aiohttp
 
 from host.fleet.view import FleetView
 from host.launch.ports import free_port
+from tests.fleet.servers import prometheus, query
+from tests.wait import wait_until_async
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -38,3 +40,13 @@ def test_a_bad_prometheus_url_is_one_line_and_exit_2() -> None:
     assert out.returncode == 2
     assert out.stderr.strip().count("\n") == 0 and "--prometheus" in out.stderr
     assert "Traceback" not in out.stderr
+
+
+async def test_a_robot_prometheus_cannot_scrape_is_unreachable(tmp_path: Path) -> None:
+    dead = f"127.0.0.1:{free_port()}"  # a robot whose daemon is not there
+    with prometheus(tmp_path, [dead]) as url:
+        await wait_until_async(lambda: query(url, "up == 0"), 120, "the failed scrape",
+                               interval=0.5)
+        view = FleetView(url)
+        rows = await view.rows()
+    assert [(r.robot, r.headline) for r in rows] == [(dead, "unreachable")]
