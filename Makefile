@@ -6,7 +6,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test check lint pytest mpytest bench browser clean
+.PHONY: run test check lint pytest mpytest bench browser prometheus clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -51,8 +51,12 @@ lint: $(STAMP)
 	$(BIN)/ruff check protocol firmware emulator host tests benchmarks
 	$(BIN)/mypy
 
-pytest: $(STAMP) browser
+pytest: $(STAMP) browser prometheus
 	$(BIN)/pytest -n $(PYTEST_WORKERS) --dist loadfile
+
+# Debian's Prometheus and Alertmanager, for the fleet's tests (installed when root and missing).
+prometheus:
+	scripts/ensure-prometheus
 
 # Debian's headless Chromium, for the web page's tests (installed when root and missing).
 browser:

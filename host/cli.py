@@ -49,6 +49,7 @@ COMMANDS: dict[str, str] = {
     "emulate": "host.commands.emulate",
     "experiment": "host.commands.experiment",
     "mission": "host.commands.mission",
+    "fleet": "host.commands.fleet",
 }
 
 

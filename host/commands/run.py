@@ -29,6 +29,7 @@ import contextlib
 import faulthandler
 import logging
 import os
+import re
 import signal
 import sys
 from pathlib import Path
@@ -39,6 +40,8 @@ NAME = "run"
 HELP = "run the daemon: observe, diagnose and repair the robot"
 
 log = logging.getLogger(__name__)
+
+LABEL_VALUE = re.compile(r"[A-Za-z0-9_.-]{1,64}")  # --robot, --site: safe in any query or URL
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -71,6 +74,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--zenoh", metavar="ENDPOINT", action="append",
                         help="zenoh endpoint the daemon listens on for topics "
                              "(default: the model's, tcp/127.0.0.1:7447)")
+    parser.add_argument("--robot", metavar="NAME", default="",
+                        help="this robot's name in the metrics (label robot) and on the page "
+                             "(default: the model's name); unique in a fleet")
+    parser.add_argument("--site", metavar="NAME", default="default",
+                        help="where the robot works, the label site of every metric "
+                             "(default 'default'); see docs/fleet.md")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -81,6 +90,10 @@ def run(args: argparse.Namespace) -> int:
         raise UserError(f"{system_dir}: no system.yaml here",
                         "give a robot directory, e.g. models/tedusar")
     web = None if args.web == "off" else parse_listen(args.web)
+    for flag, value in (("--robot", args.robot), ("--site", args.site)):
+        if value and not LABEL_VALUE.fullmatch(value):
+            raise UserError(f"{flag} {value!r}: not a name",
+                            f"give {flag} letters, digits, '_', '-' or '.' (e.g. rover-7)")
     if not 1 <= args.rate <= 100:
         raise UserError(f"--rate {args.rate} is out of range", "give 1..100")
     return asyncio.run(_main(args, system_dir, web))
@@ -109,7 +122,7 @@ async def _main(args: argparse.Namespace, system_dir: Path, web: tuple[str, int]
         opts = DaemonOptions(system_dir=system_dir, board_url=args.board or "", web=web,
                              journal=journal, dry_run=args.dry_run,
                              rate_hz=args.rate, zenoh_listen=args.zenoh,
-                             middleware=args.middleware,
+                             middleware=args.middleware, robot=args.robot, site=args.site,
                              operator=args.operator or default_socket(journal))
         launch = Launch(system_dir, None if args.emulate else args.board, key,
                         control=args.control, daemon=opts)

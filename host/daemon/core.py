@@ -15,7 +15,8 @@ Theory of operation. ``Daemon`` builds the pieces from the robot directory and o
 
 Tasks on one asyncio loop: the board task keeps a ``BoardClient`` subscribed (reconnecting with
 backoff) and feeds every reading, event and link notice to the hub and the ``BoardView``; the
-diagnosis runner's task; the sample task that emits the channels a few times a second. Nothing
+diagnosis runner's task; the sample task that emits the channels a few times a second; the
+lag probe of the metrics (``host.fleet.metrics.LagProbe``: how late the loop runs). Nothing
 below the daemon reads the clock: the daemon owns one monotonic clock (``clock``) for
 observations and deadlines and one wall clock (``wall``) for the journal and the page.
 """
@@ -53,6 +54,7 @@ from host.diagnosis.runner import DiagnosisRunner, fold_updates
 from host.errors import RemoteError, UserError
 from host.events import JOURNALED, Event, LinkChange, Note, RunStarted, Stamped
 from host.events import BoardEvent as BoardEventRecord
+from host.fleet.metrics import FleetMetrics, LagProbe
 from host.journal import Journal, TelemetryDownsampler
 from host.journal.runs import Run, list_runs, new_run_id
 from host.journal.summary import Replay
@@ -97,6 +99,8 @@ class DaemonOptions:
     device_boot_s: Mapping[str, float] = field(default_factory=dict)  # settle times of devices
     operator: Path | None = None  # the operator socket (quarantine, hold); None: none
     device_pids: Mapping[str, int] = field(default_factory=dict)  # process feeding a device
+    robot: str = ""  # the robot's name in the metrics and on the page; "": the model's
+    site: str = "default"  # where the robot is, a label of every metric (host.fleet)
 
 
 @dataclass(frozen=True)
@@ -150,8 +154,13 @@ class Daemon:
         self._managed = managed_nodes(robot.processes, robot.observers.source.kind)
         self.stream = EventStream(clock, wall)
         self.emit = self.stream.emit
-        self.status = MemoryStatusSource(Status(robot=self.model.name))
+        self.status = MemoryStatusSource(Status(robot=opts.robot or self.model.name))
         self.stream.subscribe(StatusFold(self.status))
+        self.lag = LagProbe()
+        self.metrics = FleetMetrics(self.status, robot=opts.robot or self.model.name,
+                                    site=opts.site, components=list(self.model.components),
+                                    protected=self.model.protected, lag=self.lag)
+        self.stream.subscribe(self.metrics.events)
         self.observations = ObservationSet()
         self._known = self.theory.observable_atoms()
         self.diagnosis = DiagnosisRunner(
@@ -214,7 +223,9 @@ class Daemon:
         if self.journal is not None:
             self._restore(self.journal, previous[0] if previous else None)
         if opts.web is not None:
-            self.web = WebServer(self.status, self.journal.reader if self.journal else None)
+            self.metrics.journal = self.journal
+            self.web = WebServer(self.status, self.journal.reader if self.journal else None,
+                                 metrics=self.metrics.render)
             self.web_port = await self.web.start(*opts.web)
         if opts.operator is not None:
             self.operator = OperatorServer(self.repairs, opts.operator)
@@ -247,7 +258,7 @@ class Daemon:
             f"{t} ({' '.join(n + f)})" for t, (n, f) in wired.items()) or "none")
         await self.repairs.adopt()
         self._tasks = [asyncio.ensure_future(t) for t in (
-            self._board_task(), self.diagnosis.task(), self._sample_task())]
+            self._board_task(), self.diagnosis.task(), self._sample_task(), self.lag.run())]
 
     def _restore(self, journal: Journal, previous: Run | None) -> None:
         """Quarantines and holds that earlier runs left in the journal stay in force; a repair

@@ -9,8 +9,9 @@ slow, so a burst costs one fsync, not one per entry. ``await journal.flush()`` (
 ``flush_blocking``) returns once everything recorded so far is committed, i.e. on disk:
 nothing committed is lost on kill -9, nor (with the default ``sync="full"``) on power loss.
 Nothing is dropped silently: if the disk fails, the batch stays queued and is retried with a
-back-off, logged at ERROR; only when more than ``max_pending`` entries wait are the oldest
-dropped, counted in ``dropped``, logged, and recorded as an error note once writing works again.
+back-off, logged at ERROR and counted in ``write_failures``; only when more than
+``max_pending`` entries wait are the oldest dropped, counted in ``dropped``, logged, and recorded
+as an error note once writing works again.
 Retention runs in the same thread: every ``prune_every`` telemetry entries, telemetry older than
 ``Retention.telemetry_max_age_s`` before the newest recorded wall time (the daemon's time, never
 read here) or beyond ``telemetry_max_rows`` is deleted; every other kind is kept.
@@ -101,6 +102,7 @@ class Journal:
         self._closing = False
         self._closed = False
         self.dropped = 0
+        self.write_failures = 0  # commits that failed (and were retried), for the metrics
         self._dropped_ids: list[int] = []
         self._telemetry_since_prune = 0
         self._newest_wall = 0.0
@@ -215,6 +217,7 @@ class Journal:
                 with self._db:
                     self._write(batch)
             except sqlite3.Error as exc:
+                self.write_failures += 1
                 backoff = min(5.0, backoff * 2 or 0.1)
                 log.error("journal %s: cannot commit %d entries (%s); retrying in %.1f s",
                           self.path, len(batch), exc, backoff)

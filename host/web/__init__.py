@@ -2,8 +2,8 @@
 
 ``status`` defines what is shown (``Status``) and the interface the daemon implements
 (``StatusSource``, with ``MemoryStatusSource`` a ready-made one); ``server`` serves the page,
-``/api/status``, ``/api/journal``, ``/metrics`` and the ``/ws`` push channel; ``metrics``
-writes the Prometheus text format; ``static/index.html`` is the page (plain JavaScript and CSS,
+``/api/status``, ``/api/journal``, ``/metrics`` (what the daemon gives it: ``host.fleet.metrics``)
+and the ``/ws`` push channel; ``static/index.html`` is the page (plain JavaScript and CSS,
 no build step, nothing fetched from the internet).
 """
 

@@ -7,7 +7,7 @@ client sends):
 - ``GET /api/status`` — the latest ``Status`` as JSON, plus ``server_time`` and ``stale``;
 - ``GET /api/journal?since=ID&limit=N&kind=K[,K]`` — entries after ``since`` (or, without it,
   the last ``limit``), each with a one-line ``summary``; 404 when there is no journal;
-- ``GET /metrics`` — Prometheus text format (``metrics.py``);
+- ``GET /metrics`` — Prometheus text format (``metrics``: the daemon's ``host.fleet.metrics``);
 - ``GET /ws`` — a WebSocket that sends ``{"type": "status", ...}`` on every change (at most
   one every ``push_interval_s``, and at least one every ``heartbeat_s`` so the page can tell a
   quiet daemon from a lost link) and ``{"type": "journal", "entries": [...]}`` with new entries.
@@ -35,7 +35,6 @@ from host.errors import UserError
 from host.events import Kind
 from host.journal.entries import Entry
 from host.journal.summary import summarize
-from host.web import metrics
 from host.web.status import Status, StatusSource
 
 log = logging.getLogger(__name__)
@@ -88,8 +87,9 @@ class WebServer:
     def __init__(self, source: StatusSource, journal: JournalView | None = None, *,
                  clock: Callable[[], float] = time.time, push_interval_s: float = 0.25,
                  heartbeat_s: float = 1.0, stale_after_s: float = 5.0,
-                 journal_tail: int = 50) -> None:
+                 journal_tail: int = 50, metrics: Callable[[], bytes] | None = None) -> None:
         self.source = source
+        self.metrics = metrics  # the Prometheus exposition of one scrape (host.fleet.metrics)
         self.journal = journal
         self.clock = clock  # wall clock, only to judge how old the daemon's data is
         self.push_interval_s = push_interval_s
@@ -226,13 +226,10 @@ class WebServer:
                                   "last_id": entries[-1].id if entries else since})
 
     async def _metrics(self, request: web.Request) -> web.Response:
-        counts: dict[str, int] | None = None
-        size: int | None = None
-        if self.journal is not None:
-            counts = await asyncio.to_thread(self.journal.counts)
-            size = await asyncio.to_thread(self.journal.size_bytes)
-        text = metrics.render(self.source.snapshot(), counts, size)
-        return web.Response(text=text, headers={"Content-Type": metrics.CONTENT_TYPE})
+        if self.metrics is None:
+            return web.Response(status=404, text="no metrics: this server was given none\n")
+        return web.Response(body=self.metrics(),
+                            headers={"Content-Type": "text/plain; version=0.0.4; charset=utf-8"})
 
     async def _ws(self, request: web.Request) -> web.WebSocketResponse:
         ws = web.WebSocketResponse(heartbeat=max(10.0, self.heartbeat_s * 5))

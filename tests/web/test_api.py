@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import asyncio
 import json
-import re
 import time
 from typing import Any
 
@@ -18,7 +17,6 @@ import pytest
 from host.errors import UserError
 from host.journal import Journal, Note
 from host.web import MemoryStatusSource, WebServer, parse_listen
-from host.web.status import Status
 
 
 def url(server: WebServer, path: str) -> str:
@@ -79,67 +77,6 @@ async def test_journal_api_without_a_journal_says_how_to_get_one(
         assert "--journal" in body["error"]
     finally:
         await web.close()
-
-
-SAMPLE = re.compile(r'^([a-z_]+)(\{[^}]*\})? (-?[0-9.e+]+|NaN|[+-]Inf)$')
-
-
-async def test_metrics_are_prometheus_text(server: WebServer,
-                                           source: MemoryStatusSource) -> None:
-    source.update(board_link_up=False)
-    async with aiohttp.ClientSession() as s, s.get(url(server, "/metrics")) as resp:
-        assert resp.status == 200
-        assert resp.headers["Content-Type"].startswith("text/plain; version=0.0.4")
-        text = await resp.text()
-    samples: dict[str, float] = {}
-    for line in text.splitlines():
-        if line.startswith("#"):
-            assert re.match(r"^# (HELP|TYPE) [a-z_]+ .+$", line), line
-            continue
-        m = SAMPLE.match(line)
-        assert m, f"not a sample line: {line!r}"
-        samples[m.group(1) + (m.group(2) or "")] = float(m.group(3))
-    assert samples['dxboard_channel_current_milliamperes{channel="7",name="jaguar"}'] == 7400
-    assert samples['dxboard_channel_state{channel="6",name="thermal_camera",state="tripped"}'] == 1
-    assert samples['dxboard_channel_state{channel="6",name="thermal_camera",state="on"}'] == 0
-    assert samples['dxboard_channel_on{channel="4",name="kinect"}'] == 0
-    assert samples['dxboard_observations{value="false"}'] == 2
-    assert samples['dxboard_observations{value="unknown"}'] == 1
-    assert samples["dxboard_diagnosis_duration_seconds_count"] == 12
-    assert samples['dxboard_repairs_total{outcome="failed"}'] == 1
-    assert samples['dxboard_repairs_total{outcome="timeout"}'] == 0
-    assert samples["dxboard_board_link_up"] == 0
-    assert samples['dxboard_journal_entries{kind="action"}'] == 5
-    assert samples["dxboard_journal_bytes"] > 0
-
-
-async def test_metrics_have_a_gauge_per_quarantined_and_held_component(
-        server: WebServer, source: MemoryStatusSource) -> None:
-    source.update(quarantined={"hokuyo": "3 attempts failed"},
-                  held={"jaguar": "switched off", "imu": "new cable"})
-    async with aiohttp.ClientSession() as s, s.get(url(server, "/metrics")) as resp:
-        text = await resp.text()
-    assert "# TYPE dxboard_component_quarantined gauge" in text
-    assert "# TYPE dxboard_component_held gauge" in text
-    lines = set(text.splitlines())
-    assert 'dxboard_component_quarantined{component="hokuyo"} 1' in lines
-    assert 'dxboard_component_held{component="imu"} 1' in lines
-    assert 'dxboard_component_held{component="jaguar"} 1' in lines
-    assert not any(x.startswith('dxboard_component_quarantined{component="jaguar"}')
-                   for x in lines)
-    source.update(quarantined={}, held={})
-    async with aiohttp.ClientSession() as s, s.get(url(server, "/metrics")) as resp:
-        text = await resp.text()
-    assert "dxboard_component_quarantined{" not in text and "dxboard_component_held{" not in text
-
-
-async def test_metrics_escape_label_values() -> None:
-    from host.web import metrics
-    from host.web.status import ChannelStatus
-
-    text = metrics.render(Status(channels=(ChannelStatus(0, 'odd "name"\\x\n', True, "on", 1.5),)))
-    assert 'name="odd \\"name\\"\\\\x\\n"' in text
-    assert "1.5" in text
 
 
 async def test_websocket_pushes_each_change_and_new_journal_entries(
