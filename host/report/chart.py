@@ -342,16 +342,20 @@ def draw(t: Timeline, *, title: str | None = None, dpi: int = _DPI) -> tuple[Fig
         long = short if r.repair_s is None else (
             f"{short}  ({r.repair_s:.1f} s after the first repair action)")
         right_half = r.normal_at > 0.5 * end
-        anchor = r.normal_at + (-1 if right_half else 1) * 0.07 * sec_per_in
-        for text in (long, short):  # the long label if it fits among the others, else short
+        # the long label if it fits among the others, else the short one, on the side with
+        # more room first; a label with no room is left out (the line and the legend say it)
+        tries = [(text, left) for text in (long, short) for left in (right_half, not right_half)]
+        for text, left in tries:
+            anchor = r.normal_at + (-1 if left else 1) * 0.07 * sec_per_in
             w = (_text_width_in(text, 8.5, bold=True) + 0.1) * sec_per_in
-            lo, hi = (anchor - w, anchor) if right_half else (anchor, anchor + w)
-            if lo >= -_LEFT * sec_per_in and all(hi <= a or lo >= b for a, b in taken):
+            lo, hi = (anchor - w, anchor) if left else (anchor, anchor + w)
+            if (lo >= -_LEFT * sec_per_in and hi <= end + _RIGHT * sec_per_in
+                    and all(hi <= a or lo >= b for a, b in taken)):
                 taken.append((lo, hi))
-                ax.text(anchor, rows_h + gap / 2, text, ha="right" if right_half else "left",
+                ax.text(anchor, rows_h + gap / 2, text, ha="right" if left else "left",
                         va="center", fontsize=8.5, color=RECOVERY_COLOR, fontweight="bold",
                         zorder=6, clip_on=False)
-                break  # a label with no room is left out: the dashed line and legend say it
+                break
 
     _legend(fig, t, height, legend_rows)
 
