@@ -45,10 +45,10 @@ browser:
 mpytest: $(STAMP)
 	$(BIN)/micropython tests/mpy_run.py
 
-# The docs site (mkdocs-material) into site/: the reference pages are written from the code
-# first; --strict fails on a broken link or a missing page (tests/docs/ check the same).
+# The docs site (mkdocs-material) into site/: the reference pages are made from the code as it
+# builds (scripts/gen_docs.py); --strict fails on a broken link or a missing page (tests/docs/
+# check the same).
 docs: $(STAMP)
-	$(BIN)/python scripts/gen_docs.py
 	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
 
 BENCH_STAMP := $(VENV)/.bench-installed

@@ -11,9 +11,12 @@ page names the tests that cover what it shows that way.
 
 from __future__ import annotations
 
+import importlib.util
 import re
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import ModuleType
 
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
@@ -84,3 +87,14 @@ def unmatched(command: Command, output: str) -> list[str]:
     got = [line.strip() for line in output.splitlines()]
     return [shown for shown, pat in zip(command.shown, command.patterns(), strict=True)
             if not any(pat.fullmatch(line) for line in got)]
+
+
+def gen_docs() -> ModuleType:
+    """``scripts/gen_docs.py``, the maker of the site's generated pages (the mkdocs hook)."""
+    if "gen_docs" not in sys.modules:
+        spec = importlib.util.spec_from_file_location("gen_docs", ROOT / "scripts" / "gen_docs.py")
+        assert spec is not None and spec.loader is not None
+        module = importlib.util.module_from_spec(spec)
+        sys.modules["gen_docs"] = module
+        spec.loader.exec_module(module)
+    return sys.modules["gen_docs"]

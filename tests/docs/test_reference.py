@@ -2,9 +2,9 @@
 
 Each section of a real robot's ``system.yaml`` (a copy of ``models/tedusar``'s, with one example
 entry of every observer kind) is given an unknown key; the real loaders refuse each with "use
-one of [...]", naming the keys they accept. Those sets, and no other key, must be in
-``docs/reference/system-yaml.md`` (written by ``scripts/gen_docs.py``), so a key added to a
-loader without its line in the reference fails here.
+one of [...]", naming the keys they accept. Those sets, and no other key, must be in the
+reference page ``system.yaml`` (made by ``scripts/gen_docs.py`` as the site builds), so a key
+added to a loader without its line in the reference fails here.
 """
 
 from __future__ import annotations
@@ -12,7 +12,6 @@ from __future__ import annotations
 import ast
 import re
 import shutil
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -22,10 +21,9 @@ import yaml
 from host.diagnosis.model import ModelError, check_system
 from host.observers.config import load_observers
 from host.repair.processes import load_processes
-from tests.docs.blocks import ROOT
+from tests.docs.blocks import ROOT, gen_docs
 
-sys.path.insert(0, str(ROOT / "scripts"))
-from gen_docs import system_yaml_keys
+system_yaml_keys = gen_docs().system_yaml_keys
 
 UNKNOWN = "zz_not_a_key"
 _ONE_OF = re.compile(r"unknown key '" + UNKNOWN + r"'.*\(use one of (\[.*?\])\)")
