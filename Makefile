@@ -6,7 +6,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test check lint pytest mpytest bench browser prometheus clean
+.PHONY: run test check lint pytest mpytest bench browser prometheus docs clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -16,7 +16,7 @@ $(STAMP): pyproject.toml
 
 # The main job on the emulated board: the daemon keeps the virtual TEDUSAR robot healthy,
 # its nodes real ROS 2 nodes (DXBOARD_MIDDLEWARE=zenoh make run: plain Zenoh instead).
-# A development key lets a person switch channels too (see README.md).
+# A development key lets a person switch channels too (see docs/getting-started.md).
 DXBOARD_MIDDLEWARE ?= ros2
 CONTROL ?= 127.0.0.1:7001
 WEB     ?= 127.0.0.1:8080
@@ -66,6 +66,12 @@ browser:
 mpytest: $(STAMP)
 	$(BIN)/micropython tests/mpy_run.py
 
+# The docs site (mkdocs-material) into site/: the reference pages are made from the code as it
+# builds (scripts/gen_docs.py); --strict fails on a broken link or a missing page (tests/docs/
+# check the same).
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
+
 BENCH_STAMP := $(VENV)/.bench-installed
 $(BENCH_STAMP): $(STAMP)
 	$(BIN)/python -m pip install --quiet -e '.[test,ros,bench]'
@@ -82,4 +88,4 @@ bench: $(BENCH_STAMP)
 	$(BIN)/python benchmarks/plandiag.py --quick
 
 clean:
-	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache site

@@ -35,7 +35,7 @@ def _common(p: argparse.ArgumentParser, json_opt: bool = True) -> None:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("url", metavar="URL", help="board URL, e.g. tcp://192.168.0.7:4840")
+    parser.add_argument("url", metavar="URL", help="board URL, e.g. tcp://192.168.0.7:7000")
     sub = parser.add_subparsers(dest="action", metavar="ACTION")
     sub.required = True
     _common(sub.add_parser("status", help="a table of every channel"))

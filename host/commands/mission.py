@@ -4,7 +4,9 @@
 starts the robot's emulated board, devices and world (``dxboard emulate --robot --world``) and
 the daemon, through ``host.launch``; waits until layer 0 has brought the robot up; then runs
 the mission of ``SYSTEM_DIR/mission/mission.yaml`` with the layers of paper 001 (skills,
-behaviour trees, the temporal planner and dispatcher: ``host.mission``). It prints one line per
+behaviour trees, the temporal planner and dispatcher: ``host.mission``). It prints a line as
+each step that takes seconds begins (starting the robot, layer 0 bringing it up, starting the
+layers, the mission), then one line per
 event of the mission (planned, each dispatch, each result of layers 2 and 3, each change of the
 knowledge base) and of layer 0 (diagnoses, repair plans and their ends, quarantines), and exits
 0 when the mission completed, 1 when it stopped or failed (the last line says why, naming the
@@ -70,11 +72,15 @@ def run(args: argparse.Namespace) -> int:
             stamp = time.strftime("%H:%M:%S", time.localtime(s.wall))
             print(f"{stamp} {describe(e)}", flush=True)
 
+    def step(text: str) -> None:
+        print(f"{time.strftime('%H:%M:%S')} {text}", flush=True)
+
     with tempfile.TemporaryDirectory(prefix="dxboard-mission-") as tmp:
         robot_dir = fast_model(system_dir, Path(tmp)) if args.fast else system_dir
         journal = journal_path(args.journal, Path(tmp))
         res = asyncio.run(run_mission(robot_dir, journal, flat=args.flat,
-                                      timeout_s=args.timeout, web=web, on_event=show))
+                                      timeout_s=args.timeout, web=web, on_event=show,
+                                      on_step=step))
     verdict = "completed" if res.completed else "did not complete: " + res.detail
     print(f"mission {verdict} ({res.actions} actions, {res.replans} replans, "
           f"{res.duration_s or 0:.1f} s)")

@@ -3,7 +3,9 @@
 A timeline like paper 000's figures 5 and 6, of one daemon run (a journal holds every run that
 wrote to it; the latest unless ``--run`` names another): one row per component (hardware first, then
 drivers, then nodes), red while the component is in the first-ranked diagnosis, green while
-it is not, grey before the first diagnosis; the repair actions along the top as bars from
+it is not, grey before the first diagnosis, a thin amber band where a diagnosis was taken back
+within the repair debounce (0.5 s) and nothing was repaired (a loaded machine's passing
+verdict, not a fault); the repair actions along the top as bars from
 start to end, failed and timed-out ones hatched and labelled; a dashed line where everything
 became normal again ("all normal at 38.3 s"). Options:
 

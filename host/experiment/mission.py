@@ -147,14 +147,28 @@ async def run_mission(system_dir: Path, journal: Path, *, label: str = "mission"
                       on_event: Callable[[Stamped], None] | None = None,
                       on_ready: Callable[[RobotSession], None] | None = None,
                       prepare: Callable[[str], Awaitable[None]] | None = None,
-                      inject: Injection | None = None) -> MissionRun:
+                      inject: Injection | None = None,
+                      on_step: Callable[[str], None] | None = None) -> MissionRun:
+    """Start the robot, wait until layer 0 has it healthy, run the mission. ``on_step`` is told
+    as each step that may take seconds begins (a person watching sees progress, not silence);
+    ``on_event`` gets the daemon's events from the bring-up on."""
+    step = on_step or (lambda text: None)
     run = MissionRun(label, journal=str(journal))
+    step("starting the emulated robot, its world and the daemon")
     async with RobotSession(system_dir, journal, emulate_args=("--world",), web=web) as s:
         if on_ready is not None:
             on_ready(s)
-        if not await s.wait_healthy(timeout_s, hold_s=2.0):
+        step("waiting until layer 0 has brought the robot up (healthy for 2 s)")
+        bring_up = s.daemon.subscribe(on_event) if on_event is not None else (lambda: None)
+        try:
+            healthy = await s.wait_healthy(timeout_s, hold_s=2.0)
+        finally:
+            bring_up()
+        if not healthy:
             raise UserError(f"{label}: the robot did not come up within {timeout_s:g} s",
                             f"see the journal: dxboard journal {journal}")
+        step("the robot is healthy: starting the mission's layers (skills, executive, "
+             "planner)")
         world = s.emulated.urls.get("world")
         if world is None:
             raise UserError(f"{system_dir}: the emulated robot serves no world",
@@ -165,6 +179,7 @@ async def run_mission(system_dir: Path, journal: Path, *, label: str = "mission"
         watch = _Watch(run, on_event)
         unsubscribe = s.daemon.subscribe(watch)
         stack = await MissionStack.start(s.daemon, world, system_dir, flat=flat)
+        step("running the mission")
         if fault:
             inject = _inject
         injector = None if inject is None else asyncio.ensure_future(inject(s, watch, run))

@@ -47,7 +47,10 @@ CREATE INDEX IF NOT EXISTS entries_kind ON entries (kind, id);
 CREATE INDEX IF NOT EXISTS entries_wall ON entries (wall);
 """
 
+# the fixes differ for the daemon (which takes --journal FILE) and for the commands that only
+# read a journal (dxboard journal, report: the file is their argument, they have no --journal)
 _FIX_NEW = "give --journal a new file name, or move this file away"
+_FIX_READ = "check the path: give the journal file a daemon wrote"
 
 
 def _bad(path: Path, why: str, fix: str = _FIX_NEW) -> UserError:
@@ -59,10 +62,11 @@ def connect(path: str | os.PathLike[str], *, create: bool, sync: str = "full",
     """Open (and with ``create`` make) a journal file in WAL mode; ``UserError`` if unusable."""
     p = Path(path)
     if p.is_dir():
-        raise _bad(p, "is a directory", "give --journal a file name inside it")
+        raise _bad(p, "is a directory", "give --journal a file name inside it" if create
+                   else "give the journal file inside it")
     if not p.exists():
         if not create:
-            raise _bad(p, "no such file", "check the path, or run the daemon with --journal")
+            raise _bad(p, "no such file", _FIX_READ)
         if not p.parent.is_dir():
             raise _bad(p, f"directory {p.parent} does not exist", "create it first")
     elif not os.access(p, os.R_OK):
@@ -86,16 +90,18 @@ def _check_and_setup(conn: sqlite3.Connection, p: Path, *, create: bool, sync: s
         version = conn.execute("PRAGMA user_version").fetchone()[0]
         tables = conn.execute("SELECT count(*) FROM sqlite_master").fetchone()[0]
     except sqlite3.DatabaseError as exc:
-        raise _bad(p, f"is not a dxboard journal ({exc})") from exc
+        raise _bad(p, f"is not a dxboard journal ({exc})",
+                   _FIX_NEW if create else _FIX_READ) from exc
     if app_id != APPLICATION_ID:
         if not tables and not create:
-            raise _bad(p, "is empty, not a dxboard journal",
-                       "check the path: the daemon writes the file given to --journal")
+            raise _bad(p, "is empty, not a dxboard journal", _FIX_READ)
         if tables:
-            raise _bad(p, "is an SQLite file of another program, not a dxboard journal")
+            raise _bad(p, "is an SQLite file of another program, not a dxboard journal",
+                       _FIX_NEW if create else _FIX_READ)
     elif version > SCHEMA_VERSION:
         raise _bad(p, f"has schema version {version}, newer than this dxboard's "
-                   f"{SCHEMA_VERSION}", "upgrade dxboard, or give --journal a new file")
+                   f"{SCHEMA_VERSION}", "upgrade dxboard, or give --journal a new file"
+                   if create else "upgrade dxboard to read it")
     try:
         # only the writer switches the file to WAL; a reader takes it as it is (and so can
         # read a journal it may not write)

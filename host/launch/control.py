@@ -22,7 +22,8 @@ TIMEOUT_S = 5.0
 def parse_url(url: str) -> tuple[str, int]:
     rest = url.removeprefix("control://").rstrip("/")
     host, sep, port = rest.rpartition(":")
-    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+    if ("://" in rest or "/" in host or not sep or not host or not port.isdigit()
+            or not 0 < int(port) < 65536):
         raise UserError(f"bad control URL {url!r}",
                         "give control://HOST:PORT as printed by `dxboard emulate`, or HOST:PORT")
     return host.strip("[]"), int(port)

@@ -229,7 +229,9 @@ class Actuators:
             self._sent(ch, True)
             res = await board.power_cycle(ch, self.off_s)
             self._switched_on(self.clock() + self.off_s, ch)
-            return f"channel {ch} off for {self.off_s:g} s, then on ({res.state_name})"
+            # the read-back is the middle of the cycle: the board switches on by its own timer
+            return (f"channel {ch} off for {self.off_s:g} s (read back {res.state_name}), "
+                    "on again by the board's timer")
 
         return await self._spaced(self.off_s, send)
 

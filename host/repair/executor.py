@@ -158,6 +158,11 @@ class ExecutionResult:
         return self.outcome is Outcome.DONE
 
 
+def within(seconds: float) -> str:
+    """``within 12.9 s``: a computed time limit as a person reads it (not ``12.8619``)."""
+    return f"within {seconds:.1f} s" if seconds < 100 else f"within {seconds:.0f} s"
+
+
 def plan_record(plan: Plan, plan_id: str, repairs: Iterable[str] = ()) -> PlanRecord:
     """The journal's record of a plan."""
     return PlanRecord(plan_id, tuple(PlanStep(s.action, s.args) for s in plan.steps),
@@ -367,7 +372,7 @@ class Executor:
         try:
             detail = await asyncio.wait_for(self.actuators.run(step), timeout)
         except TimeoutError:
-            why = f"no answer within {timeout:g} s"
+            why = f"no answer {within(timeout)}"
             finish(ActionState.TIMEOUT, why)
             return why
         except Refused as exc:
@@ -421,8 +426,8 @@ class Executor:
                     and not self.beliefs.missing(keeps, -math.inf)):
                 seen = {**self.beliefs.missing(new, fresh),
                         **self.beliefs.missing(keeps, -math.inf)}
-                why = "effect not observed within {:g} s: {}".format(
-                    deadline - end, "; ".join(f"{a} {v}" for a, v in seen.items()))
+                why = "effect not observed {}: {}".format(
+                    within(deadline - end), "; ".join(f"{a} {v}" for a, v in seen.items()))
                 waited = self.clock() - end
                 if waited < deadline - end - TRIP_MARGIN_S:
                     why = "the board tripped it {:.1f} s after the step: {}".format(

@@ -13,10 +13,11 @@ diagnoser the observer hub feeds. One round (``repair_once``):
 3. ``executor.execute`` it: steps verified by fresh observations, attempts counted.
 
 ``run()`` repeats rounds until the diagnosis is empty (``HEALTHY``), only quarantined components
-are left (``QUARANTINED``), no plan exists (``NO_PLAN``), the plan touches a quarantined
-component (``BLOCKED``) or ``max_rounds`` is reached (``GAVE_UP``). Replanning after a failed
-step is just the next round, after ``retry_pause_s`` for fresh evidence: the new diagnosis
-reflects what the failed step left behind. It can never loop for ever: every executed round
+are left (``QUARANTINED``; ``HELD`` when they are all held, none quarantined), no plan exists
+(``NO_PLAN``), the plan touches a quarantined component (``BLOCKED``) or ``max_rounds`` is
+reached (``GAVE_UP``). Replanning after a failed step is just the next round, after
+``retry_pause_s`` for fresh evidence: the new diagnosis reflects what the failed step left
+behind. It can never loop for ever: every executed round
 counts an attempt for each component it touches, the executor quarantines a component after
 ``max_attempts`` in its window, and ``max_rounds`` bounds the rest. A lock makes ``run`` single-
 flight: two repairs never run at once (and the executor refuses overlapping repairs of one
@@ -54,7 +55,8 @@ DEFAULT_RETRY_PAUSE_S = 2.0
 
 class LoopOutcome(StrEnum):
     HEALTHY = "healthy"
-    QUARANTINED = "quarantined"  # only quarantined components are still abnormal
+    QUARANTINED = "quarantined"  # only quarantined (or quarantined and held) are abnormal
+    HELD = "held"  # only components a person (or the board's shedding) holds are abnormal
     NO_PLAN = "no-plan"
     BLOCKED = "blocked"
     GAVE_UP = "gave-up"
@@ -131,8 +133,10 @@ class RepairLoop:
                 if r.result is None:
                     if r.no_plan:
                         return LoopResult(LoopOutcome.NO_PLAN, tuple(rounds), r.note)
-                    if r.quarantined:
+                    if r.quarantined & self.executor.quarantine.components:
                         return LoopResult(LoopOutcome.QUARANTINED, tuple(rounds), r.note)
+                    if r.quarantined:
+                        return LoopResult(LoopOutcome.HELD, tuple(rounds), r.note)
                     return LoopResult(LoopOutcome.HEALTHY, tuple(rounds), r.note)
                 if r.result.outcome is Outcome.BLOCKED:
                     return LoopResult(LoopOutcome.BLOCKED, tuple(rounds), r.result.reason)

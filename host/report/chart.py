@@ -11,14 +11,17 @@ one bar per action from its start to its end on a few lanes (packed so that no t
 overlap), each labelled with its call and, unless it succeeded, its outcome (failed and
 timed-out actions hatched in their own colours); then one row per
 component in groups (hardware, drivers, nodes, other), each a band coloured by its state over
-time (normal pale green, abnormal red, unknown hatched grey); a dashed green line where the whole
-system became normal again, labelled with the time and how long the repair took from its first
-action; the time axis in seconds; a legend. Faint vertical guides carry each action's start
-down through the rows, so cause and effect line up.
+time (normal pale green, abnormal red, unknown hatched grey, and a thin amber band where a
+diagnosis was retracted within the repair debounce: a load artefact, not a fault); a dashed
+green line where the whole system became normal again, labelled with the time and how long the
+repair took from its first action (labels never drawn over each other: shortened or left
+out); the time axis in seconds; a legend. Faint vertical guides carry each action's start down
+through the rows, so cause and effect line up.
 
-Sizes are fixed in inches (the height grows with the rows and lanes), so a chart is as legible
-in a paper as on a screen; ``render`` returns a ``Layout`` telling where (in pixels) each row
-and each second lies, which the tests use to check the colours of the image.
+Sizes are fixed in inches (the height grows with the rows and lanes; a title or subtitle wider
+than the figure is set smaller), so a chart is as legible in a paper as on a screen; ``draw``
+makes the figure, ``render`` writes it and returns a ``Layout`` telling where (in pixels) each
+row and each second lies, which the tests use to check the colours of the image.
 """
 
 from __future__ import annotations
@@ -36,6 +39,7 @@ import matplotlib
 matplotlib.use("Agg")
 
 from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.font_manager import FontProperties
 from matplotlib.lines import Line2D
@@ -57,7 +61,9 @@ from host.report.timeline import (
 log = logging.getLogger(__name__)
 
 # colours (also what the tests look for in the image)
-STATE_COLORS = {State.NORMAL: "#bfe3c6", State.ABNORMAL: "#d7263d", State.UNKNOWN: "#e3e3e3"}
+STATE_COLORS = {State.NORMAL: "#bfe3c6", State.ABNORMAL: "#d7263d", State.UNKNOWN: "#e3e3e3",
+                State.RETRACTED: "#f2c46d"}  # retracted: amber, outlined, never the fault red
+STATE_LABELS = {State.RETRACTED: "retracted within the debounce (not repaired)"}
 OUTCOME_COLORS = {"succeeded": "#2b6cb0", "failed": "#e8590c", "timeout": "#b7791f",
                   RUNNING: "#7f8c9a"}
 OUTCOME_HATCH = {"failed": "xxxx", "timeout": "....", RUNNING: "////"}
@@ -109,6 +115,13 @@ def _text_width_in(text: str, size_pt: float, bold: bool = False) -> float:
     props = FontProperties(size=size_pt, weight="bold" if bold else "normal")
     width, _h, _d = TextToPath().get_text_width_height_descent(text, props, ismath=False)
     return float(width) / 72.0
+
+
+def _fitted_pt(text: str, size_pt: float, bold: bool = False) -> float:
+    """``size_pt``, or smaller so that ``text`` fits the figure's width with a margin."""
+    room = _W - 0.3
+    width = _text_width_in(text, size_pt, bold=bold)
+    return size_pt if width <= room else size_pt * room / width
 
 
 def action_label(span: ActionSpan) -> str:
@@ -205,6 +218,14 @@ def render(t: Timeline, out: str | os.PathLike[str], *, title: str | None = None
     fmt = path.suffix.lower()
     if fmt not in FORMATS:
         raise ValueError(f"cannot write {path.suffix or 'a file without suffix'}")
+    fig, layout = draw(t, title=title, dpi=dpi)
+    fig.savefig(path, format=fmt[1:], dpi=dpi, facecolor="white",
+                metadata=None if fmt == ".svg" else {"Software": "dxboard report"})
+    return layout
+
+
+def draw(t: Timeline, *, title: str | None = None, dpi: int = _DPI) -> tuple[Figure, Layout]:
+    """The figure of ``t`` (not yet written) and where things land in it."""
     end = max(t.end, 1e-3)
     axw = _W - _LEFT - _RIGHT
     sec_per_in = end / axw
@@ -223,6 +244,7 @@ def render(t: Timeline, out: str | os.PathLike[str], *, title: str | None = None
     height = _TITLE_H + mis_h + act_h + gap + rows_h + _AXIS_H + legend_h
 
     fig = Figure(figsize=(_W, height), dpi=dpi)
+    FigureCanvasAgg(fig)  # a renderer to measure texts with (the tests do)
     fig.patch.set_facecolor("white")
     rows_bottom = _AXIS_H + legend_h
     ax = fig.add_axes((_LEFT / _W, rows_bottom / height, axw / _W, rows_h / height))
@@ -238,10 +260,11 @@ def render(t: Timeline, out: str | os.PathLike[str], *, title: str | None = None
         layer_y = {layer: mis_bottom + yc for layer, yc in lane_y.items()}
         diag_y = [mis_bottom + yc for yc in _draw_diagnoses(mis, t, diag, mis_h, axw)]
     head, sub = _title(t)
-    fig.text(0.5 * (_LEFT + _W - _RIGHT) / _W, 1 - 0.2 / height, title or head, ha="center",
-             va="center", fontsize=13, fontweight="bold", color=TEXT)
-    fig.text(0.5 * (_LEFT + _W - _RIGHT) / _W, 1 - 0.45 / height, sub, ha="center",
-             va="center", fontsize=8, color=MUTED)
+    head = title or head
+    fig.text(0.5, 1 - 0.2 / height, head, ha="center", va="center",
+             fontsize=_fitted_pt(head, 13, bold=True), fontweight="bold", color=TEXT)
+    fig.text(0.5, 1 - 0.45 / height, sub, ha="center", va="center",
+             fontsize=_fitted_pt(sub, 8), color=MUTED)
 
     # --- component rows (y in inches from the bottom of the rows axis) ----------------------
     row_y: dict[str, float] = {}
@@ -259,6 +282,10 @@ def render(t: Timeline, out: str | os.PathLike[str], *, title: str | None = None
         row = t.row(name)
         row_y[name] = y + h / 2
         for iv in row.intervals:
+            if iv.state is State.RETRACTED:  # thin: a verdict taken back, not a fault's band
+                ax.add_patch(Rectangle((iv.start, y + 0.3 * h), iv.duration, 0.4 * h,
+                                       facecolor=STATE_COLORS[iv.state], lw=0, zorder=2))
+                continue
             ax.add_patch(Rectangle(
                 (iv.start, y + 0.14 * h), iv.duration, 0.72 * h,
                 facecolor=STATE_COLORS[iv.state], edgecolor="white" if iv.state is
@@ -306,31 +333,40 @@ def render(t: Timeline, out: str | os.PathLike[str], *, title: str | None = None
                  clip_on=False)
 
     # --- all normal again -------------------------------------------------------------------
+    taken: list[tuple[float, float]] = []  # data x extents of the labels placed
     for r in t.recoveries:
         top.axvline(r.normal_at, color=RECOVERY_COLOR, lw=1.4, ls=(0, (5, 2)), zorder=5)
         ax.plot([r.normal_at] * 2, [0, rows_h + gap], color=RECOVERY_COLOR, lw=1.4,
                 ls=(0, (5, 2)), zorder=5, clip_on=False)
-        text = f"all normal at {r.normal_at:.1f} s"
-        if r.repair_s is not None:
-            text += f"  ({r.repair_s:.1f} s after the first repair action)"
+        short = f"all normal at {r.normal_at:.1f} s"
+        long = short if r.repair_s is None else (
+            f"{short}  ({r.repair_s:.1f} s after the first repair action)")
         right_half = r.normal_at > 0.5 * end
-        ax.text(r.normal_at + (-1 if right_half else 1) * 0.07 * sec_per_in,
-                rows_h + gap / 2, text, ha="right" if right_half else "left", va="center",
-                fontsize=8.5, color=RECOVERY_COLOR, fontweight="bold", zorder=6,
-                clip_on=False)
+        # the long label if it fits among the others, else the short one, on the side with
+        # more room first; a label with no room is left out (the line and the legend say it)
+        tries = [(text, left) for text in (long, short) for left in (right_half, not right_half)]
+        for text, left in tries:
+            anchor = r.normal_at + (-1 if left else 1) * 0.07 * sec_per_in
+            w = (_text_width_in(text, 8.5, bold=True) + 0.1) * sec_per_in
+            lo, hi = (anchor - w, anchor) if left else (anchor, anchor + w)
+            if (lo >= -_LEFT * sec_per_in and hi <= end + _RIGHT * sec_per_in
+                    and all(hi <= a or lo >= b for a, b in taken)):
+                taken.append((lo, hi))
+                ax.text(anchor, rows_h + gap / 2, text, ha="right" if left else "left",
+                        va="center", fontsize=8.5, color=RECOVERY_COLOR, fontweight="bold",
+                        zorder=6, clip_on=False)
+                break
 
     _legend(fig, t, height, legend_rows)
-    fig.savefig(path, format=fmt[1:], dpi=dpi, facecolor="white",
-                metadata=None if fmt == ".svg" else {"Software": "dxboard report"})
 
     def x_px(sec: float) -> float:
         return (_LEFT + sec / sec_per_in) * dpi
 
     row_px = {n: (height - rows_bottom - yy) * dpi for n, yy in row_y.items()}
-    return Layout(round(_W * dpi), round(height * dpi), row_px, lanes, x_px,
-                  {n: (height - yy) * dpi for n, yy in layer_y.items()},
-                  tuple((x_px(m.time), (height - yy) * dpi)
-                        for m, yy in zip(t.plan_diagnoses, diag_y, strict=True)))
+    return fig, Layout(round(_W * dpi), round(height * dpi), row_px, lanes, x_px,
+                       {n: (height - yy) * dpi for n, yy in layer_y.items()},
+                       tuple((x_px(m.time), (height - yy) * dpi)
+                             for m, yy in zip(t.plan_diagnoses, diag_y, strict=True)))
 
 
 def _draw_mission(mis: Axes, t: Timeline, mis_h: float, axw: float, sec_per_in: float
@@ -410,7 +446,8 @@ def _legend(fig: Figure, t: Timeline, height: float, rows: int) -> None:
     states = [s for s in State if any(iv.state is s for r in t.rows for iv in r.intervals)]
     handles: list[Patch | Line2D] = [
         Patch(facecolor=STATE_COLORS[s], edgecolor="white" if s is State.UNKNOWN else "none",
-              hatch="////" if s is State.UNKNOWN else None, label=s.value) for s in states]
+              hatch="////" if s is State.UNKNOWN else None, label=STATE_LABELS.get(s, s.value))
+        for s in states]
     outcomes = sorted({a.outcome for a in t.actions},
                       key=lambda o: list(OUTCOME_COLORS).index(o) if o in OUTCOME_COLORS else 9)
     for o in outcomes:

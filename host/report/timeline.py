@@ -14,6 +14,10 @@ mission, its layers' commands (``host.report.mission``) and its plan-execution d
   diagnosis, paper 000 §IV-E, so this is what the robot acted on). Before the first diagnosis,
   and while a diagnosis entry lists no diagnosis at all (the observations contradict the
   model), every component is **unknown**.
+- An abnormal interval shorter than the repair debounce (``debounce_s``, the daemon's 0.5 s)
+  that a later diagnosis took back, with no repair action started in it, is **retracted**: a
+  verdict the daemon rightly did not act on (a loaded machine's topic late for a moment), not a
+  fault. Nor is the moment it was taken back a recovery.
 - An action's span runs from its ``started`` to the ``finished`` of the entry that ended it
   (the same ``action_id``); its outcome is that entry's state (succeeded, failed, timeout), or
   ``running`` if the journal holds no end. Action times are the daemon's own (``started`` and
@@ -62,6 +66,10 @@ class State(StrEnum):
     NORMAL = "normal"
     ABNORMAL = "abnormal"
     UNKNOWN = "unknown"
+    RETRACTED = "retracted"  # abnormal for less than the debounce, taken back, not repaired
+
+
+DEBOUNCE_S = 0.5  # the daemon's repair debounce (host.daemon.core's repair_debounce_s)
 
 
 class Group(StrEnum):
@@ -267,12 +275,14 @@ def _action_time(value: float, entry: Entry, entry_at: float) -> float:
 
 def build_timeline(entries: Sequence[Entry], *, name: str, robot: str = "",
                    groups: Mapping[str, Group] | None = None, start: Bound | None = None,
-                   end: Bound | None = None, run: str = "") -> Timeline:
+                   end: Bound | None = None, run: str = "",
+                   debounce_s: float = DEBOUNCE_S) -> Timeline:
     """Fold ``entries`` (one daemon run, ``run``, in id order) into a ``Timeline`` of the
     window.
 
     ``groups`` is the model's components in its order, with their groups; ``start``/``end``
-    bound the window. Raises ``EmptyWindow`` if the window holds no time.
+    bound the window; ``debounce_s`` is the repair debounce (what is retracted within it).
+    Raises ``EmptyWindow`` if the window holds no time.
     """
     if not entries:
         raise EmptyWindow("the journal holds no entries")
@@ -350,8 +360,8 @@ def build_timeline(entries: Sequence[Entry], *, name: str, robot: str = "",
         if bad:
             since = t if since is None else since
         elif bad is not None and since is not None:
-            if ws <= t <= we:
-                started = [s.start for s in spans if since <= s.start <= t]
+            started = [s.start for s in spans if since <= s.start <= t]
+            if ws <= t <= we and (started or t - since >= debounce_s):
                 recoveries.append(Recovery(clip(since), clip(min(started)) if started else None,
                                            t - ws))
             since = None
@@ -361,6 +371,9 @@ def build_timeline(entries: Sequence[Entry], *, name: str, robot: str = "",
         ActionSpan(s.action_id, s.action, s.args, clip(s.start),
                    None if s.end is None else clip(s.end), s.outcome, s.plan_id, s.detail)
         for s in sorted(kept, key=lambda s: (s.start, s.action_id)))
+    starts = [s.start for s in out_spans]
+    rows = [ComponentRow(r.name, r.group, _retracted(r.intervals, starts, debounce_s, we - ws))
+            for r in rows]
     origin = entries[0].wall + ws if clock == "wall" else _wall_at(entries, ws, at)
     return Timeline(
         name=name, robot=robot, start=0.0, end=we - ws, origin_wall=origin,
@@ -402,4 +415,17 @@ def _intervals(comp: str, changes: Sequence[tuple[float, frozenset[str] | None]]
             out[-1] = Interval(out[-1].start, b - ws, state)
         else:
             out.append(Interval(a - ws, b - ws, state))
+    return tuple(out)
+
+
+def _retracted(intervals: tuple[Interval, ...], action_starts: Sequence[float],
+               debounce_s: float, end: float) -> tuple[Interval, ...]:
+    """``intervals`` with each abnormal one shorter than ``debounce_s``, taken back before
+    ``end`` and with no action started in it, marked ``RETRACTED``."""
+    out = []
+    for iv in intervals:
+        if (iv.state is State.ABNORMAL and iv.duration < debounce_s and iv.end < end - 1e-9
+                and not any(iv.start <= a <= iv.end for a in action_starts)):
+            iv = Interval(iv.start, iv.end, State.RETRACTED)
+        out.append(iv)
     return tuple(out)

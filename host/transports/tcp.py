@@ -74,7 +74,7 @@ class TcpTransport(StreamTransport):
     def __init__(self, url: BoardUrl, key: bytes | None = None) -> None:
         super().__init__(url, key)
         url.check_params(("hold_ms", PER_FRAME))
-        self.address = url.need_host_port("tcp://HOST:PORT, e.g. tcp://192.168.0.7:4840")
+        self.address = url.need_host_port("tcp://HOST:PORT, e.g. tcp://192.168.0.7:7000")
         self.hold_s = url.int_param("hold_ms", 0, 0, 100) / 1000
         self._held: asyncio.TimerHandle | None = None  # reading held until this fires
         self._sock: asyncio.Transport | None = None

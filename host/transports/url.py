@@ -75,7 +75,7 @@ def parse(text: str) -> BoardUrl:
         text = "tcp://" + text
     if "://" not in text:
         raise BadUrl(f"{text!r} is not a board URL",
-                      "write SCHEME://..., e.g. tcp://192.168.0.7:4840 or serial:///dev/ttyACM0")
+                      "write SCHEME://..., e.g. tcp://192.168.0.7:7000 or serial:///dev/ttyACM0")
     try:
         parts = urlsplit(text)
         port = parts.port

@@ -38,6 +38,16 @@ def test_a_fault_free_mission_completes_on_the_virtual_robot(tmp_path: Path) -> 
     assert out.returncode == 0, out.stdout[-2000:] + out.stderr[-2000:]
     assert "mission completed" in out.stdout.splitlines()[-1]
     assert "dispatch m1.1: level_laser()" in out.stdout
+    # progress before the mission's first event (issue 26: it printed nothing for 43 s): a line
+    # as each step longer than 2 s begins, in order, and layer 0 bringing the robot up
+    lines = out.stdout.splitlines()
+    first_dispatch = next(i for i, line in enumerate(lines) if "dispatch m1.1" in line)
+    before = "\n".join(lines[:first_dispatch])
+    steps = ["starting the emulated robot", "waiting until layer 0 has brought the robot up",
+             "the robot is healthy: starting the mission's layers", "running the mission"]
+    at = [before.find(step) for step in steps]
+    assert -1 not in at and at == sorted(at), before
+    assert "plan repair-" in before, before  # layer 0's bring-up is shown as it happens
     events = payloads(journal)
     assert [e.state for e in events if isinstance(e, MissionState)][-1] == "completed"
     assert all(d.ok for d in events if isinstance(d, Dispatch))

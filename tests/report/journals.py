@@ -41,6 +41,7 @@ from host.journal import (
     Telemetry,
 )
 
+TEDUSAR_DIR = str(Path(__file__).resolve().parents[2] / "models" / "tedusar")
 T0 = 1_800_000_000.0
 MONO0 = 5_000.0
 
@@ -167,3 +168,31 @@ if __name__ == "__main__":
         print(make(out / f"{name}.sqlite"))
     (out / "power_up_failing.sqlite").unlink(missing_ok=True)
     print(power_up(out / "power_up_failing.sqlite", failing=True))
+
+
+def load_flaps(path: Path, *, run: str | None = "20261123T210826-3fa2") -> Path:
+    """A healthy robot on a loaded machine: five times the IMU's topic drops below its rate for
+    a moment and the diagnosis blames {imu, imu_node}, retracted 0.2-0.4 s later, within the
+    repair debounce (0.5 s), so nothing is repaired (load artefacts, issue 26); then, at 30 s, a
+    real fault: the base loses power and is repaired as in ``device_shut_down``."""
+    h = _History("wall", run)
+    h.at(0.0, Note("daemon started: robot tedusar"))
+    h.at(0.5, DiagnosisRecord.of([[]], trigger="start"))
+    for t in (4.0, 5.1, 6.0, 14.0, 22.5):
+        h.at(t, Observation("ok(/imu_data)", False, "topics"))
+        h.at(t + 0.05, _bad("imu", "imu_node"))
+        h.at(t + 0.3, Observation("ok(/imu_data)", True, "topics"))
+        h.at(t + 0.35, DiagnosisRecord.of([[]], trigger="observation"))
+    h.at(30.0, Observation("on(jaguar)", False, "board"))
+    h.at(30.1, _bad("jaguar", "jaguar_node"))
+    h.at(30.7, PlanRecord("p1", (PlanStep("power_up", ("jaguar",)),
+                                 PlanStep("stop_node", ("jaguar_node",)),
+                                 PlanStep("start_node", ("jaguar_node",))),
+                          ("jaguar", "jaguar_node")))
+    h.action("power_up", "jaguar", 30.8, 32.0, plan="p1")
+    h.action("stop_node", "jaguar_node", 32.1, 32.6, plan="p1")
+    h.action("start_node", "jaguar_node", 32.7, 34.5, plan="p1")
+    h.at(35.0, DiagnosisRecord.of([[]], trigger="observation"))
+    h.telemetry(38, {1: 800.0, 3: 650.0, 7: 2400.0})
+    h.write(path)
+    return path
