@@ -85,7 +85,7 @@ async def run(app: App, uart: object) -> None:
 
 
 def main() -> None:
-    i2c = machine.I2C(0, freq=400000)
+    i2c = machine.I2C(0, freq=400000, timeout=2000)  # a bus held low costs 2 ms, not 50
     hal = TargetHal(EN_PINS, STATUS_PINS, i2c=i2c, ina226_addrs=INA226_ADDRS,
                     shunt_uohm=10000, vin_adc_pin=VIN_PIN, mv_per_count_x1000=55000,
                     storage=FileStorage(""))

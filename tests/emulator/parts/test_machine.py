@@ -242,7 +242,7 @@ class TargetHalTest(unittest.TestCase):
         w.bus(0).attach(0x40, Ina226(lambda t: (0.020, 24.0)))  # 2 A across 10 mOhm
         w.bus(0).attach(0x41, Ina226(lambda t: (0.0005, 24.0)))  # 50 mA
         hal = self.hal(w)
-        w.set_time(2200)
+        w.set_time(10000)  # configured for the tick at boot: a result every 8.8 ms
         out = [0, 0]
         hal.read_currents_ma(out)
         self.assertEqual(out, [2000, 50])

@@ -20,7 +20,7 @@ w.bus(0).attach(0x40, Ina226(lambda t: (0.020, 24.0)))
 import machine
 from firmware.hal.target import TargetHal
 hal = TargetHal((2,), (12,), i2c=machine.I2C(0), ina226_addrs=(0x40,), shunt_uohm=10000)
-w.set_time(2200)
+w.set_time(10000)
 print(machine.__file__, machine.reset_cause(), hal.read_current_ma(0))
 """
 
