@@ -17,6 +17,7 @@ import time
 
 import machine  # type: ignore[import-not-found]
 
+from firmware import boards
 from firmware.hal.ina226 import Ina226Bank
 from protocol.constants import (
     RESET_BROWNOUT,
@@ -101,3 +102,17 @@ class TargetHal:
 
     def reboot(self):
         machine.reset()
+
+
+def build(board, storage):
+    """The HAL of a board revision's description (``firmware.boards``): its I2C bus, its
+    chips, its pins and its input divider, as ``firmware/main.py`` boots it."""
+    sense = board["sense"]
+    bus = sense["i2c"]
+    i2c = machine.I2C(bus["id"], scl=machine.Pin(bus["scl"]), sda=machine.Pin(bus["sda"]),
+                      freq=bus["freq"], timeout=bus["timeout_us"])
+    vin = board["vin"]
+    return TargetHal(board["en_pins"], board["status_pins"], i2c=i2c,
+                     ina226_addrs=sense["addrs"], shunt_uohm=sense["shunt_uohm"],
+                     vin_adc_pin=vin["adc_pin"],
+                     mv_per_count_x1000=boards.mv_per_count_x1000(vin), storage=storage)
