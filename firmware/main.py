@@ -82,7 +82,11 @@ async def run(app: App, uart: object) -> None:
 
 
 def main() -> None:
-    hal = target.build(boards.load(), FileStorage(""))
+    board = boards.load()
+    hal = target.build(board, FileStorage(""))
+    print("dxboard", FIRMWARE_VERSION, board["name"], board["mcu"])
+    for line in hal.report():  # each sensor: ok, no answer, wrong chip, bus held low
+        print(line)
     app = App(hal, FACTORY)  # the flashed configuration, if no stored copy is good
     app.start()
     uart = machine.UART(UART_ID, UART_BAUD)

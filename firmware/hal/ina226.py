@@ -56,6 +56,7 @@ class Ina226Bank:
         self.n = len(addrs)
         self.shunt_uohm = shunt_uohm
         self.state = [C_UNKNOWN] * self.n
+        self.ids = [0] * self.n  # (manufacturer << 16) | die, as last read
         self.buf = bytearray(2)
         self.wbuf = bytearray(2)
         self.check_i = 0
@@ -74,7 +75,8 @@ class Ina226Bank:
 
     def _configure(self, ch: int) -> None:
         """Check the IDs and configure one chip; ``OSError`` if it does not answer."""
-        if self._get(ch, REG_MANUFACTURER) != MANUFACTURER or self._get(ch, REG_DIE) != DIE:
+        self.ids[ch] = (self._get(ch, REG_MANUFACTURER) << 16) | self._get(ch, REG_DIE)
+        if self.ids[ch] != (MANUFACTURER << 16) | DIE:
             self.state[ch] = C_WRONG
             return
         self._put(ch, REG_CONFIG, CONFIG_TICK)
@@ -99,6 +101,24 @@ class Ina226Bank:
             except OSError as exc:
                 if self._failed(ch, exc):
                     return
+
+    def report(self) -> list:  # type: ignore[type-arg]
+        """One line per chip, as the board prints them at boot: ``ch0 0x40 ina226 ok``, ``ch1
+        0x41 no answer``, ``ch2 0x42 wrong chip 5449:3220``, ``ch3 0x43 bus held low``."""
+        out = []
+        for ch in range(self.n):
+            st = self.state[ch]
+            if st == C_OK:
+                what = "ina226 ok"
+            elif st == C_WRONG:
+                i = self.ids[ch]
+                what = "wrong chip %04x:%04x" % (i >> 16, i & 0xFFFF)
+            elif self.bus_wait:
+                what = "bus held low"
+            else:
+                what = "no answer"
+            out.append("ch%d 0x%02x %s" % (ch, self.addrs[ch], what))
+        return out
 
     def read_one(self, ch: int) -> int:
         """One channel's current in mA (>= 0), or -1: no reading."""

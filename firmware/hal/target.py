@@ -60,6 +60,10 @@ class TargetHal:
             return RESET_BROWNOUT
         return RESET_UNKNOWN
 
+    def report(self):
+        """What the board prints at boot about its current sensors, one line each."""
+        return self.ina.report() if self.ina is not None else []
+
     def ticks_ms(self):
         t = time.ticks_ms()
         self._ms += time.ticks_diff(t, self._t0)

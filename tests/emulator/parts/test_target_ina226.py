@@ -212,3 +212,13 @@ class PartFaultTest(unittest.TestCase):
             b.run(10)
             seen.add(b.board.channels[0].current_ma)
         self.assertGreater(len(seen), 10)
+
+
+class ReportTest(unittest.TestCase):
+    def test_what_the_board_prints_about_its_sensors_at_boot(self):
+        b = Bench(faults={1: ("nack", True), 2: ("die_id", 0x3220)})
+        self.assertEqual(b.hal.report(), ["ch0 0x40 ina226 ok", "ch1 0x41 no answer",
+                                          "ch2 0x42 wrong chip 5449:3220"])
+        b2 = Bench(faults={0: ("stuck_low", True)})
+        self.assertEqual(b2.hal.report(), ["ch0 0x40 bus held low", "ch1 0x41 bus held low",
+                                           "ch2 0x42 bus held low"])
