@@ -9,7 +9,9 @@ boot, a chip that reset configured again, and -1 (no reading: ``F_SENSOR``) for 
 chip does not answer or is not an INA226. Each switch has an enable pin and, where the board
 has one, a status (read-back) pin; without one the enable pin's output latch is read back.
 ``ticks_ms`` turns the port's wrapping ``time.ticks_ms`` into a monotonic count with
-``ticks_diff``.
+``ticks_diff``. On the rp2 port ``machine.reset()`` reboots through the watchdog (the next boot
+reads ``WDT_RESET``), so ``reboot`` first writes the storage file ``reboot``, and a watchdog
+cause with that mark is a soft reset: a reboot the host asked for never counts toward safe mode.
 """
 
 import os
@@ -26,6 +28,8 @@ from protocol.constants import (
     RESET_UNKNOWN,
     RESET_WATCHDOG,
 )
+
+REBOOT_MARK = "reboot"  # a reboot this firmware asked for (storage file)
 
 
 class TargetHal:
@@ -50,8 +54,13 @@ class TargetHal:
 
     def _read_cause(self):
         c = machine.reset_cause()
+        asked = False  # rp2: machine.reset() reboots by the watchdog; reboot() left a mark
+        st = self.storage
+        if st is not None and st.read(REBOOT_MARK) is not None:
+            asked = True
+            st.remove(REBOOT_MARK)
         if c == getattr(machine, "WDT_RESET", -1):
-            return RESET_WATCHDOG
+            return RESET_SOFT if asked else RESET_WATCHDOG
         if c == getattr(machine, "SOFT_RESET", -1):
             return RESET_SOFT
         if c == getattr(machine, "PWRON_RESET", -1):
@@ -105,6 +114,8 @@ class TargetHal:
         return os.urandom(n)
 
     def reboot(self):
+        if self.storage is not None:  # read back at the next boot: RESET_SOFT, not watchdog
+            self.storage.write(REBOOT_MARK, b"1")
         machine.reset()
 
 

@@ -17,8 +17,8 @@ from firmware.hal.storage import MemStorage
 from tests.emulator.parts.test_machine import WorldTicks
 
 
-def build(board, input_v=24.0, amps=0.5):
-    w = install(World())
+def build(board, input_v=24.0, amps=0.5, world=None, storage=None):
+    w = world if world is not None else install(World())
     closed = {}
     for ch, pin in enumerate(board["en_pins"]):
         w.wire_output(pin, (lambda c: lambda level: closed.__setitem__(c, level))(ch))
@@ -37,7 +37,7 @@ def build(board, input_v=24.0, amps=0.5):
         del sys.modules["machine"]
     if not hasattr(target.time, "ticks_ms"):
         target.time = WorldTicks(w)
-    return w, target.build(board, MemStorage()), closed, chips
+    return w, target.build(board, storage or MemStorage()), closed, chips
 
 
 class BoardsTest(unittest.TestCase):
