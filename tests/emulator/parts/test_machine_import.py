@@ -31,3 +31,11 @@ class ImportByNameTest(unittest.TestCase):
         out = subprocess.run([find_micropython(), "-c", SCRIPT], cwd=ROOT, env=env,
                              capture_output=True, text=True, timeout=120, check=True).stdout
         self.assertEqual(out.split(), ["emulator/parts/machine.py", "1", "2000"])
+
+    def test_boot_on_the_unix_port(self):
+        env = dict(os.environ, MICROPYPATH=".:.frozen")  # no parts: the port's own modules
+        out = subprocess.run([find_micropython(), "-c", "from firmware import boot; boot.run()"],
+                             cwd=ROOT, env=env, capture_output=True, text=True, timeout=120,
+                             check=True).stdout
+        self.assertEqual(out.strip(),
+                         "network: none (no network module: the host's sockets stand in)")
