@@ -2,18 +2,19 @@
 
 ``dxboard flash --port DEVICE [--config FILE] [--key-file F] [--mpy] [--no-reset] [--board-rev
 REV]`` copies ``firmware/`` and ``protocol/`` (``.py`` sources, or ``.mpy`` compiled with
-``mpy-cross`` when ``--mpy`` is given), a ``main.py`` that starts ``firmware.main`` and the file
-``board_rev`` (the revision of ``firmware/boards`` the board is built as, default rev-a) to the
-board, removing stale modules of those packages. Two modules are written for this board:
-``firmware/factory.py`` holds the flashed configuration (the factory configuration the board
-boots when its stored one is lost, so the computer it powers stays on and protected), and
-``firmware/build.py`` the build id, a SHA-256 over every other deployed file. Every file is
-checked by SHA-256, computed on the board and compared with the host's. With ``--config`` (a
-JSON file like ``models/tedusar/board.json``: ``board`` and ``channels`` sections; the key as
-hex in ``board.key``, or from ``$DXBOARD_KEY`` or ``--key-file``) the configuration is checked
-here first (nothing is copied for one the board would refuse), then the board's own code
-validates it, stores it and reads it back. Finally flash resets the board and checks that it
-came back running the new build (its main loop started); a board that cannot reset itself (no
+``mpy-cross`` when ``--mpy`` is given), a ``main.py`` that starts ``firmware.main``, a
+``boot.py`` that brings the network up (``firmware.boot``) and the file ``board_rev`` (the
+revision of ``firmware/boards`` the board is built as, default rev-a) to the board, removing
+stale modules of those packages. Two modules are written for this board: ``firmware/factory.py``
+holds the flashed configuration (the factory configuration the board boots when its stored one
+is lost, so the computer it powers stays on and protected), and ``firmware/build.py`` the build
+id, a SHA-256 over every other deployed file. Every file is checked by SHA-256, computed on the
+board and compared with the host's. With ``--config`` (a JSON file like
+``models/tedusar/board.json``: ``board`` and ``channels`` sections; the key as hex in
+``board.key``, or from ``$DXBOARD_KEY`` or ``--key-file``) the configuration is checked here
+first (nothing is copied for one the board would refuse), then the board's own code validates
+it, stores it and reads it back. Finally flash resets the board and checks that it came back
+running the new build (its main loop started); a board that cannot reset itself (no
 ``machine.reset``) is not reset, and flash says so. mpremote runs with ``resume`` so that
 nothing is soft-reset behind our back. Every failure is one line naming the step, the device and
 the fix.
@@ -43,6 +44,8 @@ NAME = "flash"
 HELP = "deploy the firmware and a board config to a MicroPython board with mpremote"
 PACKAGES = ("protocol", "firmware")
 MAIN_PY = b"# dxboard: start the firmware (written by dxboard flash)\nimport firmware.main\n"
+BOOT_PY = (b"# dxboard: bring the network up, wired then Wi-Fi (written by dxboard flash)\n"
+           b"import firmware.boot\nfirmware.boot.run()\n")
 TIMEOUT_S = 180.0
 RESTART_S = 60.0  # how long a board may take to come back after its reset
 UPLOAD_NAME = "dxboard_new_config.json"
@@ -191,6 +194,9 @@ def collect(mpy: bool, work: Path, factory: dict[str, Any] | None = None,
     main = work / "main.py"
     main.write_bytes(MAIN_PY)
     files["main.py"] = main
+    boot = work / "boot.py"
+    boot.write_bytes(BOOT_PY)
+    files["boot.py"] = boot
     rev = work / REV_FILE
     rev.write_text(board_rev + "\n")
     files[REV_FILE] = rev
@@ -392,7 +398,8 @@ def run(args: argparse.Namespace) -> int:
         return 0
     kind = ".mpy (mpy-cross)" if args.mpy else ".py"
     print(f"flash: copied {summary['files']} files ({summary['bytes']} bytes, {kind}) "
-          f"to {args.port}: firmware/, protocol/, main.py, {REV_FILE} ({args.board_rev})")
+          f"to {args.port}: firmware/, protocol/, boot.py, main.py, {REV_FILE} "
+          f"({args.board_rev})")
     print(f"flash: verified {summary['verified']} files by SHA-256 on the board")
     if "config" in summary:
         c = summary["config"]

@@ -172,5 +172,6 @@ def test_collect_writes_the_board_revision(tmp_path: Path) -> None:
 
     files = collect(False, tmp_path, None, "rev-a")
     assert files["board_rev"].read_text() == "rev-a\n"
+    assert files["boot.py"].read_text().endswith("import firmware.boot\nfirmware.boot.run()\n")
     other = collect(False, tmp_path / "b", None, "rev-b")
     assert build_id(files) != build_id(other)  # the revision is part of the build
