@@ -183,10 +183,11 @@ class Board:
         total = 0
         live = 0  # the current of channels still switched on after this step
         for ch in self.channels:
-            ma = samples[ch.index]
-            total += ma
+            ma = samples[ch.index]  # -1: no reading (the sensor did not answer)
+            if ma > 0:
+                total += ma
             ch.step(now, ma, hal.read_switch(ch.index), dt)  # type: ignore[attr-defined]
-            if ch.state == ST_ON or ch.state == ST_INRUSH:
+            if (ch.state == ST_ON or ch.state == ST_INRUSH) and ma > 0:
                 live += ma
         self.total_ma = total
         self.input_mv = hal.read_input_mv()  # type: ignore[attr-defined]

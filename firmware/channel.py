@@ -28,6 +28,15 @@ Protection, per tick, from the integer current ``ma`` (no floating point on the 
   ``heat += (r² - start²)·dt_ms``, clamped at 0, trip (``F_OVERLOAD``) at
   ``i2t_ms``·10⁴; with start = 110 and i2t_ms = 3100 that is ≈3 s at 1.5x, ≈1.1 s at 2x,
   ≈0.4 s at 3x (under the instant trip, 2.9x takes ≈0.43 s); heat cools in every other state.
+  A *protected* channel is never switched off by the I²t model (its current may be a lying
+  sensor's, and it feeds the computer that runs the host; its fuse guards the wiring): the
+  heat is held at the limit and ``F_OVERLOAD`` is live (sticky, an EV_WARNING) until the heat
+  falls to half the limit (an EV_WARNING with 0 flags). Only the instant trip switches it off.
+- No reading (the HAL reads -1 for a channel whose sensor did not answer: a NACK, a bus held
+  low, a wrong chip): ``F_SENSOR`` live and sticky with an EV_FAULT, the switch left as it is,
+  every current rule (trips, I²t, open load, stuck on) suspended and the heat held, the
+  reported current 0; when readings return, an EV_FAULT with 0 flags and ``F_SENSOR`` live
+  cleared (unless an offset doubt below keeps it).
 - Retries: after an overload, retry after ``retry_ms[0]``, ``[1]``, ... then latch; after a
   short or inrush trip retry ``short_retries`` times (after ``retry_ms[0]``), then latch. Both
   counters reset after ``retry_reset_ms`` without a fault, or by ``clear``.
@@ -161,6 +170,7 @@ class Channel:
         self.offset_ma = 0  # protected channel: what the sensor reads with the switch open
         self.open_sum = 0  # readings with the switch open during the stuck-on window
         self.open_n = 0
+        self.unread = False  # the sensor gives no readings (the HAL reads -1)
         self.cfg = cfg
         self.apply(cfg)
 
@@ -264,6 +274,7 @@ class Channel:
             self.short_used = 0
             self.heat = 0
             self.offset_ma = 0
+            self.unread = False  # still no readings: the next step tells it again
             self.live &= ~F_SENSOR
         return err
 
@@ -286,7 +297,37 @@ class Channel:
 
     # --- the protection step, every tick -------------------------------------------------
 
+    def _blind(self, now: int, blind: bool) -> None:
+        """The sensor stopped giving readings (``blind``) or gives them again: tell the host
+        once each way (EV_FAULT with ``F_SENSOR``, then with 0 flags)."""
+        self.unread = blind
+        if blind:
+            self.live |= F_SENSOR
+            self.sticky |= F_SENSOR
+            flags = F_SENSOR
+        else:
+            if not self.offset_ma:  # a known offset keeps the doubt until clear
+                self.live &= ~F_SENSOR
+            flags = 0
+        self.log.put(EV_FAULT, self.index, self.state, self.state,  # type: ignore[attr-defined]
+                     flags, 0, now - self.boot_ms)
+
+    def _overload(self, now: int, ma: int) -> None:
+        """A protected channel's I²t model says overload: it is not switched off for it (the
+        computer it feeds; its fuse guards the wiring): held at the limit and told once."""
+        self.heat = self.heat_max
+        if not self.live & F_OVERLOAD:
+            self.live |= F_OVERLOAD
+            self.sticky |= F_OVERLOAD
+            self.log.put(EV_WARNING, self.index, self.state,  # type: ignore[attr-defined]
+                         self.state, F_OVERLOAD, ma, now - self.boot_ms)
+
     def step(self, now: int, ma: int, sw: bool, dt: int) -> None:
+        blind = ma < 0  # no reading: the sensor did not answer (see the module docstring)
+        if blind:
+            ma = 0
+        if blind != self.unread:
+            self._blind(now, blind)
         self.current_ma = ma
         self.physical = sw
         if self.offset_ma:  # protection uses the reading without the sensor's known offset
@@ -300,7 +341,9 @@ class Channel:
                     return
             else:
                 self.mismatch_n = 0
-            if ma >= (self.inrush_lim if st == ST_INRUSH else self.trip_lim):
+            if blind:
+                self.over_n = 0
+            elif ma >= (self.inrush_lim if st == ST_INRUSH else self.trip_lim):
                 self.over_n += 1
                 if self.over_n >= self.trip_samples:
                     self._trip(now, F_INRUSH if st == ST_INRUSH else F_SHORT, ma)
@@ -311,14 +354,22 @@ class Channel:
                 if now >= self.deadline:
                     self.fire(X_INRUSH_END, now)
                 return
+            if blind:  # the thermal model holds its heat until readings come back
+                return
             r = ma * 100 // self.rated
             if r > RATIO_CAP:
                 r = RATIO_CAP
             h = self.heat + (r * r - self.start2) * dt
             self.heat = h if h > 0 else 0
             if h >= self.heat_max:
-                self._trip(now, F_OVERLOAD, ma)
-                return
+                if not self.protected:
+                    self._trip(now, F_OVERLOAD, ma)
+                    return
+                self._overload(now, ma)
+            elif self.live & F_OVERLOAD and h <= self.heat_max // 2:
+                self.live &= ~F_OVERLOAD  # cooled: the warning is over
+                self.log.put(EV_WARNING, self.index, st, st, 0,  # type: ignore[attr-defined]
+                             ma, now - self.boot_ms)
             if ma < self.open_ma:
                 if self.low_since < 0:
                     self.low_since = now

@@ -1,8 +1,9 @@
 """The board's entry point: build the real HAL for this board revision and run the firmware.
 
-This is the only module that touches ``machine`` (through ``firmware.hal.target``). The pin map
-below is the dxboard rev A: ten high-side switches with status outputs, ten INA226 monitors on
-I2C(0), the input voltage on an ADC pin through a 1:11 divider. Everything runs on asyncio
+This is the only module that touches ``machine`` (through ``firmware.hal.target``). The board
+revision is data (``firmware.boards``: rev A is ten high-side switches with status outputs, ten
+INA226 monitors on I2C(0), the input voltage on an ADC pin through a 1:11 divider); the one
+this board was flashed as is read at boot and its HAL built from it. Everything runs on asyncio
 (``firmware.net``): the protection loop (one step per tick, then the pushes), the native
 protocol on TCP port 7000 and on UART(1), Modbus TCP on port 502, each registered with the
 supervisor; the original TEDUSAR format (``firmware/tug.py``) only when ``TUG_PORT`` is set
@@ -16,11 +17,11 @@ import asyncio
 
 import machine  # type: ignore[import-not-found]
 
-from firmware import build, modbus, tug
+from firmware import boards, build, modbus, tug
 from firmware.app import App
 from firmware.factory import FACTORY
+from firmware.hal import target
 from firmware.hal.storage import FileStorage
-from firmware.hal.target import TargetHal
 from firmware.net import Net
 from firmware.session import FIRMWARE_VERSION
 from protocol.constants import (
@@ -33,10 +34,6 @@ from protocol.constants import (
     CAP_VOLTAGE,
 )
 
-EN_PINS = (2, 3, 4, 5, 6, 7, 8, 9, 10, 11)
-STATUS_PINS = (12, 13, 14, 15, 16, 17, 18, 19, 20, 21)
-INA226_ADDRS = (0x40, 0x41, 0x42, 0x43, 0x44, 0x45, 0x46, 0x47, 0x48, 0x49)
-VIN_PIN = 26
 TCP_PORT = 7000
 MODBUS_PORT = 502
 UART_ID = 1
@@ -85,10 +82,11 @@ async def run(app: App, uart: object) -> None:
 
 
 def main() -> None:
-    i2c = machine.I2C(0, freq=400000)
-    hal = TargetHal(EN_PINS, STATUS_PINS, i2c=i2c, ina226_addrs=INA226_ADDRS,
-                    shunt_uohm=10000, vin_adc_pin=VIN_PIN, mv_per_count_x1000=55000,
-                    storage=FileStorage(""))
+    board = boards.load()
+    hal = target.build(board, FileStorage(""))
+    print("dxboard", FIRMWARE_VERSION, board["name"], board["mcu"])
+    for line in hal.report():  # each sensor: ok, no answer, wrong chip, bus held low
+        print(line)
     app = App(hal, FACTORY)  # the flashed configuration, if no stored copy is good
     app.start()
     uart = machine.UART(UART_ID, UART_BAUD)

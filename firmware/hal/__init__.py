@@ -9,7 +9,8 @@ so that the hot path needs no floating point: milliseconds, milliamperes, milliv
 ``ticks_ms() -> int``          monotonic milliseconds since this boot, never wrapping (a HAL on
                                a port whose ``time.ticks_ms`` wraps accumulates ``ticks_diff``)
 ``read_currents_ma(out)``      fill ``out[0:n_channels]`` with each channel's current in mA
-                               (int, >= 0); called once per protection tick
+                               (int, >= 0), or -1 for a channel whose sensor gave no reading
+                               (no answer on its bus, a wrong chip); once per protection tick
 ``read_current_ma(ch) -> int`` one channel's current, for diagnostics outside the tick
 ``set_switch(ch, on)``         drive the channel's power switch (bool)
 ``read_switch(ch) -> bool``    read the switch back (its physical state, not the command)

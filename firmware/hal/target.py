@@ -3,10 +3,15 @@
 Only ``firmware/main.py`` builds this class, passing the pin numbers of the board revision.
 Current is read either from one ``machine.ADC`` per channel across a shunt amplifier
 (``adc_pins``, ``ma_per_count_x1000`` = mA per ADC count, times 1000) or from one INA226 per
-channel on an I2C bus (``ina226_addrs``, shunt register 2.5 µV/LSB, ``shunt_uohm`` the shunt in
-micro-ohms). Each switch has an enable pin and, where the board has one, a status (read-back)
-pin; without one the enable pin's output latch is read back. ``ticks_ms`` turns the port's
-wrapping ``time.ticks_ms`` into a monotonic count with ``ticks_diff``.
+channel on an I2C bus (``ina226_addrs``, ``shunt_uohm`` the shunt in micro-ohms), driven by
+``firmware.hal.ina226.Ina226Bank``: IDs checked and each chip configured for the 10 ms tick at
+boot, a chip that reset configured again, and -1 (no reading: ``F_SENSOR``) for a channel whose
+chip does not answer or is not an INA226. Each switch has an enable pin and, where the board
+has one, a status (read-back) pin; without one the enable pin's output latch is read back.
+``ticks_ms`` turns the port's wrapping ``time.ticks_ms`` into a monotonic count with
+``ticks_diff``. On the rp2 port ``machine.reset()`` reboots through the watchdog (the next boot
+reads ``WDT_RESET``), so ``reboot`` first writes the storage file ``reboot``, and a watchdog
+cause with that mark is a soft reset: a reboot the host asked for never counts toward safe mode.
 """
 
 import os
@@ -14,6 +19,8 @@ import time
 
 import machine  # type: ignore[import-not-found]
 
+from firmware import boards
+from firmware.hal.ina226 import Ina226Bank
 from protocol.constants import (
     RESET_BROWNOUT,
     RESET_POWER_ON,
@@ -22,8 +29,7 @@ from protocol.constants import (
     RESET_WATCHDOG,
 )
 
-INA226_SHUNT = 0x01
-INA226_BUS = 0x02
+REBOOT_MARK = "reboot"  # a reboot this firmware asked for (storage file)
 
 
 class TargetHal:
@@ -35,12 +41,11 @@ class TargetHal:
         self.status = [machine.Pin(p, machine.Pin.IN) for p in status_pins] if status_pins else None
         self.adc = [machine.ADC(machine.Pin(p)) for p in adc_pins] if adc_pins else None
         self.ma_k = ma_per_count_x1000
-        self.i2c = i2c
-        self.ina = ina226_addrs
-        self.shunt_uohm = shunt_uohm
+        self.ina = Ina226Bank(i2c, ina226_addrs, shunt_uohm) if ina226_addrs else None
+        if self.ina is not None:
+            self.ina.setup()
         self.vin = machine.ADC(machine.Pin(vin_adc_pin)) if vin_adc_pin is not None else None
         self.mv_k = mv_per_count_x1000
-        self._buf = bytearray(2)
         self._t0 = time.ticks_ms()
         self._ms = 0
         self.storage = storage
@@ -49,8 +54,13 @@ class TargetHal:
 
     def _read_cause(self):
         c = machine.reset_cause()
+        asked = False  # rp2: machine.reset() reboots by the watchdog; reboot() left a mark
+        st = self.storage
+        if st is not None and st.read(REBOOT_MARK) is not None:
+            asked = True
+            st.remove(REBOOT_MARK)
         if c == getattr(machine, "WDT_RESET", -1):
-            return RESET_WATCHDOG
+            return RESET_SOFT if asked else RESET_WATCHDOG
         if c == getattr(machine, "SOFT_RESET", -1):
             return RESET_SOFT
         if c == getattr(machine, "PWRON_RESET", -1):
@@ -58,6 +68,10 @@ class TargetHal:
         if c == getattr(machine, "BROWNOUT_RESET", -2):
             return RESET_BROWNOUT
         return RESET_UNKNOWN
+
+    def report(self):
+        """What the board prints at boot about its current sensors, one line each."""
+        return self.ina.report() if self.ina is not None else []
 
     def ticks_ms(self):
         t = time.ticks_ms()
@@ -67,18 +81,15 @@ class TargetHal:
 
     def read_current_ma(self, ch):
         if self.ina is not None:
-            self.i2c.readfrom_mem_into(self.ina[ch], INA226_SHUNT, self._buf)
-            raw = (self._buf[0] << 8) | self._buf[1]
-            if raw & 0x8000:
-                raw -= 0x10000
-            if raw < 0:
-                raw = 0
-            return raw * 2500 // self.shunt_uohm  # 2.5 uV/LSB over the shunt, in mA
+            return self.ina.read_one(ch)
         if self.adc is not None:
             return self.adc[ch].read_u16() * self.ma_k // 1000
         return 0
 
     def read_currents_ma(self, out):
+        if self.ina is not None:
+            self.ina.read(out)
+            return
         for ch in range(self.n_channels):
             out[ch] = self.read_current_ma(ch)
 
@@ -103,4 +114,20 @@ class TargetHal:
         return os.urandom(n)
 
     def reboot(self):
+        if self.storage is not None:  # read back at the next boot: RESET_SOFT, not watchdog
+            self.storage.write(REBOOT_MARK, b"1")
         machine.reset()
+
+
+def build(board, storage):
+    """The HAL of a board revision's description (``firmware.boards``): its I2C bus, its
+    chips, its pins and its input divider, as ``firmware/main.py`` boots it."""
+    sense = board["sense"]
+    bus = sense["i2c"]
+    i2c = machine.I2C(bus["id"], scl=machine.Pin(bus["scl"]), sda=machine.Pin(bus["sda"]),
+                      freq=bus["freq"], timeout=bus["timeout_us"])
+    vin = board["vin"]
+    return TargetHal(board["en_pins"], board["status_pins"], i2c=i2c,
+                     ina226_addrs=sense["addrs"], shunt_uohm=sense["shunt_uohm"],
+                     vin_adc_pin=vin["adc_pin"],
+                     mv_per_count_x1000=boards.mv_per_count_x1000(vin), storage=storage)

@@ -1,21 +1,23 @@
 """Flash a MicroPython board with mpremote: the firmware, the protocol, a config; then verify.
 
-``dxboard flash --port DEVICE [--config FILE] [--key-file F] [--mpy] [--no-reset]`` copies
-``firmware/`` and ``protocol/`` (``.py`` sources, or ``.mpy`` compiled with ``mpy-cross`` when
-``--mpy`` is given) and a ``main.py`` that starts ``firmware.main`` to the board, removing stale
-modules of those packages. Two modules are written for this board: ``firmware/factory.py``
-holds the flashed configuration (the factory configuration the board boots when its stored
-one is lost, so the computer it powers stays on and protected), and ``firmware/build.py`` the
-build id, a SHA-256 over every other deployed file. Every file is checked by SHA-256, computed
-on the board and compared with the host's. With ``--config`` (a JSON file like
+``dxboard flash --port DEVICE [--config FILE] [--key-file F] [--mpy] [--no-reset] [--board-rev
+REV]`` copies ``firmware/`` and ``protocol/`` (``.py`` sources, or ``.mpy`` compiled with
+``mpy-cross`` when ``--mpy`` is given), a ``main.py`` that starts ``firmware.main``, a
+``boot.py`` that brings the network up (``firmware.boot``) and the file ``board_rev`` (the
+revision of ``firmware/boards`` the board is built as, default rev-a) to the board, removing
+stale modules of those packages. Two modules are written for this board: ``firmware/factory.py``
+holds the flashed configuration (the factory configuration the board boots when its stored one
+is lost, so the computer it powers stays on and protected), and ``firmware/build.py`` the build
+id, a SHA-256 over every other deployed file. Every file is checked by SHA-256, computed on the
+board and compared with the host's. With ``--config`` (a JSON file like
 ``models/tedusar/board.json``: ``board`` and ``channels`` sections; the key as hex in
 ``board.key``, or from ``$DXBOARD_KEY`` or ``--key-file``) the configuration is checked here
 first (nothing is copied for one the board would refuse), then the board's own code validates
 it, stores it and reads it back. Finally flash resets the board and checks that it came back
 running the new build (its main loop started); a board that cannot reset itself (no
 ``machine.reset``) is not reset, and flash says so. mpremote runs with ``resume`` so that
-nothing is soft-reset behind our back. Every failure is one line naming the step, the device
-and the fix.
+nothing is soft-reset behind our back. Every failure is one line naming the step, the device and
+the fix.
 """
 
 from __future__ import annotations
@@ -42,11 +44,15 @@ NAME = "flash"
 HELP = "deploy the firmware and a board config to a MicroPython board with mpremote"
 PACKAGES = ("protocol", "firmware")
 MAIN_PY = b"# dxboard: start the firmware (written by dxboard flash)\nimport firmware.main\n"
+BOOT_PY = (b"# dxboard: bring the network up, wired then Wi-Fi (written by dxboard flash)\n"
+           b"import firmware.boot\nfirmware.boot.run()\n")
 TIMEOUT_S = 180.0
 RESTART_S = 60.0  # how long a board may take to come back after its reset
 UPLOAD_NAME = "dxboard_new_config.json"
 FACTORY_MODULE = "firmware/factory.py"
 BUILD_MODULE = "firmware/build.py"
+REV_FILE = "board_rev"  # the revision main.py builds the board from (firmware/boards)
+DEFAULT_REV = "rev-a"
 
 # runs on the board: make the package folders, drop modules that are not being deployed
 _PREPARE = """
@@ -115,6 +121,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--mpy", action="store_true", help="deploy .mpy compiled by mpy-cross")
     parser.add_argument("--no-reset", action="store_true", help="do not reset the board at the end")
     parser.add_argument("--json", action="store_true", help="print a JSON summary")
+    parser.add_argument("--board-rev", default=DEFAULT_REV, metavar="REV",
+                        help="the board revision (a description in firmware/boards), written "
+                             f"to the board as {REV_FILE!r} for main.py (default {DEFAULT_REV})")
 
 
 def package_dir(name: str) -> Path:
@@ -146,10 +155,24 @@ def _deploy(src: Path, rel: str, work: Path, cross: str) -> tuple[str, Path]:
     return rel[:-3] + ".mpy", out
 
 
-def collect(mpy: bool, work: Path, factory: dict[str, Any] | None = None) -> dict[str, Path]:
+def board_revisions() -> list[str]:
+    """The revisions ``firmware/boards`` describes (``rev_a.py`` is "rev-a")."""
+    boards = package_dir("firmware") / "boards"
+    return sorted("rev-" + p.stem[4:] for p in boards.glob("rev_*.py"))
+
+
+def check_revision(rev: str) -> None:
+    known = board_revisions()
+    if rev not in known:
+        raise UserError(f"no board revision {rev!r}",
+                        f"give --board-rev one of: {', '.join(known)}")
+
+
+def collect(mpy: bool, work: Path, factory: dict[str, Any] | None = None,
+            board_rev: str = DEFAULT_REV) -> dict[str, Path]:
     """Remote path -> local file to copy (compiled into ``work`` when ``mpy``), with
-    ``firmware/factory.py`` holding ``factory`` (the flashed configuration) and
-    ``firmware/build.py`` the build id of everything else deployed."""
+    ``firmware/factory.py`` holding ``factory`` (the flashed configuration), ``board_rev`` the
+    board revision and ``firmware/build.py`` the build id of everything else deployed."""
     files: dict[str, Path] = {}
     cross = _mpy_cross() if mpy else ""
     generated = {FACTORY_MODULE: _factory_source(factory), BUILD_MODULE: None}
@@ -171,6 +194,12 @@ def collect(mpy: bool, work: Path, factory: dict[str, Any] | None = None) -> dic
     main = work / "main.py"
     main.write_bytes(MAIN_PY)
     files["main.py"] = main
+    boot = work / "boot.py"
+    boot.write_bytes(BOOT_PY)
+    files["boot.py"] = boot
+    rev = work / REV_FILE
+    rev.write_text(board_rev + "\n")
+    files[REV_FILE] = rev
     source = work / "src" / BUILD_MODULE
     source.write_text(_build_source(build_id(files)))
     remote, local = _deploy(source, BUILD_MODULE, work, cross)
@@ -250,15 +279,16 @@ def load_config(path: str, key: bytes | None) -> dict[str, Any]:
 
 
 def flash(port: str, config_path: str | None, key: bytes | None, mpy: bool,
-          reset: bool) -> dict[str, Any]:
+          reset: bool, board_rev: str = DEFAULT_REV) -> dict[str, Any]:
     """Do the whole job; returns the summary printed by ``run``."""
+    check_revision(board_rev)
     if port.startswith("/") and not os.path.exists(port):
         raise UserError(f"no device {port}", "is the board plugged in? try `mpremote devs`")
     cfg = load_config(config_path, key) if config_path else None
-    summary: dict[str, Any] = {"port": port, "mpy": mpy}
+    summary: dict[str, Any] = {"port": port, "mpy": mpy, "board_rev": board_rev}
     with tempfile.TemporaryDirectory(prefix="dxboard-flash-") as tmp:
         work = Path(tmp)
-        files = collect(mpy, work, cfg)
+        files = collect(mpy, work, cfg, board_rev)
         summary["build"] = _built(files)
         dirs = sorted({p.rsplit("/", 1)[0] for p in files if "/" in p},
                       key=lambda d: d.count("/"))
@@ -362,13 +392,14 @@ def run(args: argparse.Namespace) -> int:
     from host.board.keys import load_key
 
     key = load_key(args.key_file)
-    summary = flash(args.port, args.config, key, args.mpy, not args.no_reset)
+    summary = flash(args.port, args.config, key, args.mpy, not args.no_reset, args.board_rev)
     if args.json:
         print(json.dumps(summary))
         return 0
     kind = ".mpy (mpy-cross)" if args.mpy else ".py"
     print(f"flash: copied {summary['files']} files ({summary['bytes']} bytes, {kind}) "
-          f"to {args.port}: firmware/, protocol/, main.py")
+          f"to {args.port}: firmware/, protocol/, boot.py, main.py, {REV_FILE} "
+          f"({args.board_rev})")
     print(f"flash: verified {summary['verified']} files by SHA-256 on the board")
     if "config" in summary:
         c = summary["config"]

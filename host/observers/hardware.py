@@ -71,7 +71,11 @@ from host.board.types import (
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer, Update
 from host.observers.silence import JITTER_GAIN, JITTER_MEMORY_S, Confirmation, SlidingExtreme
 from protocol.constants import (
+    EV_FAULT,
     EV_TRIP,
+    EV_WARNING,
+    F_OVERLOAD,
+    F_SENSOR,
     ST_FAULTED,
     ST_LATCHED,
     ST_TRIPPED,
@@ -182,6 +186,7 @@ class HardwareObserver(Observer[BoardInput]):
         self.settle = settle
         self.link_atom = link_atom
         self.bands: dict[str, str] = {}  # device -> the settled band (nominal, over, under)
+        self.doubted: set[str] = set()  # devices whose current sensor the board doubts
         self._ev = {d: self._fresh() for d in self.devices}
         self._last_reading: float | None = None  # the last sign of life (reading, STATE)
         self._prev_reading: float | None = None  # the last reading since a reconnect
@@ -294,13 +299,14 @@ class HardwareObserver(Observer[BoardInput]):
             ev.claim = None
             self._switch(d, ch.physical, now)
             self._say(self._atoms[d.name][1], ch.state in _BAD_STATES, now)
+            self._doubt(d, bool(ch.live_faults & F_SENSOR), now)
 
     def _device(self, d: Device, on: bool, fault: bool, current_ma: int, now: float) -> None:
         """One reading of one device's channel: each of its facts counts once it settled."""
         ev = self._ev[d.name]
         if ev.on.add(on) and ev.on.value is not None:
             self._switch(d, ev.on.value, now)
-        if d.band is not None and on:  # the current of a switched-on channel only
+        if d.band is not None and on and d.name not in self.doubted:  # judged: on, sensed
             ev.band.add(d.classify(current_ma / 1000.0))
             if ev.on.value and ev.band.value is not None:
                 self.bands[d.name] = ev.band.value
@@ -338,6 +344,14 @@ class HardwareObserver(Observer[BoardInput]):
         if d is None:
             return
         ev = self._ev[d.name]
+        if e.kind == EV_FAULT and e.old_state == e.new_state:  # about the sensor, not a state
+            self._doubt(d, bool(e.faults & F_SENSOR), now)
+            return
+        if e.kind == EV_WARNING and e.faults & F_OVERLOAD:
+            log.warning("%s: the board holds %s on through an overload (a protected channel "
+                        "is never switched off for it): %s draws too much, or its current "
+                        "sensor lies", self.name, d.name, d.name)
+            return
         if e.kind == EV_TRIP or e.new_state in _BAD_STATES:
             claim = e.new_state if e.new_state in _BAD_STATES else ST_TRIPPED
             if agrees(ev.health.value, claim):  # the readings already show it
@@ -348,6 +362,27 @@ class HardwareObserver(Observer[BoardInput]):
         elif e.new_state != e.old_state:  # a state change to off, inrush or on
             ev.claim = None
             self._say(self._atoms[d.name][1], False, now)
+
+    def _doubt(self, d: Device, doubted: bool, now: float) -> None:
+        """The board doubts (or trusts again) the current sensor of ``d``'s channel: a fault of
+        the sensor, not of ``d``, so ``d``'s current is not judged while it lasts
+        (``in_band(d)`` retracted: unknown) and is judged afresh when readings return."""
+        if doubted == (d.name in self.doubted):
+            return
+        in_band = self._atoms[d.name][2]
+        self._ev[d.name].band.force(None)
+        self.bands.pop(d.name, None)
+        if doubted:
+            self.doubted.add(d.name)
+            self._forget(in_band, now)
+            log.warning("%s: the board doubts the current sensor of %s's channel %d (sensor "
+                        "flag: no reading, or current with the switch open): the sensor is "
+                        "suspect, not %s; its current is not judged until the sensor reads "
+                        "again", self.name, d.name, d.channel, d.name)
+        else:
+            self.doubted.discard(d.name)
+            log.info("%s: the current sensor of %s's channel %d reads again", self.name,
+                     d.name, d.channel)
 
     # -- the link rule ---------------------------------------------------------------------
     @property

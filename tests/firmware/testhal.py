@@ -1,7 +1,8 @@
 """A tiny HAL for the firmware tests: a simulated clock and ideal electronics set by the test.
 
 ``load_ma[ch]`` is what the channel draws while its switch is on; ``offset_ma[ch]`` is added to
-every reading (a faulty current sensor); ``stuck[ch]`` forces the switch (None = follows the
+every reading (a faulty current sensor); ``blind[ch]`` makes the sensor give no reading (-1,
+a chip that does not answer); ``stuck[ch]`` forces the switch (None = follows the
 command, True = stuck on, False = stuck off). The same file runs
 under CPython and MicroPython. ``Rig`` boots an ``App`` on it and steps it on simulated time.
 """
@@ -18,6 +19,7 @@ class TestHal:
         self.load_ma = [0] * n
         self.offset_ma = [0] * n  # a current sensor's error: read even with the switch open
         self.stuck = [None] * n
+        self.blind = [False] * n
         self.cmd = [False] * n
         self.switch_log = []  # (now, ch, on) for every change of a command
         self.input_mv = 24000
@@ -38,6 +40,8 @@ class TestHal:
             out[ch] = self.read_current_ma(ch)
 
     def read_current_ma(self, ch):
+        if self.blind[ch]:
+            return -1
         return (self.load_ma[ch] if self._on(ch) else 0) + self.offset_ma[ch]
 
     def set_switch(self, ch, on):

@@ -158,3 +158,20 @@ def test_flash_missing_device_is_one_line() -> None:
     done = dxboard("flash", "--port", "/dev/does-not-exist")
     assert done.returncode == 2
     assert done.stderr.count("\n") == 1 and "no device /dev/does-not-exist" in done.stderr
+
+
+def test_flash_unknown_board_revision_is_one_line() -> None:
+    done = dxboard("flash", "--port", "/dev/does-not-exist", "--board-rev", "rev-z")
+    assert done.returncode == 2
+    assert done.stderr.count("\n") == 1 and "no board revision 'rev-z'" in done.stderr
+    assert "rev-a" in done.stderr
+
+
+def test_collect_writes_the_board_revision(tmp_path: Path) -> None:
+    from host.commands.flash import build_id, collect
+
+    files = collect(False, tmp_path, None, "rev-a")
+    assert files["board_rev"].read_text() == "rev-a\n"
+    assert files["boot.py"].read_text().endswith("import firmware.boot\nfirmware.boot.run()\n")
+    other = collect(False, tmp_path / "b", None, "rev-b")
+    assert build_id(files) != build_id(other)  # the revision is part of the build

@@ -1,0 +1,43 @@
+"""Board revisions as data: one module per revision, one firmware.
+
+Each revision is a small module here (``rev_a.py`` for "rev-a") holding one dict, ``BOARD``: the
+microcontroller, the switches' enable and status pins, the current sensing (chip, bus, addresses,
+shunt) and the input voltage divider. ``firmware/main.py`` builds its HAL from it
+(``firmware.hal.target.build``), so adding a revision is a file, not code. ``load(name)`` returns
+a revision's description; without a name, the one named by the file ``board_rev`` on the board's
+flash (one line, written when the board is flashed), else ``DEFAULT``.
+
+Keys: ``name``, ``mcu``, ``channels`` (n), ``en_pins`` and ``status_pins`` (n GPIOs each),
+``sense`` = {``chip``: "ina226", ``i2c``: {``id``, ``scl``, ``sda``, ``freq``, ``timeout_us``},
+``addrs`` (n 7-bit addresses), ``shunt_uohm``}, ``vin`` = {``adc_pin``, ``divider``: the ratio
+of the input divider (the ADC sees input / divider), ``vref_mv``}.
+"""
+
+DEFAULT = "rev-a"
+SELECTED = "board_rev"
+
+
+def selected() -> str:
+    """The revision this board was flashed as (the ``board_rev`` file), else ``DEFAULT``."""
+    try:
+        with open(SELECTED) as f:
+            name = f.read().strip()
+    except OSError:
+        return DEFAULT
+    return name or DEFAULT
+
+
+def load(name: str = "") -> dict:  # type: ignore[type-arg]
+    """A revision's description; ``ValueError`` naming the revisions if there is none."""
+    name = name or selected()
+    mod = "rev_" + name[4:] if name.startswith("rev-") else ""
+    try:
+        module = __import__("firmware.boards." + mod, None, None, ["BOARD"])
+    except ImportError:
+        raise ValueError("no board revision " + repr(name) + ": rev-a") from None
+    return module.BOARD  # type: ignore[no-any-return]
+
+
+def mv_per_count_x1000(vin: dict) -> int:  # type: ignore[type-arg]
+    """The input voltage per count of ``read_u16`` (16 bit full scale = vref), in mV x 1000."""
+    return vin["vref_mv"] * vin["divider"] * 1000 // 65535

@@ -1,0 +1,83 @@
+"""Bring the network up before ``main.py`` runs: wired first, then Wi-Fi from the flashed file.
+
+MicroPython runs ``boot.py`` at the root of the flash, then ``main.py``; ``dxboard flash``
+writes a ``boot.py`` that calls ``run()`` here. ``up(network, wifi, sleep_ms, ticks_ms)`` (the
+port's ``network`` module and clock passed in) tries, in order:
+
+1. a wired interface (``network.LAN``, where the port has one): activated, used if its link is up
+   within ``LAN_WAIT_MS``;
+2. a Wi-Fi station (``network.WLAN(network.STA_IF)``) joining the access point of the flashed
+   file ``wifi.json`` (``{"ssid": ..., "password": ...}``) within ``WIFI_WAIT_MS``;
+3. nothing: ``main.py`` then listens on loopback only (``listen_address``).
+
+It returns the line the board prints: ``network: lan 192.168.1.50``, ``network: wlan 10.0.0.7
+(ssid robot)``, or ``network: none (why)``. The unix port has no ``network`` module: the host's
+sockets stand in for the interface, and ``run()`` says so.
+"""
+
+import json
+
+WIFI_FILE = "wifi.json"
+LAN_WAIT_MS = 3000
+WIFI_WAIT_MS = 15000
+POLL_MS = 100
+
+
+def read_wifi(path: str = WIFI_FILE) -> "dict | None":  # type: ignore[type-arg]
+    """The flashed Wi-Fi credentials, or None (no file, or not ``{"ssid": ...}``)."""
+    try:
+        with open(path) as f:
+            got = json.loads(f.read())
+    except (OSError, ValueError):
+        return None
+    if not isinstance(got, dict) or not isinstance(got.get("ssid"), str):
+        return None
+    return got
+
+
+def _wait(nic: object, ms: int, sleep_ms: object, ticks_ms: object) -> bool:
+    start = ticks_ms()  # type: ignore[operator]
+    while not nic.isconnected():  # type: ignore[attr-defined]
+        if ticks_ms() - start >= ms:  # type: ignore[operator]
+            return False
+        sleep_ms(POLL_MS)  # type: ignore[operator]
+    return True
+
+
+def up(network: object, wifi: "dict | None", sleep_ms: object, ticks_ms: object) -> str:  # type: ignore[type-arg]
+    if network is None:
+        return "network: none (no network module: the host's sockets stand in)"
+    if hasattr(network, "LAN"):
+        try:
+            lan = network.LAN()  # type: ignore[attr-defined]
+            lan.active(True)
+            if _wait(lan, LAN_WAIT_MS, sleep_ms, ticks_ms):
+                return "network: lan " + lan.ifconfig()[0]
+            lan.active(False)
+        except (OSError, ValueError):
+            pass
+    if not hasattr(network, "WLAN"):
+        return "network: none (no link on the wired interface, no Wi-Fi)"
+    if wifi is None:
+        return "network: none (no link on the wired interface, no " + WIFI_FILE + " flashed)"
+    sta = network.WLAN(network.STA_IF)  # type: ignore[attr-defined]
+    sta.active(True)
+    sta.connect(wifi["ssid"], wifi.get("password", ""))
+    if _wait(sta, WIFI_WAIT_MS, sleep_ms, ticks_ms):
+        return "network: wlan " + sta.ifconfig()[0] + " (ssid " + wifi["ssid"] + ")"
+    status = sta.status()
+    sta.active(False)
+    return "network: none (Wi-Fi " + wifi["ssid"] + " not joined, status " + str(status) + ")"
+
+
+def run() -> str:
+    """On the board: the port's ``network`` and clock; prints and returns the line."""
+    import time
+
+    try:
+        import network  # type: ignore[import-not-found]
+    except ImportError:
+        network = None
+    line = up(network, read_wifi(), time.sleep_ms, time.ticks_ms)  # type: ignore[attr-defined]
+    print(line)
+    return line

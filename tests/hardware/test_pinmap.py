@@ -1,0 +1,33 @@
+"""The committed pin maps and wiring pictures in ``hardware/`` are what ``hardware/pinmap.py``
+makes from ``firmware/boards`` now (they cannot drift from what the firmware boots), and the
+command the docs show works."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_committed_files_are_the_generators_output(tmp_path: Path) -> None:
+    done = subprocess.run([sys.executable, "hardware/pinmap.py", str(tmp_path)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    made = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*") if p.is_file())
+    assert [str(p) for p in made] == ["rev-a/pins.csv", "rev-a/pins.md", "rev-a/wiring.svg"]
+    for rel in made:
+        assert (ROOT / "hardware" / rel).read_text() == (tmp_path / rel).read_text(), rel
+
+
+def test_the_pin_map_says_what_the_firmware_uses() -> None:
+    text = (ROOT / "hardware" / "rev-a" / "pins.csv").read_text().splitlines()
+    assert text[0] == "gpio,function,connects_to"
+    rows = [line.split(",") for line in text[1:]]
+    assert [r[0] for r in rows] == sorted((r[0] for r in rows), key=int)
+    assert ["2", "switch enable", "channel 0 high-side switch IN"] in rows
+    assert ["21", "switch status", "channel 9 high-side switch ST"] in rows
+    assert ["26", "ADC", "input voltage through a 1:11 divider"] in rows
+    ET.fromstring((ROOT / "hardware" / "rev-a" / "wiring.svg").read_text())  # well-formed
