@@ -82,6 +82,7 @@ class DaemonOptions:
     board_url: str
     key: bytes | None = None
     web: tuple[str, int] | None = None
+    web_allow_origins: tuple[str, ...] = ()  # other origins the page's data may be read from
     journal: Path | None = None
     dry_run: bool = False
     rate_hz: int = 100
@@ -214,7 +215,8 @@ class Daemon:
         if self.journal is not None:
             self._restore(self.journal, previous[0] if previous else None)
         if opts.web is not None:
-            self.web = WebServer(self.status, self.journal.reader if self.journal else None)
+            self.web = WebServer(self.status, self.journal.reader if self.journal else None,
+                                 allow_origins=opts.web_allow_origins)
             self.web_port = await self.web.start(*opts.web)
         if opts.operator is not None:
             self.operator = OperatorServer(self.repairs, opts.operator)
