@@ -73,7 +73,7 @@ async def test_the_daemon_page_shows_the_robot_and_a_fault(daemon: RunningDaemon
         await page.screenshot(tmp_path / "daemon-page.png")
 
 
-async def test_clients_thathang_up_leave_no_traceback_and_strangers_are_refused(
+async def test_clients_that_hang_up_leave_no_traceback_and_strangers_are_refused(
         daemon: RunningDaemon) -> None:
     import aiohttp
     from yarl import URL
