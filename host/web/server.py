@@ -37,6 +37,7 @@ from host.journal.entries import Entry
 from host.journal.summary import summarize
 from host.web import metrics
 from host.web.guard import AccessPolicy, middlewares
+from host.web.headline import BEHIND_AFTER_S, diagnosis_age, headline
 from host.web.status import Status, StatusSource
 
 log = logging.getLogger(__name__)
@@ -156,8 +157,11 @@ class WebServer:
 
     def _status_json(self, status: Status) -> dict[str, Any]:
         now = self.clock()
+        age = diagnosis_age(status, now)
         return {**status.to_json(), "server_time": now, "stale_after_s": self.stale_after_s,
-                "stale": now - status.updated > self.stale_after_s}
+                "stale": now - status.updated > self.stale_after_s,
+                "diagnosis_age_s": age, "behind": age is not None and age > BEHIND_AFTER_S,
+                "headline": headline(status, now, self.stale_after_s)}
 
     def _status_message(self, status: Status) -> str:
         return json.dumps({"type": "status", "status": self._status_json(status)})
