@@ -266,3 +266,14 @@ def test_a_permanent_hang_is_quarantined_and_the_rest_keeps_running(
     # and it is switched off
     assert "hokuyo" in st["quarantined"], st["quarantined"]
     assert st["observations"].get("on(hokuyo)") is False
+    # a person fixes the lidar and clears what docs/troubleshooting-quarantine.md says: the
+    # device and, when it was quarantined with it, its driver; the robot comes back
+    assert "hokuyo" in d.operator("quarantine", "list")
+    d.inject("clear")
+    for component in ("hokuyo", "hokuyo_node"):
+        if component in d.status()["quarantined"]:
+            assert d.operator("quarantine", "clear", component) == \
+                f"{component}: quarantine cleared"
+    st = d.wait_for(lambda s: healthy(s) and s["observations"].get("ok(/scan)") is True,
+                    HEAL_S, "the robot back after the clears")
+    assert not st["quarantined"]

@@ -62,7 +62,7 @@ def test_a_billion_laughs_model_is_refused_by_model_check_and_diagnose(
         bomb_robot: Path) -> None:
     file = bomb_robot / "system.yaml"
     line = refused(dxboard("model", "check", str(bomb_robot)), file)
-    assert f"{file}:" in line and "alias" in line
+    assert f"{file}:7:" in line and "alias" in line  # as docs/security.md shows it
     line = refused(dxboard("diagnose", str(bomb_robot), "--obs", str(bomb_robot / "o.obs")),
                    file)
     assert "alias" in line

@@ -37,7 +37,8 @@ setInterval(() => {
 @pytest.fixture(scope="module")
 def daemon(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RunningDaemon]:
     tmp = tmp_path_factory.mktemp("page")
-    d = RunningDaemon(tmp, fast_copy(tmp))
+    d = RunningDaemon(tmp, fast_copy(tmp),  # as docs/security.md shows the flag
+                      extra_args=("--web-allow-origin", "http://robot7.local:8080"))
     try:
         yield d
     finally:
@@ -95,4 +96,7 @@ async def test_clients_that_hang_up_leave_no_traceback_and_strangers_are_refused
             assert resp.status == 403
         async with s.ws_connect(web / "ws", origin=str(web.origin())) as ws:
             assert (await ws.receive_json(timeout=60))["type"] == "status"
+        for allowed in ({"Origin": "http://robot7.local:8080"}, {"Host": "robot7.local:8080"}):
+            async with s.get(web / "api/status", headers=allowed) as resp:
+                assert resp.status == 200, allowed
     assert "Traceback" not in daemon.err_path.read_text()

@@ -13,13 +13,18 @@ import asyncio
 import logging
 import socket
 import struct
+import subprocess
+import sys
 from collections.abc import AsyncIterator
+from pathlib import Path
 
 import aiohttp
 import pytest
 
 from host.journal import Journal
 from host.web import MemoryStatusSource, WebServer
+
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def url(server: WebServer, path: str) -> str:
@@ -146,3 +151,12 @@ async def test_clients_that_go_away_are_debug_lines_not_tracebacks(
     assert status == 200
     loud = [r for r in caplog.records if r.exc_info or r.levelno >= logging.WARNING]
     assert not loud, [r.getMessage() for r in loud]
+
+
+def test_a_bad_allowed_origin_is_one_line_and_exit_code_2(tmp_path: Path) -> None:
+    out = subprocess.run([sys.executable, "-m", "host.cli", "run", "models/tedusar",
+                          "--emulate", "--journal", str(tmp_path / "j.sqlite"),
+                          "--web-allow-origin", "robot7.local"], cwd=ROOT, text=True,
+                         capture_output=True, timeout=120)
+    assert out.returncode == 2 and "Traceback" not in out.stderr
+    assert out.stderr.strip().count("\n") == 0 and "--web-allow-origin" in out.stderr
