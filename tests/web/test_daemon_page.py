@@ -65,7 +65,7 @@ async def test_the_daemon_page_shows_the_robot_and_a_fault(daemon: RunningDaemon
 
         await asyncio.to_thread(daemon.inject, "hokuyo", "hang")
         assert await page.wait_for(
-            "['hokuyo', 'hokuyo_node'].some(c => seenChips.has(c))", 30)
+            "['hokuyo', 'hokuyo_node'].some(c => seenChips.has(c))", HEAL_S)
         assert await page.wait_for("seenRepairs.has('power_cycle(hokuyo) succeeded')", 90)
         await asyncio.to_thread(daemon.wait_for, healthy, 90.0, "healthy again")
         assert await page.wait_for("document.querySelector('#diagnoses .muted')"
