@@ -105,27 +105,30 @@ class DiagnosisRecord:
     trigger: str = ""
     elapsed_s: float = 0.0
     probabilities: tuple[float, ...] = ()
+    # components whose observations expired: unknown, not healthy (host.diagnosis.coverage)
+    unknown: tuple[str, ...] = ()
     kind: ClassVar[Kind] = Kind.DIAGNOSIS
 
     @classmethod
     def of(cls, bad_sets: Sequence[Sequence[str] | frozenset[str]], *, complete: bool = True,
            trigger: str = "", elapsed_s: float = 0.0,
-           probabilities: Sequence[float] = ()) -> DiagnosisRecord:
+           probabilities: Sequence[float] = (), unknown: Sequence[str] = ()) -> DiagnosisRecord:
         """Build from any bad sets (frozensets, lists): each is sorted, their order kept."""
         return cls(tuple(tuple(sorted(b)) for b in bad_sets), complete, trigger, elapsed_s,
-                   tuple(probabilities))
+                   tuple(probabilities), tuple(unknown))
 
     def to_json(self) -> JSON:
         return {"diagnoses": [list(b) for b in self.diagnoses], "complete": self.complete,
                 "trigger": self.trigger, "elapsed_s": self.elapsed_s,
-                "probabilities": list(self.probabilities)}
+                "probabilities": list(self.probabilities), "unknown": list(self.unknown)}
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> DiagnosisRecord:
         return cls(tuple(tuple(str(c) for c in b) for b in data["diagnoses"]),
                    bool(data.get("complete", True)), str(data.get("trigger", "")),
                    float(data.get("elapsed_s", 0.0)),
-                   tuple(float(p) for p in data.get("probabilities", ())))
+                   tuple(float(p) for p in data.get("probabilities", ())),
+                   tuple(str(c) for c in data.get("unknown", ())))
 
 
 @dataclass(frozen=True)
@@ -620,7 +623,10 @@ def describe(event: Event) -> str:
             if not event.diagnoses:
                 text = "no diagnosis (observations contradict the model)"
             else:
-                text = " | ".join("{" + ", ".join(b) + "}" if b else "{} (all healthy)"
+                healthy = (f"{{}} (unknown: {', '.join(event.unknown)}, whose observations "
+                           "expired; healthy where observed)" if event.unknown
+                           else "{} (all healthy)")
+                text = " | ".join("{" + ", ".join(b) + "}" if b else healthy
                                   for b in event.diagnoses[:4])
                 if len(event.diagnoses) > 4:
                     text += f" | ... ({len(event.diagnoses)} in all)"

@@ -59,6 +59,8 @@ def run(args: argparse.Namespace) -> int:
     elif op == "quarantine":
         print(f"{args.component} quarantined; safe state: {reply.get('safe_state') or 'as is'}")
     else:
-        print(f"{args.component}: quarantine cleared" if reply.get("changed")
+        also = [c for c in reply.get("cleared", []) if c != args.component]
+        with_ = f", with {', '.join(also)} (quarantined with it)" if also else ""
+        print(f"{args.component}: quarantine cleared{with_}" if reply.get("changed")
               else f"{args.component} was not quarantined")
     return 0

@@ -54,6 +54,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="with --emulate: the fault-injection endpoint (default: free port)")
     parser.add_argument("--web", metavar="H:P", default="127.0.0.1:8080",
                         help="the web page's address (default 127.0.0.1:8080; 'off' for none)")
+    parser.add_argument("--web-allow-origin", metavar="ORIGIN", action="append", default=[],
+                        help="another origin whose pages may read the page's API and "
+                             "WebSocket, e.g. http://robot7.local:8080 (repeatable; the "
+                             "listen address itself, and localhost for a loopback one, always "
+                             "may)")
     parser.add_argument("--journal", metavar="FILE", default="dxboard-journal.sqlite",
                         help="the journal file (default dxboard-journal.sqlite)")
     parser.add_argument("--dry-run", action="store_true", help="diagnose and plan, never act")
@@ -83,6 +88,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from host.web.guard import parse_origin
     from host.web.server import parse_listen
 
     system_dir = Path(args.system_dir)
@@ -94,6 +100,11 @@ def run(args: argparse.Namespace) -> int:
         if value and not LABEL_VALUE.fullmatch(value):
             raise UserError(f"{flag} {value!r}: not a name",
                             f"give {flag} letters, digits, '_', '-' or '.' (e.g. rover-7)")
+    for origin in args.web_allow_origin:
+        try:
+            parse_origin(origin)
+        except ValueError as exc:
+            raise UserError(f"--web-allow-origin {exc}", "give scheme://host[:port]") from None
     if not 1 <= args.rate <= 100:
         raise UserError(f"--rate {args.rate} is out of range", "give 1..100")
     return asyncio.run(_main(args, system_dir, web))
@@ -120,6 +131,7 @@ async def _main(args: argparse.Namespace, system_dir: Path, web: tuple[str, int]
         key = load_key(args.key_file) if (args.key_file or not args.emulate) else None
         journal = Path(args.journal)
         opts = DaemonOptions(system_dir=system_dir, board_url=args.board or "", web=web,
+                             web_allow_origins=tuple(args.web_allow_origin),
                              journal=journal, dry_run=args.dry_run,
                              rate_hz=args.rate, zenoh_listen=args.zenoh,
                              middleware=args.middleware, robot=args.robot, site=args.site,

@@ -84,6 +84,7 @@ class DaemonOptions:
     board_url: str
     key: bytes | None = None
     web: tuple[str, int] | None = None
+    web_allow_origins: tuple[str, ...] = ()  # other origins the page's data may be read from
     journal: Path | None = None
     dry_run: bool = False
     rate_hz: int = 100
@@ -225,7 +226,8 @@ class Daemon:
         if opts.web is not None:
             self.metrics.journal = self.journal
             self.web = WebServer(self.status, self.journal.reader if self.journal else None,
-                                 metrics=self.metrics.render)
+                                 metrics=self.metrics.render,
+                                 allow_origins=opts.web_allow_origins)
             self.web_port = await self.web.start(*opts.web)
         if opts.operator is not None:
             self.operator = OperatorServer(self.repairs, opts.operator)

@@ -39,6 +39,7 @@ from host.errors import UserError
 if TYPE_CHECKING:
     from host.diagnosis.encoding import Encoding
 
+MAX_BYTES = 8 * 1024 * 1024  # a file a person gives (yamlpos.MAX_CHARS for YAML too)
 _TUG = re.compile(r"^rules\s*:", re.MULTILINE)
 _TIME = re.compile(r"^(?P<body>.*?)\s*@\s*(?P<time>[-+0-9.eE]+)\s*$")
 _UNKNOWN = re.compile(r"^(?:unknown\s+|\?\s*)(?P<atom>.+)$")
@@ -87,7 +88,7 @@ def _read_model_file(p: Path) -> Theory:
     try:  # a tug model is all strings: read it without implicit typing (twice as fast)
         data, lines = yamlpos.load(text, typed=not _TUG.search(text))
     except yamlpos.YamlSyntaxError as exc:
-        raise UserError(f"{p}:{exc.line}: {exc}", "fix the YAML syntax") from exc
+        raise UserError(f"{p}:{exc.line}: {exc}", exc.fix) from exc
     if looks_like_tug(data):
         return parse_tug(data, lines, p)
     if isinstance(data, dict) and "components" in data:
@@ -102,6 +103,10 @@ def _read_model_file(p: Path) -> Theory:
 def read_text(file: Path, what: str) -> str:
     """The file's text; a missing, unreadable or binary file is a ``UserError``."""
     try:
+        size = file.stat().st_size
+        if size > MAX_BYTES:
+            raise UserError(f"{file}: {size:,} bytes, more than the {MAX_BYTES:,} a file "
+                            "here may have", f"give {what}, smaller")
         data = file.read_bytes()
     except OSError as exc:
         raise UserError(f"{file}: cannot read: {exc.strerror}", f"give {what}") from exc

@@ -174,15 +174,19 @@ def read_section(
     ``processes:``); an unreadable file or bad YAML raises ``error`` naming file and line."""
     file = system_file(path)
     try:
-        text = file.read_text(encoding="utf-8")
+        text = yamlpos.read_text(file)
+    except yamlpos.YamlTooBig as exc:
+        raise exc.to_user_error(file) from None
     except (OSError, UnicodeDecodeError) as exc:
         why = exc.strerror if isinstance(exc, OSError) else "not a UTF-8 text file"
         raise error([Problem(file, 0, f"cannot read: {why}",
                              "give a robot directory holding system.yaml")]) from exc
     try:
         data, lines = yamlpos.load(text)
+    except yamlpos.YamlTooBig as exc:
+        raise exc.to_user_error(file) from None
     except yamlpos.YamlSyntaxError as exc:
-        raise error([Problem(file, exc.line, str(exc), "fix the YAML syntax")]) from exc
+        raise error([Problem(file, exc.line, str(exc), exc.fix)]) from exc
     return file, data.get(section) if isinstance(data, dict) else None, lines
 
 
@@ -201,15 +205,19 @@ def check_system(path: str | Path) -> list[Problem]:
 
 def _load(file: Path) -> tuple[SystemModel | None, list[Problem]]:
     try:
-        text = file.read_text(encoding="utf-8")
+        text = yamlpos.read_text(file)
+    except yamlpos.YamlTooBig as exc:
+        raise exc.to_user_error(file) from None
     except (OSError, UnicodeDecodeError) as exc:
         why = exc.strerror if isinstance(exc, OSError) else "not a UTF-8 text file"
         return None, [Problem(file, 0, f"cannot read the model: {why}",
                               "give a robot directory holding system.yaml")]
     try:
         data, lines = yamlpos.load(text)
+    except yamlpos.YamlTooBig as exc:
+        raise exc.to_user_error(file) from None
     except yamlpos.YamlSyntaxError as exc:
-        return None, [Problem(file, exc.line, str(exc), "fix the YAML syntax")]
+        return None, [Problem(file, exc.line, str(exc), exc.fix)]
     return _Builder(file, lines).build(data)
 
 

@@ -24,6 +24,7 @@ from collections.abc import Callable, Iterable, Set
 from concurrent.futures import ThreadPoolExecutor
 from typing import TYPE_CHECKING
 
+from host.diagnosis.coverage import Coverage
 from host.diagnosis.diagnoser import Diagnoser
 from host.diagnosis.observations import Observation as Seen
 from host.diagnosis.observations import ObservationSet
@@ -71,6 +72,8 @@ class DiagnosisRunner:
         self.bounds = {"max_card": max_card, "max_count": max_count,
                        "time_budget_s": time_budget_s}
         self.result: DiagnosisResult | None = None
+        self.coverage = Coverage(diagnoser.theory)
+        self.unknown: tuple[str, ...] = ()  # components whose observations expired
         self._poked = asyncio.Event()
         self._lock = asyncio.Lock()
         self._worker = ThreadPoolExecutor(1, thread_name_prefix="diagnosis")
@@ -97,6 +100,7 @@ class DiagnosisRunner:
             for gone in self.observations.expire(self.clock()):
                 self.emit(Observation(gone.literal.atom, None, "expired"))
             literals = self.observations.literals()  # the snapshot, on the loop's thread
+            unknown = self.coverage.observe({lit.atom for lit in literals})
             t0 = time.perf_counter()
             result = await asyncio.get_running_loop().run_in_executor(
                 self._worker, functools.partial(self.diagnoser.diagnose, literals=literals,
@@ -105,12 +109,15 @@ class DiagnosisRunner:
             elapsed = time.perf_counter() - t0
             self.emit(DiagnosisRun(elapsed, trigger))
             old, self.result = self.result, result
-            if old is None or old.bad_sets() != result.bad_sets():
+            old_unknown, self.unknown = self.unknown, unknown
+            if old is None or old.bad_sets() != result.bad_sets() or old_unknown != unknown:
                 self.emit(DiagnosisRecord.of(
                     result.bad_sets(), complete=result.complete, trigger=trigger,
-                    elapsed_s=elapsed, probabilities=[d.probability for d in result.diagnoses]))
-                if self.on_changed is not None:
-                    self.on_changed(result)
+                    elapsed_s=elapsed, probabilities=[d.probability for d in result.diagnoses],
+                    unknown=unknown))
+            changed = old is None or old.bad_sets() != result.bad_sets()
+            if changed and self.on_changed is not None:
+                self.on_changed(result)
             return result
 
     def close(self) -> None:

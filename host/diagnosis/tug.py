@@ -44,14 +44,16 @@ def read_tug(path: str | Path) -> Theory:
     """Load a tug model file. Raises ``UserError`` naming file and line."""
     file = Path(path)
     try:
-        text = file.read_text(encoding="utf-8")
+        text = yamlpos.read_text(file)
+    except yamlpos.YamlTooBig as exc:
+        raise exc.to_user_error(file) from None
     except (OSError, UnicodeDecodeError) as exc:
         why = exc.strerror if isinstance(exc, OSError) else "not a UTF-8 text file"
         raise UserError(f"{file}: cannot read: {why}", "give a tug model file") from exc
     try:
         data, lines = yamlpos.load(text, typed=False)  # all strings
     except yamlpos.YamlSyntaxError as exc:
-        raise UserError(f"{file}:{exc.line}: {exc}", "fix the YAML syntax") from exc
+        raise UserError(f"{file}:{exc.line}: {exc}", exc.fix) from exc
     return parse_tug(data, lines, file)
 
 

@@ -9,13 +9,24 @@ to its nearest recorded ancestor. The line table is built only when a line is fi
 valid file read by a loader that asks for no line is parsed once. ``typed=False`` (every
 scalar a string, the tug format's reading) builds the value straight from libyaml's events.
 Syntax errors become ``YamlSyntaxError`` carrying the line.
+
+Every file a person gives is bounded before it is built (``check_bounds``): at most
+``MAX_CHARS`` characters, and at most ``MAX_NODES`` values once aliases are expanded, nested at
+most ``MAX_DEPTH`` deep. A "billion laughs" file (nine aliases of nine aliases of ...) is
+refused from its events in milliseconds, with ``YamlTooBig`` (a ``YamlSyntaxError``, so every
+caller names the file and the line) instead of growing to gigabytes in whatever walks it.
+Ordinary aliases (a shared settings block) pass. ``read_text`` reads a file with its size
+checked first, for the loaders that read files themselves.
 """
 
 from __future__ import annotations
 
+import pathlib
 from typing import Any
 
 import yaml
+
+from host.errors import UserError
 
 Path = tuple[object, ...]
 
@@ -24,10 +35,77 @@ _Loader: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 _PlainLoader: Any = getattr(yaml, "CBaseLoader", yaml.BaseLoader)
 
 
+MAX_CHARS = 8 * 1024 * 1024  # files.MAX_BYTES: far above the largest real model
+MAX_NODES = 1_000_000  # values after alias expansion
+MAX_DEPTH = 200  # nesting of sequences and mappings
+
+
 class YamlSyntaxError(ValueError):
-    def __init__(self, message: str, line: int) -> None:
+    def __init__(self, message: str, line: int, fix: str = "fix the YAML syntax") -> None:
         super().__init__(message)
         self.line = line
+        self.fix = fix  # what the person should do
+
+
+class YamlTooBig(YamlSyntaxError):
+    """The document is larger than a person's file may be (see the module): a refusal."""
+
+    def to_user_error(self, file: object) -> UserError:
+        return UserError(f"{file}:{self.line}: {self}", self.fix)
+
+
+def read_text(file: pathlib.Path, max_chars: int = MAX_CHARS) -> str:
+    """``file``'s UTF-8 text, refused with ``YamlTooBig`` before reading when it is larger
+    than ``max_chars`` bytes (OSError and UnicodeDecodeError pass to the caller)."""
+    size = file.stat().st_size
+    if size > max_chars:
+        raise YamlTooBig(f"the file has {size:,} bytes, more than the {max_chars:,} a "
+                         f"file here may have", 1, "give a smaller file")
+    return file.read_text(encoding="utf-8")
+
+
+def check_bounds(text: str) -> None:
+    """Raise ``YamlTooBig`` when ``text`` is too long, expands through aliases to more than
+    ``MAX_NODES`` values, or nests deeper than ``MAX_DEPTH``. A pass over libyaml's events,
+    made only when the text has aliases or much flow nesting (else the bounds hold)."""
+    if len(text) > MAX_CHARS:
+        raise YamlTooBig(f"the text has {len(text):,} characters, more than the "
+                         f"{MAX_CHARS:,} a file here may have", 1, "give a smaller file")
+    if "*" not in text and text.count("[") + text.count("{") <= MAX_DEPTH:
+        return
+    sizes: dict[str, int] = {}  # anchor -> values it stands for
+    open_: list[tuple[str | None, int]] = []  # (anchor, values so far) of each open collection
+    total = 0
+    events: Any = yaml.parse(text, Loader=_Loader)  # the stubs' Event lacks anchor
+    for event in events:
+        kind = type(event)
+        if kind is yaml.SequenceStartEvent or kind is yaml.MappingStartEvent:
+            open_.append((event.anchor, 1))
+            if len(open_) > MAX_DEPTH:
+                raise YamlTooBig(f"values nested more than {MAX_DEPTH} deep",
+                                 event.start_mark.line + 1, "flatten the file")
+            continue
+        if kind is yaml.SequenceEndEvent or kind is yaml.MappingEndEvent:
+            anchor, n = open_.pop()
+        elif kind is yaml.ScalarEvent:
+            anchor, n = event.anchor, 1
+        elif kind is yaml.AliasEvent:
+            anchor, n = None, sizes.get(event.anchor, 1)
+        else:
+            continue
+        if anchor is not None:
+            sizes[anchor] = n
+        if open_:
+            open_[-1] = (open_[-1][0], open_[-1][1] + n)
+            n = open_[-1][1]
+        else:
+            total += n
+            n = total
+        if n > MAX_NODES:
+            raise YamlTooBig(
+                f"aliases expand the document to more than {MAX_NODES:,} values (a "
+                "'billion laughs' file?)", event.start_mark.line + 1,
+                "write the values out, or alias fewer times")
 
 
 class Lines:
@@ -70,8 +148,9 @@ def _syntax_error(exc: yaml.YAMLError) -> YamlSyntaxError:
 def load(text: str, typed: bool = True) -> tuple[Any, Lines]:
     """Parse ``text``; return ``(value, lines)``. ``typed=False`` reads every scalar as a
     string (no implicit ints, floats or booleans: half the time on a large file of
-    strings). Raises ``YamlSyntaxError``."""
+    strings). Raises ``YamlSyntaxError`` (``YamlTooBig`` beyond the bounds)."""
     try:
+        check_bounds(text)
         # safe loaders only (CSafeLoader/SafeLoader, CBaseLoader/BaseLoader)
         value = yaml.load(text, Loader=_Loader) if typed else _plain(text)
     except yaml.YAMLError as exc:

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import yaml
 
+from host.diagnosis import yamlpos
 from host.errors import UserError
 
 # the lidar keeps a noticeable boot (it orders the plan's timeline), the rest is near instant
@@ -28,7 +29,10 @@ def fast_model(system_dir: Path, dest: Path) -> Path:
     if not emu_file.is_file():
         raise UserError(f"{system_dir}: no emulator.yaml, so no boot times to shorten",
                         "leave out --fast, or use a robot with an emulator.yaml")
-    emu = yaml.safe_load(emu_file.read_text())
+    try:  # the one bounded loader of files a person gives
+        emu, _ = yamlpos.load(yamlpos.read_text(emu_file))
+    except yamlpos.YamlSyntaxError as exc:
+        raise UserError(f"{emu_file}:{exc.line}: {exc}", exc.fix) from None
     for ch in emu.get("channels", []):
         if ch.get("name") in FAST_BOOT_MS:
             ch["boot_ms"] = FAST_BOOT_MS[ch["name"]]

@@ -16,8 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
+from host.diagnosis import yamlpos
 from host.diagnosis.model import SystemModel
 from host.errors import UserError
 from host.executive.trees import Recipe, RecipeError, parse_recipe
@@ -119,8 +118,10 @@ def load_mission(system_dir: Path, model: SystemModel | None = None) -> MissionF
         raise UserError(f"{path}: no mission here", "give a robot directory with a mission, "
                         "e.g. models/tedusar")
     try:
-        raw = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as exc:
+        raw, _ = yamlpos.load(yamlpos.read_text(path))
+    except yamlpos.YamlSyntaxError as exc:
+        raise UserError(f"{path}:{exc.line}: {exc}", exc.fix) from None
+    except (OSError, UnicodeDecodeError) as exc:
         raise UserError(f"{path}: cannot read it: {exc}", "fix the file") from None
     if not isinstance(raw, dict):
         raise UserError(f"{path}: expected a mapping", "see models/tedusar/mission/mission.yaml")

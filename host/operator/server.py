@@ -9,7 +9,7 @@ per request, in order:
     {"op": "list"}                                   -> {"ok": true, "quarantined": {C: why},
                                                          "held": {C: why}}
     {"op": "quarantine", "component": C, "reason": R} -> {"ok": true, "safe_state": "..."}
-    {"op": "clear", "component": C}                   -> {"ok": true}
+    {"op": "clear", "component": C}                   -> {"ok": true, "cleared": [C, ...]}
     {"op": "hold", "component": C, "reason": R}       -> {"ok": true}
     {"op": "release", "component": C}                 -> {"ok": true}
 
@@ -40,7 +40,7 @@ class Operator(Protocol):
 
     async def quarantine(self, component: str, reason: str, by: str) -> str: ...
 
-    async def clear(self, component: str, by: str) -> bool: ...
+    async def clear(self, component: str, by: str) -> list[str]: ...
 
     def hold(self, component: str, reason: str, by: str) -> bool: ...
 
@@ -70,7 +70,8 @@ async def handle(op: Operator, line: bytes) -> dict[str, Any]:
     if kind == "quarantine":
         return {"ok": True, "safe_state": await op.quarantine(comp, reason or "by hand", by)}
     if kind == "clear":
-        return {"ok": True, "changed": await op.clear(comp, by)}
+        cleared = await op.clear(comp, by)
+        return {"ok": True, "changed": bool(cleared), "cleared": cleared}
     if kind == "hold":
         return {"ok": True, "changed": op.hold(comp, reason or "maintenance", by)}
     return {"ok": True, "changed": op.release(comp, by)}

@@ -271,15 +271,22 @@ class RepairService:
         entry = await self.executor.quarantine_component(component, reason, by)
         return entry.safe_state
 
-    async def clear(self, component: str, by: str = "person") -> bool:
-        """Give ``component`` back to automatic repair, with fresh attempts; a device the board
-        latched for a short may be cleared and switched on once."""
+    async def clear(self, component: str, by: str = "person") -> list[str]:
+        """Give ``component`` back to automatic repair, with fresh attempts, and with it the
+        quarantined drivers that run on it (a device's permanent fault quarantines its driver
+        too: one clear must bring the robot back); what was cleared, ``component`` first. A
+        device the board latched for a short may be cleared and switched on once."""
         if not self.executor.clear_quarantine(component):
-            return False
+            return []
+        cleared = [component]
+        drivers = [c.name for c in self.executor.model.components.values()
+                   if component in c.hardware]
+        cleared += [d for d in drivers if self.executor.clear_quarantine(d)]
         self.executor.actuators.allow_unlatch(component)
-        self._emit(QuarantineChange(component, False, by=by))
+        for c in cleared:
+            self._emit(QuarantineChange(c, False, by=by))
         self._again()
-        return True
+        return cleared
 
     def hold(self, component: str, reason: str, by: str = "person") -> bool:
         """Leave ``component`` alone (maintenance) until it is released."""

@@ -174,7 +174,9 @@ def replay(robot: RobotFiles, bag: Bag, journal: Journal | None) -> RunStats:
         observers.advance(bag.end)
         now[0] = bag.end
         observers.stop()
-        stream.emit(Note("dxboard replay ended"))
+        # the end of the data is no evidence: what expired with it is unknown (the last
+        # diagnosis says so), and the replay's last word is that the bag ended
+        stream.emit(Note(f"bag ended: {count} messages, {bag.end - bag.start:.1f} s"))
     finally:
         diagnosing.close()
     return RunStats(count, bag.end - bag.start, time.perf_counter() - t0,

@@ -34,6 +34,7 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from host.diagnosis import Diagnoser
+from host.diagnosis.coverage import Coverage
 from host.diagnosis.logic import Theory
 from host.diagnosis.observations import ObservationSet
 from host.diagnosis.runner import fold_updates
@@ -185,7 +186,8 @@ class Diagnosing:
         self.diagnoser = Diagnoser(theory, observations=self.observations)
         self.bounds = {"max_card": max_card, "max_count": max_count}
         self.records: list[DiagnosisRecord] = []
-        self._last: list[frozenset[str]] | None = None
+        self.coverage = Coverage(theory)  # what expired is unknown, not healthy
+        self._last: tuple[list[frozenset[str]], tuple[str, ...]] | None = None
 
     def apply(self, updates: list[Update], now: float) -> None:
         if fold_updates(updates, self.observations, self.known, self.emit):
@@ -195,17 +197,19 @@ class Diagnosing:
         for gone in self.observations.expire(now):
             self.emit(Observation(gone.literal.atom, None, "expired"))
         t0 = time.perf_counter()
-        result = self.diagnoser.diagnose(literals=self.observations.literals(),
+        literals = self.observations.literals()
+        unknown = self.coverage.observe({lit.atom for lit in literals})
+        result = self.diagnoser.diagnose(literals=literals,
                                          **self.bounds)  # type: ignore[arg-type]
         ranked = sorted(result.diagnoses, key=lambda d: (
             len(d.bad), -round(d.probability, 9), sorted(d.bad)))
         bad = [d.bad for d in ranked]
-        if bad != self._last:
-            self._last = bad
+        if (bad, unknown) != self._last:
+            self._last = (bad, unknown)
             record = DiagnosisRecord.of(
                 bad, complete=result.complete, trigger=trigger,
                 elapsed_s=time.perf_counter() - t0,
-                probabilities=[d.probability for d in ranked])
+                probabilities=[d.probability for d in ranked], unknown=unknown)
             self.records.append(record)
             self.emit(record)
 

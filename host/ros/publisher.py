@@ -44,7 +44,7 @@ from host.events import ChannelSample, DiagnosisRecord, Stamped
 from host.observers.hardware import BoardInput
 from host.ros import boardstream
 from host.ros.node import RosNode
-from host.ros.status import ERROR, OK, Status, StatusFold
+from host.ros.status import ERROR, OK, STALE, Status, StatusFold
 
 log = logging.getLogger(__name__)
 
@@ -126,9 +126,13 @@ class RosPublisher:
                                        value=f"{record.probabilities[i - 1]:.6g}"))
             values += [KeyValue(key="complete", value=str(record.complete).lower()),
                        KeyValue(key="trigger", value=record.trigger)]
+            # nothing found broken is "all healthy" only when nothing went unobserved
+            level, text = (ERROR, ", ".join(bad)) if bad else (
+                (STALE, "unknown: " + ", ".join(record.unknown)) if record.unknown
+                else (OK, "all healthy"))
             msg.status.append(DiagnosticStatus(
-                level=bytes([ERROR if bad else OK]), name=f"dxboard diagnosis {i}",
-                message=", ".join(bad) or "all healthy", hardware_id="", values=values))
+                level=bytes([level]), name=f"dxboard diagnosis {i}",
+                message=text, hardware_id="", values=values))
         return msg
 
     def close(self) -> None:

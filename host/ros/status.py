@@ -123,6 +123,8 @@ class StatusFold:
             level, message = ERROR, "abnormal in the best diagnosis {" + ", ".join(diags[0]) + "}"
         elif inside:
             level, message = WARN, f"abnormal in {inside} of {len(diags)} minimal diagnoses"
+        elif name in self.diagnosis.unknown:
+            level, message = STALE, "unknown: its observations expired"
         else:
             level, message = OK, "normal in every minimal diagnosis"
         if comp.quarantined:

@@ -75,8 +75,10 @@ class StatusFold:
                 DiagnosisStatus(bad, p)
                 for bad, p in zip(e.diagnoses, self._probabilities(e), strict=True) if bad)
             changes["diagnosis_complete"] = e.complete
+            changes["unknown"] = e.unknown
         elif isinstance(e, DiagnosisRun):
             changes["diagnosis_runs"] = status.diagnosis_runs + 1
+            changes["diagnosed_at"] = stamped.wall
             changes["diagnosis_latency_sum_s"] = status.diagnosis_latency_sum_s + e.elapsed_s
             changes["diagnosis_last_latency_s"] = e.elapsed_s
         elif isinstance(e, ActionRecord):

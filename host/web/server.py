@@ -35,6 +35,8 @@ from host.errors import UserError
 from host.events import Kind
 from host.journal.entries import Entry
 from host.journal.summary import summarize
+from host.web.guard import AccessPolicy, middlewares
+from host.web.headline import BEHIND_AFTER_S, diagnosis_age, headline
 from host.web.status import Status, StatusSource
 
 log = logging.getLogger(__name__)
@@ -42,6 +44,11 @@ log = logging.getLogger(__name__)
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 8080
 MAX_LIMIT = 1000
+MAX_ID = 2**63 - 1  # SQLite's largest integer: a larger ``since`` is a bad query, not a 500
+QUERIES = {  # the query parameters each route takes (guard.middlewares refuses the others)
+    "/api/status": frozenset(), "/api/journal": frozenset({"since", "limit", "kind"}),
+    "/metrics": frozenset(), "/ws": frozenset(),
+}
 
 
 class JournalView(Protocol):
@@ -87,7 +94,8 @@ class WebServer:
     def __init__(self, source: StatusSource, journal: JournalView | None = None, *,
                  clock: Callable[[], float] = time.time, push_interval_s: float = 0.25,
                  heartbeat_s: float = 1.0, stale_after_s: float = 5.0,
-                 journal_tail: int = 50, metrics: Callable[[], bytes] | None = None) -> None:
+                 journal_tail: int = 50, metrics: Callable[[], bytes] | None = None,
+                 allow_origins: Iterable[str] = ()) -> None:
         self.source = source
         self.metrics = metrics  # the Prometheus exposition of one scrape (host.fleet.metrics)
         self.journal = journal
@@ -101,7 +109,9 @@ class WebServer:
         self._broadcaster: asyncio.Task[None] | None = None
         self._runner: web.AppRunner | None = None
         self.port = 0
-        self.app = web.Application()
+        self.allow_origins = tuple(allow_origins)
+        self.policy = AccessPolicy(DEFAULT_HOST, self.allow_origins)  # start() sets the host
+        self.app = web.Application(middlewares=middlewares(lambda: self.policy, QUERIES))
         self.app.router.add_get("/", self._index)
         self.app.router.add_get("/api/status", self._status)
         self.app.router.add_get("/api/journal", self._journal)
@@ -114,6 +124,7 @@ class WebServer:
 
     async def start(self, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT) -> int:
         """Listen on ``host:port`` (port 0: any free one); returns the port."""
+        self.policy = AccessPolicy(host, self.allow_origins)
         self._runner = web.AppRunner(self.app, access_log=None)
         await self._runner.setup()
         site = web.TCPSite(self._runner, host, port)
@@ -147,8 +158,11 @@ class WebServer:
 
     def _status_json(self, status: Status) -> dict[str, Any]:
         now = self.clock()
+        age = diagnosis_age(status, now)
         return {**status.to_json(), "server_time": now, "stale_after_s": self.stale_after_s,
-                "stale": now - status.updated > self.stale_after_s}
+                "stale": now - status.updated > self.stale_after_s,
+                "diagnosis_age_s": age, "behind": age is not None and age > BEHIND_AFTER_S,
+                "headline": headline(status, now, self.stale_after_s)}
 
     def _status_message(self, status: Status) -> str:
         return json.dumps({"type": "status", "status": self._status_json(status)})
@@ -191,7 +205,7 @@ class WebServer:
                     for text in messages:
                         await asyncio.wait_for(ws.send_str(text), self.heartbeat_s * 5)
                 except (ConnectionError, TimeoutError, RuntimeError) as exc:
-                    log.info("web: dropping a client: %r", exc)
+                    log.debug("web: dropping a client: %r", exc)
                     self._clients.discard(ws)
                     await ws.close()
             await asyncio.sleep(self.push_interval_s)
@@ -213,8 +227,8 @@ class WebServer:
         try:
             since = int(q["since"]) if "since" in q else None
             limit = int(q.get("limit", "100"))
-            kinds = [Kind(k).value for k in q["kind"].split(",")] if q.get("kind") else None
-            if (since is not None and since < 0) or not 0 < limit <= MAX_LIMIT:
+            kinds = [Kind(k).value for k in q["kind"].split(",")] if "kind" in q else None
+            if (since is not None and not 0 <= since <= MAX_ID) or not 0 < limit <= MAX_LIMIT:
                 raise ValueError("out of range")
         except ValueError as exc:
             return web.json_response(

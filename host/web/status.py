@@ -94,6 +94,8 @@ class Status:
     observations: Mapping[str, bool | None] = field(default_factory=dict)
     diagnoses: tuple[DiagnosisStatus, ...] = ()
     diagnosis_complete: bool = True
+    unknown: tuple[str, ...] = ()  # components whose observations expired (not healthy)
+    diagnosed_at: float = 0.0  # wall time of the daemon's last diagnosis (0: none yet)
     repairs: tuple[RepairStatus, ...] = ()
     board_link_up: bool = False
     board_key: str = ""  # what the board said of the daemon's key (``LinkChange.key``)
@@ -128,6 +130,8 @@ class Status:
             "healthy": dict(sorted(self.healthy.items())),
             "diagnoses": [d.to_json() for d in self.diagnoses],
             "diagnosis_complete": self.diagnosis_complete,
+            "unknown": list(self.unknown),
+            "diagnosed_at": self.diagnosed_at,
             "repairs": [r.to_json() for r in self.repairs],
             "quarantined": dict(sorted(self.quarantined.items())),
             "held": dict(sorted(self.held.items())),

@@ -266,3 +266,16 @@ def test_a_permanent_hang_is_quarantined_and_the_rest_keeps_running(
     # and it is switched off
     assert "hokuyo" in st["quarantined"], st["quarantined"]
     assert st["observations"].get("on(hokuyo)") is False
+    # issue 25 item 9: a person fixes the lidar and clears the device, one command as
+    # docs/troubleshooting-quarantine.md says; what was quarantined with it (its driver) is
+    # cleared too, and said; the robot comes back
+    assert "hokuyo" in d.operator("quarantine", "list")
+    with_it = sorted(set(st["quarantined"]) - {"hokuyo"})
+    d.inject("clear")
+    said = d.operator("quarantine", "clear", "hokuyo")
+    assert said.startswith("hokuyo: quarantine cleared"), said
+    for driver in with_it:
+        assert driver in said, said
+    st = d.wait_for(lambda s: healthy(s) and s["observations"].get("ok(/scan)") is True,
+                    HEAL_S, "the robot back after one clear")
+    assert not st["quarantined"]

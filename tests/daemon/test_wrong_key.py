@@ -34,8 +34,13 @@ def board() -> Iterator[Emulate]:
 
 
 def _status(url: str) -> dict[str, Any]:
-    with urllib.request.urlopen(url + "api/status", timeout=5) as r:
-        data: dict[str, Any] = json.load(r)
+    """The daemon's status, or {} when it did not answer this time (asked again by the
+    caller's wait: a busy daemon answers late)."""
+    try:
+        with urllib.request.urlopen(url + "api/status", timeout=30) as r:
+            data: dict[str, Any] = json.load(r)
+    except (OSError, ValueError):
+        return {}
     return data
 
 
@@ -56,7 +61,7 @@ def daemon(board: Emulate, tmp_path: Path, key_hex: str) -> Iterator[tuple[dict[
         web = wait_until(lambda: next((x.split(": ", 1)[1].strip() for x in lines
                                        if x.startswith("web: ")), None),
                          60, "the web URL", show=lambda: lines[-20:])
-        yield wait_until(lambda: (s := _status(web))["board_link_up"] and s, 60,
+        yield wait_until(lambda: (s := _status(web)).get("board_link_up") and s, 60,
                          "the board link up"), lines
     finally:
         proc.terminate()

@@ -84,7 +84,7 @@ def test_unreachable_endpoint_is_a_one_line_error() -> None:
 
 def test_protocol_survives_garbage_and_answers_status(bg: Background) -> None:
     host, port = bg.address
-    with socket.create_connection((host, port), timeout=5) as s:
+    with socket.create_connection((host, port), timeout=30) as s:
         f = s.makefile("rwb")
         for line in (b"not json\n", b"[1]\n", b'{"op": "dance"}\n'):
             f.write(line)

@@ -82,10 +82,17 @@ def robot_dir(tmp: Path, processes: str, domain: str | None = None) -> Path:
     return d
 
 
+# how long a step's effect may take to show: generous, since a step that works ends the moment
+# its effect is seen and a busy machine starts a process slowly (a deadline only bounds how long
+# a broken step takes to fail); tests that expect a step to fail pass a short one
+VERIFY_S = 30.0
+EXPECTED_FAILURE_VERIFY_S = 1.5
+
+
 class Rig:
     def __init__(self, robot: Path, devices: Sequence[str], nodes: Sequence[str],
                  topics: Sequence[str] = (), endpoint: str | None = None,
-                 max_attempts: int = 3, dry_run: bool = False, verify_s: float = 1.5,
+                 max_attempts: int = 3, dry_run: bool = False, verify_s: float = VERIFY_S,
                  refresh: float = REFRESH) -> None:
         """``refresh``: how often observers repeat an unchanged literal (validity 3.5x)."""
         self.robot = robot

@@ -21,7 +21,13 @@ from host.repair.executor import Outcome, StepReport
 from host.repair.limits import Quarantined
 from host.repair.loop import LoopOutcome, RepairLoop
 from host.repair.plan import Plan, Step
-from tests.executor.conftest import ODOM_NODE, TEDUSAR, Rig, robot_dir
+from tests.executor.conftest import (
+    EXPECTED_FAILURE_VERIFY_S,
+    ODOM_NODE,
+    TEDUSAR,
+    Rig,
+    robot_dir,
+)
 from tests.wait import wait_until_async
 
 JAGUAR = 7
@@ -90,7 +96,8 @@ jaguar_node:
   command: [python, -c, "import sys; print('no device'); sys.exit(3)"]
   settle_s: 2.0
 """)
-    async with Rig(robot, ["jaguar"], ["jaguar_node"]) as rig:
+    async with Rig(robot, ["jaguar"], ["jaguar_node"],
+                   verify_s=EXPECTED_FAILURE_VERIFY_S) as rig:
         await rig.client.switch(JAGUAR, True)
         await rig.until({"on(jaguar)": True, "running(jaguar_node)": False})
         loop = RepairLoop(rig.planner, rig.executor, rig.diagnose)
@@ -119,7 +126,8 @@ jaguar_node:
 async def test_device_with_a_permanent_fault_is_quarantined_and_left_off(
         tmp_path: Path) -> None:
     robot = robot_dir(tmp_path, "{}\n")
-    async with Rig(robot, ["hokuyo"], [], max_attempts=2) as rig:
+    async with Rig(robot, ["hokuyo"], [], max_attempts=2,
+                   verify_s=EXPECTED_FAILURE_VERIFY_S) as rig:
         rig.board.emu.inject("hokuyo", "open_load", {})  # draws nothing: never in band
         await rig.until({"on(hokuyo)": False})
         plan = rig.planner.plan({"hokuyo"}, [parse_literal("~running(hokuyo_node)")])
@@ -271,7 +279,7 @@ hokuyo_node: {{command: [python, {tmp_path / 'scan.py'}], settle_s: 0.5, {env}}}
 hector_mapping: {{command: [python, {tmp_path / 'map.py'}], settle_s: 0.5, {env}}}
 """)
     async with Rig(robot, ["hokuyo"], ["hokuyo_node", "hector_mapping"], ["/scan", "/map"],
-                   endpoint, verify_s=8.0) as rig:
+                   endpoint, verify_s=8.0) as rig:  # short: the test is about this deadline
         await rig.client.switch(3, True)  # the lidar is on; its driver and the mapper are not
         await rig.until({"on(hokuyo)": True, "running(hokuyo_node)": False,
                          "running(hector_mapping)": False})

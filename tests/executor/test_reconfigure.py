@@ -18,7 +18,7 @@ from pathlib import Path
 from host.events import ActionState
 from host.repair.executor import ExecutionResult, Outcome, StepReport
 from host.repair.plan import Plan, Step
-from tests.executor.conftest import TEDUSAR, Rig, robot_dir
+from tests.executor.conftest import EXPECTED_FAILURE_VERIFY_S, TEDUSAR, Rig, robot_dir
 
 HOKUYO = 3
 BOOT_S = 3.0  # the lidar's settle time here: the power cycle is verified this long after
@@ -141,7 +141,7 @@ async def test_a_reconfigure_ends_on_its_output_not_on_a_refresh_of_its_running_
 async def test_a_reconfigure_fails_when_the_power_cycle_is_not_verified(
         tmp_path: Path, endpoint: str) -> None:
     flag = tmp_path / "connected"
-    async with _rig(tmp_path, endpoint) as rig:
+    async with _rig(tmp_path, endpoint, verify_s=EXPECTED_FAILURE_VERIFY_S) as rig:
         reconf = await _blind_driver(rig, flag)
         rig.board.emu.inject("hokuyo", "open_load", {})  # draws nothing: never in band
         res = await _execute(rig)

@@ -23,11 +23,12 @@ class Emulate:
         self.proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                      text=True, env={**ENV, **(env or {})}, cwd=ROOT)
         self.urls: dict[str, str] = {}
-        deadline = time.monotonic() + 30
+        deadline = time.monotonic() + 120  # generous: a busy machine starts it slowly
         assert self.proc.stdout is not None
         while "control" not in self.urls or len(self.urls) < 2 + self._extra(options):
             line = self.proc.stdout.readline()
             if not line or time.monotonic() > deadline:
+                self.kill()  # else reading its stderr waits for a live process forever
                 err = self.proc.stderr.read() if self.proc.stderr else ""
                 raise RuntimeError(f"dxboard emulate did not start: {err}")
             name, _, url = line.strip().partition(": ")

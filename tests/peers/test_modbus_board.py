@@ -25,7 +25,7 @@ def board(request: pytest.FixtureRequest) -> Iterator[Emulate]:
 
 async def modbus_from(board: Emulate, source: str) -> AsyncModbusTcpClient:
     host, port = board.address("modbus")
-    client = AsyncModbusTcpClient(host, port=port, timeout=3, retries=0,
+    client = AsyncModbusTcpClient(host, port=port, timeout=30, retries=0,
                                   source_address=(source, 0))
     assert await client.connect()
     return client

@@ -66,7 +66,7 @@ class Device:
 
     def coils(self, unit: int, n: int) -> list[bool]:
         """The device's coils as a plain pymodbus client reads them."""
-        client = ModbusTcpClient("127.0.0.1", port=self.port, timeout=3, retries=0)
+        client = ModbusTcpClient("127.0.0.1", port=self.port, timeout=30, retries=0)
         try:
             assert client.connect()
             reply = client.read_coils(0, count=n, device_id=unit)

@@ -152,7 +152,7 @@ def test_serial_partial_frame_is_dropped_after_silence(board: Emulate) -> None:
     link = Serial(path)
     try:
         peer = sc.SpecPeer(link.send, link.recv, KEY)
-        hello = peer.greet(ask=True, timeout=2.0)
+        hello = peer.greet(ask=True, timeout=30.0)
         assert hello["board_id"] == "tedusar"
         assert peer.ping(7)[0] == 7
     finally:

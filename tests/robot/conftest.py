@@ -117,7 +117,7 @@ class Conn:
     """A client of one device: JSON lines in, lines out."""
 
     def __init__(self, port: int) -> None:
-        self.sock = socket.create_connection(("127.0.0.1", port), timeout=5)
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=30)
         self.buf = b""
         self.closed = False
 

@@ -138,6 +138,9 @@ def test_a_bag_recorded_from_a_live_hang_replays_to_the_same_diagnoses(
     names = [any({"hokuyo", "hokuyo_node"} & set(bad) for bad in d) for d in live_d]
     assert False in names and True in names[names.index(False):], live_d
     assert replay_d == live_d
+    with JournalReader(replayed) as r:  # its last word: the bag ended, not a verdict
+        notes = [e.payload.text for e in r.query(kind=Kind.NOTE, limit=100000)]  # type: ignore[attr-defined]
+    assert notes[-1].startswith("bag ended"), notes
     # node presence replayed from the graph's recorded samples
     assert seen(replayed, "running(hokuyo_node)", True)
     assert seen(replayed, "running(hokuyo_node)", False)

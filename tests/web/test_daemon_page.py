@@ -37,7 +37,8 @@ setInterval(() => {
 @pytest.fixture(scope="module")
 def daemon(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RunningDaemon]:
     tmp = tmp_path_factory.mktemp("page")
-    d = RunningDaemon(tmp, fast_copy(tmp))
+    d = RunningDaemon(tmp, fast_copy(tmp),  # as docs/security.md shows the flag
+                      extra_args=("--web-allow-origin", "http://robot7.local:8080"))
     try:
         yield d
     finally:
@@ -64,10 +65,38 @@ async def test_the_daemon_page_shows_the_robot_and_a_fault(daemon: RunningDaemon
 
         await asyncio.to_thread(daemon.inject, "hokuyo", "hang")
         assert await page.wait_for(
-            "['hokuyo', 'hokuyo_node'].some(c => seenChips.has(c))", 30)
+            "['hokuyo', 'hokuyo_node'].some(c => seenChips.has(c))", HEAL_S)
         assert await page.wait_for("seenRepairs.has('power_cycle(hokuyo) succeeded')", 90)
         await asyncio.to_thread(daemon.wait_for, healthy, 90.0, "healthy again")
         assert await page.wait_for("document.querySelector('#diagnoses .muted')"
                                    "?.textContent === 'none'", HEAL_S)
         assert await page.wait_for(f"{CHANNEL_STATE.format(3)} === 'on'", 30)
         await page.screenshot(tmp_path / "daemon-page.png")
+
+
+async def test_clients_that_hang_up_leave_no_traceback_and_strangers_are_refused(
+        daemon: RunningDaemon) -> None:
+    import aiohttp
+    from yarl import URL
+
+    from tests.web.test_guard import hang_up
+
+    web = URL(daemon.urls["web"])
+    assert web.port is not None
+    for i in range(20):  # a browser tab closed mid-load, mid-handshake, mid-journal
+        for path, upgrade in (("/ws", True), ("/api/journal?limit=1000", False), ("/", False)):
+            await hang_up(web.port, path, upgrade, 0.02 * (i % 3))
+    async with aiohttp.ClientSession() as s, s.get(web / "api/status") as resp:
+        assert resp.status == 200  # it answers still, and said nothing loud about the above
+    assert "Traceback" not in daemon.err_path.read_text()
+    async with aiohttp.ClientSession() as s:
+        async with s.get(web / "ws", headers={"Origin": "http://evil.example"}) as resp:
+            assert resp.status == 403 and "evil.example" in await resp.text()
+        async with s.get(web / "api/status", headers={"Host": "rebound.example"}) as resp:
+            assert resp.status == 403
+        async with s.ws_connect(web / "ws", origin=str(web.origin())) as ws:
+            assert (await ws.receive_json(timeout=60))["type"] == "status"
+        for allowed in ({"Origin": "http://robot7.local:8080"}, {"Host": "robot7.local:8080"}):
+            async with s.get(web / "api/status", headers=allowed) as resp:
+                assert resp.status == 200, allowed
+    assert "Traceback" not in daemon.err_path.read_text()
