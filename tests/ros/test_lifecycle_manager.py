@@ -25,15 +25,19 @@ from lifecycle_msgs.msg import Transition
 from lifecycle_msgs.srv import ChangeState, GetState
 from std_msgs.msg import String
 
+from host.events import Kind
+from host.journal import JournalReader
 from host.ros.lifecycle import LifecycleError
 from host.ros.manager import LifecycleManager
 from host.ros.node import RosNode
+from tests.daemon.runner import RunningDaemon, fast_copy
 from tests.robot.conftest import ROOT
 from tests.ros.conftest import Peer
 from tests.wait import wait_until
 
 SUBJECT = Path(__file__).parent / "second_robot" / "lifecycle_node.py"
 WAIT_S = 90.0
+DAEMON_WAIT_S = 240.0  # a power-up of the whole robot on a loaded 2-core machine
 
 
 class Subjects:
@@ -159,3 +163,46 @@ async def test_a_configure_that_fails_because_the_device_is_off_is_one_clear_err
     device.touch()  # the device powered
     assert await manager.activate("driver") == \
         "driver bring up from unconfigured: configure, activate"
+
+
+def test_the_daemon_brings_up_and_repairs_a_lifecycle_node_it_did_not_start(
+        tmp_path: Path, subjects: Subjects, peer: Peer) -> None:
+    # The finding: a standard lifecycle node waiting for a manager was restarted three times,
+    # then quarantined, its change_state never called. Here the thermal camera's driver is a
+    # plain rclpy lifecycle node the test starts (as ros2 launch would); the model names it
+    # in external: with lifecycle: true. dxboard run powers the camera up and then brings the
+    # driver up through its transitions; when a person deactivates it, dxboard repairs it.
+    system = fast_copy(tmp_path)
+    f = system / "system.yaml"
+    text = "\n".join(x for x in f.read_text().splitlines()
+                     if not x.startswith("  thermal_camera_node: {command"))
+    text = text.replace("observers:\n", "observers:\n  source: {kind: ros2}\n", 1).replace(
+        "    thermal_camera_node: {supervised: true}", "    thermal_camera_node: {graph: true}")
+    f.write_text(text + "\nexternal:\n  thermal_camera_node: {lifecycle: true}\n")
+    node = "thermal_camera_node"
+    peer.listen("/thermal/image", String)
+    proc = subjects.start(node, "--topic", "/thermal/image", "--rate", "9")
+    daemon = RunningDaemon(tmp_path, system)
+    try:
+        wait_until(lambda: plain_state(peer, node) == "active", DAEMON_WAIT_S,
+                   "dxboard brought the driver up", show=lambda: actions(daemon, node))
+        peer.collect("/thermal/image", 9, DAEMON_WAIT_S)
+        assert {a for a, _ in actions(daemon, node)} & {"activate_node", "reset_node"}
+        assert not {a for a, _ in actions(daemon, node)} & {"start_node", "stop_node"}
+
+        assert plain_transition(peer, node, Transition.TRANSITION_DEACTIVATE)  # a person
+        wait_until(lambda: plain_state(peer, node) == "active", DAEMON_WAIT_S,
+                   "dxboard repaired the driver", show=lambda: actions(daemon, node))
+        assert proc.poll() is None  # the same process: never restarted by dxboard
+    finally:
+        daemon.close()
+
+
+def actions(daemon: RunningDaemon, node: str) -> list[tuple[str, str]]:
+    """The repair actions on ``node`` the daemon journaled: (action, state)."""
+    if not daemon.journal_path.exists():
+        return []
+    with JournalReader(daemon.journal_path) as r:
+        return [(e.payload.action, e.payload.state.value)  # type: ignore[attr-defined]
+                for e in r.query(kind=Kind.ACTION, limit=100000)
+                if node in e.payload.args]  # type: ignore[attr-defined]

@@ -1,9 +1,9 @@
 """A standard ROS 2 managed node that waits for a lifecycle manager: plain rclpy, no dxboard.
 
-``python lifecycle_node.py NAME [--configure-delay S] [--rate HZ]`` starts the node NAME
+``python lifecycle_node.py NAME [--topic T] [--configure-delay S] [--rate HZ]`` starts NAME
 unconfigured, as Nav2's nodes and most drivers do, and waits for a manager to configure and
 activate it through ``/NAME/change_state``. While active it publishes ``std_msgs/String`` on
-``/NAME/out`` at HZ (default 10). ``--configure-delay`` makes its configure take S seconds (a
+T (default ``/NAME/out``) at HZ (default 10). ``--configure-delay`` makes its configure take S seconds (a
 driver opening a slow device), longer than a hasty manager waits for the call's answer.
 ``--device FILE``: configure fails while FILE does not exist (its device is off).
 """
@@ -21,10 +21,11 @@ from std_msgs.msg import String
 
 
 class Subject(LifecycleNode):
-    def __init__(self, name: str, delay: float, rate: float, device: str | None) -> None:
+    def __init__(self, name: str, topic: str, delay: float, rate: float,
+                 device: str | None) -> None:
         super().__init__(name)
         self.delay, self.rate, self.device = delay, rate, device
-        self.pub = self.create_lifecycle_publisher(String, f"/{name}/out", 10)
+        self.pub = self.create_lifecycle_publisher(String, topic, 10)
         self.timer = None
         self.count = 0
 
@@ -52,12 +53,13 @@ class Subject(LifecycleNode):
 def main() -> None:
     p = argparse.ArgumentParser()
     p.add_argument("name")
+    p.add_argument("--topic")
     p.add_argument("--configure-delay", type=float, default=0.0)
     p.add_argument("--rate", type=float, default=10.0)
     p.add_argument("--device")
     a = p.parse_args()
     rclpy.init()
-    node = Subject(a.name, a.configure_delay, a.rate, a.device)
+    node = Subject(a.name, a.topic or f"/{a.name}/out", a.configure_delay, a.rate, a.device)
     try:
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
