@@ -25,7 +25,7 @@ from lifecycle_msgs.msg import Transition
 from lifecycle_msgs.srv import ChangeState, GetState
 from std_msgs.msg import String
 
-from host.events import Kind
+from host.events import ActionRecord, Kind
 from host.journal import JournalReader
 from host.ros.lifecycle import LifecycleError
 from host.ros.manager import LifecycleManager
@@ -203,6 +203,6 @@ def actions(daemon: RunningDaemon, node: str) -> list[tuple[str, str]]:
     if not daemon.journal_path.exists():
         return []
     with JournalReader(daemon.journal_path) as r:
-        return [(e.payload.action, e.payload.state.value)  # type: ignore[attr-defined]
-                for e in r.query(kind=Kind.ACTION, limit=100000)
-                if node in e.payload.args]  # type: ignore[attr-defined]
+        records = [e.payload for e in r.query(kind=Kind.ACTION, limit=100000)]
+    return [(a.action, a.state.value) for a in records
+            if isinstance(a, ActionRecord) and node in a.args]

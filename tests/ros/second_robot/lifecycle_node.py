@@ -1,10 +1,10 @@
 """A standard ROS 2 managed node that waits for a lifecycle manager: plain rclpy, no dxboard.
 
-``python lifecycle_node.py NAME [--topic T] [--configure-delay S] [--rate HZ]`` starts NAME
+``python lifecycle_node.py NAME [--topic T] [--configure-delay S] [--rate HZ]`` starts it
 unconfigured, as Nav2's nodes and most drivers do, and waits for a manager to configure and
 activate it through ``/NAME/change_state``. While active it publishes ``std_msgs/String`` on
-T (default ``/NAME/out``) at HZ (default 10). ``--configure-delay`` makes its configure take S seconds (a
-driver opening a slow device), longer than a hasty manager waits for the call's answer.
+T (default ``/NAME/out``) at HZ (default 10). ``--configure-delay`` makes its configure take S
+seconds (a driver opening a slow device), longer than a hasty manager waits for the call's answer.
 ``--device FILE``: configure fails while FILE does not exist (its device is off).
 """
 
@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import os
 import time
+from typing import Any
 
 import rclpy
 from rclpy.executors import ExternalShutdownException
@@ -26,7 +27,7 @@ class Subject(LifecycleNode):
         super().__init__(name)
         self.delay, self.rate, self.device = delay, rate, device
         self.pub = self.create_lifecycle_publisher(String, topic, 10)
-        self.timer = None
+        self.timer: Any = None
         self.count = 0
 
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
