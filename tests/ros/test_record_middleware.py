@@ -65,7 +65,10 @@ def test_the_recorder_has_the_start_of_a_fault_injected_as_it_says_recording(
     try:
         assert rec.stdout is not None
         line = rec.stdout.readline()
-        assert line.startswith("recording"), (line, rec.stderr)
+        # subscribed and matched: /scan is not among the topics nobody publishes yet (only
+        # the Hokuyo's driver runs here)
+        assert line.startswith(f"recording tedusar into {bag} (no publisher yet: "), line
+        assert "/board_stream" in line and "/scan" not in line, line
         hang = time.time()
         robot.inject("hokuyo", "hang")  # at once
         wait_until(lambda: seen(live, "ok(/scan)", False), WAIT_S,
