@@ -18,6 +18,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from diagnostic_msgs.msg import DiagnosticArray
 from sensor_msgs.msg import Image
 
@@ -31,6 +32,7 @@ HERE = Path(__file__).parent / "second_robot"
 NODE, TOPIC = "thermal_camera_node", "/thermal/image"
 
 
+@pytest.mark.timeout(900)  # a whole robot's power-up under a load of 100 on 2 cores
 def test_a_node_started_by_another_launcher_is_restarted_by_its_command(
         tmp_path: Path, peer: Peer) -> None:
     pidfile = tmp_path / "camera.pid"

@@ -165,6 +165,7 @@ async def test_a_configure_that_fails_because_the_device_is_off_is_one_clear_err
         "driver bring up from unconfigured: configure, activate"
 
 
+@pytest.mark.timeout(900)  # a whole robot's power-up under a load of 100 on 2 cores
 def test_the_daemon_brings_up_and_repairs_a_lifecycle_node_it_did_not_start(
         tmp_path: Path, subjects: Subjects, peer: Peer) -> None:
     # The finding: a standard lifecycle node waiting for a manager was restarted three times,

@@ -11,9 +11,9 @@ import argparse
 import os
 
 import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from sensor_msgs.msg import Image
+from spin import spin  # beside this script (its sys.path[0])
 
 
 def main() -> None:
@@ -36,13 +36,7 @@ def main() -> None:
         pub.publish(frame)
 
     node.create_timer(1.0 / a.rate, tick)
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+    spin(node)
 
 
 if __name__ == "__main__":

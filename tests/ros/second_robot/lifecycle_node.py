@@ -16,8 +16,8 @@ import time
 from typing import Any
 
 import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
+from spin import spin  # beside this script (its sys.path[0])
 from std_msgs.msg import String
 
 
@@ -61,13 +61,7 @@ def main() -> None:
     a = p.parse_args()
     rclpy.init()
     node = Subject(a.name, a.topic or f"/{a.name}/out", a.configure_delay, a.rate, a.device)
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+    spin(node)
 
 
 if __name__ == "__main__":
