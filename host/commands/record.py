@@ -1,7 +1,8 @@
 """Record a ROS 2 robot's topics into a rosbag2 MCAP bag: ``dxboard record SYSTEM_DIR BAG``.
 
 Records the topics the robot's topic observers watch (its ``observers:`` section in
-``system.yaml``, which must say ``source: {kind: ros2}``), ``/board_stream`` (what a running
+``system.yaml``, which must say ``source: {kind: ros2}``, or ``--middleware ros2`` as for
+``dxboard run``: the robot ``make run`` starts), ``/board_stream`` (what a running
 ``dxboard run``'s hardware observer is fed: the board's readings, events and link) when the
 robot has a hardware observer, the ROS 2 graph's node list every discovery period (on
 ``/dxboard/graph``) when it observes node presence from the graph, plus ``/diagnostics`` (the
@@ -10,12 +11,16 @@ directory BAG (MCAP storage; ``ros2 bag play`` and Foxglove read it). Until Ctrl
 SIGTERM), or for ``--duration S`` seconds. The DDS domain is the model's ``domain:`` or
 ``$ROS_DOMAIN_ID``. With ``--journal FILE`` the observers and the diagnoser run on the messages
 as they are recorded and the diagnoses go into the journal, as ``dxboard replay`` would write
-them from the bag.
+them from the bag. The recorder subscribes every observed topic before it prints its
+"recording" line, and waits (at most ``--wait S``, default 15) until each of them is matched
+with the publishers the ROS 2 graph shows, so a fault that starts after that line is in the bag
+from its start; topics nobody publishes yet are named on that line and recorded once they appear.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 
 NAME = "record"
@@ -29,6 +34,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="stop after S seconds (default: at Ctrl-C)")
     parser.add_argument("--journal", metavar="FILE",
                         help="journal the live diagnoses into FILE (SQLite) too")
+    parser.add_argument("--wait", type=float, default=15.0, metavar="S",
+                        help="at most S seconds to match the observed topics' publishers "
+                             "before saying 'recording' (default 15)")
+    add_middleware(parser)
+
+
+def add_middleware(parser: argparse.ArgumentParser) -> None:
+    """``--middleware`` as ``dxboard run`` takes it (a bag holds ROS 2 topics: ros2)."""
+    parser.add_argument("--middleware", choices=("zenoh", "ros2"),
+                        default=os.environ.get("DXBOARD_MIDDLEWARE") or None,
+                        help="the robot's middleware, as `dxboard run --middleware` (default: "
+                             "$DXBOARD_MIDDLEWARE, else the model's observers: source: kind:); "
+                             "bags need ros2")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -36,6 +54,8 @@ def run(args: argparse.Namespace) -> int:
 
     from host.errors import UserError
 
+    if not args.wait >= 0:
+        raise UserError(f"--wait {args.wait} is negative", "give a number of seconds, 0 or more")
     if args.duration is not None and not args.duration > 0:
         raise UserError(f"--duration {args.duration} is not positive",
                         "give a number of seconds above 0, or leave it out")
@@ -49,7 +69,7 @@ async def _main(args: argparse.Namespace, system_dir: Path, bag: Path) -> int:
     from host.journal import Journal
     from host.ros.bagrun import load_ros_robot, record
 
-    robot = load_ros_robot(system_dir)
+    robot = load_ros_robot(system_dir, args.middleware)
     journal = Journal(args.journal) if args.journal else None
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
@@ -57,9 +77,12 @@ async def _main(args: argparse.Namespace, system_dir: Path, bag: Path) -> int:
         loop.add_signal_handler(sig, stop.set)
     if args.duration is not None:
         loop.call_later(args.duration, stop.set)
-    print(f"recording {robot.model.name} into {bag}", flush=True)
+    def ready(missing: list[str]) -> None:
+        yet = f" (no publisher yet: {', '.join(missing)})" if missing else ""
+        print(f"recording {robot.model.name} into {bag}{yet}", flush=True)
+
     try:
-        stats = await record(robot, bag, journal, stop)
+        stats = await record(robot, bag, journal, stop, ready=ready, wait_s=args.wait)
     finally:
         if journal is not None:
             await journal.flush()

@@ -1,20 +1,22 @@
 """Diagnose a recorded bag again: ``dxboard replay BAG SYSTEM_DIR --journal FILE``.
 
 Runs the topic observers and the hardware observer of the robot's ``observers:`` section
-(``source: {kind: ros2}``; the hardware observer is fed the board's items from the bag's
-``/board_stream``, which a ``dxboard run`` on ROS 2 publishes, each at its stamp) and the
-diagnoser over the rosbag2 bag BAG (MCAP or SQLite; ``dxboard record`` or ``ros2 bag record``
-wrote it) on the bag's clock: every message at its recorded time, every observer deadline at
-its time, as fast as the bag can be read. The journal FILE gets the observations and the
-diagnoses with the bag's times, so ``dxboard report FILE -o timeline.png`` draws the timeline
-of the recorded failure. Node presence from the ROS 2 graph is replayed from the graph samples
-``dxboard record`` wrote (``/dxboard/graph``); process observers are not (not yet: a bag holds
-no supervisor).
+(``source: {kind: ros2}``, or ``--middleware ros2`` as for ``dxboard run``; the hardware
+observer is fed the board's items from the bag's ``/board_stream``, which a ``dxboard run`` on
+ROS 2 publishes, each at its stamp) and the diagnoser over the rosbag2 bag BAG (MCAP or SQLite;
+``dxboard record`` or ``ros2 bag record`` wrote it) on the bag's clock: every message at its
+recorded time, every observer deadline at its time, as fast as the bag can be read. The journal
+FILE gets the observations and the diagnoses with the bag's times, so ``dxboard report FILE -o
+timeline.png`` draws the timeline of the recorded failure. Node presence from the ROS 2 graph is
+replayed from the graph samples ``dxboard record`` wrote (``/dxboard/graph``); process observers
+are not (not yet: a bag holds no supervisor).
 """
 
 from __future__ import annotations
 
 import argparse
+
+from host.commands.record import add_middleware
 
 NAME = "replay"
 HELP = "diagnose a recorded rosbag2 bag on its own clock into a journal"
@@ -25,6 +27,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("system_dir", metavar="SYSTEM_DIR", help="robot directory (system.yaml)")
     parser.add_argument("--journal", required=True, metavar="FILE",
                         help="the journal to write (SQLite)")
+    add_middleware(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -34,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
     from host.ros.bag import Bag
     from host.ros.bagrun import load_ros_robot, replay
 
-    robot = load_ros_robot(Path(args.system_dir))
+    robot = load_ros_robot(Path(args.system_dir), args.middleware)
     bag = Bag(Path(args.bag))
     try:
         journal = Journal(args.journal)

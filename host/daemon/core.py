@@ -64,12 +64,14 @@ from host.observers.config import ObserversConfig, SourceSpec
 from host.observers.starvation import wire_probes
 from host.operator.server import OperatorServer
 from host.repair import service
+from host.repair.external import ExternalNode, lifecycle_nodes, load_external
 from host.repair.planner import RepairPlanner
 from host.repair.processes import ProcessConfig, load_processes, managed_nodes
 from host.web.fold import StatusFold
 from host.web.server import WebServer
 from host.web.status import MemoryStatusSource, Status
 
+from .external import ExternalActuators, check_external
 from .stream import EventStream
 
 log = logging.getLogger(__name__)
@@ -113,6 +115,7 @@ class RobotFiles:
     observers: ObserversConfig
     processes: Mapping[str, ProcessConfig]
     planner: RepairPlanner
+    external: Mapping[str, ExternalNode] = field(default_factory=dict)  # started elsewhere
 
 
 def load_robot(system_dir: Path, zenoh_listen: list[str] | None = None,
@@ -132,9 +135,11 @@ def load_robot(system_dir: Path, zenoh_listen: list[str] | None = None,
     if middleware is not None:
         observers.source = dataclasses.replace(observers.source, kind=middleware)
     processes = load_processes(system_dir, model)
+    external = load_external(system_dir, model, processes)
+    check_external(observers.file, external, observers.source.kind)
     managed = managed_nodes(processes, observers.source.kind)
     return RobotFiles(model, theory, observers, processes,
-                      RepairPlanner.for_system(system_dir, managed=managed))
+                      RepairPlanner.for_system(system_dir, managed=managed), external)
 
 
 def _middleware_env(source: SourceSpec) -> dict[str, str]:
@@ -152,7 +157,10 @@ class Daemon:
         self.clock = clock
         robot = files or load_robot(opts.system_dir, opts.zenoh_listen, opts.middleware)
         self.model, self.theory, self.observers_cfg = robot.model, robot.theory, robot.observers
-        self._managed = managed_nodes(robot.processes, robot.observers.source.kind)
+        self._managed = [*managed_nodes(robot.processes, robot.observers.source.kind),
+                         *lifecycle_nodes(robot.external)]  # their reconfigure_node too
+        self.external = ExternalActuators(robot.external, robot.observers.source.kind,
+                                          robot.observers.source.domain)
         self.stream = EventStream(clock, wall)
         self.emit = self.stream.emit
         self.status = MemoryStatusSource(Status(robot=opts.robot or self.model.name))
@@ -250,6 +258,7 @@ class Daemon:
             self.lifecycle.open()  # its node now, each managed node's services once seen
             self.repairs.executor.actuators.add("reconfigure_node",
                                                 self.lifecycle.reconfigure_node)
+        self.external.open(self.repairs.executor.actuators)  # restart_node, lifecycle manager
         await self.hub.start(self.source, self.observers_cfg.processes,
                              poll=self.observers_cfg.poll)
         watcher = self.hub.watcher
@@ -333,6 +342,7 @@ class Daemon:
         if self.lifecycle is not None:
             stage("the lifecycle client")
             self.lifecycle.close()
+        self.external.close()
         if self.web is not None:
             stage("the web page")
             await self.web.close()

@@ -146,10 +146,11 @@ class ModelError(UserError):
         self.problems = problems
 
 
-# "observers" is read by host.observers.config and "processes" by host.repair.processes,
-# from the same file.
+# "observers" is read by host.observers.config, "processes" by host.repair.processes and
+# "external" by host.repair.external, from the same file.
 _TOP_KEYS = {
     "robot", "board", "components", "values", "related", "description", "observers", "processes",
+    "external",
 }
 _COMMON_KEYS = {"kind", "prior", "description"}
 _KIND_KEYS = {

@@ -25,6 +25,12 @@ from host.errors import DxboardError
 from host.repair.domain import DOMAIN_FILE, ROOT_TYPE, Atom, Domain, load_domain
 from host.repair.downward import fast_downward
 from host.repair.errors import DomainError, NoPlanError, ProblemError
+from host.repair.external import (
+    lifecycle_nodes,
+    load_external,
+    not_repairable,
+    with_external,
+)
 from host.repair.grounding import ground
 from host.repair.plan import Plan, deorder, stops_first
 from host.repair.problem import (
@@ -81,7 +87,8 @@ class RepairPlanner:
         """Load ``SYSTEM_DIR/system.yaml`` and ``repair.pddl`` (or ``domain_path``).
         ``system_dir`` may be a tug model file; its domain is ``domain_path`` or the
         ``repair.pddl`` beside it. ``managed``: the robot's ROS 2 managed nodes (used when
-        the domain has ``managed``)."""
+        the domain has ``managed``); the nodes started elsewhere (``external:``,
+        ``host.repair.external``) are added, the lifecycle ones as managed."""
         from host.diagnosis.files import load_theory
         from host.diagnosis.model import SYSTEM_FILE, load_system
         from host.repair.theory_model import repair_model_of
@@ -89,9 +96,12 @@ class RepairPlanner:
         path = Path(system_dir)
         if path.is_dir() or path.name == SYSTEM_FILE:
             domain = load_domain(domain_path if domain_path is not None else path)
+            system = load_system(path)
+            external = load_external(path, system)
+            managed = [*managed, *lifecycle_nodes(external)]
             if "managed" not in domain.predicates:
-                managed = ()
-            return cls(domain, repair_model(load_system(path), managed))
+                managed = []
+            return cls(domain, with_external(repair_model(system, managed), external))
         theory = load_theory(path)
         model = repair_model_of(theory, path.stem)
         if domain_path is None:
@@ -212,6 +222,9 @@ class RepairPlanner:
         if blocked:
             return f"{what}: {', '.join(blocked)} would switch off a protected component and "\
                 "no other repair can become applicable"
+        if name in self.model.external and name not in self.model.managed \
+                and name not in self.model.restartable:
+            return f"{what}: {not_repairable(name)}"
         if not achievers:
             typ = self.model.types.get(name, "?")
             return f"{what}: no action of the domain repairs a {typ}"

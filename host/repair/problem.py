@@ -45,6 +45,7 @@ log = logging.getLogger(__name__)
 # the static predicates the problem layer writes (when the domain declares them)
 NEEDS, PROTECTED = "needs", "protected"
 MANAGED = "managed"  # static: a ROS 2 managed (lifecycle) node, repaired by reconfigure_node
+EXTERNAL, RESTARTABLE = "external", "restartable"  # static: started elsewhere; has an actuator
 SWITCHABLE, HARDWARE, DRIVER, NODE, COMPONENT = "switchable", "hardware", "driver", "node", \
     "component"
 NODE_TYPES = frozenset({DRIVER, NODE})
@@ -78,6 +79,8 @@ class RepairModel:
     needs: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     protected: frozenset[str] = frozenset()
     managed: frozenset[str] = frozenset()
+    external: frozenset[str] = frozenset()  # nodes started elsewhere (host.repair.external)
+    restartable: frozenset[str] = frozenset()  # of those, the ones an actuator restarts
 
     def objects(self) -> dict[str, str]:
         return dict(self.types)
@@ -86,6 +89,8 @@ class RepairModel:
         out = [Atom(NEEDS, (n, c)) for n, cs in self.needs.items() for c in cs]
         out += [Atom(PROTECTED, (c,)) for c in sorted(self.protected)]
         out += [Atom(MANAGED, (n,)) for n in sorted(self.managed)]
+        out += [Atom(EXTERNAL, (n,)) for n in sorted(self.external)]
+        out += [Atom(RESTARTABLE, (n,)) for n in sorted(self.restartable)]
         return out
 
     def is_node(self, name: str) -> bool:

@@ -60,19 +60,27 @@ class RunStats:
     diagnoses: int  # diagnosis records (changes of the bad sets)
 
 
-def load_ros_robot(system_dir: Path) -> RobotFiles:
+def load_ros_robot(system_dir: Path, middleware: str | None = None) -> RobotFiles:
     """The robot directory, checked: a bag holds ROS 2 topics, so it must observe through
-    ROS 2 (``observers: source: {kind: ros2}``)."""
+    ROS 2 (``middleware``, as ``dxboard run --middleware`` gives it, else the model's
+    ``observers: source: {kind: ros2}``)."""
     from host.daemon.core import load_robot
 
     if not (system_dir / "system.yaml").is_file():
         raise UserError(f"{system_dir}: no system.yaml here",
                         "give a robot directory, e.g. models/tedusar")
-    robot = load_robot(system_dir)
+    if middleware not in (None, "ros2", "zenoh"):
+        raise UserError(f"DXBOARD_MIDDLEWARE={middleware}: not a middleware",
+                        "set it to zenoh or ros2, or unset it")
+    if middleware == "zenoh":
+        raise UserError("--middleware zenoh: a bag holds ROS 2 topics",
+                        "run the robot and record it with --middleware ros2")
+    robot = load_robot(system_dir, middleware=middleware)
     if robot.observers.source.kind != "ros2":
         raise UserError(f"{system_dir}/system.yaml: the robot observes through "
                         f"{robot.observers.source.kind}, not ROS 2",
-                        "set observers: source: {kind: ros2} in its system.yaml")
+                        "give --middleware ros2 (as to `dxboard run`), or set observers: "
+                        "source: {kind: ros2} in its system.yaml")
     return robot
 
 
@@ -84,9 +92,15 @@ def _journaled(journal: Journal | None) -> Callable[[Stamped], None]:
 
 
 async def record(robot: RobotFiles, bag_path: Path, journal: Journal | None,
-                 stop: asyncio.Event, clock: Callable[[], float] = time.time) -> RunStats:
-    """Record until ``stop`` is set; the bag is complete when this returns."""
+                 stop: asyncio.Event, clock: Callable[[], float] = time.time,
+                 ready: Callable[[list[str]], None] | None = None,
+                 wait_s: float = 15.0) -> RunStats:
+    """Record until ``stop`` is set; the bag is complete when this returns. ``ready`` is
+    called once every topic is subscribed and matched with its publishers (at most
+    ``wait_s`` later; with the observed topics nobody publishes yet): from then on nothing
+    published is missed (``host.ros.matched``)."""
     from host.observers.sources.ros2 import Ros2Source
+    from host.ros.matched import wait_matched
 
     spec = robot.observers.source
     stream = EventStream(clock, clock)
@@ -111,12 +125,16 @@ async def record(robot: RobotFiles, bag_path: Path, journal: Journal | None,
     t0 = time.perf_counter()
     stream.emit(Note(f"dxboard record {bag_path}: {robot.model.name}"))
     observers.start(start)
-    subs = [source.subscribe(GRAPH if t == graphlog.TOPIC else t, on_message)
-            for t in sorted({*observers.topics, DIAGNOSTICS})]
+    subs = {t: source.subscribe(GRAPH if t == graphlog.TOPIC else t, on_message)
+            for t in sorted({*observers.topics, DIAGNOSTICS})}
     try:
+        topics = {t: s for t, s in subs.items() if t != graphlog.TOPIC}
+        missing = await wait_matched(source, topics, observers.topics, wait_s, stop)
+        if ready is not None:
+            ready(missing)
         await stop.wait()
     finally:
-        for s in subs:
+        for s in subs.values():
             s.close()
         source.close()
         for msg in waiting.drain():

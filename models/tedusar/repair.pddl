@@ -10,6 +10,9 @@
 ;                    with a ros2 source)
 ;   (lost ?n)        running node ?n lost its device to a power switch of this plan (never in
 ;                    the initial state: a node found abnormal is restarted, not reconfigured)
+;   (external ?n)    static: ?n is started elsewhere (system.yaml external:), never by
+;                    start_node/stop_node; with (managed ?n) dxboard is its lifecycle manager
+;   (restartable ?n) static: an external node with a restart actuator (systemd, command, container)
 ; The planner's words for the roles it fills from a diagnosis (host/repair/vocabulary.py; the
 ; original system's domain says bad/good/not_on instead, and is read by the same conventions):
 ; dxboard-vocabulary: abnormal=ab powered=on running=running
@@ -17,7 +20,9 @@
 ; command, off then on), reconfigure_node (lifecycle transitions of a ROS 2 managed node
 ; instead of restarting its process), a driver cannot start before the hardware it needs is
 ; healthy, and switching a device's power while its driver runs leaves the driver abnormal
-; (it lost its device: the jaguar scenario's stop_node + start_node).
+; (it lost its device: the jaguar scenario's stop_node + start_node). For nodes started
+; elsewhere (external): activate_node and reset_node (dxboard as their lifecycle manager) and
+; restart_node (their systemd unit, command or container).
 (define (domain dxboard-repair)
   (:requirements :strips :typing :negative-preconditions :disjunctive-preconditions
                  :universal-preconditions :conditional-effects)
@@ -30,7 +35,9 @@
                (needs ?n - node ?c - component)
                (protected ?c - component)
                (managed ?n - node)
-               (lost ?n - node))
+               (lost ?n - node)
+               (external ?n - node)
+               (restartable ?n - node))
 
   ; power a switched-off faulty device; its running drivers lose it
   (:action power_up
@@ -59,7 +66,7 @@
   ; start a node once everything it needs works
   (:action start_node
     :parameters (?n - node)
-    :precondition (and (not (running ?n))
+    :precondition (and (not (running ?n)) (not (external ?n))
                        (forall (?c - component) (imply (needs ?n ?c) (not (ab ?c)))))
     :effect (and (running ?n) (not (ab ?n))))
 
@@ -75,5 +82,28 @@
   ; stop a running node (never a protected one); a stopped node is abnormal
   (:action stop_node
     :parameters (?n - node)
-    :precondition (and (running ?n) (not (protected ?n)))
-    :effect (and (not (running ?n)) (ab ?n))))
+    :precondition (and (running ?n) (not (protected ?n)) (not (external ?n)))
+    :effect (and (not (running ?n)) (ab ?n)))
+
+  ; an external managed node that is not active: configure and activate it as its lifecycle
+  ; state requires (unconfigured: both; inactive: activate), once everything it needs works
+  (:action activate_node
+    :parameters (?n - node)
+    :precondition (and (not (running ?n)) (managed ?n) (external ?n)
+                       (forall (?c - component) (imply (needs ?n ?c) (not (ab ?c)))))
+    :effect (and (running ?n) (not (ab ?n)) (not (lost ?n))))
+
+  ; an abnormal external managed node: back to active through a fresh configure (from active:
+  ; deactivate, cleanup, configure, activate; from inactive or unconfigured what is left)
+  (:action reset_node
+    :parameters (?n - node)
+    :precondition (and (running ?n) (ab ?n) (managed ?n) (external ?n)
+                       (forall (?c - component) (imply (needs ?n ?c) (not (ab ?c)))))
+    :effect (and (not (ab ?n)) (not (lost ?n))))
+
+  ; a node started elsewhere, restarted through the actuator system.yaml names for it
+  (:action restart_node
+    :parameters (?n - node)
+    :precondition (and (restartable ?n) (external ?n)
+                       (forall (?c - component) (imply (needs ?n ?c) (not (ab ?c)))))
+    :effect (and (running ?n) (not (ab ?n)) (not (lost ?n)))))

@@ -16,8 +16,8 @@ def test_tedusar_domain_has_the_papers_actions_and_more() -> None:
     d = load_domain(TEDUSAR)
     names = {s.name for s in d.schemas}
     assert {"power_up", "shutdown", "start_node", "stop_node", "power_cycle",
-            "reconfigure_node"} <= names
-    assert d.statics == {"needs", "protected", "managed"}
+            "reconfigure_node", "activate_node", "reset_node", "restart_node"} <= names
+    assert d.statics == {"needs", "protected", "managed", "external", "restartable"}
     assert d.fluents == {"ab", "on", "running", "lost"}
     assert d.supertypes("switchable") == ["switchable", "hardware", "component"]
     assert d.supertypes("driver") == ["driver", "node", "component"]
