@@ -169,6 +169,7 @@ async def _main(args: argparse.Namespace, system_dir: Path, web: tuple[str, int]
             if terminal is not None:
                 terminal.say("stopping")
         finally:
+            signals.begin()  # whatever ended the run, its stop is bounded
             stopping.start()
             await robot.close()
         return 0

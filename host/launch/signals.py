@@ -17,9 +17,10 @@ so it hears a signal even while the event loop, or the main thread, is held up:
   asks again;
 - a second SIGINT/SIGTERM stops at once: every child process (and its process group) is
   killed, one line says so on stderr, and the process exits with ``EXIT_SECOND`` (130);
-- a stop still running ``deadline_s`` after the first signal is cut short the same way (exit
-  ``EXIT_DEADLINE``, 124), so that no stage, however stuck, keeps the daemon from ending;
-  ``done()`` (the orderly stop finished) stands the watchdog down.
+- a stop still running ``deadline_s`` after the first signal (or after ``begin()``, a stop for
+  another reason, such as a failed task) is cut short the same way (exit ``EXIT_DEADLINE``,
+  124), so that no stage, however stuck, keeps the daemon from ending; ``done()`` (the orderly
+  stop finished) stands the watchdog down.
 
 Other signals can be routed through the same socket (``on(signum, callback)``: the callback
 runs on the loop), for the SIGUSR2 memory probe. ``close()`` restores the previous handlers and
@@ -118,6 +119,12 @@ class StopSignals:
         if self._thread.is_alive():
             self._old.setdefault(signum, signal.signal(signum, _ignore))
 
+    def begin(self) -> None:
+        """A stop has begun without a signal (the daemon failed): arm the watchdog all the
+        same, so that this stop is bounded too."""
+        if not self._first:
+            self._first = time.monotonic()
+
     def done(self) -> None:
         """The orderly stop has finished: the watchdog stands down."""
         self._done.set()
@@ -148,14 +155,15 @@ class StopSignals:
                 return
             for signum in data:
                 self._heard(signum)
-            if not self.received or self._done.is_set():
+            if not self._first or self._done.is_set():
                 continue
             waited = time.monotonic() - self._first
             if waited >= self.deadline_s:
                 self.exit_now(EXIT_DEADLINE, f"the stop took longer than {self.deadline_s:g} s"
                               " (what it waited for is logged above)")
                 return
-            if not self._acked.is_set() and waited - nudged >= self.nudge_s:
+            if (self.received and not self._acked.is_set()
+                    and waited - nudged >= self.nudge_s):
                 nudged = waited
                 log.warning("the event loop has not reacted to %s for %.0f s; asked again",
                             signal.Signals(self.received[0]).name, waited)
@@ -171,7 +179,7 @@ class StopSignals:
         self.received.append(signum)
         name = signal.Signals(signum).name
         if len(self.received) == 1:
-            self._first = time.monotonic()
+            self.begin()
             self._request()
         elif not self._done.is_set():
             self.exit_now(EXIT_SECOND, f"a second {name} during the stop")

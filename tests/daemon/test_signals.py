@@ -114,3 +114,18 @@ def test_a_second_ctrl_c_kills_the_children_and_exits_non_zero(tmp_path: Path) -
         wait_until(lambda: not alive(kids), 60, "its children gone")
     finally:
         d.close()
+
+
+async def test_a_stop_for_another_reason_is_bounded_too() -> None:
+    exits: list[tuple[int, str]] = []
+    signals = StopSignals(asyncio.get_running_loop(), lambda: None, deadline_s=0.5,
+                          exit_now=lambda code, why: exits.append((code, why))).install()
+    try:
+        signals.begin()  # a failed task ended the run: no signal, but a stop all the same
+        deadline = time.monotonic() + 60
+        while not exits and time.monotonic() < deadline:
+            await asyncio.sleep(0.02)
+        assert exits and exits[0][0] == 124
+        assert signals.received == []
+    finally:
+        signals.close()
