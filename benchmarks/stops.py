@@ -77,11 +77,13 @@ def flood(runs: int, baseline: bool) -> tuple[int, list[float]]:
 def hostile(tmp: Path) -> list[tuple[str, StoppedRun]]:
     out = []
     for kind in KINDS:
+        (tmp / kind).mkdir()
         with HostileBoard(kind) as board:
             run = StoppedRun.against(board.url, tmp / kind, give_up_s=60)
         out.append((kind, run))
         print(f"  {kind}: {run.seconds:.1f} s, exit {run.code}", flush=True)
     emu = Emulate()
+    (tmp / "wrong_key").mkdir()
     try:
         run = StoppedRun.against(emu.urls["board"], tmp / "wrong_key", key_hex="ff" * 16,
                                  give_up_s=60)
@@ -135,11 +137,11 @@ def main() -> None:
     ap.add_argument("--no-boards", action="store_true", help="skip the hostile boards")
     ap.add_argument("--write", action="store_true", help="append to benchmarks/RESULTS.md")
     args = ap.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        boards = [] if args.no_boards else hostile(Path(tmp))
     print(f"signals under a {RATE} msg/s flood, loop stalled {STALL_S:g} s:", flush=True)
     heard, delays = flood(args.runs, baseline=False)
     base_heard, _ = flood(args.baseline_runs, baseline=True)
-    with tempfile.TemporaryDirectory() as tmp:
-        boards = [] if args.no_boards else hostile(Path(tmp))
     text = section(args.runs, heard, delays, args.baseline_runs, base_heard, boards)
     print("\n".join(text))
     if args.write:
