@@ -62,19 +62,22 @@ def run(args: argparse.Namespace) -> int:
     return asyncio.run(_main(args, Path(args.system_dir), Path(args.bag)))
 
 
+RECORD_STOP_S = 60.0  # Ctrl-C to exit: closing a large bag can take a while
+
+
 async def _main(args: argparse.Namespace, system_dir: Path, bag: Path) -> int:
     import asyncio
-    import signal
 
     from host.journal import Journal
+    from host.launch.signals import StopSignals
     from host.ros.bagrun import load_ros_robot, record
 
     robot = load_ros_robot(system_dir, args.middleware)
     journal = Journal(args.journal) if args.journal else None
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        loop.add_signal_handler(sig, stop.set)
+    # never lost to a flood of messages; a second Ctrl-C ends it at once (host.launch.signals)
+    signals = StopSignals(loop, stop.set, deadline_s=RECORD_STOP_S).install()
     if args.duration is not None:
         loop.call_later(args.duration, stop.set)
     def ready(missing: list[str]) -> None:
@@ -84,9 +87,13 @@ async def _main(args: argparse.Namespace, system_dir: Path, bag: Path) -> int:
     try:
         stats = await record(robot, bag, journal, stop, ready=ready, wait_s=args.wait)
     finally:
-        if journal is not None:
-            await journal.flush()
-            journal.close()
+        try:
+            if journal is not None:
+                await journal.flush()
+                journal.close()
+        finally:
+            signals.done()
+            signals.close()
     print(f"wrote {bag}: {stats.messages} messages, {stats.bag_s:.1f} s, "
           f"{stats.diagnoses} diagnosis changes", flush=True)
     return 0

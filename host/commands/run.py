@@ -9,8 +9,10 @@ virtual devices when the robot has them) and prints its board and fault-injectio
 URLs. It prints one URL a line (``board:``, ``control:``, ``device:``, ``web:``, ``journal:``),
 then the run's id (for ``dxboard report --run``) and one line per change of diagnosis, plan,
 step result, quarantine and hold, and the board link going down or up (``-q``: only the URLs),
-and runs until Ctrl-C, which stops everything cleanly (it prints ``stopping``, and every 5 s
-of a slow stop what it still waits for). The robot directory and the addresses are checked
+and runs until Ctrl-C or SIGTERM, which stops everything cleanly (it prints ``stopping``, and
+every 5 s of a slow stop what it still waits for; each stage of the stop has a deadline, and
+the whole stop ends within 9 s; a second Ctrl-C stops at once, killing the nodes and the
+emulator, with exit code 130; docs/stopping.md). The robot directory and the addresses are checked
 before anything starts. ``kill -USR1 PID`` prints where every thread is, on stderr, for a
 report of a daemon that seems stuck.
 
@@ -25,7 +27,6 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import contextlib
 import faulthandler
 import logging
 import os
@@ -33,8 +34,12 @@ import re
 import signal
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from host.errors import UserError
+
+if TYPE_CHECKING:
+    from host.launch.signals import StopSignals
 
 NAME = "run"
 HELP = "run the daemon: observe, diagnose and repair the robot"
@@ -88,6 +93,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from host.launch.signals import StopSignals
     from host.web.guard import parse_origin
     from host.web.server import parse_listen
 
@@ -107,10 +113,38 @@ def run(args: argparse.Namespace) -> int:
             raise UserError(f"--web-allow-origin {exc}", "give scheme://host[:port]") from None
     if not 1 <= args.rate <= 100:
         raise UserError(f"--rate {args.rate} is out of range", "give 1..100")
-    return asyncio.run(_main(args, system_dir, web))
+    state = _State()
+    # the runner's teardown (cancelling what is left, joining its executor) stays under the
+    # signals' watchdog: a stop ends within its deadline even if that hangs
+    with asyncio.Runner() as runner:
+        signals = StopSignals(runner.get_loop(), state.request_stop).install()
+        try:
+            return runner.run(_main(args, system_dir, web, state, signals))
+        except asyncio.CancelledError:  # stopped while starting up
+            print("stopped before the robot was up", file=sys.stderr)
+            return 0
+        finally:
+            runner.close()
+            signals.done()
+            signals.close()
 
 
-async def _main(args: argparse.Namespace, system_dir: Path, web: tuple[str, int] | None) -> int:
+class _State:
+    """What a stop request has to reach: the stop event once running, the starting task."""
+
+    def __init__(self) -> None:
+        self.stop = asyncio.Event()
+        self.running = False
+        self.main: asyncio.Task[Any] | None = None
+
+    def request_stop(self) -> None:  # on the loop, at the first SIGINT/SIGTERM
+        self.stop.set()
+        if not self.running and self.main is not None:
+            self.main.cancel()  # still starting: unwind the start (bounded like a stop)
+
+
+async def _main(args: argparse.Namespace, system_dir: Path, web: tuple[str, int] | None,
+                state: _State, signals: StopSignals) -> int:
     from host.board.keys import load_key
     from host.commands.terminal import TerminalLines
     from host.daemon import memprobe
@@ -119,14 +153,12 @@ async def _main(args: argparse.Namespace, system_dir: Path, web: tuple[str, int]
     from host.launch.stopping import Stopping
     from host.operator.client import default_socket
 
-    loop = asyncio.get_running_loop()
-    stop = asyncio.Event()
+    state.main = asyncio.current_task()
+    stop = state.stop
     terminal: TerminalLines | None = None
     stopping: Stopping | None = None
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        loop.add_signal_handler(sig, stop.set)
     faulthandler.register(signal.SIGUSR1, all_threads=True)  # where it is, for a bug report
-    memprobe.install(loop)  # off unless $DXBOARD_MEMPROBE is set
+    memprobe.install(signals.on)  # off unless $DXBOARD_MEMPROBE is set
     try:
         key = load_key(args.key_file) if (args.key_file or not args.emulate) else None
         journal = Path(args.journal)
@@ -141,7 +173,11 @@ async def _main(args: argparse.Namespace, system_dir: Path, web: tuple[str, int]
         terminal = None if args.quiet else TerminalLines(paused=True)
         if terminal is not None:
             launch.readers = (terminal,)
-        async with LaunchedRobot(launch) as robot:
+        robot = LaunchedRobot(launch)
+        stopping = Stopping(lambda: robot.closing)  # says what a slow stop waits for
+        await robot.__aenter__()  # a stop request meanwhile cancels it: it unwinds, bounded
+        state.running = True
+        try:
             for line in robot.lines():
                 print(line)
             sys.stdout.flush()
@@ -157,14 +193,13 @@ async def _main(args: argparse.Namespace, system_dir: Path, web: tuple[str, int]
                 waiter.result()  # a failed task: raise it
             if terminal is not None:
                 terminal.say("stopping")
-            stopping = Stopping(lambda: robot.closing)  # says what a slow stop waits for
+        finally:
+            signals.begin()  # whatever ended the run, its stop is bounded
             stopping.start()
+            await robot.close()
         return 0
     finally:
         if stopping is not None:
             stopping.done()
         if terminal is not None:
             terminal.close()
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            with contextlib.suppress(Exception):
-                loop.remove_signal_handler(sig)

@@ -24,7 +24,6 @@ observations and deadlines and one wall clock (``wall``) for the journal and the
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import dataclasses
 import logging
 import os
@@ -72,12 +71,14 @@ from host.web.server import WebServer
 from host.web.status import MemoryStatusSource, Status
 
 from .external import ExternalActuators, check_external
+from .stages import StopStages
 from .stream import EventStream
 
 log = logging.getLogger(__name__)
 
-SAMPLE_S = 0.2
-CLOSE_FLUSH_S = 10.0  # the page's sparklines: a sample of every channel this often
+SAMPLE_S = 0.2  # the page's sparklines: a sample of every channel this often
+STOP_BUDGET_S = 6.5  # close(): all its stages (host.daemon.stages), below the signals' 9 s
+JOURNAL_S = 1.5  # of which the journal's last commit may take this much
 
 
 @dataclass
@@ -205,7 +206,7 @@ class Daemon:
         self._telemetry = TelemetryDownsampler(period_s=1.0)
         self.ros_out: Any = None  # the ROS 2 publisher, with a ros2 source
         self.lifecycle: Any = None  # the lifecycle actuator, with a ros2 source
-        self.closing = ""  # what close() is closing now
+        self._stages: StopStages | None = None  # the stop, once close() began
 
     @property
     def result(self) -> Any:
@@ -311,58 +312,65 @@ class Daemon:
         self._stop.set()
 
     async def close(self) -> None:
-        """Stop everything, in the reverse order of starting; idempotent. Each step names
-        itself in ``self.closing`` (``host.launch.stopping`` says which one a slow stop waits
-        for)."""
+        """Stop everything, in the reverse order of starting; idempotent. Each stage has a
+        deadline within ``STOP_BUDGET_S`` (``host.daemon.stages``): one that overruns it is
+        cut short (the nodes then get SIGKILL), logged, and the stop goes on. The stage
+        running now is ``self.closing`` (``host.launch.stopping`` says it while it waits)."""
+        stages = self._stages = StopStages(STOP_BUDGET_S)
+        keep = JOURNAL_S + 0.5  # the journal's last commit comes late: keep it its time
 
-        def stage(name: str) -> None:
-            self.closing = name
-
-        stage("the daemon's tasks")
-        for task in self._tasks:
-            task.cancel()
-        for task in self._tasks:
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await task
-        self._tasks = []
+        if self._tasks:
+            running, self._tasks = self._tasks, []
+            for task in running:
+                task.cancel()
+            await stages.run("the daemon's tasks (the board link, the diagnosis)",
+                             asyncio.gather(*running, return_exceptions=True), 1.0,
+                             reserve_s=keep)
         if self.operator is not None:
-            stage("the operator socket")
-            await self.operator.close()
-            self.operator = None
-        stage("the repairs and the nodes they started")
-        await self.repairs.close()
-        stage("the observers")
-        await self.hub.close()
-        stage("the topic source")
-        with contextlib.suppress(Exception):
-            self.source.close()
+            operator, self.operator = self.operator, None
+            await stages.run("the operator socket", operator.close(), 0.5, reserve_s=keep)
+        sup = self.repairs.executor.actuators.supervisor
+        await stages.run("the repairs and the nodes they started", self.repairs.close(), 3.0,
+                         on_cut=None if sup is None else sup.kill_all, reserve_s=keep)
+        await stages.run("the observers", self.hub.close(), 1.0, reserve_s=keep)
+        source = getattr(self, "source", None)
+        if source is not None:
+            await stages.run("the topic source", source.close, 1.0, reserve_s=keep)
         if self.ros_out is not None:
-            stage("the ROS 2 publishers")
-            self.ros_out.close()
+            ros_out, self.ros_out = self.ros_out, None
+            await stages.run("the ROS 2 publishers", ros_out.close, 0.5, reserve_s=keep)
         if self.lifecycle is not None:
-            stage("the lifecycle client")
-            self.lifecycle.close()
-        self.external.close()
+            lifecycle, self.lifecycle = self.lifecycle, None
+            await stages.run("the lifecycle client", lifecycle.close, 0.5, reserve_s=keep)
+        await stages.run("the nodes started elsewhere (their lifecycle clients)",
+                         self.external.close, 0.5, reserve_s=keep)
         if self.web is not None:
-            stage("the web page")
-            await self.web.close()
-            self.web = None
+            web, self.web = self.web, None
+            await stages.run("the web page", web.close(), 1.0, reserve_s=keep)
         telemetry = self._telemetry.flush()
         if telemetry is not None:
             self.emit(telemetry)
+        if stages.cut:
+            self.emit(Note("the stop cut short " + ", ".join(stages.cut), "warning"))
         self.emit(Note("dxboard run stopped"))
         if self.journal is not None:
-            stage("the journal's last commit")
-            try:  # a journal whose disk failed must not keep the daemon from stopping
-                await asyncio.wait_for(self.journal.flush(), CLOSE_FLUSH_S)
-            except TimeoutError:
-                log.error("journal %s: not everything was committed within %g s",
-                          self.journal.path, CLOSE_FLUSH_S)
-            self.journal.close()
-            self.journal = None
-        stage("the diagnosis engine")
-        self.diagnosis.close()
-        stage("the rest")
+            journal, self.journal = self.journal, None
+            if not await stages.run("the journal's last commit", journal.flush(), JOURNAL_S):
+                log.error("journal %s: not everything was committed within the stop's "
+                          "deadline", journal.path)
+            await stages.run("the journal file", journal.close, 0.5)
+        await stages.run("the diagnosis engine", self.diagnosis.close, 0.5)
+        self.closing = "the rest"
+
+    @property
+    def closing(self) -> str:
+        """What ``close()`` is closing now ("" before it started)."""
+        return self._stages.current if self._stages is not None else ""
+
+    @closing.setter
+    def closing(self, what: str) -> None:
+        if self._stages is not None:
+            self._stages.current = what
 
     # --- observations and diagnoses -----------------------------------------------------
 

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import ctypes
 import logging
 import os
 import secrets
@@ -23,19 +22,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from host.errors import UserError
+from host.lifeline import lifeline
 
 log = logging.getLogger(__name__)
 
 START_TIMEOUT_S = 30.0
-PR_SET_PDEATHSIG = 1
-
-
-def _die_with_parent() -> None:
-    """In the child, before exec: on Linux, get SIGTERM when the daemon dies, even by
-    SIGKILL, so that an emulated board never outlives the daemon that started it."""
-    if sys.platform.startswith("linux"):
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+STOP_GRACE_S = 1.0  # SIGTERM, then SIGKILL: the emulator holds nothing worth waiting for
 
 
 @dataclass
@@ -60,10 +52,10 @@ class EmulatedBoard:
         log.info("starting the emulated board: %s", " ".join(argv))
         # a session of its own: Ctrl-C on the terminal reaches the daemon alone, which stops
         # its nodes and then this board, in order (the board gone first read as a lost link
-        # at every stop); it still dies with the daemon (_die_with_parent)
+        # at every stop); it still dies with the daemon, even a killed one (host.lifeline)
         proc = await asyncio.create_subprocess_exec(
             *argv, env=env, stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE,
-            preexec_fn=_die_with_parent, start_new_session=True,
+            preexec_fn=lifeline(), start_new_session=True,
         )
         board = cls(proc, key)
         try:
@@ -117,7 +109,7 @@ class EmulatedBoard:
                 break
             self._take(line)
 
-    async def stop(self, grace_s: float = 5.0) -> None:
+    async def stop(self, grace_s: float = STOP_GRACE_S) -> None:
         for task in self._drains:
             task.cancel()
         proc = self.process

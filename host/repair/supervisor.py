@@ -18,8 +18,10 @@
 ``start`` of a node that runs already returns its pid without starting a second copy; ``stop``
 of a node that does not run is a no-op. ``close()`` stops every process it started.
 
-Nodes outlive a daemon that is killed (they run in their own sessions, so a robot does not lose
-its drivers when its watchdog restarts), but never unnoticed: the supervisor keeps a record of
+Nodes die with the daemon, even one killed with SIGKILL (``host.lifeline``: no orphan keeps
+running unsupervised; under systemd the unit's control group would end them anyway). They run
+in their own sessions (so a terminal's Ctrl-C reaches the daemon alone, which stops them in
+order), and the supervisor keeps a record of
 what it runs (``log_dir/nodes.json``: pid, start time, command line and a digest of the
 environment it gave), and ``adopt()``, called by the next daemon before it repairs anything,
 takes over every recorded node that still runs the same command with the same environment
@@ -44,6 +46,7 @@ from typing import IO
 import psutil
 
 from host.errors import RemoteError
+from host.lifeline import lifeline
 from host.repair.processes import ProcessConfig
 
 log = logging.getLogger(__name__)
@@ -152,6 +155,15 @@ class ProcessSupervisor:
             await r.reaper
         return r.code
 
+    def kill_all(self) -> None:
+        """SIGKILL every process this supervisor started, with its process group, at once (a
+        stop that ran out of time)."""
+        for node, r in list(self._running.items()):
+            if r.code is None:
+                log.warning("%s (pid %d): SIGKILL, the stop ran out of time", node, r.pid)
+                r.stopping = True
+                self._signal(r.pid, signal.SIGKILL)
+
     async def close(self) -> None:
         """Stop every process this supervisor started (units are left to systemd), all at
         once: one after the other, nine nodes on a loaded machine took longer than a person
@@ -173,7 +185,8 @@ class ProcessSupervisor:
             proc = await asyncio.create_subprocess_exec(
                 *cfg.argv, stdin=asyncio.subprocess.DEVNULL, stdout=logf,
                 stderr=asyncio.subprocess.STDOUT, cwd=cfg.cwd,
-                env={**os.environ, **self.env, **cfg.env}, start_new_session=True)
+                env={**os.environ, **self.env, **cfg.env}, start_new_session=True,
+                preexec_fn=lifeline())  # dies with the daemon, even a killed one
         except OSError as exc:
             logf.write(f"--- cannot start: {exc}\n".encode())
             logf.close()

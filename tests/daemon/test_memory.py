@@ -113,10 +113,11 @@ async def test_the_memory_probe_writes_a_snapshot_on_sigusr2_only_when_asked(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     loop = asyncio.get_running_loop()
     monkeypatch.delenv(memprobe.ENV, raising=False)
-    assert memprobe.install(loop) is None and not tracemalloc.is_tracing()  # off: nothing
+    assert memprobe.install(loop.add_signal_handler) is None  # off: nothing
+    assert not tracemalloc.is_tracing()
     monkeypatch.setenv(memprobe.ENV, str(tmp_path / "probe"))
     try:
-        out = memprobe.install(loop)
+        out = memprobe.install(loop.add_signal_handler)
         assert out == tmp_path / "probe" and tracemalloc.is_tracing()
         for n in (1, 2):
             os.kill(os.getpid(), signal.SIGUSR2)

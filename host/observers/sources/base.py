@@ -3,18 +3,22 @@
 A source owns its clock (``clock``, seconds, monotonic by default): it stamps each message
 with the host time it arrived, since it is the I/O edge; observers below it never read a clock.
 Callbacks run on the asyncio loop's thread (a backend with its own threads marshals them
-there), must not block, and see messages of one topic in arrival order. ``close()`` is
+there through one ``host.observers.sources.inbox.Inbox``: one wakeup of the loop per batch,
+never one per message, and ``dropped`` counts what a lagging loop lost), must not block, and
+see messages of one topic in arrival order. ``close()`` is
 idempotent; sources are async context managers.
 """
 
 from __future__ import annotations
 
+import asyncio
 import time
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from types import TracebackType
 
 from host.observers.payload import Message
+from host.observers.sources.inbox import Inbox
 
 Callback = Callable[[Message], None]
 Clock = Callable[[], float]
@@ -30,6 +34,19 @@ class TopicSource(ABC):
     def __init__(self, clock: Clock = time.monotonic) -> None:
         self.clock = clock
         self._closed = False
+        self._inbox: Inbox[tuple[Callback, Message]] | None = None
+
+    def _post(self, loop: asyncio.AbstractEventLoop, callback: Callback, msg: Message) -> None:
+        """Hand ``callback(msg)`` to ``loop`` from a middleware thread (batched, bounded)."""
+        inbox = self._inbox
+        if inbox is None:
+            inbox = self._inbox = Inbox(loop, _call, name=f"{type(self).__name__} messages")
+        inbox.put((callback, msg))
+
+    @property
+    def dropped(self) -> int:
+        """Messages lost because the loop fell too far behind (see ``Inbox``)."""
+        return 0 if self._inbox is None else self._inbox.dropped
 
     @abstractmethod
     def subscribe(self, topic: str, callback: Callback) -> Subscription:
@@ -49,6 +66,10 @@ class TopicSource(ABC):
     async def __aexit__(self, exc_type: type[BaseException] | None,
                         exc: BaseException | None, tb: TracebackType | None) -> None:
         self.close()
+
+
+def _call(item: tuple[Callback, Message]) -> None:
+    item[0](item[1])
 
 
 def check_topic(topic: str) -> str:

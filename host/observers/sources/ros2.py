@@ -6,7 +6,8 @@
 the source reads every ``discovery_s`` until a publisher of the topic shows up (so the
 observers may start before the robot's nodes). Subscriptions are *raw*: rclpy hands over the
 serialized CDR bytes, stamped with the source's clock on the executor's thread and passed to
-the asyncio loop with ``call_soon_threadsafe`` as a ``host.ros.message.RosMessage``. A
+the asyncio loop through the source's inbox (one wakeup per batch, ``TopicSource._post``) as a
+``host.ros.message.RosMessage``. A
 frequency observer only counts them; value and diagnostic observers decode them on demand.
 
 QoS adapts to the publishers, as ``ros2 bag record`` does: keep last ``DEPTH``, reliable when every
@@ -26,7 +27,6 @@ for ``host.ros.graph.GraphObserver`` (node presence).
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 from collections.abc import Mapping
 from typing import Any
@@ -61,8 +61,7 @@ class _RosSubscription(Subscription):
 
     def deliver(self, msg: Message) -> None:  # on the executor's thread
         if self.open:
-            with contextlib.suppress(RuntimeError):  # the loop closed meanwhile
-                self.loop.call_soon_threadsafe(self.callback, msg)
+            self.source._post(self.loop, self.callback, msg)
 
     def close(self) -> None:
         if self.open:

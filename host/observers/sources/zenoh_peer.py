@@ -14,13 +14,13 @@ Without it, such peers send to the daemon over the loopback link like any other.
 Topic names map to key expressions by dropping the leading slash and adding ``prefix``:
 ``/odom`` is ``odom`` (or ``robot1/odom`` with prefix ``robot1``). Zenoh calls subscribers on
 its own threads; each sample is stamped with the source's clock there and handed to the
-asyncio loop with ``call_soon_threadsafe``, so callbacks run on the loop's thread in order.
+asyncio loop through the source's inbox (``TopicSource._post``: one wakeup per batch), so
+callbacks run on the loop's thread in order.
 """
 
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import json
 import logging
 from collections.abc import Sequence
@@ -84,10 +84,7 @@ class ZenohSource(TopicSource):
         clock = self.clock
 
         def on_sample(sample: zenoh.Sample) -> None:  # on a zenoh thread
-            msg = Message(clock(), topic, sample.payload.to_bytes())
-            # the loop may have closed while zenoh was still delivering
-            with contextlib.suppress(RuntimeError):
-                loop.call_soon_threadsafe(callback, msg)
+            self._post(loop, callback, Message(clock(), topic, sample.payload.to_bytes()))
 
         sub = _ZenohSubscription(
             self.session.declare_subscriber(key_of(topic, self.prefix), on_sample))
