@@ -187,6 +187,15 @@ def system_yaml_keys() -> list[tuple[str, str, str]]:
          "s from SIGTERM to SIGKILL"),
         ("processes.NODE.lifecycle", "`false`",
          "a ROS 2 managed node: repaired by `reconfigure_node` on ROS 2"),
+        ("external", "`{}`", "nodes started elsewhere (a launcher, systemd, a container) and "
+         "how dxboard repairs them (`host/repair/external.py`, [your robot](../your-robot.md))"),
+        ("external.NODE.lifecycle", "`false`",
+         "a ROS 2 managed node: dxboard is its lifecycle manager (ROS 2 only)"),
+        ("external.NODE.after", "`[]`", "lifecycle nodes brought up before this one"),
+        ("external.NODE.systemd", "none (at most one of systemd, command, container)",
+         "restarted with `systemctl restart UNIT`"),
+        ("external.NODE.command", "none", "restarted by running this argv"),
+        ("external.NODE.container", "none", "restarted with `docker restart NAME`"),
     ]
 
 
