@@ -1,7 +1,7 @@
 """Context & plan interpreter (paper 004 §4.3.1.3): the history with the domain, step by step.
 
 ``interpret_context`` grounds every executed step's action, the fault modes that may replace it
-and the exogenous events that may happen in each gap (through ``host.repair.grounding``, with
+and the exogenous events that may happen in each gap (through ``host.planning.grounding``, with
 the static facts of the initial knowledge base), checks the history against the domain (every
 action, object, type and atom is known; ``HistoryError`` names the place otherwise), and returns
 the ``Problem`` the engines search together with the knowledge base the dispatcher held at
@@ -23,11 +23,11 @@ from host.plandiag.errors import HistoryError
 from host.plandiag.history import History, Result, Where
 from host.plandiag.model import FaultKind, FaultSchema, PlanModel
 from host.plandiag.problem import Fault, Problem, StepSpec
-from host.repair.domain import ROOT_TYPE
-from host.repair.domain import Atom as PAtom
-from host.repair.errors import DomainError
-from host.repair.grounding import Grounder
-from host.repair.task import GroundOp, Task
+from host.planning.domain import ROOT_TYPE
+from host.planning.domain import Atom as PAtom
+from host.planning.errors import DomainError
+from host.planning.grounding import Grounder
+from host.planning.task import GroundOp, Task
 
 log = logging.getLogger(__name__)
 

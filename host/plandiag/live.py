@@ -30,7 +30,6 @@ from enum import StrEnum
 from host.atoms import Atom
 from host.events import Dispatch, Event, KbChange, PlanDiagnosis
 from host.mission.dispatcher import Dispatched
-from host.mission.pddl import Domain, Literal, parse_atom
 from host.plandiag.errors import HistoryError
 from host.plandiag.history import (
     Alarm,
@@ -44,6 +43,7 @@ from host.plandiag.history import (
 from host.plandiag.model import PlanModel
 from host.plandiag.pipeline import Explanation, explain_history
 from host.plandiag.text import listing, winning_path
+from host.planning.temporal_pddl import Domain, Literal, parse_atom
 
 log = logging.getLogger(__name__)
 

@@ -24,7 +24,7 @@ from host.plandiag.context import Context
 from host.plandiag.history import History, Result
 from host.plandiag.model import PlanModel
 from host.plandiag.problem import Stop, simulate
-from host.repair.domain import ROOT_TYPE, CAnd, CAtom, CNot, Cond, Schema
+from host.planning.domain import ROOT_TYPE, CAnd, CAtom, CNot, Cond, Schema
 
 MAX_CANDIDATES = 5
 

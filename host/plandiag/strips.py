@@ -1,12 +1,12 @@
 """The mission layer's temporal domain read as plan-execution diagnosis reads it: STRIPS.
 
-The mission layer plans with durative actions (``host.mission.pddl``); plan-execution diagnosis
-explains histories of steps with preconditions and effects (``host.plandiag.model``). One robot
-does one action at a time, so a durative action is one step: its **precondition** is its start
-and over-all conditions and the end conditions its start effects do not establish; its
-**effect** is its start effects followed by its end effects (an end effect overrides a start
-effect on the same atom). ``strips_text`` writes that reading as PDDL text (typed STRIPS with
-negative preconditions) for ``build_model``, so the mission's domain stays the one source:
+The mission layer plans with durative actions (``host.planning.temporal_pddl``); plan-execution
+diagnosis explains histories of steps with preconditions and effects (``host.plandiag.model``).
+One robot does one action at a time, so a durative action is one step: its **precondition** is
+its start and over-all conditions and the end conditions its start effects do not establish;
+its **effect** is its start effects followed by its end effects (an end effect overrides a
+start effect on the same atom). ``strips_text`` writes that reading as PDDL text (typed STRIPS
+with negative preconditions) for ``build_model``, so the mission's domain stays the one source:
 ``load_mission_model`` joins it with ``faults.pddl`` beside it (the fault modes and exogenous
 events, written over the same types and predicates).
 """
@@ -15,9 +15,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from host.mission.pddl import Action, Domain, Literal
 from host.plandiag.errors import PlanModelError
 from host.plandiag.model import FAULTS_FILE, PlanModel, build_model
+from host.planning.temporal_pddl import Action, Domain, Literal
 
 
 def _lit(lit: Literal) -> str:

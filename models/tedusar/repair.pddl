@@ -10,7 +10,7 @@
 ;                    with a ros2 source)
 ;   (lost ?n)        running node ?n lost its device to a power switch of this plan (never in
 ;                    the initial state: a node found abnormal is restarted, not reconfigured)
-; The planner's words for the roles it fills from a diagnosis (host/repair/vocabulary.py; the
+; The planner's words for the roles it fills from a diagnosis (host/planning/vocabulary.py; the
 ; original system's domain says bad/good/not_on instead, and is read by the same conventions):
 ; dxboard-vocabulary: abnormal=ab powered=on running=running
 ; Beyond the paper's power_up, shutdown, start_node and stop_node: power_cycle (one board

@@ -29,9 +29,9 @@ from dataclasses import dataclass
 from host.atoms import Atom
 from host.plandiag.history import Alarm, History, Observation, Result, Step, Where
 from host.plandiag.model import PlanModel, build_model
-from host.repair.domain import Atom as PAtom
-from host.repair.grounding import Grounder
-from host.repair.task import GroundOp
+from host.planning.domain import Atom as PAtom
+from host.planning.grounding import Grounder
+from host.planning.task import GroundOp
 
 ACTIONS = 4
 PREDICATES = 4

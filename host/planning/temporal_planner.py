@@ -25,7 +25,7 @@ import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
-from host.mission.pddl import Action, Atom, Domain, Literal, Problem
+from host.planning.temporal_pddl import Action, Atom, Domain, Literal, Problem
 
 log = logging.getLogger(__name__)
 
