@@ -26,10 +26,10 @@ import logging
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
+from typing import Protocol
 
 from host.atoms import Atom
 from host.events import Dispatch, Event, KbChange, PlanDiagnosis
-from host.mission.dispatcher import Dispatched
 from host.plandiag.errors import HistoryError
 from host.plandiag.history import (
     Alarm,
@@ -46,6 +46,24 @@ from host.plandiag.text import listing, winning_path
 from host.planning.temporal_pddl import Domain, Literal, parse_atom
 
 log = logging.getLogger(__name__)
+
+
+class EndedStep(Protocol):
+    """What ``MissionDiagnoser.ended`` reads of a dispatcher's end of a step (the mission
+    layer's ``host.mission.dispatcher.Dispatched`` is one), so that plan-execution diagnosis
+    does not import the layer it diagnoses."""
+
+    @property
+    def dispatch_id(self) -> str: ...
+
+    @property
+    def outcome(self) -> str: ...  # one of ``Ending``'s values but HALTED
+
+    @property
+    def halted(self) -> bool: ...
+
+    @property
+    def alarm(self) -> tuple[Literal, ...]: ...
 
 
 class Ending(StrEnum):
@@ -130,11 +148,11 @@ class MissionDiagnoser:
         for atom, value in lits:
             seen[atom] = value
 
-    def ended(self, done: Dispatched, at: float) -> None:
+    def ended(self, done: EndedStep, at: float) -> None:
         """The dispatcher's end of a step: how, when, what it observed that raised an alarm."""
         rec = self._record(done.dispatch_id)
         if rec is not None:
-            ending = Ending.HALTED if done.halted else Ending(done.outcome.value)
+            ending = Ending.HALTED if done.halted else Ending(done.outcome)
             rec.ending, rec.end, rec.alarm_atoms = ending, at, done.alarm
 
     def surprise(self) -> tuple[Literal, ...]:
