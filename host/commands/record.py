@@ -46,8 +46,8 @@ async def _main(args: argparse.Namespace, system_dir: Path, bag: Path) -> int:
     import asyncio
     import signal
 
+    from host.commands.bagrun import load_ros_robot, record
     from host.journal import Journal
-    from host.ros.bagrun import load_ros_robot, record
 
     robot = load_ros_robot(system_dir)
     journal = Journal(args.journal) if args.journal else None
