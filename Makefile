@@ -31,8 +31,9 @@ run: $(STAMP)
 test: $(STAMP) lint pytest mpytest
 
 lint: $(STAMP)
-	$(BIN)/ruff check protocol firmware emulator host tests benchmarks
+	$(BIN)/ruff check protocol firmware emulator host tests benchmarks scripts
 	$(BIN)/mypy
+	$(BIN)/python scripts/layers.py
 
 pytest: $(STAMP) browser
 	$(BIN)/pytest
