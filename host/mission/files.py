@@ -23,7 +23,7 @@ from host.errors import UserError
 from host.executive.trees import Recipe, RecipeError, parse_recipe
 from host.mission.runner import GoalRule
 from host.mission.sensing import KEYS, Sensing
-from host.planning.temporal_pddl import Domain, PddlError, Problem, load, parse_atom
+from host.planning.temporal_pddl import PddlError, TemporalDomain, TemporalProblem, load, parse_atom
 from host.skills.skill import SkillSpec
 
 MISSION_DIR = "mission"
@@ -34,8 +34,8 @@ FIELDS = {"domain", "problem", "goals", "sensing", "skills", "actions", "max_hol
 @dataclass(frozen=True)
 class MissionFiles:
     path: Path
-    domain: Domain
-    problem: Problem
+    domain: TemporalDomain
+    problem: TemporalProblem
     rules: tuple[GoalRule, ...]
     sensing: Sensing
     skills: dict[str, SkillSpec]
@@ -81,7 +81,7 @@ def _skills(path: Path, raw: Any, model: SystemModel | None) -> dict[str, SkillS
     return out
 
 
-def _recipes(path: Path, raw: Any, domain: Domain, skills: dict[str, SkillSpec]
+def _recipes(path: Path, raw: Any, domain: TemporalDomain, skills: dict[str, SkillSpec]
              ) -> dict[str, Recipe]:
     if not isinstance(raw, dict):
         raise UserError(f"{path}: 'actions' must map each domain action to its recipe",

@@ -36,7 +36,7 @@ from host.events import Event, MissionState, MissionStep
 from host.layers import MISSION, Result
 from host.mission.dispatcher import Dispatched, Dispatcher, Outcome
 from host.mission.kb import KnowledgeBase
-from host.planning.temporal_pddl import Atom, Domain, Literal, Problem, spell
+from host.planning.temporal_pddl import Atom, Literal, TemporalDomain, TemporalProblem, spell
 from host.planning.temporal_planner import Ground, ground, holds, plan
 from host.skills import Layer0View, State
 
@@ -84,7 +84,7 @@ class MissionOutcome:
 
 
 class MissionRunner:
-    def __init__(self, domain: Domain, problem: Problem, rules: Sequence[GoalRule],
+    def __init__(self, domain: TemporalDomain, problem: TemporalProblem, rules: Sequence[GoalRule],
                  kb: KnowledgeBase, dispatcher: Dispatcher,
                  needs_of: Mapping[str, Sequence[str]], layer0: Layer0View | None,
                  emit: Callable[[Event], None], mission_id: str = "m1",

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 from host.atoms import Atom
 from host.plandiag.errors import HistoryError
-from host.plandiag.history import History, Result, Where
+from host.plandiag.history import History, StepResult, Where
 from host.plandiag.model import FaultKind, FaultSchema, PlanModel
 from host.plandiag.problem import Fault, Problem, StepSpec
 from host.planning.domain import ROOT_TYPE
@@ -88,9 +88,9 @@ def interpret_context(model: PlanModel, history: History, suspicion: Suspicion) 
                                f"the mission domain has {', '.join(sorted(model.actions))}")
         _check_args(model, history, schema.parameters, step.args, place)
         nominal = grounder.instantiate(schema, step.args)
-        if nominal is not None and step.result is Result.FAIL:
+        if nominal is not None and step.result is StepResult.FAIL:
             nominal = None  # it ran and failed: not as intended
-        elif nominal is not None and step.result is Result.HALTED:
+        elif nominal is not None and step.result is StepResult.HALTED:
             nominal = GroundOp.make(nominal.name, nominal.args, (), ())  # stopped: unknown
         modes: list[int] = []
         if step.executed():
@@ -166,7 +166,7 @@ def _dispatcher_kb(problem: Problem, history: History) -> tuple[list[int], list[
         after.append(state)
         if not spec.executed:
             break
-        if step.result is Result.SUCCESS and spec.nominal is not None:
+        if step.result is StepResult.SUCCESS and spec.nominal is not None:
             state = spec.nominal.apply(state)
         kb.append(state)
         state = _override(problem, 2 * spec.index, state)

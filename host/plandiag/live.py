@@ -35,15 +35,15 @@ from host.plandiag.history import (
     Alarm,
     ComponentHealth,
     History,
-    Observation,
-    Result,
-    Step,
+    HistoryStep,
+    MissionObservation,
+    StepResult,
     Where,
 )
 from host.plandiag.model import PlanModel
 from host.plandiag.pipeline import Explanation, explain_history
 from host.plandiag.text import listing, winning_path
-from host.planning.temporal_pddl import Domain, Literal, parse_atom
+from host.planning.temporal_pddl import Literal, TemporalDomain, parse_atom
 
 log = logging.getLogger(__name__)
 
@@ -111,7 +111,7 @@ class Diagnosed:
 class MissionDiagnoser:
     """The mission layer's plan-execution diagnosis: record, explain on an alarm, correct."""
 
-    def __init__(self, model: PlanModel, domain: Domain, mission_id: str,
+    def __init__(self, model: PlanModel, domain: TemporalDomain, mission_id: str,
                  health: Callable[[], ComponentHealth] = ComponentHealth,
                  engine: str = "sat") -> None:
         self.model = model
@@ -176,8 +176,8 @@ class MissionDiagnoser:
         if last is None or not recs:
             raise HistoryError("nothing was dispatched yet", "diagnose after a step")
         init = {to_atom(parse_atom(a)) for a in recs[0].kb}
-        pre: list[list[Observation]] = [[] for _ in recs]
-        post: list[list[Observation]] = [[] for _ in recs]
+        pre: list[list[MissionObservation]] = [[] for _ in recs]
+        post: list[list[MissionObservation]] = [[] for _ in recs]
         for atom, value in self.at_start.items():
             self._place(atom, value, init, pre[0], Where.PRE, None)
         for i, rec in enumerate(recs):
@@ -189,24 +189,24 @@ class MissionDiagnoser:
                     self._place(atom, value, init, pre[i + 1], Where.PRE, rec.end)
         steps = []
         for i, rec in enumerate(recs):
-            result = _RESULT[rec.ending or Ending.DONE] if rec.ok else Result.NOT_RUN
+            result = _RESULT[rec.ending or Ending.DONE] if rec.ok else StepResult.NOT_RUN
             obs = pre[i] + (post[i] if rec.ok else [])
             if not rec.ok:  # what the check found: the KB the dispatcher held
                 have = {o.atom for o in obs}
-                obs += [Observation(to_atom(a), v, Where.PRE, rec.start, "check")
+                obs += [MissionObservation(to_atom(a), v, Where.PRE, rec.start, "check")
                         for a, v in rec.failed if to_atom(a) not in have]
-            steps.append(Step(rec.action, rec.args, result, tuple(obs), rec.start, rec.end))
+            steps.append(HistoryStep(rec.action, rec.args, result, tuple(obs), rec.start, rec.end))
         alarm = self._alarm(len(steps), last, message, observed)
         return History(dict(objects), frozenset(init), tuple(steps), alarm, self.health())
 
     def _place(self, atom: tuple[str, ...], value: bool, init: set[Atom],
-               into: list[Observation], where: Where, t: float | None) -> None:
+               into: list[MissionObservation], where: Where, t: float | None) -> None:
         a = to_atom(atom)
         if atom[0] in self.static:
             if value:
                 init.add(a)  # it held all along (a victim found where it lies)
             return
-        into.append(Observation(a, value, where, t, "sensing"))
+        into.append(MissionObservation(a, value, where, t, "sensing"))
 
     def _mentioned(self, rec: _Record) -> set[tuple[str, ...]]:
         """The ground atoms the step's action names in its conditions and effects."""
@@ -269,9 +269,9 @@ class MissionDiagnoser:
             kb, pe_text, round(e.elapsed_s, 4))
 
 
-_RESULT = {Ending.DONE: Result.SUCCESS, Ending.SURPRISE: Result.SUCCESS,
-           Ending.FAILED: Result.FAIL, Ending.HALTED: Result.HALTED,
-           Ending.REFUSED: Result.NOT_RUN}
+_RESULT = {Ending.DONE: StepResult.SUCCESS, Ending.SURPRISE: StepResult.SUCCESS,
+           Ending.FAILED: StepResult.FAIL, Ending.HALTED: StepResult.HALTED,
+           Ending.REFUSED: StepResult.NOT_RUN}
 
 
 def corrections(e: Explanation) -> tuple[Literal, ...]:

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from host.plandiag.errors import PlanModelError
 from host.plandiag.model import FAULTS_FILE, PlanModel, build_model
-from host.planning.temporal_pddl import Action, Domain, Literal
+from host.planning.temporal_pddl import Action, Literal, TemporalDomain
 
 
 def _lit(lit: Literal) -> str:
@@ -42,7 +42,7 @@ def step_of(action: Action) -> tuple[list[Literal], list[Literal]]:
     return pre, list(eff.items())
 
 
-def strips_text(domain: Domain) -> str:
+def strips_text(domain: TemporalDomain) -> str:
     types = " ".join(f"{t} - {p}" for t, p in domain.types.items())
     preds = " ".join("(" + " ".join([p, *(f"?x{i} - {t}" for i, t in enumerate(ts))]) + ")"
                      for p, ts in domain.predicates.items())
@@ -57,7 +57,7 @@ def strips_text(domain: Domain) -> str:
     return "\n".join(out) + ")\n"
 
 
-def load_mission_model(domain: Domain, mission_dir: Path) -> PlanModel:
+def load_mission_model(domain: TemporalDomain, mission_dir: Path) -> PlanModel:
     """The plan model of a mission: its domain read as STRIPS, with ``faults.pddl`` of
     ``mission_dir`` (none there: no fault modes or events, every failure a plan error)."""
     faults = mission_dir / FAULTS_FILE
