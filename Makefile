@@ -48,8 +48,9 @@ check: $(STAMP) lint
 	$(BIN)/pytest --in-process -n $(PYTEST_WORKERS) --dist loadfile
 
 lint: $(STAMP)
-	$(BIN)/ruff check protocol firmware emulator host tests benchmarks
+	$(BIN)/ruff check protocol firmware emulator host tests benchmarks scripts
 	$(BIN)/mypy
+	$(BIN)/python scripts/layers.py
 
 pytest: $(STAMP) browser prometheus
 	$(BIN)/pytest -n $(PYTEST_WORKERS) --dist loadfile

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from host.plandiag.problem import Problem, bits, effective_delete
-from host.repair.task import GroundOp
+from host.planning.task import GroundOp
 
 
 def _cond(pre_t: int, pre_f: int) -> list[str]:

@@ -37,8 +37,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from host.diagnosis.logic import Literal  # noqa: E402
-from host.repair.domain import Domain, load_domain  # noqa: E402
-from host.repair.downward import DownwardRun, driver_path, run_fast_downward  # noqa: E402
+from host.planning.domain import Domain, load_domain  # noqa: E402
+from host.planning.downward import DownwardRun, driver_path, run_fast_downward  # noqa: E402
 from host.repair.planner import RepairPlanner  # noqa: E402
 from host.repair.problem import RepairModel  # noqa: E402
 

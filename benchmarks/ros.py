@@ -187,9 +187,9 @@ def run_one(middleware: str, system_dir: Path, devices: dict[str, str], seconds:
 
 def replay_speed(system_dir: Path, devices: dict[str, str], seconds: float,
                  tmp: Path) -> dict[str, float]:
+    from host.commands.bagrun import load_ros_robot, replay
     from host.journal import Journal
     from host.ros.bag import Bag
-    from host.ros.bagrun import load_ros_robot, replay
 
     ros_dir = tmp / "tedusar-ros2"
     shutil.copytree(system_dir, ros_dir)

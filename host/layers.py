@@ -8,7 +8,7 @@ The robot is layered: 0 components (the daemon: observers, SAT diagnosis, repair
 - ``Command`` — down: what layer *i + 1* asks of layer *i*, in layer *i*'s words once φ
   (``Concretize``) has turned it from L_{i+1} into L_i (a PDDL action becomes a tree, a tree's
   leaf becomes a skill goal);
-- ``Observation`` — up: a fact of layer *i* that layer *i + 1* may use for monitoring, once ψ
+- ``LayerObservation`` — up: a fact of layer *i* that layer *i + 1* may use for monitoring, once ψ
   (``Abstract``) has put it in L_{i+1} (the world's state becomes PDDL atoms);
 - ``Result`` — up, once per command: ⟨s, Δ⟩ with ``success`` for s and ``explanation`` for Δ,
   a chain of ``Cause``s, each in the words of the layer that found it, the lowest last. A cause
@@ -46,7 +46,7 @@ class Command:
 
 
 @dataclass(frozen=True)
-class Observation:
+class LayerObservation:
     """A fact seen at ``layer``: ``fact`` names it, ``value`` is plain JSON."""
 
     layer: int
@@ -124,7 +124,7 @@ class Result:
 
 
 Concretize = Callable[[Command], Sequence[Command]]  # φ: L_{i+1} -> L_i
-Abstract = Callable[[Observation], Sequence[Observation]]  # ψ: L_i -> L_{i+1}
+Abstract = Callable[[LayerObservation], Sequence[LayerObservation]]  # ψ: L_i -> L_{i+1}
 
 
 class Layer(Protocol):

@@ -59,7 +59,7 @@ def _check_robot(path: Path) -> int:
     from host.diagnosis.generation import generate
     from host.diagnosis.model import check_system, load_system
     from host.errors import UserError
-    from host.repair.domain import domain_file
+    from host.planning.domain import domain_file
     from host.repair.planner import RepairPlanner
 
     problems = check_system(path)

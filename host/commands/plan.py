@@ -6,7 +6,7 @@ directory (system.yaml and repair.pddl) or a tug model file of the original syst
 components' kinds and dependencies read off the clauses; the domain is ``--domain`` or the
 repair.pddl beside it). Any domain plans whose words for abnormal / healthy / powered / running
 are declared or follow the original's conventions (``bad``/``good``/``not_on``: see
-host/repair/vocabulary.py). Each ``--bad`` is one diagnosis (the components it finds abnormal);
+host/planning/vocabulary.py). Each ``--bad`` is one diagnosis (the components it finds abnormal);
 ``--diagnoses`` reads the JSON of ``dxboard diagnose --json``. With several diagnoses the policy
 picks one (or all at once) and prints why. ``--obs`` holds observations in the format of
 ``dxboard diagnose`` (``~on(jaguar)``, ``running(jaguar_node)``); a literal the model does not
@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from host.repair.plan import Plan
+    from host.planning.plan import Plan
     from host.repair.policy import Candidate
 
 NAME = "plan"
@@ -66,8 +66,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from host.diagnosis.files import load_theory, read_observations
     from host.errors import UserError
-    from host.repair.errors import PlanningLimitError
-    from host.repair.planner import PLANNERS, RepairPlanner
+    from host.planning.errors import PlanningLimitError
+    from host.planning.planners import PLANNERS
+    from host.repair.planner import RepairPlanner
     from host.repair.policy import choose
 
     if args.planner not in PLANNERS:
@@ -137,8 +138,8 @@ def _managed(args: argparse.Namespace) -> list[str]:
 
 def _problem_file(args: argparse.Namespace) -> int:
     from host.errors import UserError
-    from host.repair.domain import load_domain
-    from host.repair.problem_file import plan_problem_file
+    from host.planning.domain import load_domain
+    from host.planning.problem_file import plan_problem_file
 
     if args.domain is None or args.system is not None or args.bad or args.diagnoses \
             or args.obs or args.middleware:

@@ -68,9 +68,9 @@ RECORD_STOP_S = 60.0  # Ctrl-C to exit: closing a large bag can take a while
 async def _main(args: argparse.Namespace, system_dir: Path, bag: Path) -> int:
     import asyncio
 
+    from host.commands.bagrun import load_ros_robot, record
     from host.journal import Journal
     from host.launch.signals import StopSignals
-    from host.ros.bagrun import load_ros_robot, record
 
     robot = load_ros_robot(system_dir, args.middleware)
     journal = Journal(args.journal) if args.journal else None

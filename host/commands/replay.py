@@ -33,9 +33,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from host.commands.bagrun import load_ros_robot, replay
     from host.journal import Journal
     from host.ros.bag import Bag
-    from host.ros.bagrun import load_ros_robot, replay
 
     robot = load_ros_robot(Path(args.system_dir), args.middleware)
     bag = Bag(Path(args.bag))

@@ -48,8 +48,8 @@ class ExternalActuators:
         managed = lifecycle_nodes(self.external)
         if self.kind != "ros2" or not managed or self._ros is not None:
             return
+        from host.observers.sources.ros2_node import RosNode
         from host.ros.manager import LifecycleManager
-        from host.ros.node import RosNode
 
         self._ros = RosNode("dxboard_lifecycle_manager", self.domain)
         manager = LifecycleManager(self._ros)

@@ -22,7 +22,7 @@ import logging
 import time
 from collections.abc import Callable, Iterable, Set
 from concurrent.futures import ThreadPoolExecutor
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from host.diagnosis.coverage import Coverage
 from host.diagnosis.diagnoser import Diagnoser
@@ -31,13 +31,22 @@ from host.diagnosis.observations import ObservationSet
 from host.diagnosis.result import DiagnosisResult
 from host.events import DiagnosisRecord, DiagnosisRun, Event, Observation
 
-if TYPE_CHECKING:
-    from host.observers.base import Update
-
 log = logging.getLogger(__name__)
 
 
-def fold_updates(updates: Iterable[Update], observations: ObservationSet, known: Set[str],
+class Retracted(Protocol):
+    """What ``fold_updates`` reads of a retraction (the observers' ``Retraction`` is one): the
+    atom whose last word from ``source`` no longer holds. A protocol here, so that diagnosis,
+    on the floor below the observers, does not import them."""
+
+    @property
+    def atom(self) -> str: ...
+
+    @property
+    def source(self) -> str: ...
+
+
+def fold_updates(updates: Iterable[Seen | Retracted], observations: ObservationSet, known: Set[str],
                  emit: Callable[[Event], None]) -> bool:
     """Fold observers' updates into the set (``S ⊕ o``), emitting each change as an
     ``Observation`` event; literals of atoms not in ``known`` (the model) are ignored. True when

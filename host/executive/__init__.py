@@ -9,7 +9,7 @@ events) and reports ⟨s, Δ⟩ up with the failed subtask and its explanation.
 
 from host.executive.nodes import Guard, SkillAction, Trace
 from host.executive.runner import Executive
-from host.executive.trees import Recipe, RecipeError, Step, build, parse_recipe
+from host.executive.trees import Recipe, RecipeError, RecipeStep, build, parse_recipe
 
-__all__ = ["Executive", "Guard", "Recipe", "RecipeError", "SkillAction", "Step", "Trace",
+__all__ = ["Executive", "Guard", "Recipe", "RecipeError", "RecipeStep", "SkillAction", "Trace",
            "build", "parse_recipe"]

@@ -42,7 +42,7 @@ class RecipeError(ValueError):
 
 
 @dataclass(frozen=True)
-class Step:
+class RecipeStep:
     skill: str
     args: tuple[tuple[str, str], ...] = ()  # (name, value or ?parameter)
 
@@ -58,23 +58,23 @@ class Step:
 @dataclass(frozen=True)
 class Recipe:
     action: str
-    do: tuple[Step, ...]
-    fallback: tuple[Step, ...] = ()
+    do: tuple[RecipeStep, ...]
+    fallback: tuple[RecipeStep, ...] = ()
     retries: int = 0
 
     def skills(self) -> set[str]:
         return {s.skill for s in self.do + self.fallback}
 
 
-def _step(action: str, raw: Any) -> Step:
+def _step(action: str, raw: Any) -> RecipeStep:
     if isinstance(raw, str) and raw:
-        return Step(raw)
+        return RecipeStep(raw)
     if isinstance(raw, dict) and len(raw) == 1:
         (skill, args), = raw.items()
         if isinstance(skill, str) and (args is None or isinstance(args, dict)) \
                 and all(isinstance(k, str) and isinstance(v, str) for k, v in
                         (args or {}).items()):
-            return Step(skill, tuple((args or {}).items()))
+            return RecipeStep(skill, tuple((args or {}).items()))
     raise RecipeError(f"action {action}: a step is a skill name or {{skill: {{arg: value}}}}, "
                       f"not {raw!r}")
 
@@ -114,12 +114,12 @@ def build(recipe: Recipe, params: Mapping[str, str], ctx: Context,
           flat: bool = False) -> py_trees.behaviour.Behaviour:
     """The tree for one dispatch of ``recipe``'s action with ``params`` (``?x`` -> value)."""
 
-    def action(step: Step) -> py_trees.behaviour.Behaviour:
+    def action(step: RecipeStep) -> py_trees.behaviour.Behaviour:
         cmd = step.bind(params)
         return SkillAction(str(cmd), ctx.skills[step.skill], cmd, ctx.trace, ctx.clock,
                            ctx.emit, ctx.dispatch_id)
 
-    def guarded(step: Step) -> py_trees.behaviour.Behaviour:
+    def guarded(step: RecipeStep) -> py_trees.behaviour.Behaviour:
         cmd = step.bind(params)
         guard = Guard(f"{step.skill} available", ctx.skills[step.skill].spec.needs, ctx.layer0,
                       ctx.clock, ctx.trace, ctx.max_hold_s)

@@ -4,7 +4,7 @@ experiment M1 (``dxboard experiment mission-fault``, MISSIONS.md).
 ``run_mission(system_dir, journal)`` starts the emulated robot with its world (``dxboard
 emulate --robot --world``) and the daemon through ``host.launch`` (``RobotSession``), waits until
 layer 0 has brought the robot up (all-normal), wires layers 1-3 to the daemon
-(``host.mission.session``) and runs the mission, every event on the daemon's stream and in its
+(``host.launch.mission_stack``) and runs the mission, every event on the daemon's stream and in its
 journal. ``prepare`` sets the world up before the mission (given its URL), ``inject`` runs
 beside the mission (M2-M4: ``host.experiment.plandiag``). With ``fault`` the Hokuyo hangs
 (``dxboard inject hokuyo hang``) ``FAULT_DELAY_S`` into the
@@ -43,8 +43,8 @@ from host.events import (
     TreeChange,
 )
 from host.experiment.session import RobotSession, beside
+from host.launch.mission_stack import MissionStack
 from host.layers import MISSION
-from host.mission.session import MissionStack
 
 log = logging.getLogger(__name__)
 

@@ -33,9 +33,9 @@ from typing import Any, Protocol
 from host.events import Dispatch, Event, LayerResult
 from host.layers import EXECUTIVE, MISSION, Command, Result
 from host.mission.kb import KnowledgeBase
-from host.mission.pddl import Atom, Literal, spell
-from host.mission.planner import Scheduled
 from host.mission.sensing import Sensing
+from host.planning.temporal_pddl import Atom, Literal, spell
+from host.planning.temporal_planner import Scheduled
 
 log = logging.getLogger(__name__)
 

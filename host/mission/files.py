@@ -1,7 +1,7 @@
 """A robot's mission, read and checked: ``SYSTEM_DIR/mission/mission.yaml`` and its PDDL files.
 
 ``mission.yaml`` (see ``models/tedusar/mission/mission.yaml``) names the temporal PDDL
-``domain`` and ``problem`` (``host.mission.pddl``), the goal reasoner's ``goals`` rules,
+``domain`` and ``problem`` (``host.planning.temporal_pddl``), the goal reasoner's ``goals`` rules,
 ``sensing`` (ψ: the world's state in the domain's predicates), the ``skills`` (layer 1: what
 each needs of layer 0, its monitor's limits), the ``actions`` (layer 2: a behaviour-tree recipe
 per domain action) and ``max_hold_s``. ``load_mission`` checks that they fit together and with
@@ -20,9 +20,9 @@ from host.diagnosis import yamlpos
 from host.diagnosis.model import SystemModel
 from host.errors import UserError
 from host.executive.trees import Recipe, RecipeError, parse_recipe
-from host.mission.pddl import Domain, PddlError, Problem, load, parse_atom
 from host.mission.runner import GoalRule
 from host.mission.sensing import KEYS, Sensing
+from host.planning.temporal_pddl import PddlError, TemporalDomain, TemporalProblem, load, parse_atom
 from host.skills.skill import SkillSpec
 
 MISSION_DIR = "mission"
@@ -33,8 +33,8 @@ FIELDS = {"domain", "problem", "goals", "sensing", "skills", "actions", "max_hol
 @dataclass(frozen=True)
 class MissionFiles:
     path: Path
-    domain: Domain
-    problem: Problem
+    domain: TemporalDomain
+    problem: TemporalProblem
     rules: tuple[GoalRule, ...]
     sensing: Sensing
     skills: dict[str, SkillSpec]
@@ -80,7 +80,7 @@ def _skills(path: Path, raw: Any, model: SystemModel | None) -> dict[str, SkillS
     return out
 
 
-def _recipes(path: Path, raw: Any, domain: Domain, skills: dict[str, SkillSpec]
+def _recipes(path: Path, raw: Any, domain: TemporalDomain, skills: dict[str, SkillSpec]
              ) -> dict[str, Recipe]:
     if not isinstance(raw, dict):
         raise UserError(f"{path}: 'actions' must map each domain action to its recipe",

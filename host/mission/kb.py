@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 
 from host.events import ConditionCheck, Event, KbChange
-from host.mission.pddl import Atom, Literal, spell
+from host.planning.temporal_pddl import Atom, Literal, spell
 
 
 class KnowledgeBase:

@@ -6,10 +6,10 @@ Dispatching & Monitoring):
 1. sense the world into the KB (``init``), then repeat:
 2. goal reasoning — the mission's goal plus what ``goals:`` rules add for what the robot has
    learnt (a victim found must be marked: ``{when: (victim-in ?v ?r), add: (marked ?v)}``);
-3. planning from the KB (``host.mission.planner``) with only the actions whose skills layer 0
-   leaves available (a quarantined lidar takes navigation away); no plan: the mission *stops*,
-   and says what the planner lacked — the actions it had to leave out and the components
-   behind them;
+3. planning from the KB (``host.planning.temporal_planner``) with only the actions whose skills
+   layer 0 leaves available (a quarantined lidar takes navigation away); no plan: the mission
+   *stops*, and says what the planner lacked — the actions it had to leave out and the
+   components behind them;
 4. dispatching the plan step by step (``host.mission.dispatcher``); after a refused or failed
    action, a success the world does not show, or a goal that grew, the KB is as sensed and the
    mission replans (at most ``max_replans`` times, then it *fails*); an action that failed
@@ -36,8 +36,8 @@ from host.events import Event, MissionState, MissionStep
 from host.layers import MISSION, Result
 from host.mission.dispatcher import Dispatched, Dispatcher, Outcome
 from host.mission.kb import KnowledgeBase
-from host.mission.pddl import Atom, Domain, Literal, Problem, spell
-from host.mission.planner import Ground, ground, holds, plan
+from host.planning.temporal_pddl import Atom, Literal, TemporalDomain, TemporalProblem, spell
+from host.planning.temporal_planner import Ground, ground, holds, plan
 from host.skills import Layer0View, State
 
 log = logging.getLogger(__name__)
@@ -84,7 +84,7 @@ class MissionOutcome:
 
 
 class MissionRunner:
-    def __init__(self, domain: Domain, problem: Problem, rules: Sequence[GoalRule],
+    def __init__(self, domain: TemporalDomain, problem: TemporalProblem, rules: Sequence[GoalRule],
                  kb: KnowledgeBase, dispatcher: Dispatcher,
                  needs_of: Mapping[str, Sequence[str]], layer0: Layer0View | None,
                  emit: Callable[[Event], None], mission_id: str = "m1",

@@ -26,7 +26,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from host.mission.pddl import Literal
+from host.planning.temporal_pddl import Literal
 
 KEYS = ("place", "doors", "locked", "found", "seen", "marked", "level", "victim_type", "room_type",
         "door_type")

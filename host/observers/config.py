@@ -61,6 +61,7 @@ from host.observers.hardware import (
 )
 from host.observers.processes import NodeObserver, PropertyObserver
 from host.observers.sources.base import TopicSource
+from host.observers.sources.ros2_graph import GraphObserver
 from host.observers.topics import DEFAULT_SILENCE, FrequencyObserver, ResponseObserver
 from host.observers.values import (
     DiagnosticObserver,
@@ -70,7 +71,6 @@ from host.observers.values import (
     ValueRef,
 )
 from host.observers.watcher import DEFAULT_POLL, ProcessSpec
-from host.ros.graph import GraphObserver
 
 SECTION = "observers"
 _TOP = {"refresh", "validity", "poll", "source", "hardware", "nodes", "topics", "trends",

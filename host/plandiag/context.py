@@ -1,7 +1,7 @@
 """Context & plan interpreter (paper 004 §4.3.1.3): the history with the domain, step by step.
 
 ``interpret_context`` grounds every executed step's action, the fault modes that may replace it
-and the exogenous events that may happen in each gap (through ``host.repair.grounding``, with
+and the exogenous events that may happen in each gap (through ``host.planning.grounding``, with
 the static facts of the initial knowledge base), checks the history against the domain (every
 action, object, type and atom is known; ``HistoryError`` names the place otherwise), and returns
 the ``Problem`` the engines search together with the knowledge base the dispatcher held at
@@ -20,14 +20,14 @@ from dataclasses import dataclass, field
 
 from host.atoms import Atom
 from host.plandiag.errors import HistoryError
-from host.plandiag.history import History, Result, Where
+from host.plandiag.history import History, StepResult, Where
 from host.plandiag.model import FaultKind, FaultSchema, PlanModel
 from host.plandiag.problem import Fault, Problem, StepSpec
-from host.repair.domain import ROOT_TYPE
-from host.repair.domain import Atom as PAtom
-from host.repair.errors import DomainError
-from host.repair.grounding import Grounder
-from host.repair.task import GroundOp, Task
+from host.planning.domain import ROOT_TYPE
+from host.planning.domain import Atom as PAtom
+from host.planning.errors import DomainError
+from host.planning.grounding import Grounder
+from host.planning.task import GroundOp, Task
 
 log = logging.getLogger(__name__)
 
@@ -88,9 +88,9 @@ def interpret_context(model: PlanModel, history: History, suspicion: Suspicion) 
                                f"the mission domain has {', '.join(sorted(model.actions))}")
         _check_args(model, history, schema.parameters, step.args, place)
         nominal = grounder.instantiate(schema, step.args)
-        if nominal is not None and step.result is Result.FAIL:
+        if nominal is not None and step.result is StepResult.FAIL:
             nominal = None  # it ran and failed: not as intended
-        elif nominal is not None and step.result is Result.HALTED:
+        elif nominal is not None and step.result is StepResult.HALTED:
             nominal = GroundOp.make(nominal.name, nominal.args, (), ())  # stopped: unknown
         modes: list[int] = []
         if step.executed():
@@ -166,7 +166,7 @@ def _dispatcher_kb(problem: Problem, history: History) -> tuple[list[int], list[
         after.append(state)
         if not spec.executed:
             break
-        if step.result is Result.SUCCESS and spec.nominal is not None:
+        if step.result is StepResult.SUCCESS and spec.nominal is not None:
             state = spec.nominal.apply(state)
         kb.append(state)
         state = _override(problem, 2 * spec.index, state)

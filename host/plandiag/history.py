@@ -48,7 +48,7 @@ class Where(StrEnum):
     POST = "post"
 
 
-class Result(StrEnum):
+class StepResult(StrEnum):
     SUCCESS = "success"
     FAIL = "fail"
     HALTED = "halted"
@@ -56,7 +56,7 @@ class Result(StrEnum):
 
 
 @dataclass(frozen=True)
-class Observation:
+class MissionObservation:
     atom: Atom
     value: bool
     where: Where
@@ -77,11 +77,11 @@ class Observation:
 
 
 @dataclass(frozen=True)
-class Step:
+class HistoryStep:
     action: str
     args: tuple[str, ...]
-    result: Result = Result.SUCCESS
-    observations: tuple[Observation, ...] = ()
+    result: StepResult = StepResult.SUCCESS
+    observations: tuple[MissionObservation, ...] = ()
     start: float | None = None
     end: float | None = None
 
@@ -89,7 +89,7 @@ class Step:
         return f"{self.action}({','.join(self.args)})"
 
     def executed(self) -> bool:
-        return self.result is not Result.NOT_RUN
+        return self.result is not StepResult.NOT_RUN
 
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {"action": self.action, "args": list(self.args),
@@ -140,7 +140,7 @@ class ComponentHealth:
 class History:
     objects: Mapping[str, str]
     init: frozenset[Atom]
-    steps: tuple[Step, ...]
+    steps: tuple[HistoryStep, ...]
     alarm: Alarm | None = None
     components: ComponentHealth = field(default_factory=ComponentHealth)
 
@@ -242,32 +242,32 @@ class _Reader:
             names = ", ".join(m.value for m in kind)
             raise self.fail(place, f"{v!r} is not one of {names}", f"use one of {names}") from None
 
-    def observation(self, v: Any, place: str) -> Observation:
+    def observation(self, v: Any, place: str) -> MissionObservation:
         o = self.obj(v, place)
         value = o.get("value", True)
         if not isinstance(value, bool):
             raise self.fail(f"{place}.value", f"{value!r} is not true or false",
                             "write true or false")
-        return Observation(self.atom(o.get("atom"), f"{place}.atom"), value,
+        return MissionObservation(self.atom(o.get("atom"), f"{place}.atom"), value,
                            self.enum(Where, o.get("where", "post"), f"{place}.where"),
                            self.time(o.get("time"), f"{place}.time"),
                            str(o.get("source", "")))
 
-    def step(self, v: Any, place: str) -> Step:
+    def step(self, v: Any, place: str) -> HistoryStep:
         s = self.obj(v, place)
         args = tuple(self.text(a, f"{place}.args") for a in self.array(s.get("args", []),
                                                                          f"{place}.args"))
         obs = tuple(self.observation(o, f"{place}.observations[{i}]")
                     for i, o in enumerate(self.array(s.get("observations", []),
                                                      f"{place}.observations")))
-        result = self.enum(Result, s.get("result", "success"), f"{place}.result")
-        if result is Result.NOT_RUN:
+        result = self.enum(StepResult, s.get("result", "success"), f"{place}.result")
+        if result is StepResult.NOT_RUN:
             late = [o for o in obs if o.where is not Where.PRE]
             if late:
                 raise self.fail(f"{place}.observations", "a not-run step has observations "
                                 f"at {late[0].where.value}", "a step that never ran has only "
                                 "its precondition check (where: pre)")
-        return Step(self.text(s.get("action"), f"{place}.action"), args, result, obs,
+        return HistoryStep(self.text(s.get("action"), f"{place}.action"), args, result, obs,
                     self.time(s.get("start"), f"{place}.start"),
                     self.time(s.get("end"), f"{place}.end"))
 

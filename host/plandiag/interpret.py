@@ -23,7 +23,14 @@ from enum import StrEnum
 
 from host.plandiag.context import Context, Suspicion
 from host.plandiag.errors import HistoryError
-from host.plandiag.history import Alarm, ComponentHealth, History, Observation, Result, Where
+from host.plandiag.history import (
+    Alarm,
+    ComponentHealth,
+    History,
+    MissionObservation,
+    StepResult,
+    Where,
+)
 from host.plandiag.model import FaultKind, PlanModel
 
 log = logging.getLogger(__name__)
@@ -73,10 +80,10 @@ def handle_alarm(history: History) -> tuple[History, AlarmNote]:
                            "put the alarm at its precondition check (where: pre)")
     decision = alarm_decision(alarm)
     if (alarm.where is Where.DURING and decision is Decision.HALT_NOW
-            and step.result is Result.SUCCESS):
-        step = replace(step, result=Result.HALTED)
+            and step.result is StepResult.SUCCESS):
+        step = replace(step, result=StepResult.HALTED)
     have = {(o.atom, o.where) for o in step.observations}
-    extra = tuple(Observation(a, v, alarm.where, alarm.time, "alarm")
+    extra = tuple(MissionObservation(a, v, alarm.where, alarm.time, "alarm")
                   for a, v in alarm.atoms if (a, alarm.where) not in have)
     steps[-1] = replace(step, observations=step.observations + extra)
     note = AlarmNote(alarm, decision, dropped, synthesized)
@@ -133,13 +140,13 @@ def identify_symptoms(ctx: Context, history: History) -> list[Symptom]:
                                        f"{'' if value else '~'}{name} observed {where} step "
                                        f"{i}, the knowledge base said "
                                        f"{name if believed else '~' + name}"))
-        if step.result is Result.FAIL:
+        if step.result is StepResult.FAIL:
             out.append(Symptom(SymptomKind.LOCAL, i, Where.DURING, 2 * i, None,
                                text=f"step {i} {spec.label} reported failure"))
-        elif step.result is Result.HALTED:
+        elif step.result is StepResult.HALTED:
             out.append(Symptom(SymptomKind.LOCAL, i, Where.DURING, 2 * i, None,
                                text=f"step {i} {spec.label} was halted by a critical alarm"))
-        elif step.result is Result.SUCCESS and spec.nominal is None:
+        elif step.result is StepResult.SUCCESS and spec.nominal is None:
             out.append(Symptom(SymptomKind.LOCAL, i, Where.DURING, 2 * i, None,
                                text=f"step {i} {spec.label} reported success, but its static "
                                "precondition is false in the knowledge base"))

@@ -26,26 +26,44 @@ import logging
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
+from typing import Protocol
 
 from host.atoms import Atom
 from host.events import Dispatch, Event, KbChange, PlanDiagnosis
-from host.mission.dispatcher import Dispatched
-from host.mission.pddl import Domain, Literal, parse_atom
 from host.plandiag.errors import HistoryError
 from host.plandiag.history import (
     Alarm,
     ComponentHealth,
     History,
-    Observation,
-    Result,
-    Step,
+    HistoryStep,
+    MissionObservation,
+    StepResult,
     Where,
 )
 from host.plandiag.model import PlanModel
 from host.plandiag.pipeline import Explanation, explain_history
 from host.plandiag.text import listing, winning_path
+from host.planning.temporal_pddl import Literal, TemporalDomain, parse_atom
 
 log = logging.getLogger(__name__)
+
+
+class EndedStep(Protocol):
+    """What ``MissionDiagnoser.ended`` reads of a dispatcher's end of a step (the mission
+    layer's ``host.mission.dispatcher.Dispatched`` is one), so that plan-execution diagnosis
+    does not import the layer it diagnoses."""
+
+    @property
+    def dispatch_id(self) -> str: ...
+
+    @property
+    def outcome(self) -> str: ...  # one of ``Ending``'s values but HALTED
+
+    @property
+    def halted(self) -> bool: ...
+
+    @property
+    def alarm(self) -> tuple[Literal, ...]: ...
 
 
 class Ending(StrEnum):
@@ -93,7 +111,7 @@ class Diagnosed:
 class MissionDiagnoser:
     """The mission layer's plan-execution diagnosis: record, explain on an alarm, correct."""
 
-    def __init__(self, model: PlanModel, domain: Domain, mission_id: str,
+    def __init__(self, model: PlanModel, domain: TemporalDomain, mission_id: str,
                  health: Callable[[], ComponentHealth] = ComponentHealth,
                  engine: str = "sat") -> None:
         self.model = model
@@ -130,11 +148,11 @@ class MissionDiagnoser:
         for atom, value in lits:
             seen[atom] = value
 
-    def ended(self, done: Dispatched, at: float) -> None:
+    def ended(self, done: EndedStep, at: float) -> None:
         """The dispatcher's end of a step: how, when, what it observed that raised an alarm."""
         rec = self._record(done.dispatch_id)
         if rec is not None:
-            ending = Ending.HALTED if done.halted else Ending(done.outcome.value)
+            ending = Ending.HALTED if done.halted else Ending(done.outcome)
             rec.ending, rec.end, rec.alarm_atoms = ending, at, done.alarm
 
     def surprise(self) -> tuple[Literal, ...]:
@@ -158,8 +176,8 @@ class MissionDiagnoser:
         if last is None or not recs:
             raise HistoryError("nothing was dispatched yet", "diagnose after a step")
         init = {to_atom(parse_atom(a)) for a in recs[0].kb}
-        pre: list[list[Observation]] = [[] for _ in recs]
-        post: list[list[Observation]] = [[] for _ in recs]
+        pre: list[list[MissionObservation]] = [[] for _ in recs]
+        post: list[list[MissionObservation]] = [[] for _ in recs]
         for atom, value in self.at_start.items():
             self._place(atom, value, init, pre[0], Where.PRE, None)
         for i, rec in enumerate(recs):
@@ -171,24 +189,24 @@ class MissionDiagnoser:
                     self._place(atom, value, init, pre[i + 1], Where.PRE, rec.end)
         steps = []
         for i, rec in enumerate(recs):
-            result = _RESULT[rec.ending or Ending.DONE] if rec.ok else Result.NOT_RUN
+            result = _RESULT[rec.ending or Ending.DONE] if rec.ok else StepResult.NOT_RUN
             obs = pre[i] + (post[i] if rec.ok else [])
             if not rec.ok:  # what the check found: the KB the dispatcher held
                 have = {o.atom for o in obs}
-                obs += [Observation(to_atom(a), v, Where.PRE, rec.start, "check")
+                obs += [MissionObservation(to_atom(a), v, Where.PRE, rec.start, "check")
                         for a, v in rec.failed if to_atom(a) not in have]
-            steps.append(Step(rec.action, rec.args, result, tuple(obs), rec.start, rec.end))
+            steps.append(HistoryStep(rec.action, rec.args, result, tuple(obs), rec.start, rec.end))
         alarm = self._alarm(len(steps), last, message, observed)
         return History(dict(objects), frozenset(init), tuple(steps), alarm, self.health())
 
     def _place(self, atom: tuple[str, ...], value: bool, init: set[Atom],
-               into: list[Observation], where: Where, t: float | None) -> None:
+               into: list[MissionObservation], where: Where, t: float | None) -> None:
         a = to_atom(atom)
         if atom[0] in self.static:
             if value:
                 init.add(a)  # it held all along (a victim found where it lies)
             return
-        into.append(Observation(a, value, where, t, "sensing"))
+        into.append(MissionObservation(a, value, where, t, "sensing"))
 
     def _mentioned(self, rec: _Record) -> set[tuple[str, ...]]:
         """The ground atoms the step's action names in its conditions and effects."""
@@ -251,9 +269,9 @@ class MissionDiagnoser:
             kb, pe_text, round(e.elapsed_s, 4))
 
 
-_RESULT = {Ending.DONE: Result.SUCCESS, Ending.SURPRISE: Result.SUCCESS,
-           Ending.FAILED: Result.FAIL, Ending.HALTED: Result.HALTED,
-           Ending.REFUSED: Result.NOT_RUN}
+_RESULT = {Ending.DONE: StepResult.SUCCESS, Ending.SURPRISE: StepResult.SUCCESS,
+           Ending.FAILED: StepResult.FAIL, Ending.HALTED: StepResult.HALTED,
+           Ending.REFUSED: StepResult.NOT_RUN}
 
 
 def corrections(e: Explanation) -> tuple[Literal, ...]:

@@ -20,7 +20,7 @@ one gap; ``components`` names the robot's components whose failure causes the mo
 diagnosis then confirms or clears it). ``faults.pddl`` may leave out ``:requirements``,
 ``:types``, ``:constants`` and ``:predicates``: they are taken from ``mission.pddl``
 (``annotate.complete``). Both files are parsed by the ``pddl`` library through
-``host.repair.domain``; ``load_model`` returns one ``PlanModel``.
+``host.planning.domain``; ``load_model`` returns one ``PlanModel``.
 """
 
 from __future__ import annotations
@@ -33,8 +33,8 @@ from pathlib import Path
 
 from host.plandiag.annotate import Annotation, complete, read_annotations
 from host.plandiag.errors import PlanModelError
-from host.repair.domain import Domain, EAnd, Eff, EForall, EWhen, Schema, parse_domain_text
-from host.repair.errors import DomainError
+from host.planning.domain import Domain, EAnd, Eff, EForall, EWhen, Schema, parse_domain_text
+from host.planning.errors import DomainError
 
 log = logging.getLogger(__name__)
 

@@ -21,10 +21,10 @@ from dataclasses import dataclass
 from typing import Any
 
 from host.plandiag.context import Context
-from host.plandiag.history import History, Result
+from host.plandiag.history import History, StepResult
 from host.plandiag.model import PlanModel
 from host.plandiag.problem import Stop, simulate
-from host.repair.domain import ROOT_TYPE, CAnd, CAtom, CNot, Cond, Schema
+from host.planning.domain import ROOT_TYPE, CAnd, CAtom, CNot, Cond, Schema
 
 MAX_CANDIDATES = 5
 
@@ -73,7 +73,7 @@ def analyse_plan_error(model: PlanModel, ctx: Context, history: History,
     schema = model.actions[step.action]
     state = run.states[2 * i - 1] if len(run.states) > 2 * i - 1 else run.states[-1]
     earlier = [(k, s.args) for k, s in enumerate(history.steps[: i - 1], start=1)
-               if s.action == step.action and s.result is Result.SUCCESS]
+               if s.action == step.action and s.result is StepResult.SUCCESS]
     found = []
     for cand in _candidates(model, ctx, schema, step.args, state):
         lifted, ground, positive, pred, idx = cand
@@ -91,7 +91,7 @@ def analyse_plan_error(model: PlanModel, ctx: Context, history: History,
             found.append(MissingCondition(lifted, ground, tuple(held),
                                           pred in model.domain.statics))
     found.sort(key=lambda c: (not c.supported_by, not c.static, c.literal))
-    what = {Result.FAIL: "reported failure", Result.HALTED: "was halted"}.get(
+    what = {StepResult.FAIL: "reported failure", StepResult.HALTED: "was halted"}.get(
         step.result, "did not reach its expected state")
     reason = (f"it ran as intended and {what}; no fault mode or event explains it"
               + ("" if proven else " within the bounds"))

@@ -1,7 +1,7 @@
 """The inference problem both engines solve: a history compiled to bit masks, and its semantics.
 
 A ``Problem`` is what the context & plan interpreter (``context.py``) makes of a history: the
-initial state (an ``int`` whose bit ``a`` is atom ``a``, as in ``host.repair.task``), one
+initial state (an ``int`` whose bit ``a`` is atom ``a``, as in ``host.planning.task``), one
 ``StepSpec`` per step (the nominal ground action, or None when it cannot have run as intended,
 and the fault modes that may replace it), the candidate exogenous events of every gap, every
 ``Fault`` with its prior, and the observations as masks per *point*. Points number the states
@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 
 from host.plandiag.model import FaultKind
-from host.repair.task import GroundOp, Task
+from host.planning.task import GroundOp, Task
 
 
 class Stop(StrEnum):

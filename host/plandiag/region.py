@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from host.plandiag.context import Context
 from host.plandiag.interpret import Symptom
 from host.plandiag.problem import Problem, bits, effective_delete, writes
-from host.repair.task import GroundOp
+from host.planning.task import GroundOp
 
 
 @dataclass(frozen=True)

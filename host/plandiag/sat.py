@@ -48,7 +48,7 @@ from host.plandiag.problem import (
     simulate,
     writes,
 )
-from host.repair.task import GroundOp
+from host.planning.task import GroundOp
 
 
 class Encoding:

@@ -1,12 +1,12 @@
 """The mission layer's temporal domain read as plan-execution diagnosis reads it: STRIPS.
 
-The mission layer plans with durative actions (``host.mission.pddl``); plan-execution diagnosis
-explains histories of steps with preconditions and effects (``host.plandiag.model``). One robot
-does one action at a time, so a durative action is one step: its **precondition** is its start
-and over-all conditions and the end conditions its start effects do not establish; its
-**effect** is its start effects followed by its end effects (an end effect overrides a start
-effect on the same atom). ``strips_text`` writes that reading as PDDL text (typed STRIPS with
-negative preconditions) for ``build_model``, so the mission's domain stays the one source:
+The mission layer plans with durative actions (``host.planning.temporal_pddl``); plan-execution
+diagnosis explains histories of steps with preconditions and effects (``host.plandiag.model``).
+One robot does one action at a time, so a durative action is one step: its **precondition** is
+its start and over-all conditions and the end conditions its start effects do not establish;
+its **effect** is its start effects followed by its end effects (an end effect overrides a
+start effect on the same atom). ``strips_text`` writes that reading as PDDL text (typed STRIPS
+with negative preconditions) for ``build_model``, so the mission's domain stays the one source:
 ``load_mission_model`` joins it with ``faults.pddl`` beside it (the fault modes and exogenous
 events, written over the same types and predicates).
 """
@@ -15,9 +15,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from host.mission.pddl import Action, Domain, Literal
 from host.plandiag.errors import PlanModelError
 from host.plandiag.model import FAULTS_FILE, PlanModel, build_model
+from host.planning.temporal_pddl import Action, Literal, TemporalDomain
 
 
 def _lit(lit: Literal) -> str:
@@ -42,7 +42,7 @@ def step_of(action: Action) -> tuple[list[Literal], list[Literal]]:
     return pre, list(eff.items())
 
 
-def strips_text(domain: Domain) -> str:
+def strips_text(domain: TemporalDomain) -> str:
     types = " ".join(f"{t} - {p}" for t, p in domain.types.items())
     preds = " ".join("(" + " ".join([p, *(f"?x{i} - {t}" for i, t in enumerate(ts))]) + ")"
                      for p, ts in domain.predicates.items())
@@ -57,7 +57,7 @@ def strips_text(domain: Domain) -> str:
     return "\n".join(out) + ")\n"
 
 
-def load_mission_model(domain: Domain, mission_dir: Path) -> PlanModel:
+def load_mission_model(domain: TemporalDomain, mission_dir: Path) -> PlanModel:
     """The plan model of a mission: its domain read as STRIPS, with ``faults.pddl`` of
     ``mission_dir`` (none there: no fault modes or events, every failure a plan error)."""
     faults = mission_dir / FAULTS_FILE

@@ -29,7 +29,7 @@ from enum import Enum
 from host.diagnosis.result import Bound
 from host.plandiag.limits import Deadline, Limits, Outcome
 from host.plandiag.problem import Problem, apply_events
-from host.repair.task import GroundOp
+from host.planning.task import GroundOp
 
 
 class _Stop(Exception):

@@ -42,7 +42,7 @@ BOARD_RETRY_WAIT_S = 6.0  # longer than the board's longest default retry delay 
 if TYPE_CHECKING:
     from host.board.client import BoardClient
     from host.diagnosis.model import SystemModel
-    from host.repair.plan import Step
+    from host.planning.plan import Step
     from host.repair.supervisor import ProcessSupervisor
 
 log = logging.getLogger(__name__)

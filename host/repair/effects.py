@@ -37,7 +37,7 @@ import host.atoms as A
 
 if TYPE_CHECKING:
     from host.diagnosis.model import SystemModel
-    from host.repair.plan import Step
+    from host.planning.plan import Step
     from host.repair.processes import ProcessConfig
 
 DEFAULT_DEVICE_SETTLE_S = 1.0

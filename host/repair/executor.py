@@ -63,6 +63,7 @@ from enum import StrEnum
 
 from host.errors import DxboardError
 from host.events import ActionRecord, ActionState, PlanRecord, PlanStep
+from host.planning.plan import Plan, Step
 from host.repair.actuators import Actuators, Refused, Unsafe
 from host.repair.beliefs import Beliefs
 from host.repair.effects import (
@@ -73,7 +74,6 @@ from host.repair.effects import (
     kept,
 )
 from host.repair.limits import AttemptLimiter, Quarantine, Quarantined
-from host.repair.plan import Plan, Step
 
 log = logging.getLogger(__name__)
 

@@ -35,7 +35,7 @@ from enum import StrEnum
 from typing import TYPE_CHECKING
 
 from host.events import PlanRecord
-from host.repair.errors import NoPlanError
+from host.planning.errors import NoPlanError
 from host.repair.executor import ExecutionResult, Executor, Outcome, plan_record
 from host.repair.policy import Candidate, Choice, choose
 

@@ -21,18 +21,24 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from host.errors import DxboardError
-from host.repair.domain import DOMAIN_FILE, ROOT_TYPE, Atom, Domain, load_domain
-from host.repair.downward import fast_downward
-from host.repair.errors import DomainError, NoPlanError, ProblemError
+from host.planning.domain import DOMAIN_FILE, ROOT_TYPE, Atom, Domain, load_domain
+from host.planning.errors import DomainError, NoPlanError, ProblemError
+from host.planning.grounding import ground
+from host.planning.plan import Plan, deorder, stops_first
+from host.planning.planners import PLANNERS, unreachable, validate
+from host.planning.search import (
+    DEFAULT_MAX_EXPANSIONS,
+    SearchInput,
+    relevant_ops,
+)
+from host.planning.task import Task, lit_atom
+from host.planning.vocabulary import Vocabulary
 from host.repair.external import (
     lifecycle_nodes,
     load_external,
     not_repairable,
     with_external,
 )
-from host.repair.grounding import ground
-from host.repair.plan import Plan, deorder, stops_first
 from host.repair.problem import (
     RepairModel,
     RepairProblem,
@@ -42,30 +48,11 @@ from host.repair.problem import (
     to_pddl,
 )
 from host.repair.protect import check_plan, enforce
-from host.repair.search import (
-    DEFAULT_MAX_EXPANSIONS,
-    Planner,
-    SearchInput,
-    astar,
-    bfs,
-    relevant_ops,
-)
-from host.repair.task import GroundOp, Task, holds, lit_atom
-from host.repair.vocabulary import Vocabulary
 
 if TYPE_CHECKING:
     from host.diagnosis.logic import Literal
 
 log = logging.getLogger(__name__)
-
-# the search engines a plan can be found with: ours (optimal A*, a BFS baseline) and Fast
-# Downward (the benchmark baseline, when installed)
-PLANNERS: dict[str, Planner] = {
-    "astar": astar,
-    "bfs": bfs,
-    "fast-downward": fast_downward,
-}
-
 
 class RepairPlanner:
     """Plans repairs for one robot model with one domain."""
@@ -229,49 +216,3 @@ class RepairPlanner:
             typ = self.model.types.get(name, "?")
             return f"{what}: no action of the domain repairs a {typ}"
         return None
-
-
-def unreachable(
-    task: Task, init: int, goal: Iterable[int], subset: Iterable[int]
-) -> list[int]:
-    """Goal literals not reachable even ignoring the operators' harmful effects."""
-    goal = list(goal)
-    ops = task.ops
-    reached: set[int] = set()
-    for x in goal:
-        if holds(x, init):
-            reached.add(x)
-    waiting: dict[int, list[int]] = {}
-    missing_count: dict[int, int] = {}
-    queue: list[int] = []
-    for i in subset:
-        pre = [x for x in ops[i].pre if not holds(x, init)]
-        missing_count[i] = len(pre)
-        for x in pre:
-            waiting.setdefault(x, []).append(i)
-        if not pre:
-            queue.append(i)
-    while queue:
-        i = queue.pop()
-        for x in ops[i].effect_literals():  # conditional effects optimistically
-            if x in reached or holds(x, init):
-                continue
-            reached.add(x)
-            for j in waiting.get(x, ()):
-                missing_count[j] -= 1
-                if missing_count[j] == 0:
-                    queue.append(j)
-    return [x for x in goal if x not in reached]
-
-
-def validate(
-    task: Task, init: int, goal: tuple[int, ...], ops: list[GroundOp], planner: str
-) -> None:
-    s = init
-    for k, op in enumerate(ops):
-        if not op.applicable(s):
-            raise DxboardError(f"planner {planner}: step {k} {op.label()} is not applicable")
-        s = op.apply(s)
-    bad = [task.describe(x) for x in goal if not holds(x, s)]
-    if bad:
-        raise DxboardError(f"planner {planner}: the plan leaves {', '.join(bad[:5])} unmet")

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from host.diagnosis.result import rank_key
-from host.repair.errors import NoPlanError
-from host.repair.plan import Plan
+from host.planning.errors import NoPlanError
+from host.planning.plan import Plan
 
 if TYPE_CHECKING:
     from host.diagnosis.logic import Literal

@@ -26,9 +26,9 @@ from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from host.repair.domain import ROOT_TYPE, Atom
-from host.repair.errors import ProblemError
-from host.repair.vocabulary import (
+from host.planning.domain import ROOT_TYPE, Atom
+from host.planning.errors import ProblemError
+from host.planning.vocabulary import (
     ABNORMAL,
     POWERED,
     ROLE_OF_OBSERVATION,

@@ -16,9 +16,9 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-from host.repair.errors import NoPlanError
-from host.repair.task import GroundOp, Task
-from host.repair.vocabulary import Vocabulary
+from host.planning.errors import NoPlanError
+from host.planning.task import GroundOp, Task
+from host.planning.vocabulary import Vocabulary
 
 SWITCH_OFF_ACTIONS = frozenset({"shutdown", "power_cycle", "stop_node", "power_down"})
 

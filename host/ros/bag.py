@@ -25,7 +25,7 @@ from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
 from host.errors import UserError
-from host.ros.message import RosMessage
+from host.observers.sources.ros2_message import RosMessage
 
 log = logging.getLogger(__name__)
 

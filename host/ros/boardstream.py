@@ -46,7 +46,7 @@ from host.board.types import (
     Rebooted,
 )
 from host.observers.hardware import BoardInput
-from host.ros.message import RosMessage
+from host.observers.sources.ros2_message import RosMessage
 
 log = logging.getLogger(__name__)
 

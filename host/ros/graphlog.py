@@ -2,7 +2,7 @@
 
 The ROS 2 graph is not a topic: the ROS 2 source samples it every discovery period (the
 ``GRAPH`` pseudo-topic, ``host.observers.sources.ros2``) for the graph observers
-(``host.ros.graph``, ``running(n)``). ``dxboard record`` writes each sample into the bag on
+(``sources.ros2_graph``, ``running(n)``). ``dxboard record`` writes each sample into the bag on
 ``/dxboard/graph`` (a topic only bags have: nothing publishes it over DDS) as a standard
 ``diagnostic_msgs/DiagnosticArray``, so ``ros2 bag``, Foxglove and ``rosbags`` read it:
 
@@ -20,9 +20,9 @@ from __future__ import annotations
 import logging
 
 from host.observers.payload import Message, encode
+from host.observers.sources.ros2_graph import GRAPH
+from host.observers.sources.ros2_message import RosMessage
 from host.ros.boardstream import set_stamp
-from host.ros.graph import GRAPH
-from host.ros.message import RosMessage
 
 log = logging.getLogger(__name__)
 

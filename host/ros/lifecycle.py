@@ -3,7 +3,7 @@
 A managed node (``rclpy.lifecycle``, ``rclcpp_lifecycle``) offers ``/NODE/get_state``
 (``lifecycle_msgs/srv/GetState``) and ``/NODE/change_state`` (``ChangeState``).
 ``LifecycleClient(ros)`` calls them from the daemon's asyncio loop through a ``RosNode``
-(``host.ros.node``: rclpy's futures complete on its thread and are handed to the loop).
+(``sources.ros2_node``: rclpy's futures complete on its thread and are handed to the loop).
 ``reconfigure(node)`` is the repair of a driver whose device was power-cycled: from wherever
 the node is, the shortest way back to *active* through a fresh connection::
 
@@ -38,7 +38,7 @@ from lifecycle_msgs.msg import Transition
 from lifecycle_msgs.srv import ChangeState, GetState
 
 from host.errors import RemoteError
-from host.ros.node import RosNode
+from host.observers.sources.ros2_node import RosNode
 
 log = logging.getLogger(__name__)
 

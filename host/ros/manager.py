@@ -32,8 +32,8 @@ from typing import Any
 
 from lifecycle_msgs.msg import TransitionEvent
 
+from host.observers.sources.ros2_node import RosNode
 from host.ros.lifecycle import TRANSITIONS, LifecycleClient, LifecycleError
-from host.ros.node import RosNode
 
 log = logging.getLogger(__name__)
 

@@ -41,10 +41,10 @@ from host.diagnosis.runner import fold_updates
 from host.events import DiagnosisRecord, Event, Observation
 from host.observers.base import Observer, Update
 from host.observers.hardware import HardwareObserver
+from host.observers.sources.ros2_graph import GRAPH
+from host.observers.sources.ros2_message import RosMessage
 from host.observers.topics import TopicObserver
 from host.ros import boardstream, graphlog
-from host.ros.graph import GRAPH
-from host.ros.message import RosMessage
 
 log = logging.getLogger(__name__)
 

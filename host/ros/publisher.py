@@ -1,6 +1,6 @@
 """The daemon reports through ROS 2: a reader of its event stream that publishes standard messages.
 
-``RosPublisher(components, domain_id)`` is one rclpy node, ``dxboard`` (``host.ros.node``: a
+``RosPublisher(components, domain_id)`` is one rclpy node, ``dxboard`` (``sources.ros2_node``: a
 thread of its own), subscribed to the daemon's ``EventStream`` (it is called with every
 ``Stamped`` event on the loop's thread). It folds the events with ``host.ros.status`` and
 publishes, with standard types only, so any ROS 2 tool reads them (``rqt_robot_monitor``,
@@ -42,8 +42,8 @@ from std_msgs.msg import Float32MultiArray, MultiArrayDimension
 
 from host.events import ChannelSample, DiagnosisRecord, Stamped
 from host.observers.hardware import BoardInput
+from host.observers.sources.ros2_node import RosNode
 from host.ros import boardstream
-from host.ros.node import RosNode
 from host.ros.status import ERROR, OK, STALE, Status, StatusFold
 
 log = logging.getLogger(__name__)

@@ -31,7 +31,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from host.layers import SKILLS, Command, Observation, Result
+from host.layers import SKILLS, Command, LayerObservation, Result
 from host.skills.client import WorldClient
 from host.skills.layer0 import Layer0View, State
 
@@ -54,7 +54,7 @@ class Skill:
 
     def __init__(self, spec: SkillSpec, world: WorldClient, layer0: Layer0View,
                  clock: Callable[[], float],
-                 observe: Callable[[Observation], None] | None = None,
+                 observe: Callable[[LayerObservation], None] | None = None,
                  flat: bool = False) -> None:
         self.spec = spec
         self.flat = flat
@@ -82,7 +82,7 @@ class Skill:
                     waiting = [str(w) for w in msg.get("waiting", [])]
                     if float(msg.get("progress", 0.0)) > progress:
                         progress, last_t = float(msg["progress"]), now
-                    self.observe(Observation(SKILLS, "feedback", {
+                    self.observe(LayerObservation(SKILLS, "feedback", {
                         "skill": spec.name, "progress": progress, "waiting": waiting,
                         "state": msg.get("state", {})}, source=spec.name))
                 elif msg is not None and msg.get("event") == "result":

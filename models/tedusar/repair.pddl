@@ -13,7 +13,7 @@
 ;   (external ?n)    static: ?n is started elsewhere (system.yaml external:), never by
 ;                    start_node/stop_node; with (managed ?n) dxboard is its lifecycle manager
 ;   (restartable ?n) static: an external node with a restart actuator (systemd, command, container)
-; The planner's words for the roles it fills from a diagnosis (host/repair/vocabulary.py; the
+; The planner's words for the roles it fills from a diagnosis (host/planning/vocabulary.py; the
 ; original system's domain says bad/good/not_on instead, and is read by the same conventions):
 ; dxboard-vocabulary: abnormal=ab powered=on running=running
 ; Beyond the paper's power_up, shutdown, start_node and stop_node: power_cycle (one board

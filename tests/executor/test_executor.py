@@ -15,12 +15,12 @@ import pytest
 
 from host.diagnosis.logic import parse_literal
 from host.events import ActionState
+from host.planning.errors import NoPlanError
+from host.planning.plan import Plan, Step
 from host.repair.actuators import Refused
-from host.repair.errors import NoPlanError
 from host.repair.executor import Outcome, StepReport
 from host.repair.limits import Quarantined
 from host.repair.loop import LoopOutcome, RepairLoop
-from host.repair.plan import Plan, Step
 from tests.executor.conftest import (
     EXPECTED_FAILURE_VERIFY_S,
     ODOM_NODE,

@@ -16,8 +16,8 @@ import asyncio
 from pathlib import Path
 
 from host.events import ActionState
+from host.planning.plan import Plan, Step
 from host.repair.executor import ExecutionResult, Outcome, StepReport
-from host.repair.plan import Plan, Step
 from tests.executor.conftest import EXPECTED_FAILURE_VERIFY_S, TEDUSAR, Rig, robot_dir
 
 HOKUYO = 3

@@ -30,9 +30,9 @@ from host.events import (
     RepairEnded,
     Stamped,
 )
+from host.launch.mission_stack import wire
 from host.mission.files import MissionFiles, load_mission
 from host.mission.runner import MissionRunner
-from host.mission.session import wire
 from host.skills import Layer0View, WorldClient
 
 TEDUSAR = Path(__file__).resolve().parents[2] / "models" / "tedusar"

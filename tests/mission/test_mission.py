@@ -10,7 +10,7 @@ import asyncio
 from host.events import Dispatch, KbChange, LayerResult, MissionState, TreeChange
 from host.layers import EXECUTIVE, MISSION
 from host.mission.dispatcher import Outcome
-from host.mission.planner import Scheduled, ground
+from host.planning.temporal_planner import Scheduled, ground
 from tests.mission.harness import Harness, until
 
 

@@ -1,6 +1,7 @@
-"""Layer 3's temporal PDDL (``host.mission.pddl``) and planner (``host.mission.planner``):
-durative actions with start / over-all / end conditions and effects, read with the place of
-every mistake; an optimal schedule; plans around actions a layer below took away."""
+"""Layer 3's temporal PDDL (``host.planning.temporal_pddl``) and planner
+(``host.planning.temporal_planner``): durative actions with start / over-all / end conditions
+and effects, read with the place of every mistake; an optimal schedule; plans around actions a
+layer below took away."""
 
 from __future__ import annotations
 
@@ -8,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from host.mission.pddl import PddlError, load, parse_domain, parse_problem
-from host.mission.planner import applicable, ground, plan
+from host.planning.temporal_pddl import PddlError, load, parse_domain, parse_problem
+from host.planning.temporal_planner import applicable, ground, plan
 
 TEDUSAR = Path(__file__).resolve().parents[2] / "models" / "tedusar" / "mission"
 

@@ -27,11 +27,11 @@ import random
 from dataclasses import dataclass
 
 from host.atoms import Atom
-from host.plandiag.history import Alarm, History, Observation, Result, Step, Where
+from host.plandiag.history import Alarm, History, HistoryStep, MissionObservation, StepResult, Where
 from host.plandiag.model import PlanModel, build_model
-from host.repair.domain import Atom as PAtom
-from host.repair.grounding import Grounder
-from host.repair.task import GroundOp
+from host.planning.domain import Atom as PAtom
+from host.planning.grounding import Grounder
+from host.planning.task import GroundOp
 
 ACTIONS = 4
 PREDICATES = 4
@@ -121,7 +121,7 @@ def synthetic_history(model: PlanModel, steps: int, objects: int, seed: int,
         task.atom_id(a.predicate, a.args)
     truth_state = task.state((a.predicate, a.args) for a in init_atoms)
     kb = truth_state
-    out: list[Step] = []
+    out: list[HistoryStep] = []
     truth: set[tuple[str, int, str]] = set()
     alarm = None
     for i in range(1, steps + 1):
@@ -136,13 +136,14 @@ def synthetic_history(model: PlanModel, steps: int, objects: int, seed: int,
             truth = {t for t in truth if t[:2] != ("event", i)}
             break
         op = rng.choice(options)
-        obs: list[Observation] = []
+        obs: list[MissionObservation] = []
         pre_obs = [x for x in op.pre if rng.random() < obs_rate]
         for x in pre_obs:
             a = x >> 1
-            obs.append(Observation(_atom(task.atoms[a]), bool((truth_state >> a) & 1), Where.PRE))
+            obs.append(MissionObservation(_atom(task.atoms[a]), bool((truth_state >> a) & 1),
+                                          Where.PRE))
         if realistic and any(bool((truth_state >> (x >> 1)) & 1) != bool(x & 1) for x in pre_obs):
-            out.append(Step(op.name, op.args, Result.NOT_RUN, tuple(obs)))
+            out.append(HistoryStep(op.name, op.args, StepResult.NOT_RUN, tuple(obs)))
             alarm = Alarm(i, Where.PRE, atoms=tuple((o.atom, o.value) for o in obs))
             break
         variant = op if op.applicable(truth_state) else None
@@ -159,9 +160,9 @@ def synthetic_history(model: PlanModel, steps: int, objects: int, seed: int,
                 truth.add(("mode", i, _label(variant)))
         if variant is None:  # the world cannot run it at all: the precondition check fails
             bad = [x for x in op.pre if bool((truth_state >> (x >> 1)) & 1) != bool(x & 1)]
-            obs += [Observation(_atom(task.atoms[x >> 1]), not bool(x & 1), Where.PRE)
+            obs += [MissionObservation(_atom(task.atoms[x >> 1]), not bool(x & 1), Where.PRE)
                     for x in bad[:1]]
-            out.append(Step(op.name, op.args, Result.NOT_RUN, tuple(obs)))
+            out.append(HistoryStep(op.name, op.args, StepResult.NOT_RUN, tuple(obs)))
             alarm = Alarm(i, Where.PRE, atoms=tuple((o.atom, o.value) for o in obs[-1:]))
             break
         failed = variant is not op and rng.random() < 0.5
@@ -174,11 +175,11 @@ def synthetic_history(model: PlanModel, steps: int, objects: int, seed: int,
         for x in op.eff:
             if rng.random() < obs_rate:
                 a = x >> 1
-                post.append(Observation(_atom(task.atoms[a]), bool((truth_state >> a) & 1),
+                post.append(MissionObservation(_atom(task.atoms[a]), bool((truth_state >> a) & 1),
                                         Where.POST))
         if i == steps and not realistic:
             for a in rng.sample(range(len(task.atoms)), min(final_obs, len(task.atoms))):
-                post.append(Observation(_atom(task.atoms[a]), bool((truth_state >> a) & 1),
+                post.append(MissionObservation(_atom(task.atoms[a]), bool((truth_state >> a) & 1),
                                         Where.POST))
         contradiction = [o for o in post
                          if bool((kb >> task.index[(o.atom.predicate, o.atom.args)]) & 1)
@@ -186,8 +187,8 @@ def synthetic_history(model: PlanModel, steps: int, objects: int, seed: int,
         for o in post:
             a = task.index[(o.atom.predicate, o.atom.args)]
             kb = kb | (1 << a) if o.value else kb & ~(1 << a)
-        result = Result.FAIL if failed else Result.SUCCESS
-        out.append(Step(op.name, op.args, result, tuple(obs + post)))
+        result = StepResult.FAIL if failed else StepResult.SUCCESS
+        out.append(HistoryStep(op.name, op.args, result, tuple(obs + post)))
         if realistic and (contradiction or failed):
             alarm = Alarm(i, Where.POST if contradiction else Where.DURING,
                           atoms=tuple((o.atom, o.value) for o in contradiction))

@@ -10,7 +10,7 @@ from typing import Any
 import pytest
 
 from host.plandiag.errors import HistoryError
-from host.plandiag.history import Result, Where, history_from_json, load_history
+from host.plandiag.history import StepResult, Where, history_from_json, load_history
 from host.plandiag.model import PlanModel
 from host.plandiag.pipeline import explain_history
 from tests.plandiag.conftest import ARENA
@@ -22,7 +22,7 @@ def test_a_history_survives_its_json_round_trip() -> None:
     h = history_from_json(M2)
     again = history_from_json(json.loads(json.dumps(h.to_json())))
     assert again == h
-    assert h.steps[12].result is Result.NOT_RUN
+    assert h.steps[12].result is StepResult.NOT_RUN
     assert h.steps[12].observations[0].where is Where.PRE
     assert h.alarm is not None and h.alarm.step == 13 and not h.alarm.critical
 

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 from host.atoms import Atom
 from host.plandiag.context import BROKEN_PRIOR, interpret_context
-from host.plandiag.history import Alarm, ComponentHealth, Result, Where
+from host.plandiag.history import Alarm, ComponentHealth, StepResult, Where
 from host.plandiag.interpret import (
     Decision,
     SymptomKind,
@@ -25,9 +25,9 @@ def test_critical_alarms_halt_at_once_others_let_the_step_finish() -> None:
     assert alarm_decision(Alarm(1, Where.DURING)) is Decision.FINISH_STEP
     h = arena_history("m3-marker-missing")
     halted, note = handle_alarm(replace(h, alarm=Alarm(4, Where.DURING, critical=True)))
-    assert halted.steps[-1].result is Result.HALTED and note.dropped_steps == 8
+    assert halted.steps[-1].result is StepResult.HALTED and note.dropped_steps == 8
     finished, _ = handle_alarm(replace(h, alarm=Alarm(4, Where.DURING)))
-    assert finished.steps[-1].result is Result.SUCCESS and len(finished.steps) == 4
+    assert finished.steps[-1].result is StepResult.SUCCESS and len(finished.steps) == 4
 
 
 def test_the_alarm_atoms_become_observations_at_its_moment() -> None:

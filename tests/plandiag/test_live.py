@@ -13,8 +13,7 @@ from host.events import ConditionCheck, Dispatch, KbChange
 from host.layers import MISSION, Result
 from host.mission.dispatcher import Dispatched, Outcome
 from host.mission.files import load_mission
-from host.plandiag.history import Alarm, Observation, Step, Where
-from host.plandiag.history import Result as StepResult
+from host.plandiag.history import Alarm, HistoryStep, MissionObservation, StepResult, Where
 from host.plandiag.live import MissionDiagnoser, corrections
 from host.plandiag.model import PlanModel
 from host.plandiag.pipeline import explain_history
@@ -92,9 +91,9 @@ def test_sensing_that_takes_back_an_effect_is_a_surprise_once() -> None:
 def test_the_corrections_are_what_the_most_probable_history_implies_beyond_sensing(
         arena: PlanModel) -> None:
     h = arena_history("m2-door-closed")
-    steps = [h.steps[0], Step("navigate", ("tedusar", "hall1", "hall2")),
-             Step("open-door", ("tedusar", "door2", "hall2", "room2"), StepResult.NOT_RUN,
-                  (Observation(Atom("at", ("tedusar", "hall2")), False, Where.PRE),))]
+    steps = [h.steps[0], HistoryStep("navigate", ("tedusar", "hall1", "hall2")),
+             HistoryStep("open-door", ("tedusar", "door2", "hall2", "room2"), StepResult.NOT_RUN,
+                  (MissionObservation(Atom("at", ("tedusar", "hall2")), False, Where.PRE),))]
     e = explain_history(arena, replace(h, steps=tuple(steps), alarm=Alarm(3, Where.PRE)))
     # navigate-stuck is the most probable: the robot is still in hall1, which nobody observed
     assert corrections(e) == ((("at", "tedusar", "hall1"), True),)

@@ -15,7 +15,14 @@ from __future__ import annotations
 from dataclasses import replace
 
 from host.atoms import Atom
-from host.plandiag.history import Alarm, ComponentHealth, Observation, Result, Step, Where
+from host.plandiag.history import (
+    Alarm,
+    ComponentHealth,
+    HistoryStep,
+    MissionObservation,
+    StepResult,
+    Where,
+)
 from host.plandiag.interpret import SymptomKind
 from host.plandiag.model import PlanModel
 from host.plandiag.pipeline import explain_history
@@ -122,9 +129,9 @@ def test_the_kb_is_corrected_to_where_the_robot_most_probably_is(arena: PlanMode
     # navigate hall1 -> hall2 reports success with no check; the next precondition check
     # finds the robot not in hall2
     steps = [h.steps[0],
-             Step("navigate", ("tedusar", "hall1", "hall2")),
-             Step("open-door", ("tedusar", "door2", "hall2", "room2"), Result.NOT_RUN,
-                  (Observation(Atom("at", ("tedusar", "hall2")), False, Where.PRE),))]
+             HistoryStep("navigate", ("tedusar", "hall1", "hall2")),
+             HistoryStep("open-door", ("tedusar", "door2", "hall2", "room2"), StepResult.NOT_RUN,
+                  (MissionObservation(Atom("at", ("tedusar", "hall2")), False, Where.PRE),))]
     e = explain_history(arena, replace(h, steps=tuple(steps), alarm=Alarm(3, Where.PRE)))
     assert _labels(e) == [["navigate-stuck(tedusar,hall1,hall2) at step 2"],
                           ["navigate-elsewhere(tedusar,hall1,hall2,start) at step 2"]]

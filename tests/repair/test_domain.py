@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from host.repair.domain import CAnd, CForall, CNot, EForall, load_domain, parse_domain_text
-from host.repair.errors import DomainError
+from host.planning.domain import CAnd, CForall, CNot, EForall, load_domain, parse_domain_text
+from host.planning.errors import DomainError
 
 from .conftest import TEDUSAR
 

@@ -12,9 +12,9 @@ import pytest
 
 from host.diagnosis.logic import parse_literal
 from host.errors import DxboardError
-from host.repair import downward
-from host.repair.downward import DownwardRun
-from host.repair.errors import NoPlanError
+from host.planning import downward
+from host.planning.downward import DownwardRun
+from host.planning.errors import NoPlanError
 from host.repair.planner import RepairPlanner
 
 

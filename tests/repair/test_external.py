@@ -24,8 +24,8 @@ import pytest
 
 from host.diagnosis.logic import parse_literal
 from host.errors import UserError
+from host.planning.errors import NoPlanError
 from host.repair.actuators import ActuationError, Refused
-from host.repair.errors import NoPlanError
 from host.repair.external import ExternalNode, load_external
 from host.repair.planner import RepairPlanner
 from host.repair.restart import RestartActuator

@@ -8,13 +8,13 @@ from itertools import permutations
 import pytest
 
 from host.diagnosis.logic import Literal, parse_literal
-from host.repair import search
-from host.repair.domain import load_domain
-from host.repair.errors import NoPlanError, ProblemError
-from host.repair.plan import Plan
+from host.planning import search
+from host.planning.domain import load_domain
+from host.planning.errors import NoPlanError, ProblemError
+from host.planning.plan import Plan
+from host.planning.search import SearchInput, astar, bfs
 from host.repair.planner import RepairPlanner
 from host.repair.problem import RepairModel, build_problem
-from host.repair.search import SearchInput, astar, bfs
 
 from .conftest import TEDUSAR
 

@@ -6,7 +6,7 @@ import pytest
 
 from host.diagnosis import Clause, Diagnoser, Literal, Theory, ab
 from host.diagnosis.logic import parse_literal
-from host.repair.errors import NoPlanError
+from host.planning.errors import NoPlanError
 from host.repair.planner import RepairPlanner
 from host.repair.policy import Candidate, choose, prior_weight
 

@@ -9,8 +9,8 @@ from pddl.parser.problem import ProblemParser
 
 from host.diagnosis.logic import parse_literal
 from host.diagnosis.model import Component, Kind, SystemModel
-from host.repair.domain import Atom, load_domain
-from host.repair.errors import ProblemError
+from host.planning.domain import Atom, load_domain
+from host.planning.errors import ProblemError
 from host.repair.planner import RepairPlanner
 from host.repair.problem import build_problem, repair_model, to_pddl
 

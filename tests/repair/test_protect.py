@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from host.diagnosis.logic import parse_literal
-from host.repair.domain import parse_domain_text
-from host.repair.errors import NoPlanError
+from host.planning.domain import parse_domain_text
+from host.planning.errors import NoPlanError
 from host.repair.planner import RepairPlanner
 from host.repair.problem import RepairModel
 

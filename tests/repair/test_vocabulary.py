@@ -12,13 +12,13 @@ from pddl.parser.problem import ProblemParser
 from host.diagnosis import generate, load_system, load_theory
 from host.diagnosis.logic import parse_literal
 from host.diagnosis.tug import write_tug
-from host.repair.domain import load_domain, parse_domain_text
-from host.repair.errors import DomainError, NoPlanError
-from host.repair.plan import Plan
+from host.planning.domain import load_domain, parse_domain_text
+from host.planning.errors import DomainError, NoPlanError
+from host.planning.plan import Plan
+from host.planning.vocabulary import Vocabulary
 from host.repair.planner import RepairPlanner
 from host.repair.problem import RepairModel, repair_model
 from host.repair.theory_model import repair_model_of
-from host.repair.vocabulary import Vocabulary
 from tests.diagnosis.originals import DOMAIN, JAGUAR_2012
 
 from .conftest import TEDUSAR

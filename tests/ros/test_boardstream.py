@@ -19,8 +19,8 @@ from rclpy.serialization import serialize_message
 from host.board.types import BoardInfo, LinkDown, LinkUp, Rebooted
 from host.observers import Device, HardwareObserver, Retraction, Update
 from host.observers.silence import JITTER_S
+from host.observers.sources.ros2_message import RosMessage
 from host.ros import boardstream
-from host.ros.message import RosMessage
 from host.ros.offline import ClockedObservers, Reorder, bag_observers
 from protocol.constants import EV_TRIP, ST_ON, ST_TRIPPED
 from tests.observers.test_hardware import event, reading, state

@@ -13,8 +13,8 @@ from rclpy.serialization import deserialize_message
 
 from host.observers import Retraction, Update
 from host.observers.payload import Message, encode
+from host.observers.sources.ros2_graph import GRAPH, GraphObserver
 from host.ros import graphlog
-from host.ros.graph import GRAPH, GraphObserver
 from host.ros.offline import ClockedObservers, bag_observers
 
 

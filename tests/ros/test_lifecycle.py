@@ -20,8 +20,8 @@ from sensor_msgs.msg import LaserScan
 from host.daemon.core import load_robot
 from host.diagnosis.logic import parse_literal
 from host.errors import UserError
+from host.observers.sources.ros2_node import RosNode
 from host.ros.lifecycle import LifecycleActuator, LifecycleClient, LifecycleError
-from host.ros.node import RosNode
 from tests.robot.conftest import TEDUSAR, Robot, serving
 from tests.ros.conftest import Peer, RosNodes
 from tests.wait import wait_until_async

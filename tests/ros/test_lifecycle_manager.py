@@ -27,9 +27,9 @@ from std_msgs.msg import String
 
 from host.events import ActionRecord, Kind
 from host.journal import JournalReader
+from host.observers.sources.ros2_node import RosNode
 from host.ros.lifecycle import LifecycleError
 from host.ros.manager import LifecycleManager
-from host.ros.node import RosNode
 from tests.daemon.runner import RunningDaemon, fast_copy
 from tests.robot.conftest import ROOT
 from tests.ros.conftest import Peer

@@ -8,7 +8,7 @@ from nav_msgs.msg import OccupancyGrid
 from rclpy.serialization import serialize_message
 from std_msgs.msg import String
 
-from host.ros.message import RosMessage
+from host.observers.sources.ros2_message import RosMessage
 
 
 def test_the_stamp_is_read_from_the_bytes_without_deserialising() -> None:

@@ -9,9 +9,9 @@ from host.diagnosis.observations import Observation
 from host.observers.base import Update
 from host.observers.hub import ObserverHub
 from host.observers.sources.ros2 import Ros2Source
+from host.observers.sources.ros2_graph import GraphObserver
 from host.observers.topics import FrequencyObserver
 from host.observers.values import DiagnosticObserver, Threshold, TrendObserver, ValueRef
-from host.ros.graph import GraphObserver
 from tests.robot.conftest import Robot
 from tests.ros.conftest import RosNodes
 from tests.wait import wait_until_async

@@ -22,7 +22,7 @@ from tests.robot.conftest import ROOT
 
 TEDUSAR = ROOT / "models" / "tedusar"
 HANG = "on(hokuyo)\nrunning(hokuyo_node)\n"  # the board and the supervisor: all looks fine
-# the driver is stopped before its device's power cycle (host/repair/plan.py: stops_first)
+# the driver is stopped before its device's power cycle (host/planning/plan.py: stops_first)
 RESTART = [("stop_node", ["hokuyo_node"]), ("power_cycle", ["hokuyo"]),
            ("start_node", ["hokuyo_node"])]
 LIFECYCLE = [("power_cycle", ["hokuyo"]), ("reconfigure_node", ["hokuyo_node"])]

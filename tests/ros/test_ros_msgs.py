@@ -83,7 +83,7 @@ def test_any_message_reads_by_path_and_diagnostics_by_status_name() -> None:
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
     from nav_msgs.msg import Odometry
 
-    from host.ros.message import RosMessage
+    from host.observers.sources.ros2_message import RosMessage
 
     odom = Odometry()
     odom.twist.twist.angular.z = -0.25

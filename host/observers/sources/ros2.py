@@ -1,13 +1,13 @@
 """The ROS 2 topic source: the robot's topics over DDS through rclpy, counted without decoding.
 
 ``Ros2Source(domain_id)`` is one rclpy node (``dxboard_observer``) in a thread of its own
-(``host.ros.node``). ``subscribe("/scan", cb)`` needs the topic's type: given in ``types``
+(``ros2_node`` beside it). ``subscribe("/scan", cb)`` needs the topic's type: given in ``types``
 (``{"/scan": "sensor_msgs/msg/LaserScan"}``), or else learnt from the ROS 2 graph, which
 the source reads every ``discovery_s`` until a publisher of the topic shows up (so the
 observers may start before the robot's nodes). Subscriptions are *raw*: rclpy hands over the
 serialized CDR bytes, stamped with the source's clock on the executor's thread and passed to
 the asyncio loop through the source's inbox (one wakeup per batch, ``TopicSource._post``) as a
-``host.ros.message.RosMessage``. A
+``ros2_message.RosMessage``. A
 frequency observer only counts them; value and diagnostic observers decode them on demand.
 
 QoS adapts to the publishers, as ``ros2 bag record`` does: keep last ``DEPTH``, reliable when every
@@ -21,7 +21,7 @@ stay serialized in DDS's history and take memory only while the executor lags.
 
 ``GRAPH`` (``/_graph/nodes``) is not a DDS topic: subscribing it delivers, every
 ``discovery_s``, a message whose values are ``{"nodes": [names...]}`` from the ROS 2 graph,
-for ``host.ros.graph.GraphObserver`` (node presence).
+for ``host.observers.sources.ros2_graph.GraphObserver`` (node presence).
 """
 
 from __future__ import annotations
@@ -35,10 +35,10 @@ from rclpy.qos import QoSHistoryPolicy, QoSProfile, QoSReliabilityPolicy
 
 from host.observers.payload import Message, encode
 from host.observers.sources.base import Callback, Subscription, TopicSource, check_topic
-from host.ros.convert import message_type
-from host.ros.graph import GRAPH
-from host.ros.message import RosMessage
-from host.ros.node import RosNode
+from host.observers.sources.ros2_convert import message_type
+from host.observers.sources.ros2_graph import GRAPH
+from host.observers.sources.ros2_message import RosMessage
+from host.observers.sources.ros2_node import RosNode
 
 log = logging.getLogger(__name__)
 

@@ -1,5 +1,5 @@
 ; The TEDUSAR search-and-rescue mission (paper 001's high level): a temporal PDDL domain, read by
-; the mission layer's own parser (host/mission/pddl.py: durative actions with conditions at
+; the temporal parser of host/planning (temporal_pddl.py: durative actions with conditions at
 ; start, over all and at end, effects at start and at end; constant durations in seconds).
 ;   (at ?r)              the robot is in room ?r
 ;   (connects ?d ?a ?b)  static: door ?d leads from room ?a to room ?b (both ways are listed)

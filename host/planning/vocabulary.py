@@ -32,7 +32,7 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from host.repair.errors import DomainError
+from host.planning.errors import DomainError
 
 ABNORMAL, HEALTHY, POWERED, RUNNING = "abnormal", "healthy", "powered", "running"
 ROLES = (ABNORMAL, HEALTHY, POWERED, RUNNING)

@@ -23,8 +23,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from host.errors import UserError
-from host.repair.errors import NoPlanError
-from host.repair.search import SearchInput, SearchResult
+from host.planning.errors import NoPlanError
+from host.planning.search import SearchInput, SearchResult
 
 log = logging.getLogger(__name__)
 

@@ -62,7 +62,7 @@ class Action:
 
 
 @dataclass
-class Domain:
+class TemporalDomain:
     name: str
     types: dict[str, str] = field(default_factory=dict)  # type -> parent ("object" at the top)
     predicates: dict[str, tuple[str, ...]] = field(default_factory=dict)  # name -> arg types
@@ -78,7 +78,7 @@ class Domain:
 
 
 @dataclass
-class Problem:
+class TemporalProblem:
     name: str
     domain: str
     objects: dict[str, str]  # object -> type
@@ -260,9 +260,9 @@ def _sections(tree: list[object], kind: str, where: str) -> tuple[str, list[list
     return _word(tree[1][1], where, "a name"), sections
 
 
-def parse_domain(text: str, where: str = "domain.pddl") -> Domain:
+def parse_domain(text: str, where: str = "domain.pddl") -> TemporalDomain:
     name, sections = _sections(_read(_tokens(text), where), "domain", where)
-    dom = Domain(name)
+    dom = TemporalDomain(name)
     for sec in sections:
         head = _word(sec[0], where, "a :section")
         if head == ":requirements":
@@ -292,7 +292,8 @@ def parse_domain(text: str, where: str = "domain.pddl") -> Domain:
     return dom
 
 
-def parse_problem(text: str, domain: Domain, where: str = "problem.pddl") -> Problem:
+def parse_problem(text: str, domain: TemporalDomain,
+                  where: str = "problem.pddl") -> TemporalProblem:
     name, sections = _sections(_read(_tokens(text), where), "problem", where)
     objects: dict[str, str] = {}
     init: set[Atom] = set()
@@ -325,10 +326,10 @@ def parse_problem(text: str, domain: Domain, where: str = "problem.pddl") -> Pro
         unknown = [a for a in atom[1:] if a not in objects]
         if unknown:
             raise PddlError(f"{where}: {spell(atom)}: {unknown[0]} is not an object")
-    return Problem(name, dom_name, objects, frozenset(init), tuple(goal))
+    return TemporalProblem(name, dom_name, objects, frozenset(init), tuple(goal))
 
 
-def load(domain_file: Path, problem_file: Path) -> tuple[Domain, Problem]:
+def load(domain_file: Path, problem_file: Path) -> tuple[TemporalDomain, TemporalProblem]:
     try:
         dom_text, prob_text = domain_file.read_text(), problem_file.read_text()
     except OSError as exc:

@@ -23,8 +23,8 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from host.repair.errors import DomainError
-from host.repair.vocabulary import Vocabulary, infer
+from host.planning.errors import DomainError
+from host.planning.vocabulary import Vocabulary, infer
 
 log = logging.getLogger(__name__)
 

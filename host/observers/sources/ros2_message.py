@@ -6,7 +6,7 @@ frequency observer reads for every message, is read straight from the CDR bytes 
 ``header`` that stamped types carry first: deserialising a 4 MB map to find it would starve the
 daemon's loop); ``values`` (used by the
 trend, matched-trend and diagnostic observers) deserialises once with
-``rclpy.serialization.deserialize_message`` and converts with ``host.ros.convert.to_dict``,
+``rclpy.serialization.deserialize_message`` and converts with ``ros2_convert.to_dict``,
 shared by every observer of the topic. Bytes that do not deserialise have no values (None),
 like a payload that is not JSON on Zenoh.
 """
@@ -23,7 +23,7 @@ from typing import Any
 from rclpy.serialization import deserialize_message
 
 from host.observers.payload import Message
-from host.ros.convert import message_type, to_dict
+from host.observers.sources.ros2_convert import message_type, to_dict
 
 log = logging.getLogger(__name__)
 

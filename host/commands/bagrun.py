@@ -40,10 +40,10 @@ from host.events import JOURNALED, Note, Stamped
 from host.journal import Journal
 from host.observers.base import Update
 from host.observers.payload import Message
+from host.observers.sources.ros2_graph import GRAPH
+from host.observers.sources.ros2_message import RosMessage
 from host.ros import graphlog
 from host.ros.bag import NS, Bag, BagWriter
-from host.ros.graph import GRAPH
-from host.ros.message import RosMessage
 from host.ros.offline import ClockedObservers, Diagnosing, Reorder, bag_observers
 
 log = logging.getLogger(__name__)

@@ -24,7 +24,7 @@ from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from host.repair.task import GroundOp, holds
+from host.planning.task import GroundOp, holds
 
 #: a ``stop_node`` moves ahead of these steps (``stops_first``)
 STOP_BEFORE = frozenset({"power_cycle"})

@@ -18,7 +18,7 @@ import logging
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
-from host.repair.domain import (
+from host.planning.domain import (
     ROOT_TYPE,
     Atom,
     CAnd,
@@ -35,8 +35,8 @@ from host.repair.domain import (
     EWhen,
     Schema,
 )
-from host.repair.errors import DomainError
-from host.repair.task import CondEffect, GroundOp, Task, lit
+from host.planning.errors import DomainError
+from host.planning.task import CondEffect, GroundOp, Task, lit
 
 log = logging.getLogger(__name__)
 

@@ -25,7 +25,7 @@ import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
-from host.mission.pddl import Action, Atom, Domain, Literal, Problem
+from host.planning.temporal_pddl import Action, Atom, Literal, TemporalDomain, TemporalProblem
 
 log = logging.getLogger(__name__)
 
@@ -90,13 +90,13 @@ def applicable(state: State, g: Ground) -> State | None:
     return apply(mid, g.eff["end"])
 
 
-def _static(domain: Domain) -> set[str]:
+def _static(domain: TemporalDomain) -> set[str]:
     changed = {a[0] for act in domain.actions.values() for lits in act.eff.values()
                for a, _ in lits}
     return set(domain.predicates) - changed
 
 
-def ground(domain: Domain, problem: Problem, objects: dict[str, str] | None = None,
+def ground(domain: TemporalDomain, problem: TemporalProblem, objects: dict[str, str] | None = None,
            init: frozenset[Atom] | None = None) -> list[Ground]:
     """Every ground action whose static conditions hold in ``init``."""
     objects = problem.objects if objects is None else objects

@@ -22,12 +22,12 @@ import logging
 from pathlib import Path
 from typing import Any
 
-from host.repair.domain import ROOT_TYPE, Atom, Domain
-from host.repair.errors import NoPlanError, ProblemError
-from host.repair.grounding import ground
-from host.repair.plan import Plan, deorder
-from host.repair.planner import PLANNERS, unreachable, validate
-from host.repair.search import DEFAULT_MAX_EXPANSIONS, SearchInput, relevant_ops
+from host.planning.domain import ROOT_TYPE, Atom, Domain
+from host.planning.errors import NoPlanError, ProblemError
+from host.planning.grounding import ground
+from host.planning.plan import Plan, deorder
+from host.planning.planners import PLANNERS, unreachable, validate
+from host.planning.search import DEFAULT_MAX_EXPANSIONS, SearchInput, relevant_ops
 
 log = logging.getLogger(__name__)
 

@@ -31,8 +31,8 @@ from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from host.repair.errors import PlanningLimitError
-from host.repair.task import GroundOp, Task, holds, masks
+from host.planning.errors import PlanningLimitError
+from host.planning.task import GroundOp, Task, holds, masks
 
 log = logging.getLogger(__name__)
 
