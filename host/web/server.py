@@ -148,9 +148,15 @@ class WebServer:
 
     async def _close_clients(self, app: web.Application) -> None:
         if self._broadcaster is not None:
-            self._broadcaster.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._broadcaster
+            # Python 3.11's wait_for swallows a cancellation that lands while the status it
+            # waits for arrives (the broadcaster then runs on and a single cancel() waits for it
+            # forever): cancel until the task has ended.
+            task, self._broadcaster = self._broadcaster, None
+            while not task.done():
+                task.cancel()
+                await asyncio.wait({task}, timeout=0.1)
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                task.result()
         for ws in list(self._clients):
             await ws.close(code=1001, message=b"server shutdown")
 
