@@ -49,7 +49,7 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from command_bench import (  # noqa: E402
+from benchmarks.command_bench import (  # noqa: E402
     MAX_COUNT,
     bench_command,
     cpu_timed,
@@ -57,7 +57,7 @@ from command_bench import (  # noqa: E402
     mean_worst,
     timed,
 )
-from iscas import (  # noqa: E402
+from benchmarks.iscas import (  # noqa: E402
     CIRCUITS,
     ISCAS,
     circuit_theory,
@@ -65,7 +65,6 @@ from iscas import (  # noqa: E402
     rc2_reference,
     sample,
 )
-
 from host.diagnosis import (  # noqa: E402
     Diagnoser,
     DiagnosisResult,
