@@ -80,8 +80,8 @@ $(BENCH_STAMP): $(STAMP)
 
 # Every benchmark, in turn (several minutes); figures go to benchmarks/RESULTS.md by hand.
 bench: $(BENCH_STAMP)
-	$(BIN)/python benchmarks/protocol.py
-	$(BIN)/python benchmarks/firmware.py
+	$(BIN)/python benchmarks/codec.py
+	$(BIN)/python benchmarks/board_firmware.py
 	$(BIN)/python benchmarks/transport.py
 	$(BIN)/python benchmarks/diagnosis.py --quick
 	$(BIN)/python benchmarks/planning.py --quick

@@ -50,6 +50,8 @@ from pathlib import Path
 
 import psutil
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the checkout before benchmarks/
+
 from benchmarks.loop import start_board, stop_boards
 from host.board import BoardClient
 from host.board.types import Reading

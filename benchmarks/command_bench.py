@@ -40,8 +40,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from iscas import ISCAS, circuit_theory, parse_bench, sample
-
+from benchmarks.iscas import ISCAS, circuit_theory, parse_bench, sample
 from host.diagnosis import Diagnoser, DiagnosisResult, Literal, Theory
 from host.diagnosis.encoding import Encoding, encode
 from host.diagnosis.tug import write_tug

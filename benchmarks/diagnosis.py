@@ -10,8 +10,10 @@ to 1,000) by ``auto``; and, beside them in the same run, the reference: PySAT's 
 whole model, first optimum. Instances of minimum cardinality above 5 are counted apart. The
 table reports the mean and the *worst* instance, and how many missed 1 s / 5 s.
 
-c432, all subset-minimal diagnoses up to cardinality 1, 2, 3, against PyMBD's published
-figures and a plain Reiter HS-tree (same SAT oracle) measured here.
+All subset-minimal diagnoses up to cardinality 1, 2, 3 on ``--all-circuits`` (c432, c499,
+c880), against live peers run here on the same instances: a plain HS-tree and an HS-DAG over
+the same SAT solver, RC2 enumeration and LBX (PySAT); PyMBD's c432 figures stand beside as
+published, not run.
 
 The whole command (benchmarks/command_bench.py): ``dxboard diagnose MODEL.yaml --obs FILE
 --json --min-card-only`` as a process, on circuits written as tug model files, against the
@@ -26,7 +28,7 @@ form; with every observer reporting, one observation at a time flips and flips b
 re-diagnosis (observe -> diagnose) is timed, p50/p99.
 
     .venv/bin/python benchmarks/diagnosis.py [--quick] [--seed N] [--per-circuit N]
-        [--only iscas|command|robots] [--base DIR] [--write]
+        [--only iscas|command|robots] [--all-circuits A,B] [--base DIR] [--write]
 
 ``--write`` replaces the "## Diagnosis" section of benchmarks/RESULTS.md.
 """
@@ -43,13 +45,14 @@ import tempfile
 import time
 from collections import deque
 from pathlib import Path
+from typing import Any
 
 import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from command_bench import (  # noqa: E402
+from benchmarks.command_bench import (  # noqa: E402
     MAX_COUNT,
     bench_command,
     cpu_timed,
@@ -57,15 +60,16 @@ from command_bench import (  # noqa: E402
     mean_worst,
     timed,
 )
-from iscas import (  # noqa: E402
+from benchmarks.iscas import (  # noqa: E402
     CIRCUITS,
     ISCAS,
     circuit_theory,
+    lbx_all,
     parse_bench,
+    rc2_all,
     rc2_reference,
     sample,
 )
-
 from host.diagnosis import (  # noqa: E402
     Diagnoser,
     DiagnosisResult,
@@ -83,8 +87,10 @@ MAX_CARD = 5
 
 # -- the baseline: a plain Reiter HS-tree ----------------------------------------------------
 def hs_tree(ctx: SatContext, obs: list[int], max_card: int, min_card_only: bool,
-            budget_s: float) -> tuple[list[frozenset[int]], bool]:
-    """Breadth-first HS-tree; returns (minimal diagnoses, complete)."""
+            budget_s: float, dag: bool = True) -> tuple[list[frozenset[int]], bool]:
+    """Breadth-first HS-tree (Reiter: conflicts reused as labels, nodes holding a diagnosis
+    closed); ``dag``: HS-DAG, a node reached again by another path is not expanded twice.
+    Returns (minimal diagnoses, complete)."""
     deadline = time.perf_counter() + budget_s
     n = len(ctx.ab_vars)
     conflicts: list[frozenset[int]] = []
@@ -99,9 +105,10 @@ def hs_tree(ctx: SatContext, obs: list[int], max_card: int, min_card_only: bool,
             return diagnoses, True
         if min_card_only and diagnoses and len(h) > len(diagnoses[0]):
             return diagnoses, True
-        if h in seen or any(d <= h for d in diagnoses):
+        if (dag and h in seen) or any(d <= h for d in diagnoses):
             continue
-        seen.add(h)
+        if dag:
+            seen.add(h)
         label = next((c for c in conflicts if not (c & h)), None)
         if label is None:
             if ctx.solve(obs + [-ctx.ab_vars[i] for i in range(n) if i not in h]):
@@ -202,41 +209,64 @@ def bench_iscas(args: argparse.Namespace, lines: list[str]) -> None:
     lines.append("")
 
 
+PEERS = ("HS-tree", "HS-DAG", "RC2 enum", "LBX")
+
+
 def bench_c432(args: argparse.Namespace, lines: list[str]) -> None:
+    """All subset-minimal diagnoses up to k on the ISCAS-85 circuits ``--all-circuits``, dxboard
+    against live peers in this run: a plain HS-tree and an HS-DAG over the same SAT solver,
+    RC2 enumeration and LBX (PySAT). Each peer's answer, when complete, must equal ours."""
     rng = random.Random(args.seed)
-    circuit = parse_bench(ISCAS / "c432.bench")
-    theory = circuit_theory(circuit)
-    known = theory.observable_atoms()
-    ours: dict[int, list[float]] = {1: [], 2: [], 3: []}
-    base: dict[int, list[float]] = {1: [], 2: [], 3: []}
-    with Diagnoser(theory) as d:
-        for _flips, obs in sample(circuit, rng, 5 if args.quick else 10):
-            obs = [o for o in obs if o.atom in known]
-            for o in obs:
-                d.observe(o)
-            ctx = SatContext(theory)
-            lits = [ctx.lit(o) for o in obs]
-            for k in (1, 2, 3):
-                t, r = timed(d.diagnose, max_card=k, max_count=100000,
-                             time_budget_s=args.budget)
-                ours[k].append(t)
-                t, (diags, complete) = timed(hs_tree, ctx, lits, k, False, args.base_budget)
-                base[k].append(t)
-                if complete:  # cross-check
+    lines.append("All subset-minimal diagnoses up to cardinality k (mean per instance, same "
+                 f"seed; load average {os.getloadavg()[0]:.1f} at the start). Live peers run "
+                 "here in the same process; PyMBD's c432 figures are published, not run:\n")
+    lines.append("| circuit | k | dxboard | " + " | ".join(PEERS)
+                 + " | fastest peer / dxboard | PyMBD best (published, not run) |")
+    lines.append("|---|---|---|" + "---|" * len(PEERS) + "---|---|")
+    for name in args.all_circuits.split(","):
+        circuit = parse_bench(ISCAS / f"{name}.bench")
+        theory = circuit_theory(circuit)
+        known = theory.observable_atoms()
+        ours: dict[int, list[float]] = {1: [], 2: [], 3: []}
+        peers: dict[tuple[str, int], list[float]] = {(p, k): [] for p in PEERS for k in (1, 2, 3)}
+        cut: set[tuple[str, int]] = set()
+        with Diagnoser(theory) as d:
+            for _flips, obs in sample(circuit, rng, 5 if args.quick else 10):
+                obs = [o for o in obs if o.atom in known]
+                for o in obs:
+                    d.observe(o)
+                ctx = SatContext(theory)
+                lits = [ctx.lit(o) for o in obs]
+                for k in (1, 2, 3):
+                    t, r = timed(d.diagnose, max_card=k, max_count=100000,
+                                 time_budget_s=args.budget)
+                    ours[k].append(t)
                     got = {frozenset(theory.components.index(x) for x in b)
                            for b in r.bad_sets()}
-                    assert set(diags) == got
-            ctx.close()
-    lines.append("c432, all subset-minimal diagnoses up to cardinality k (mean per instance, "
-                 "same seed):\n")
-    lines.append("| k | PyMBD best (published) | dxboard | speedup vs PyMBD | HS-tree (here) | "
-                 "speedup vs HS-tree |")
-    lines.append("|---|---|---|---|---|---|")
-    for k in (1, 2, 3):
-        o, b = statistics.fmean(ours[k]), statistics.fmean(base[k])
-        lines.append(f"| {k} | {PYMBD_C432[k]:.2f} s | {fmt(o)} | {PYMBD_C432[k] / o:.0f}x | "
-                     f"{fmt(b)} | {b / o:.1f}x |")
-        print(lines[-1], flush=True)
+                    runs: list[tuple[str, Any, tuple[Any, ...]]] = [
+                        ("HS-tree", hs_tree, (ctx, lits, k, False, args.base_budget, False)),
+                        ("HS-DAG", hs_tree, (ctx, lits, k, False, args.base_budget)),
+                        ("RC2 enum", rc2_all, (theory, obs, k, args.base_budget)),
+                        ("LBX", lbx_all, (theory, obs, k, args.base_budget)),
+                    ]
+                    for peer, run, run_args in runs:
+                        t, (diags, complete) = timed(run, *run_args)
+                        peers[peer, k].append(t)
+                        if complete:  # cross-check
+                            assert set(diags) == got, (name, k, peer)
+                        else:
+                            cut.add((peer, k))
+                ctx.close()
+        for k in (1, 2, 3):
+            o = statistics.fmean(ours[k])
+            cells = [fmt(statistics.fmean(peers[p, k])) + (" (cut)" if (p, k) in cut else "")
+                     for p in PEERS]
+            done = [statistics.fmean(peers[p, k]) for p in PEERS if (p, k) not in cut]
+            ratio = f"{min(done) / o:.2f}x" if done else "every peer cut"
+            pymbd = f"{PYMBD_C432[k]:.2f} s" if name == "c432" else "-"
+            lines.append(f"| {name} | {k} | {fmt(o)} | " + " | ".join(cells)
+                         + f" | {ratio} | {pymbd} |")
+            print(lines[-1], flush=True)
     lines.append("")
 
 
@@ -351,7 +381,11 @@ def main() -> None:
     parser.add_argument("--card-budget", type=float, default=5.0,
                         help="the `cardinality` column's budget, s")
     parser.add_argument("--ref-budget", type=float, default=30.0, help="RC2's budget, s")
-    parser.add_argument("--base-budget", type=float, default=5.0, help="HS-tree budget, s")
+    parser.add_argument("--base-budget", type=float, default=5.0,
+                        help="each live peer's budget per instance, s")
+    parser.add_argument("--all-circuits", default="c432,c499,c880", metavar="A,B",
+                        help="ISCAS-85 circuits of the all-diagnoses comparison with live "
+                             "peers (default: c432,c499,c880)")
     parser.add_argument("--base", type=Path, default=None, metavar="DIR",
                         help="the whole command: also run it from this checkout (the code "
                         "before a change, e.g. `git archive REV | tar -x -C DIR`), interleaved")

@@ -56,6 +56,8 @@ from typing import Protocol, cast
 
 import psutil
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the checkout before benchmarks/
+
 from benchmarks.loop import (
     Sample,
     TopicClock,

@@ -146,6 +146,21 @@ def sample(c: Circuit, rng: random.Random, n: int) -> list[tuple[int, list[Liter
 def rc2_reference(theory: Theory, obs: list[Literal], budget_s: float) -> tuple[float, int | None]:
     """Seconds to RC2's first optimum over the whole model, and the minimum cardinality
     (None when the budget ran out first)."""
+    wcnf, _ = _wcnf(theory, obs)
+    start = time.perf_counter()
+    with RC2(wcnf, solver="g3") as rc2:
+        timer = threading.Timer(budget_s, rc2.interrupt)
+        timer.start()
+        try:
+            model = rc2.compute(expect_interrupt=True)
+        finally:
+            timer.cancel()
+        cost = None if model is None else int(rc2.cost)
+    return time.perf_counter() - start, cost
+
+
+def _wcnf(theory: Theory, obs: list[Literal]) -> tuple[WCNF, list[int]]:
+    """Hard: the clauses and the observations; soft: each component healthy (weight 1)."""
     ids: dict[str, int] = {}
 
     def lit(x: Literal) -> int:
@@ -160,13 +175,51 @@ def rc2_reference(theory: Theory, obs: list[Literal], budget_s: float) -> tuple[
         wcnf.append([lit(o)])
     for v in comps:
         wcnf.append([-v], weight=1)
-    start = time.perf_counter()
-    with RC2(wcnf, solver="g3") as rc2:
+    return wcnf, comps
+
+
+def rc2_all(theory: Theory, obs: list[Literal], max_card: int,
+            budget_s: float) -> tuple[set[frozenset[int]], bool]:
+    """A live peer: every subset-minimal diagnosis up to ``max_card`` by RC2 enumeration
+    (each optimum blocked for its supersets); (diagnoses as component indexes, complete)."""
+    wcnf, comps = _wcnf(theory, obs)
+    index = {v: i for i, v in enumerate(comps)}
+    out: set[frozenset[int]] = set()
+    deadline = time.perf_counter() + budget_s
+    with RC2(wcnf, solver="g3", exhaust=True) as rc2:
         timer = threading.Timer(budget_s, rc2.interrupt)
         timer.start()
         try:
-            model = rc2.compute(expect_interrupt=True)
+            while time.perf_counter() < deadline:
+                model = rc2.compute(expect_interrupt=True)
+                if model is None:
+                    return out, not rc2.interrupted
+                if rc2.cost > max_card:
+                    return out, True
+                bad = frozenset(index[x] for x in model if x > 0 and x in index)
+                out.add(bad)
+                rc2.add_clause([-comps[i] for i in bad])
         finally:
             timer.cancel()
-        cost = None if model is None else int(rc2.cost)
-    return time.perf_counter() - start, cost
+    return out, False
+
+
+def lbx_all(theory: Theory, obs: list[Literal], max_card: int,
+            budget_s: float) -> tuple[set[frozenset[int]], bool]:
+    """A live peer: PySAT's LBX enumerating the minimal correction subsets of "every
+    component healthy" (= the subset-minimal diagnoses, in no order of size), keeping those
+    up to ``max_card``; complete only when it enumerated them all within ``budget_s``."""
+    from pysat.examples.lbx import LBX  # type: ignore[import-untyped]
+
+    wcnf, comps = _wcnf(theory, obs)
+    soft_of = {i + 1: i for i in range(len(comps))}  # LBX numbers soft clauses from 1
+    out: set[frozenset[int]] = set()
+    deadline = time.perf_counter() + budget_s
+    with LBX(wcnf, use_cld=True, solver_name="g3") as lbx:
+        for mcs in lbx.enumerate():
+            lbx.block(mcs)
+            if len(mcs) <= max_card:
+                out.add(frozenset(soft_of[j] for j in mcs))
+            if time.perf_counter() > deadline:
+                return out, False
+    return out, True

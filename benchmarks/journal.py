@@ -21,7 +21,7 @@ import tempfile
 import time
 from pathlib import Path
 
-sys.path.insert(0, ".")
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the checkout before benchmarks/
 
 from host.journal import (
     ActionRecord,
@@ -123,4 +123,8 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    if "--help" in sys.argv or "-h" in sys.argv:
+        print("usage: python benchmarks/journal.py  (or python -m benchmarks.journal)\n")
+        print(__doc__)
+        sys.exit(0)
     main()

@@ -16,7 +16,11 @@ as the robot is verified healthy again — except that a device's next fault wai
 counts as one that did not hold, and the third would quarantine it): the first fault in the
 order whose device is ready goes next. For each, from the journal's wall times:
 
-- detection: the inject command returned → the first observation that changed;
+- detection: the fault's effect → the first observation that changed, on CLOCK_MONOTONIC
+  (the journal's ``mono``): for a hang the later of the inject command's start and the last
+  message of the device's topic seen by a Zenoh peer of the benchmark's own (the device falls
+  silent after it); for a trip the inject command's start (the board trips after it). Both
+  come no later than the fault's effect, so no latency is negative;
 - for a hang, the silence limit as applied: the last message of the topic seen by a Zenoh
   peer of the benchmark's own → that observation (both on CLOCK_MONOTONIC);
 - diagnosis: that observation → the first diagnosis naming the component (or its driver);
@@ -25,9 +29,8 @@ order whose device is ready goes next. For each, from the journal's wall times:
 
 The daemon's CPU (user+system) and resident memory are also taken over the fault series.
 
-The inject command's return is later than the fault itself (the CLI process starts, connects,
-sends, and the reply comes back), so detection latencies are slight underestimates of the
-true ones and may be negative by a few ms for events the board pushes at once.
+A trip's latencies include the inject command's own start (the CLI process starts,
+connects and sends): slight overestimates, never negative.
 
 Part 2, ten boards: the daemon handles one board, so this measures its per-board pipeline ten
 times in one process: ten ``dxboard emulate`` subprocesses, and here, per board, a
@@ -67,6 +70,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import psutil
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the checkout before benchmarks/
 
 from host.board import BoardClient
 from host.diagnosis import Diagnoser, generate, load_system
@@ -210,8 +215,8 @@ def _one_fault(d: RunningDaemon, kind: str, device: str, clock: TopicClock,
     # the journal (a trip's fault must be cleared before the board's retry a second later,
     # else the board latches the channel for a short and the daemon quarantines it)
     mark = max((e.id for e in reader.tail(1)), default=0)
+    sent = time.monotonic()  # before the command: the fault comes after, never before
     d.inject(device, *ARGS[kind])
-    t0 = time.time()
     s = Sample(kind, device)
     end = time.monotonic() + 90
     cleared = kind != "trip"
@@ -234,13 +239,16 @@ def _one_fault(d: RunningDaemon, kind: str, device: str, clock: TopicClock,
             d.inject("clear")
             cleared = True
         if obs and diag and acts and done:
-            s.detect = obs[0].wall - t0
+            # the fault's effect: a hang's last message of the device's topic (the device
+            # falls silent after it); a trip's inject command sent (the board trips after)
+            t0 = max(last_msg, sent) if last_msg is not None else sent
+            s.detect = obs[0].mono - t0
             if last_msg is not None:
                 s.silence = obs[0].mono - last_msg
-            s.to_diagnosis = diag[0].wall - t0
-            s.diagnose = diag[0].wall - obs[0].wall
-            s.to_repair = acts[0].wall - t0
-            s.to_healthy = done[0].wall - t0
+            s.to_diagnosis = diag[0].mono - t0
+            s.diagnose = diag[0].mono - obs[0].mono
+            s.to_repair = acts[0].mono - t0
+            s.to_healthy = done[0].mono - t0
             break
         time.sleep(0.05)
     else:
@@ -459,7 +467,7 @@ def table(res: Results) -> str:
                for d in KINDS["hang"]]
     rows = ["| measure | faults | n | p50 | p99 | max |", "|---|---|---|---|---|---|"]
     for name, attr, per_device in (
-            ("detection (inject returned → first changed observation)", "detect", True),
+            ("detection (fault's effect → first changed observation)", "detect", True),
             ("hang: last message seen → ~ok (the silence limit as applied)", "silence", True),
             ("diagnosis (that observation → diagnosis naming it)", "diagnose", False),
             ("fault → diagnosis", "to_diagnosis", False),
@@ -521,10 +529,11 @@ Part 1 runs the real `dxboard run models/tedusar --emulate` (board streaming 10 
 camera 2 s); faults are injected with `dxboard inject`, hangs in turn on \
 {", ".join(KINDS["hang"])}, trips on {", ".join(KINDS["trip"])}, a device's next fault at \
 least {SPACING_S:.0f} s after its last repair (the limiter's stable time), the next fault as \
-soon as the robot is verified healthy. Times come from the journal's wall clock; detection \
-starts when the inject command *returns*, slightly after the fault (a trip pushed by the board \
-can show as a few ms before). The silence row: from the last message of the hung device's \
-topic seen by a Zenoh peer of the benchmark's own to the observation (CLOCK_MONOTONIC in both).
+soon as the robot is verified healthy. Times come from the journal's CLOCK_MONOTONIC; the \
+fault's effect is a hang's last message on the device's topic (or the inject's start, if later) \
+and a trip's inject command start (before the board trips: never negative). The silence \
+row: from the last message of the hung device's topic seen by a Zenoh peer of the \
+benchmark's own to the observation (CLOCK_MONOTONIC in both).
 
 {table(res)}
 

@@ -28,6 +28,7 @@ import json
 import os
 import re
 import signal
+import sys
 import tempfile
 import threading
 import time
@@ -35,6 +36,8 @@ import tracemalloc
 from pathlib import Path
 
 import psutil
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the checkout before benchmarks/
 
 from benchmarks.loop import KINDS, TOPIC, TopicClock, ms, one_fault, schedule, spaced
 from tests.daemon.runner import RunningDaemon, fast_copy, healthy, key_file

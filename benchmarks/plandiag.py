@@ -33,10 +33,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from plandiag_kstar import minimum_diagnoses  # noqa: E402
-
+from benchmarks.plandiag_kstar import minimum_diagnoses  # noqa: E402
 from host.diagnosis.result import Bound  # noqa: E402
 from host.plandiag.context import Context, interpret_context  # noqa: E402
 from host.plandiag.engines import ENGINES  # noqa: E402

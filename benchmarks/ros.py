@@ -37,7 +37,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-sys.path.insert(0, ".")
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the checkout before benchmarks/
 
 ROOT = Path(__file__).resolve().parents[1]
 KEY_HEX = "000102030405060708090a0b0c0d0e0f"

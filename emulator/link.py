@@ -98,6 +98,14 @@ class LinkProxy:
         if task is not None:
             self.tasks.add(task)
             task.add_done_callback(self.tasks.discard)
+        try:
+            await self._serve(reader, writer)
+        except asyncio.CancelledError:
+            # close() cancelled it: end quietly. Python 3.11's stream protocol asks a client
+            # task that ended cancelled for its exception and logs the CancelledError.
+            writer.transport.abort()
+
+    async def _serve(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
         if "link_disconnect" in self.faults:
             writer.transport.abort()
             return

@@ -12,6 +12,15 @@ preceded by one annotation comment:
                                               first parameters are ACTION's, more may follow
   ; @event prior=P                            an exogenous event: may happen between steps
 
+A mode's P is the probability that ACTION goes wrong that way when it runs; a mode with extra
+parameters shares P evenly among their groundings (navigate-elsewhere to one of 4 places:
+P/4 each). An event's P is its probability per grounding and gap.
+
+The bounds mean the same in every engine: --max-card K lists the minimal histories of at most K
+faults; --max-count N keeps N of them, the N smallest (--order cardinality) or the N most
+probable (--order probability); "complete" is false exactly when a bound left one out (or the
+time budget ran out), and "explainable" is false only when no alternative history exists.
+
 HISTORY.json is the mission journal's record: ``objects`` (name: type), ``init`` (the
 knowledge base before the first step, atoms like ``at(tedusar,start)``), ``steps`` (each with
 ``action``, ``args``, ``start``, ``end``, ``result`` success | fail | halted | not-run, and

@@ -118,6 +118,9 @@ class Theory:
     ``negations`` are the model's own prefixes that negate a literal (the tug format's
     ``neg_prefix``, e.g. ``not_``), accepted in observations beside ``~`` and ``not``;
     ``notes`` are what a person should know about how the model was read (said once).
+    ``separate`` are atoms whose negation is an atom of its own, named ``separate_prefix`` +
+    the atom (the original tug engine's reading of an atom ``props`` does not list: ``~a`` and
+    ``not_a`` say ``not_a`` holds, nothing about ``a``).
     """
 
     components: tuple[str, ...]
@@ -126,6 +129,8 @@ class Theory:
     observables: frozenset[str] = frozenset()
     negations: tuple[str, ...] = ()
     notes: tuple[str, ...] = field(default=(), compare=False)
+    separate: frozenset[str] = frozenset()
+    separate_prefix: str = ""
 
     def atoms(self) -> set[str]:
         out = {ab(c) for c in self.components}
@@ -143,7 +148,10 @@ class Theory:
 
     def parse(self, text: str) -> Literal:
         """A literal in this model's language (its own negation prefixes included)."""
-        return parse_literal(text, self.negations)
+        lit = parse_literal(text, self.negations)
+        if not lit.positive and lit.atom in self.separate:
+            return Literal(self.separate_prefix + lit.atom, True)
+        return lit
 
 
 def horn(body: Iterable[Literal], head: Iterable[Literal], origin: str = "") -> Clause:

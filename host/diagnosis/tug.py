@@ -16,9 +16,21 @@ rule without ``->`` is a fact (a disjunction), so any clause set can be written,
 included; an empty head is an error (write ``false``). Components are the arguments of
 ``ab``/``nab`` atoms in props and rules. An optional ``priors: {component: p}`` key carries
 prior fault probabilities. As in the original system, a rule may use atoms ``props`` does not
-list: they are accepted, and the theory's one note names all of them. The January 2012
-prototype format, ``props`` and ``rules`` as mappings (``rule1: NAB(a) -> ok(x)``), is read in
-the file's order. Errors name the file, the line, the offending value and the fix.
+list: they are accepted, and the theory's one note names all of them.
+
+Negation, as the original engine reads it (its C++ controller and Java prover in
+``zinnirahkasim/tug_ist_model_based_diagnosis``): the prover knows no negation, ``not_a`` is an
+atom like any other; the controller adds ``p, not_p -> false`` for each ``props`` entry and
+sends an observation ``~a`` as the fact ``not_a``. So ``a`` and ``not_a`` exclude each other
+only for the atoms ``props`` lists (read here as ``a`` and ``~a``); for an atom it does not list,
+``not_a`` is an atom of its own (``Theory.separate``), and observing ``~a`` says nothing about
+``a``. ``complement="all"`` reads ``not_a`` as ``~a`` everywhere (dxboard's earlier reading).
+One difference is left: for a ``props`` entry the original only forbids both; here exactly one
+holds (it matters only where a rule's body uses ``not_a`` of an atom nothing observes).
+
+The January 2012 prototype format, ``props`` and ``rules`` as mappings (``rule1: NAB(a) ->
+ok(x)``), is read in the file's order. Errors name the file, the line, the offending value
+and the fix.
 """
 
 from __future__ import annotations
@@ -40,7 +52,7 @@ def looks_like_tug(data: Any) -> bool:
     return isinstance(data, dict) and "rules" in data and "props" in data
 
 
-def read_tug(path: str | Path) -> Theory:
+def read_tug(path: str | Path, complement: str = "props") -> Theory:
     """Load a tug model file. Raises ``UserError`` naming file and line."""
     file = Path(path)
     try:
@@ -54,7 +66,7 @@ def read_tug(path: str | Path) -> Theory:
         data, lines = yamlpos.load(text, typed=False)  # all strings
     except yamlpos.YamlSyntaxError as exc:
         raise UserError(f"{file}:{exc.line}: {exc}", exc.fix) from exc
-    return parse_tug(data, lines, file)
+    return parse_tug(data, lines, file, complement)
 
 
 def _entries(value: Any) -> list[tuple[object, Any]] | None:
@@ -67,7 +79,11 @@ def _entries(value: Any) -> list[tuple[object, Any]] | None:
     return None
 
 
-def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
+def parse_tug(data: Any, lines: yamlpos.Lines, file: Path, complement: str = "props") -> Theory:
+    """The theory of a parsed tug file. ``complement``: ``props`` (the original engine's
+    reading, see the module docstring) or ``all`` (``not_a`` is ``~a`` for every atom)."""
+    if complement not in ("props", "all"):
+        raise ValueError(f"complement must be 'props' or 'all', not {complement!r}")
     def fail(path: tuple[object, ...], message: str, fix: str) -> UserError:
         return UserError(f"{file}:{lines(*path)}: {message}", fix)
 
@@ -100,6 +116,10 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
             lit = parse_literal(s, neg_prefixes)
         except ValueError as exc:
             raise fail(path, str(exc), "write a literal such as ok(/scan) or !on(jaguar)") from exc
+        if (own and not lit.positive and s.startswith(own) and lit.atom not in known
+                and ab_component(lit.atom) is None and not s.startswith(own + own)):
+            separate.setdefault(lit.atom)
+            return Literal(own + lit.atom, True)
         for pred, sign in ((nab_name, False), (ab_name, True)):
             if lit.atom.startswith(pred + "(") and lit.atom.endswith(")"):
                 comp = lit.atom[len(pred) + 1 : -1]
@@ -113,8 +133,14 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
     if props is None:
         raise fail(("props",), "props is not a list of propositions", "write props: [ok(/scan)]")
     known: dict[str, None] = {}
+    own = ""  # set once props are read
+    separate: dict[str, None] = {}
     for i, p in props:
         known.setdefault(literal(str(p), ("props", i)).atom)
+    # from here on (the rules), an unlisted atom written with the model's prefix is an atom
+    # of its own (not_a), as the original engine reads it
+    own = str(neg).strip() if complement == "props" and str(neg).strip() not in (
+        "~", "!", "-", "¬") else ""
     rules = _entries(data.get("rules"))
     if rules is None:
         raise fail(("rules",), "rules is not a list", "write rules: ['NAB(a) -> ok(x)']")
@@ -148,7 +174,10 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
         clauses.append(Clause(tuple(lits)))
     # atoms rules use that props does not list, in the order rules first use them
     unlisted = {lit.atom: None for lit in seen.values()
-                if lit.atom not in known and ab_component(lit.atom) is None}
+                if lit.atom not in known and ab_component(lit.atom) is None
+                and not (own and lit.atom.startswith(own) and lit.atom[len(own):] in separate)}
+    if own:  # observing ~a of an unlisted atom a says not_a (as the original's controller)
+        separate.update(unlisted)
     priors = data.get("priors") or {}
     if not isinstance(priors, dict):
         raise fail(("priors",), "priors is not a mapping", "write priors: {name: 0.01}")
@@ -164,12 +193,20 @@ def parse_tug(data: Any, lines: yamlpos.Lines, file: Path) -> Theory:
     notes: tuple[str, ...] = ()
     if unlisted:
         n = len(unlisted)
-        notes = (f"{file}: rules use {n} atom{'s' if n > 1 else ''} that props does not list, "
-                 f"accepted as the original system does: {', '.join(unlisted)} (add "
-                 f"{'them' if n > 1 else 'it'} to props to silence this note)",)
-    observables = frozenset(a for a in (*known, *unlisted) if ab_component(a) is None)
+        them = "them" if n > 1 else "it"
+        if own:
+            how = (f"accepted as the original engine reads them: {own}X is an atom of its own, "
+                   f"not complementary to X, and observing ~X says {own}X (add {them} to "
+                   f"props to make {own}X the negation of X, and to silence this note)")
+        else:
+            how = f"accepted (add {them} to props to silence this note)"
+        notes = (f"{file}: rules use {n} atom{'s' if n > 1 else ''} that props does not list: "
+                 f"{', '.join(unlisted)}; {how}",)
+    observables = frozenset(a for a in (*known, *unlisted) if ab_component(a) is None) | {
+        own + a for a in separate}
     negations = tuple(p for p in neg_prefixes if p not in ("~", "!", "-", "¬"))
-    return Theory(tuple(components), tuple(clauses), out_priors, observables, negations, notes)
+    return Theory(tuple(components), tuple(clauses), out_priors, observables, negations, notes,
+                  frozenset(separate), own)
 
 
 def _number(value: Any) -> float | None:

@@ -5,8 +5,11 @@ alternative history), ``max_count`` (the most diagnoses to list), ``time_budget_
 measured with ``time.perf_counter``, the only clock this package reads and only to bound
 computation) and ``order`` (``cardinality``: fewest faults first; ``probability``: most
 probable first, which matters when a bound cuts the list). ``Outcome`` holds the minimal
-diagnoses found (sets of fault ids), the bound that cut the list (``host.diagnosis.result.
-Bound``) and whether the engine proved that no diagnosis exists at all (``explainable``).
+diagnoses found (sets of fault ids) and the bound that cut the list (``host.diagnosis.result.
+Bound``), set only when a diagnosis was really left out (or time ran out), so ``complete``
+means the list is every minimal diagnosis. ``explainable`` follows from the two, the same for
+every engine: False exactly when the search was complete and found nothing (it proved that no
+alternative history explains the observations).
 """
 
 from __future__ import annotations
@@ -36,13 +39,17 @@ class Limits:
 class Outcome:
     diagnoses: list[frozenset[int]] = field(default_factory=list)
     cut_by: Bound | None = None
-    explainable: bool = True
     nodes: int = 0  # context-tree nodes expanded, histories simulated, or solver calls
     elapsed_s: float = 0.0
 
     @property
     def complete(self) -> bool:
         return self.cut_by is None
+
+    @property
+    def explainable(self) -> bool:
+        """False only when the engine proved that no diagnosis exists at all."""
+        return bool(self.diagnoses) or self.cut_by is not None
 
 
 class Deadline:
@@ -53,3 +60,7 @@ class Deadline:
 
     def passed(self) -> bool:
         return time.perf_counter() >= self.at
+
+    def left(self) -> float | None:
+        """The seconds left (None: no budget), at least a millisecond."""
+        return None if self.at == math.inf else max(self.at - time.perf_counter(), 1e-3)

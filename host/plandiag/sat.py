@@ -18,8 +18,8 @@ chain over the points of ``problem.py``:
 - observations are unit clauses at their points.
 
 ``order=probability`` enumerates with PySAT's RC2 instead (weighted MaxSAT, weight ``-log p``
-per fault, which ranks by the product of the priors): each optimum, blocked in turn, is a
-subset-minimal diagnosis, most probable first.
+per fault in millionths, which ranks by the product of the priors): each optimum, blocked in
+turn, is a subset-minimal diagnosis, most probable first.
 """
 
 from __future__ import annotations
@@ -49,6 +49,10 @@ from host.plandiag.problem import (
     writes,
 )
 from host.planning.task import GroundOp
+
+#: RC2's integer weights are ``-log p`` in millionths: histories whose priors differ by more
+#: than a few parts in a million come in the right order (thousandths swapped close ones)
+WEIGHT_SCALE = 1_000_000
 
 
 class Encoding:
@@ -200,14 +204,20 @@ class Encoding:
             self.ctx.start_budget(limits.time_budget_s)
             calls = self.ctx.calls
             try:
-                # a plain count (every diagnosis weighs the same): stop at the N-th found
-                quota = Quota(limits.max_count, [0.0] * len(self.ctx.ab_vars))
+                # a plain count (every diagnosis weighs the same): stop at the (N+1)-th
+                # found, so that the cut is reported only when it left one out
+                n = limits.max_count
+                quota = Quota(None if n is None else n + 1, [0.0] * len(self.ctx.ab_vars))
                 found = cardinality_search(self.ctx, [], limits.max_card, quota,
                                            expand=self._siblings)
             finally:
                 self.ctx.stop_budget()
-            out = Outcome([frozenset(self.fault_ids[i] for i in bad) for bad in found.bad_sets],
-                          found.cut_by, found.explainable, self.ctx.calls - calls)
+            bad_sets = found.bad_sets
+            cut_by = found.cut_by
+            if n is not None and len(bad_sets) > n:
+                bad_sets, cut_by = bad_sets[:n], Bound.MAX_COUNT
+            out = Outcome([frozenset(self.fault_ids[i] for i in bad) for bad in bad_sets],
+                          cut_by, self.ctx.calls - calls)
         out.elapsed_s = time.perf_counter() - start
         return out
 
@@ -267,16 +277,14 @@ class Encoding:
         for cl in self.hard:
             wcnf.append(cl)
         for fid, v in self.fvar.items():
-            wcnf.append([-v], weight=1 + round(-1000 * math.log(self.p.faults[fid].prior)))
+            cost = -math.log(self.p.faults[fid].prior)
+            wcnf.append([-v], weight=1 + round(WEIGHT_SCALE * cost))
         index = {v: fid for fid, v in self.fvar.items()}
         deadline = Deadline(limits.time_budget_s)
         self.ctx.start_budget(limits.time_budget_s)
         try:
             with RC2(wcnf, solver="g3", exhaust=True) as rc2, self.ctx.interrupting(rc2):
                 while True:
-                    if limits.max_count is not None and len(out.diagnoses) >= limits.max_count:
-                        out.cut_by = Bound.MAX_COUNT
-                        break
                     if deadline.passed():
                         out.cut_by = Bound.TIME_BUDGET
                         break
@@ -285,13 +293,15 @@ class Encoding:
                     if model is None:
                         if rc2.interrupted:
                             out.cut_by = Bound.TIME_BUDGET
-                        out.explainable = bool(out.diagnoses) or rc2.interrupted
                         break
                     bad = frozenset(index[x] for x in model if x > 0 and x in index)
                     if limits.max_card is not None and len(bad) > limits.max_card:
                         out.cut_by = Bound.MAX_CARD  # minimal but too big: skip it
                         rc2.add_clause([-self.fvar[f] for f in bad])
                         continue
+                    if limits.max_count is not None and len(out.diagnoses) >= limits.max_count:
+                        out.cut_by = Bound.MAX_COUNT  # one more exists: the cut left it out
+                        break
                     out.diagnoses.append(bad)
                     rc2.add_clause([-self.fvar[f] for f in bad])
         finally:
@@ -300,6 +310,26 @@ class Encoding:
 
     def close(self) -> None:
         self.ctx.close()
+
+
+def any_beyond(problem: Problem, universe: frozenset[int] | None,
+               found: list[frozenset[int]], budget_s: float | None) -> bool | None:
+    """Is there a minimal diagnosis besides ``found``, of any size? One solver call: a
+    consistent history that is no superset of one found holds such a diagnosis. The tree and
+    naive ask it once they have listed every diagnosis up to ``max_card``, to know whether the
+    bound left one out. None when ``budget_s`` ran out first."""
+    enc = Encoding(problem, universe)
+    try:
+        for d in found:
+            if all(f in enc.fvar for f in d):  # else not minimal here: blocks nothing more
+                enc.ctx.solver.add_clause([-enc.fvar[f] for f in d])
+        enc.ctx.start_budget(budget_s)
+        try:
+            return enc.ctx.solve([])
+        finally:
+            enc.ctx.stop_budget()
+    finally:
+        enc.close()
 
 
 def sat_engine(problem: Problem, universe: frozenset[int] | None, limits: Limits) -> Outcome:

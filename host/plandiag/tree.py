@@ -29,6 +29,7 @@ from enum import Enum
 from host.diagnosis.result import Bound
 from host.plandiag.limits import Deadline, Limits, Outcome
 from host.plandiag.problem import Problem, apply_events
+from host.plandiag.sat import any_beyond
 from host.planning.task import GroundOp
 
 
@@ -73,16 +74,16 @@ class ContextTree:
         with _deep_recursion(4 * len(p.steps) + 200):
             try:
                 if not p.obs_ok(0, p.init) or p.impossible_step(self.universe) is not None:
-                    out.explainable = False
-                    return self._done()
+                    return self._done()  # complete and empty: proven unexplainable
                 for k in range(limit + 1):
                     self._dfs(0, p.init, (), k, _Mode.RECORD)
                     if frozenset() in self.found:  # nothing went wrong: the only diagnosis
                         return self._done()
-                if limit == total:
-                    out.explainable = bool(self.found)
-                elif self._probe(limit + 1):
-                    out.cut_by = Bound.MAX_CARD
+                if limit < total:
+                    more = self.beyond(limit + 1) or any_beyond(
+                        p, self.universe, self.found, self.deadline.left())
+                    if more is None or more:
+                        out.cut_by = Bound.TIME_BUDGET if more is None else Bound.MAX_CARD
             except _Stop:
                 pass
         return self._done()
@@ -92,9 +93,11 @@ class ContextTree:
         self.out.nodes = self.nodes
         return self.out
 
-    def _probe(self, budget: int) -> bool:
+    def beyond(self, budget: int) -> bool:
         """Is there a consistent history with at most ``budget`` faults that is no superset
-        of a diagnosis found? (One level beyond ``max_card``: such a history is minimal.)"""
+        of a diagnosis found? (Asked one level beyond ``max_card``: such a history is a
+        minimal diagnosis the bound left out. Consistency is not monotone, so none there
+        does not prove none beyond: ``sat.any_beyond`` settles that in one solver call.)"""
         try:
             self._dfs(0, self.p.init, (), budget, _Mode.PROBE)
         except _Hit:

@@ -73,7 +73,7 @@ def test_unlisted_atoms_are_noted_in_the_order_rules_first_use_them(tmp_path: Pa
                     "  - NAB(a), w -> !y\n")
     theory = read_tug(path)
     assert len(theory.notes) == 1
-    assert "3 atoms" in theory.notes[0] and ": z, y, w (add them" in theory.notes[0]
+    assert "3 atoms" in theory.notes[0] and ": z, y, w; accepted (add them" in theory.notes[0]
     assert theory.observable_atoms() == {"x", "y", "z", "w"}
 
 

@@ -1,6 +1,6 @@
 """Firmware benchmarks: tick cost, trip latency, memory after boot, deployed size.
 
-Run from the project root: ``.venv/bin/python benchmarks/firmware.py``. It measures, on the
+Run from the project root: ``.venv/bin/python benchmarks/board_firmware.py``. It measures, on the
 simulated clock where time is simulated and with the wall clock only for CPU cost:
 - one protection tick for 10 channels, under CPython and under the real MicroPython (a child
   process running this same file with ``--mpy-part``);
@@ -18,8 +18,10 @@ It prints a Markdown section; ``--write`` replaces the "## Firmware" section of 
 import os
 import sys
 
-sys.path.insert(0, ".")
-sys.path.insert(0, "tests/mpy")
+# the checkout before benchmarks/ (no pathlib on MicroPython, which runs it from the checkout)
+ROOT = __file__.rsplit("/", 2)[0] if __file__.count("/") >= 2 else "."
+sys.path.insert(0, ROOT)
+sys.path.insert(0, ROOT + "/tests/mpy")
 
 FIRMWARE_FILES = ("firmware/__init__.py", "firmware/app.py", "firmware/board.py",
                   "firmware/session.py", "firmware/net.py", "firmware/modbus.py",
@@ -140,6 +142,7 @@ KEY = bytes(range(32))
 async def _subscribers(address, rate, seconds, n=4):
     """Received counts and gap flags of ``n`` clients subscribed at ``rate`` for ``seconds``."""
     import asyncio
+    import contextlib
 
     from protocol.connection import HOST, Connection
     from protocol.messages import Measurement, Subscribe
@@ -161,6 +164,9 @@ async def _subscribers(address, rate, seconds, n=4):
             conn.receive_data(data)
             seqs.extend(m.seq for m in conn.events() if isinstance(m, Measurement))
         w.close()
+        # closed before asyncio.run closes the loop: no tracebacks from __del__ later
+        with contextlib.suppress(OSError):
+            await w.wait_closed()
         gap = seqs != list(range(seqs[0], seqs[0] + len(seqs))) if seqs else True
         return len(seqs), gap
 
@@ -250,7 +256,8 @@ def main():
 
     cp_us = tick_cost(lambda: time.perf_counter() * 1e6, 5000)
     mp = subprocess.run([os.path.join(os.path.dirname(sys.executable), "micropython"),
-                         "benchmarks/firmware.py", "--mpy-part"], capture_output=True, text=True)
+                         "benchmarks/board_firmware.py", "--mpy-part"],
+                        capture_output=True, text=True)
     line = [ln for ln in mp.stdout.splitlines() if ln.startswith("MPY")]
     if not line:
         sys.exit("micropython part failed: " + mp.stderr)
@@ -263,7 +270,7 @@ def main():
     lines = [
         "## Firmware",
         "",
-        "`benchmarks/firmware.py` (simulated clock for latencies; CPU time for tick cost).",
+        "`benchmarks/board_firmware.py` (simulated clock for latencies; CPU time for tick cost).",
         "",
         "| measure | value |",
         "|---|---|",
@@ -310,6 +317,11 @@ def main():
 
 
 if __name__ == "__main__":
+    if "--help" in sys.argv or "-h" in sys.argv:
+        print("usage: python benchmarks/board_firmware.py"
+              "  (or python -m benchmarks.board_firmware)\n")
+        print(__doc__)
+        sys.exit(0)
     if "--mpy-part" in sys.argv:
         mpy_part()
     else:

@@ -1,6 +1,6 @@
 """Protocol benchmark: encode+decode of a full 10-channel MEASUREMENT frame.
 
-Run with the project's Python (``.venv/bin/python benchmarks/protocol.py``). It measures, in
+Run with the project's Python (``.venv/bin/python benchmarks/codec.py``). It measures, in
 one run: frames per second through ``Connection.send`` on the board side and
 ``receive_data``/``next_event`` on the host side, on CPython and (as a subprocess running
 this same file) on MicroPython; and, on CPython, ``json.dumps``+``json.loads`` of the same
@@ -10,7 +10,8 @@ is in the MicroPython subset so that both interpreters run the same loop.
 
 import sys
 
-sys.path.insert(0, ".")
+# the checkout before benchmarks/ (no pathlib on MicroPython, which runs it from the checkout)
+sys.path.insert(0, __file__.rsplit("/", 2)[0] if __file__.count("/") >= 2 else ".")
 
 from protocol.connection import BOARD, HOST, Connection
 from protocol.messages import Hello, Measurement
@@ -77,7 +78,7 @@ def main() -> None:
     js = max(json_rate(n) for _ in range(3))
     mpy_bin = Path(sys.executable).with_name("micropython")
     out = subprocess.run(
-        [str(mpy_bin), "benchmarks/protocol.py", "--inner", "5000"],
+        [str(mpy_bin), "benchmarks/codec.py", "--inner", "5000"],
         capture_output=True,
         text=True,
         check=True,
@@ -100,6 +101,10 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    if "--help" in sys.argv or "-h" in sys.argv:
+        print("usage: python benchmarks/codec.py  (or python -m benchmarks.codec)\n")
+        print(__doc__)
+        sys.exit(0)
     if len(sys.argv) > 2 and sys.argv[1] == "--inner":
         print(max(codec_rate(int(sys.argv[2])) for _ in range(3)))
     else:

@@ -1,0 +1,39 @@
+"""Every benchmark runs as documented: ``python benchmarks/X.py`` and ``python -m benchmarks.X``.
+
+Each runnable benchmark (a file with a ``__main__`` block) is started both ways from the
+checkout, with ``--help``, as a real process without ``PYTHONPATH`` (so nothing but the file's
+own start-up puts the checkout on the path): it must exit 0, print its usage, and leave no
+traceback. Run as a script, ``benchmarks/`` comes first on ``sys.path``; a module there named
+like a package of ours (the old ``benchmarks/protocol.py``) would shadow it.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+RUNNABLE = sorted(p.stem for p in (ROOT / "benchmarks").glob("*.py")
+                  if "__main__" in p.read_text(encoding="utf-8"))
+
+
+def test_no_benchmark_shadows_a_package_of_ours() -> None:
+    ours = {p.name for p in ROOT.iterdir() if (p / "__init__.py").exists()}
+    assert ours >= {"protocol", "host", "firmware", "emulator"}
+    assert not ours & {p.stem for p in (ROOT / "benchmarks").glob("*.py")}
+
+
+@pytest.mark.parametrize("name", RUNNABLE)
+@pytest.mark.parametrize("way", ["script", "module"])
+def test_the_benchmark_starts_both_ways(name: str, way: str) -> None:
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    how = [f"benchmarks/{name}.py"] if way == "script" else ["-m", f"benchmarks.{name}"]
+    proc = subprocess.run([sys.executable, *how, "--help"], cwd=ROOT, env=env,
+                          capture_output=True, text=True, timeout=240, check=False)
+    assert "Traceback" not in proc.stderr, proc.stderr[-2000:]
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "usage:" in proc.stdout.lower(), proc.stdout[-500:]
