@@ -10,7 +10,8 @@ words) or a failed handler (logged; the server stays up) with an error object bu
 takes a client that goes away quietly. ``answer(line, conn)`` is the reply to one line;
 ``serve`` is an ``asyncio.start_server`` callback running the connection. The client side:
 ``ask`` (one request, one reply, blocking, over TCP or a Unix socket, within a deadline) and
-``connect`` (an asyncio connection within a deadline, ``messages`` reading its objects).
+``connect`` (an asyncio connection within a deadline, ``messages`` reading its objects);
+``connect_retrying`` is the one reconnect policy (the robot's drivers to their devices).
 
 Where it lives: ``emulator/`` is the lowest package both the emulator's servers (control port,
 devices, world) and the host's (operator socket, skills client, control client) may import:
@@ -23,6 +24,7 @@ emulator to launch it). So one copy here serves all, instead of a copy on each s
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import inspect
 import json
 import logging
@@ -173,6 +175,32 @@ async def connect(host: str, port: int, timeout: float, max_line: int = MAX_LINE
                   ) -> tuple[asyncio.StreamReader, asyncio.StreamWriter]:
     """An asyncio connection within ``timeout`` seconds (``OSError`` or ``TimeoutError``)."""
     return await asyncio.wait_for(asyncio.open_connection(host, port, limit=max_line), timeout)
+
+
+async def connect_retrying(address: tuple[str, int], every: float, *,
+                           deadline: float | None = None, stop: asyncio.Event | None = None,
+                           refused: Callable[[OSError], None] | None = None,
+                           max_line: int = MAX_LINE,
+                           ) -> tuple[asyncio.StreamReader, asyncio.StreamWriter] | None:
+    """The reconnect policy, in one place: connect to ``address``, trying again every
+    ``every`` seconds while it refuses (a device may be off or booting), until connected (the
+    pair), ``stop`` is set (None), or the event loop's clock passes ``deadline`` (the last
+    refusal is raised). ``refused(exc)`` hears each refusal."""
+    loop = asyncio.get_running_loop()
+    while stop is None or not stop.is_set():
+        try:
+            return await asyncio.open_connection(*address, limit=max_line)
+        except OSError as exc:
+            if refused is not None:
+                refused(exc)
+            if deadline is not None and loop.time() >= deadline:
+                raise
+        if stop is None:
+            await asyncio.sleep(every)
+        else:
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(stop.wait(), every)
+    return None
 
 
 async def messages(reader: asyncio.StreamReader) -> AsyncIterator[Msg]:

@@ -10,7 +10,7 @@ from typing import Any
 
 import pytest
 
-from emulator.jsonlines import Lines, ask
+from emulator.jsonlines import Lines, ask, connect_retrying
 
 DEADLINE_S = 60.0
 
@@ -103,5 +103,32 @@ def test_ask_over_a_unix_socket_and_a_refused_port(tmp_path: Path) -> None:
         finally:
             server.close()
             await server.wait_closed()
+
+    asyncio.run(main())
+
+
+def test_connect_retrying_waits_for_a_late_server_gives_up_at_its_deadline_or_stop() -> None:
+    async def main() -> None:
+        loop = asyncio.get_running_loop()
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as held:
+            held.bind(("127.0.0.1", 0))  # bound, not listening: every try is refused
+            address = held.getsockname()[:2]
+            refusals: list[OSError] = []
+            with pytest.raises(OSError):
+                await connect_retrying(address, 0.01, deadline=loop.time() + 0.05,
+                                       refused=refusals.append)
+            assert len(refusals) >= 1
+            stop = asyncio.Event()
+            stop.set()
+            assert await connect_retrying(address, 0.01, stop=stop) is None
+            # the server appears while the client waits: it connects
+            stop = asyncio.Event()
+            trying = asyncio.ensure_future(connect_retrying(address, 0.01, stop=stop))
+            await asyncio.sleep(0.05)
+            assert not trying.done()
+            held.listen()
+            pair = await asyncio.wait_for(trying, DEADLINE_S)
+            assert pair is not None
+            pair[1].close()
 
     asyncio.run(main())
