@@ -32,6 +32,7 @@ import socket
 from collections.abc import AsyncIterator, Awaitable, Callable, Mapping
 from pathlib import Path
 from typing import Any
+from urllib.parse import urlsplit
 
 log = logging.getLogger(__name__)
 
@@ -169,6 +170,18 @@ def ask(address: tuple[str, int] | Path, request: Msg, timeout: float) -> Msg | 
                 break
             buf += chunk
     return decode(buf)
+
+
+def tcp_address(url: str) -> tuple[str, int] | None:
+    """(host, port) of a ``tcp://HOST:PORT`` URL, None if it is not one."""
+    parts = urlsplit(url)
+    try:
+        port = parts.port
+    except ValueError:
+        return None
+    if parts.scheme != "tcp" or not parts.hostname or port is None:
+        return None
+    return parts.hostname, port
 
 
 async def connect(host: str, port: int, timeout: float, max_line: int = MAX_LINE,

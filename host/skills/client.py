@@ -18,9 +18,8 @@ import contextlib
 import itertools
 import logging
 from typing import Any
-from urllib.parse import urlsplit
 
-from emulator.jsonlines import connect, encode, messages
+from emulator.jsonlines import connect, encode, messages, tcp_address
 from host.errors import RemoteError, UserError
 
 log = logging.getLogger(__name__)
@@ -65,16 +64,12 @@ class WorldClient:
 
     @classmethod
     async def connect(cls, url: str, timeout: float = 10.0) -> WorldClient:
-        parts = urlsplit(url)
-        try:
-            port = parts.port
-        except ValueError:
-            port = None
-        if parts.scheme != "tcp" or not parts.hostname or port is None:
+        address = tcp_address(url)
+        if address is None:
             raise UserError(f"world URL {url!r} is not tcp://HOST:PORT",
                             "give the world: line `dxboard emulate --robot --world` printed")
         try:
-            reader, writer = await connect(parts.hostname, port, timeout)
+            reader, writer = await connect(*address, timeout)
         except (OSError, TimeoutError) as exc:
             raise RemoteError(f"cannot reach the world at {url}: {exc}",
                               "is the emulated robot running with --world?") from None

@@ -10,7 +10,7 @@ from typing import Any
 
 import pytest
 
-from emulator.jsonlines import Lines, ask, connect_retrying
+from emulator.jsonlines import Lines, ask, connect_retrying, tcp_address
 
 DEADLINE_S = 60.0
 
@@ -132,3 +132,11 @@ def test_connect_retrying_waits_for_a_late_server_gives_up_at_its_deadline_or_st
             pair[1].close()
 
     asyncio.run(main())
+
+
+@pytest.mark.parametrize(("url", "address"), [
+    ("tcp://127.0.0.1:7000", ("127.0.0.1", 7000)), ("tcp://[::1]:9", ("::1", 9)),
+    ("http://127.0.0.1:7000", None), ("tcp://127.0.0.1", None), ("tcp://h:99999", None),
+    ("tcp://:80", None)])
+def test_tcp_address_reads_only_tcp_host_port(url: str, address: tuple[str, int] | None) -> None:
+    assert tcp_address(url) == address
