@@ -30,82 +30,57 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import threading
 from collections.abc import Callable, Coroutine
 from concurrent.futures import Future
 from typing import Any, TypeVar
 
 from emulator import faults as F
+from emulator.jsonlines import MAX_LINE, Lines
 from emulator.sim import Emulator
 
-MAX_LINE = 65536
 SCHEME = "control://"
 T = TypeVar("T")
 
 
-def handle(emu: Emulator, line: bytes) -> dict[str, Any]:
-    """The reply to one request line."""
-    try:
-        req = json.loads(line)
-    except (ValueError, UnicodeDecodeError):
-        return {"ok": False, "error": "not a JSON object on one line"}
-    if not isinstance(req, dict):
-        return {"ok": False, "error": "not a JSON object on one line"}
-    op = req.get("op")
-    try:
-        if op == "hello":
-            return {"ok": True, "board": "dxboard-emulator", "version": 1,
-                    "channels": [c.name for c in emu.model.channels], "faults": list(F.FAULTS),
-                    "boot_ms": {c.name: c.boot_ms for c in emu.model.channels}}
-        if op == "inject":
-            fault, params = req.get("fault"), req.get("params", {})
-            channel = req.get("channel")
-            if not isinstance(fault, str) or not isinstance(params, dict) \
-                    or not isinstance(channel, str | int) or isinstance(channel, bool):
-                return {"ok": False, "error": "inject needs channel, fault and params {}"}
-            return {"ok": True, **emu.inject(channel, fault, params)}
-        if op == "clear":
-            before = len(emu.active)
-            channel, fault = req.get("channel"), req.get("fault")
-            if channel is not None and (not isinstance(channel, str | int)
-                                        or isinstance(channel, bool)):
-                return {"ok": False, "error": "channel must be a number or a name"}
-            if fault is not None and not isinstance(fault, str):
-                return {"ok": False, "error": "fault must be a name"}
-            emu.clear(channel, fault)
-            return {"ok": True, "cleared": before - len(emu.active)}
-        if op == "faults":
-            return {"ok": True, "faults": emu.faults()}
-        if op == "status":
-            return {"ok": True, "status": emu.status()}
-    except F.FaultError as exc:
-        return {"ok": False, "error": str(exc)}
-    return {"ok": False, "error": f"unknown op {op!r} (hello, inject, clear, faults, status)"}
+def _hello(emu: Emulator) -> dict[str, Any]:
+    return {"ok": True, "board": "dxboard-emulator", "version": 1,
+            "channels": [c.name for c in emu.model.channels], "faults": list(F.FAULTS),
+            "boot_ms": {c.name: c.boot_ms for c in emu.model.channels}}
 
 
-async def _client(emu: Emulator, reader: asyncio.StreamReader,
-                  writer: asyncio.StreamWriter) -> None:
-    try:
-        while True:
-            try:
-                line = await reader.readuntil(b"\n")
-            except asyncio.LimitOverrunError:
-                writer.write(b'{"ok": false, "error": "line too long"}\n')
-                break
-            except asyncio.IncompleteReadError:
-                break
-            writer.write(json.dumps(handle(emu, line)).encode() + b"\n")
-            await writer.drain()
-    except ConnectionError:
-        pass
-    finally:
-        writer.close()
+def _inject(emu: Emulator, req: dict[str, Any]) -> dict[str, Any]:
+    fault, params, channel = req.get("fault"), req.get("params", {}), req.get("channel")
+    if not isinstance(fault, str) or not isinstance(params, dict) \
+            or not isinstance(channel, str | int) or isinstance(channel, bool):
+        raise F.FaultError("inject needs channel, fault and params {}")
+    return {"ok": True, **emu.inject(channel, fault, params)}
+
+
+def _clear(emu: Emulator, req: dict[str, Any]) -> dict[str, Any]:
+    before = len(emu.active)
+    channel, fault = req.get("channel"), req.get("fault")
+    if channel is not None and (not isinstance(channel, str | int) or isinstance(channel, bool)):
+        raise F.FaultError("channel must be a number or a name")
+    if fault is not None and not isinstance(fault, str):
+        raise F.FaultError("fault must be a name")
+    emu.clear(channel, fault)
+    return {"ok": True, "cleared": before - len(emu.active)}
+
+
+def lines(emu: Emulator) -> Lines:
+    """The control endpoint's requests (a ``FaultError`` is a refusal: a ``ValueError``)."""
+    return Lines({
+        "hello": lambda req, conn: _hello(emu),
+        "inject": lambda req, conn: _inject(emu, req),
+        "clear": lambda req, conn: _clear(emu, req),
+        "faults": lambda req, conn: {"ok": True, "faults": emu.faults()},
+        "status": lambda req, conn: {"ok": True, "status": emu.status()},
+    }, max_line=MAX_LINE)
 
 
 async def start_server(emu: Emulator, host: str = "127.0.0.1", port: int = 0) -> asyncio.Server:
-    return await asyncio.start_server(lambda r, w: _client(emu, r, w), host, port,
-                                      limit=MAX_LINE)
+    return await asyncio.start_server(lines(emu).serve, host, port, limit=MAX_LINE)
 
 
 async def run_wallclock(emu: Emulator, stop: asyncio.Event, tick_ms: int = 10) -> None:

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import logging
 from collections.abc import Callable, Coroutine
 from typing import Any
@@ -38,6 +37,7 @@ from rclpy.context import Context
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.signals import SignalHandlerOptions
 
+from emulator.jsonlines import connect_retrying, encode
 from emulator.robot import behaviours as B
 from emulator.robot.driver_status import DriverStatus
 from emulator.robot.ros_bus import RosBus
@@ -48,7 +48,6 @@ CONNECT_S = 5.0  # configure: how long to try the device (a power cycle's off ti
 CONNECT_RETRY_S = 0.05  # a refused local connection is cheap to try again: no time lost
 RETRY_S = 0.5  # autostart: configure again after a failed one
 CALLBACK_S = 10.0  # a transition's coroutine must finish within this
-MAX_LINE = 65536
 
 Publish = Callable[[str, dict[str, Any]], None]
 ReadFrames = Callable[[asyncio.StreamReader, Publish, str, DriverStatus | None],
@@ -113,18 +112,15 @@ class ManagedDriver:
 
     async def configure(self) -> bool:
         await self.disconnect()
-        end = self.loop.time() + CONNECT_S
-        while True:
-            try:
-                reader, self._writer = await asyncio.open_connection(*self.address,
-                                                                     limit=MAX_LINE)
-                break
-            except OSError as exc:
-                if self.loop.time() >= end:
-                    log.info("configure: %s at %s:%d refuses (%s)", self.device, *self.address,
-                             exc.strerror or exc)
-                    return False
-                await asyncio.sleep(CONNECT_RETRY_S)
+        try:
+            pair = await connect_retrying(self.address, CONNECT_RETRY_S,
+                                          deadline=self.loop.time() + CONNECT_S)
+        except OSError as exc:
+            log.info("configure: %s at %s:%d refuses (%s)", self.device, *self.address,
+                     exc.strerror or exc)
+            return False
+        assert pair is not None  # no stop event: connected or raised
+        reader, self._writer = pair
         self.status.connected = True
         self._reading = asyncio.ensure_future(
             self.read_frames(reader, self._publish, self.topic, self.status))
@@ -159,7 +155,7 @@ class ManagedDriver:
         cmd = B.device_command(in_topic, values)
         w = self._writer
         if cmd is not None and self.active and w is not None and not w.is_closing():
-            w.write(json.dumps(cmd, separators=(",", ":")).encode() + b"\n")
+            w.write(encode(cmd))
 
     # -- the node's life ---------------------------------------------------------------------
     async def run(self, stop: asyncio.Event) -> None:

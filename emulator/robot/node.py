@@ -34,9 +34,9 @@ import sys
 import time
 from collections.abc import Sequence
 from typing import Any
-from urllib.parse import urlsplit
 
 from emulator.errors import InputError
+from emulator.jsonlines import connect_retrying, encode, messages, tcp_address
 from emulator.model import EmulatorModelError
 from emulator.robot import behaviours as B
 from emulator.robot.bus import DEFAULT_ENDPOINT, Bus, TopicBus
@@ -46,7 +46,6 @@ from emulator.robot.driver_status import PERIOD_S, DriverStatus
 log = logging.getLogger("emulator.robot.node")
 
 RETRY_S = 0.5
-MAX_LINE = 65536
 
 
 class NodeError(InputError):
@@ -71,14 +70,10 @@ def device_address(spec: NodeSpec, env: dict[str, str]) -> tuple[str, tuple[str,
     url = urls.get(device)
     if not isinstance(url, str):
         raise NodeError(f"DXBOARD_DEVICES has no URL for device {device!r}")
-    parts = urlsplit(url)
-    try:
-        port = parts.port
-    except ValueError:
-        port = None
-    if parts.scheme != "tcp" or not parts.hostname or port is None:
+    address = tcp_address(url)
+    if address is None:
         raise NodeError(f"DXBOARD_DEVICES: {device}: {url!r} is not tcp://HOST:PORT")
-    return device, (parts.hostname, port)
+    return device, address
 
 
 async def run_driver(spec: NodeSpec, bus: TopicBus, device: str, address: tuple[str, int],
@@ -108,22 +103,19 @@ async def _report(bus: TopicBus, status: DriverStatus, stop: asyncio.Event) -> N
 async def _drive(spec: NodeSpec, bus: TopicBus, topic: str, device: str,
                  address: tuple[str, int], stop: asyncio.Event,
                  status: DriverStatus | None) -> None:
-    reader: asyncio.StreamReader | None = None
-    writer: asyncio.StreamWriter | None = None
     waited = False
-    while not stop.is_set():
-        try:
-            reader, writer = await asyncio.open_connection(*address, limit=MAX_LINE)
-            break
-        except OSError as exc:
-            if not waited:
-                log.info("%s at %s:%d refuses (%s); waiting for it", device, *address,
-                         exc.strerror or exc)
-                waited = True
-            with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(stop.wait(), RETRY_S)
-    if reader is None or writer is None:
+
+    def refused(exc: OSError) -> None:
+        nonlocal waited
+        if not waited:
+            log.info("%s at %s:%d refuses (%s); waiting for it", device, *address,
+                     exc.strerror or exc)
+        waited = True
+
+    pair = await connect_retrying(address, RETRY_S, stop=stop, refused=refused)
+    if pair is None:
         return
+    reader, writer = pair
     log.info("connected to %s at %s:%d; publishing %s", device, *address, topic)
     connected = True
     if status is not None:
@@ -133,7 +125,7 @@ async def _drive(spec: NodeSpec, bus: TopicBus, topic: str, device: str,
         cmd = B.device_command(in_topic, values)
         if cmd is None or not connected or writer.is_closing():
             return
-        writer.write(json.dumps(cmd, separators=(",", ":")).encode() + b"\n")
+        writer.write(encode(cmd))
 
     for in_topic in spec.subscribes:
         if in_topic not in B.COMMANDS:
@@ -158,26 +150,21 @@ async def _drive(spec: NodeSpec, bus: TopicBus, topic: str, device: str,
 async def read_frames(reader: asyncio.StreamReader, publish: B.Publish, topic: str,
                       status: DriverStatus | None = None) -> str:
     """Publish every frame until the connection ends; returns why it ended."""
-    while True:
-        try:
-            line = await reader.readuntil(b"\n")
-        except asyncio.IncompleteReadError:
-            return "closed by the device"
-        except asyncio.LimitOverrunError:
-            return "line too long"
-        except ConnectionError as exc:
-            return str(exc) or type(exc).__name__
-        try:
-            frame = json.loads(line)
-        except (ValueError, UnicodeDecodeError):
-            log.warning("not a JSON line from the device: %r", line[:80])
-            continue
-        if isinstance(frame, dict) and "error" not in frame:
+    try:
+        async for frame in messages(reader):
+            if "error" in frame:
+                log.warning("device says: %s", frame["error"])
+                continue
             publish(topic, frame)
             if status is not None:
                 status.frame(time.monotonic())
-        elif isinstance(frame, dict):
-            log.warning("device says: %s", frame["error"])
+    except asyncio.IncompleteReadError:
+        return "closed by the device"
+    except asyncio.LimitOverrunError:
+        return "line too long"
+    except ConnectionError as exc:
+        return str(exc) or type(exc).__name__
+    return "closed by the device"
 
 
 async def run_node(spec: NodeSpec, bus: TopicBus, stop: asyncio.Event) -> None:

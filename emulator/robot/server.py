@@ -31,12 +31,12 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import logging
 import random
 import socket
 from typing import TYPE_CHECKING, Any
 
+from emulator.jsonlines import MAX_LINE, Lines, encode
 from emulator.robot import devices as D
 from emulator.robot.config import DeviceSpec
 from emulator.sim import Emulator
@@ -47,7 +47,6 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-MAX_LINE = 65536
 MAX_BACKLOG = 1 << 20  # bytes queued to a client that does not read: it is dropped
 POLL_S = 0.005
 MAX_CATCH_UP_MS = 2000  # frames due longer ago than this, when the loop stalled, are lost
@@ -88,6 +87,10 @@ class DeviceServer:
         self.state = OFF
         self.on_since = -1
         self.next_due = 0.0  # the next frame's time on the emulator's clock (ms)
+        # commands: any JSON object, answered only when refused; booting or hung, nobody listens
+        self._lines = Lines(fallback=self._command, error=lambda words: {"error": words},
+                            listening=lambda: self.state == READY,
+                            on_close=self.clients.discard)
 
     @property
     def name(self) -> str:
@@ -185,7 +188,7 @@ class DeviceServer:
             self._send(self.device.frame(t_ms))
 
     def _send(self, frame: dict[str, Any]) -> None:
-        line = json.dumps(frame, separators=(",", ":")).encode() + b"\n"
+        line = encode(frame)
         for w in list(self.clients):
             if w.transport.get_write_buffer_size() > MAX_BACKLOG:
                 log.warning("%s: a client does not read; dropping it", self.name)
@@ -197,38 +200,10 @@ class DeviceServer:
     async def _client(self, reader: asyncio.StreamReader,
                       writer: asyncio.StreamWriter) -> None:
         self.clients.add(writer)
-        try:
-            while True:
-                try:
-                    line = await reader.readuntil(b"\n")
-                except asyncio.LimitOverrunError:
-                    writer.write(b'{"error": "line too long"}\n')
-                    break
-                except asyncio.IncompleteReadError:
-                    break
-                if self.state != READY:
-                    continue  # booting or hung: nobody listens
-                reply = self._command(line)
-                if reply is not None:
-                    writer.write(json.dumps(reply).encode() + b"\n")
-        except ConnectionError:
-            pass
-        finally:
-            self.clients.discard(writer)
-            writer.transport.abort()
+        await self._lines.serve(reader, writer)  # ends by dropping it from clients
 
-    def _command(self, line: bytes) -> dict[str, Any] | None:
-        try:
-            msg = json.loads(line)
-        except (ValueError, UnicodeDecodeError):
-            return {"error": "not a JSON object on one line"}
-        if not isinstance(msg, dict):
-            return {"error": "not a JSON object on one line"}
-        try:
-            self.device.command(msg, self.emu.now)
-        except ValueError as exc:
-            return {"error": str(exc)}
-        return None
+    def _command(self, msg: dict[str, Any], conn: object) -> None:
+        self.device.command(msg, self.emu.now)  # a ValueError is answered with its words
 
 
 class Robot:

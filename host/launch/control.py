@@ -1,19 +1,19 @@
 """A client of the emulated board's control endpoint (``control://HOST:PORT``).
 
-One JSON object per line each way (the protocol is ``emulator/control.py``'s; nothing of the
-emulator is imported): ``request(url, {"op": "inject", ...})`` sends one request and returns the
-reply, or raises ``UserError`` naming what went wrong (unreachable, not a control endpoint, a
-refusal with the emulator's own words). ``dxboard inject``, the experiments and the launcher's
-questions to the emulated robot (its devices' boot times) all go through it.
+One JSON object per line each way (the protocol is ``emulator/control.py``'s; of the emulator
+only the wire helper ``emulator.jsonlines`` is imported): ``request(url, {"op": "inject",
+...})`` sends one request and returns the reply, or raises ``UserError`` naming what went
+wrong (unreachable, not a control endpoint, a refusal with the emulator's own words).
+``dxboard inject``, the experiments and the launcher's questions to the emulated robot (its
+devices' boot times) all go through it.
 """
 
 from __future__ import annotations
 
 import asyncio
-import json
-import socket
 from typing import Any
 
+from emulator.jsonlines import ask
 from host.errors import UserError
 
 TIMEOUT_S = 5.0
@@ -33,24 +33,13 @@ def request(url: str, req: dict[str, Any]) -> dict[str, Any]:
     """Send one request line and return the reply; ``UserError`` if the endpoint fails."""
     host, port = parse_url(url)
     try:
-        with socket.create_connection((host, port), timeout=TIMEOUT_S) as sock:
-            sock.sendall(json.dumps(req).encode() + b"\n")
-            buf = b""
-            while not buf.endswith(b"\n"):
-                chunk = sock.recv(65536)
-                if not chunk:
-                    break
-                buf += chunk
+        reply = ask((host, port), req, TIMEOUT_S)
     except OSError as exc:
         raise UserError(f"cannot reach the control endpoint {host}:{port}: {exc}",
                         "is `dxboard emulate` running? use the control URL it printed") from exc
-    try:
-        reply = json.loads(buf)
-    except ValueError as exc:
+    if reply is None:
         raise UserError(f"{host}:{port} is not a dxboard control endpoint",
-                        "use the control URL, not the board URL") from exc
-    if not isinstance(reply, dict):
-        raise UserError(f"{host}:{port} is not a dxboard control endpoint")
+                        "use the control URL, not the board URL")
     if not reply.get("ok"):
         raise UserError(str(reply.get("error", "refused")))
     return reply

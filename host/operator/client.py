@@ -8,11 +8,10 @@ daemon's words). The default path is the one ``dxboard run`` uses by default:
 
 from __future__ import annotations
 
-import json
-import socket
 from pathlib import Path
 from typing import Any
 
+from emulator.jsonlines import ask as ask_line
 from host.errors import UserError
 
 DEFAULT_SOCKET = Path("dxboard-journal.sock")
@@ -26,16 +25,7 @@ def default_socket(journal: Path) -> Path:
 
 def ask(path: Path, request: dict[str, Any]) -> dict[str, Any]:
     try:
-        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
-            sock.settimeout(TIMEOUT_S)
-            sock.connect(str(path))
-            sock.sendall(json.dumps(request).encode() + b"\n")
-            buf = b""
-            while not buf.endswith(b"\n"):
-                chunk = sock.recv(65536)
-                if not chunk:
-                    break
-                buf += chunk
+        reply = ask_line(path, request, TIMEOUT_S)
     except FileNotFoundError:
         raise UserError(f"{path}: no daemon's operator socket here",
                         "is `dxboard run` running? give its socket with --operator PATH "
@@ -46,12 +36,8 @@ def ask(path: Path, request: dict[str, Any]) -> dict[str, Any]:
     except OSError as exc:
         raise UserError(f"{path}: cannot reach the daemon: {exc}",
                         "is `dxboard run` still running?") from None
-    try:
-        reply = json.loads(buf)
-    except ValueError:
-        raise UserError(f"{path}: the daemon did not answer", "is it still running?") from None
-    if not isinstance(reply, dict):
-        raise UserError(f"{path}: not a dxboard operator socket")
+    if reply is None:
+        raise UserError(f"{path}: the daemon did not answer", "is it still running?")
     if not reply.get("ok"):
         raise UserError(str(reply.get("error", "refused")))
     return reply

@@ -14,23 +14,22 @@ per request, in order:
     {"op": "release", "component": C}                 -> {"ok": true}
 
 Errors are ``{"ok": false, "error": "..."}`` with words for a person (an unknown component, a
-line that is not JSON); a bad line changes nothing. ``Operator`` is what the server calls: the
-repair service implements it.
+line that is not JSON); a bad line changes nothing. The wire is ``emulator.jsonlines``'s.
+``Operator`` is what the server calls: the repair service implements it.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
-import logging
 import os
 from pathlib import Path
 from typing import Any, Protocol
 
-log = logging.getLogger(__name__)
+from emulator.jsonlines import Lines
 
 MAX_LINE = 4096
+BY = "person"
 
 
 class Operator(Protocol):
@@ -47,34 +46,41 @@ class Operator(Protocol):
     def release(self, component: str, by: str) -> bool: ...
 
 
-async def handle(op: Operator, line: bytes) -> dict[str, Any]:
-    """The reply to one request line."""
-    try:
-        req = json.loads(line)
-    except (ValueError, UnicodeDecodeError):
-        return {"ok": False, "error": "not a JSON object on one line"}
-    if not isinstance(req, dict):
-        return {"ok": False, "error": "not a JSON object on one line"}
-    kind = req.get("op")
-    if kind == "list":
-        return {"ok": True, **op.listing()}
-    if kind not in ("quarantine", "clear", "hold", "release"):
-        return {"ok": False, "error": f"unknown op {kind!r} (list, quarantine, clear, hold, "
-                                      "release)"}
+def _component(op: Operator, req: dict[str, Any]) -> str:
     comp = req.get("component")
     if not isinstance(comp, str) or comp not in op.components():
-        return {"ok": False, "error": f"no component {comp!r}; the robot's components: "
-                                      + ", ".join(sorted(op.components()))}
+        raise ValueError(f"no component {comp!r}; the robot's components: "
+                         + ", ".join(sorted(op.components())))
+    return comp
+
+
+async def _quarantine(op: Operator, req: dict[str, Any]) -> dict[str, Any]:
+    comp = _component(op, req)
     reason = str(req.get("reason") or "")
-    by = "person"
-    if kind == "quarantine":
-        return {"ok": True, "safe_state": await op.quarantine(comp, reason or "by hand", by)}
-    if kind == "clear":
-        cleared = await op.clear(comp, by)
-        return {"ok": True, "changed": bool(cleared), "cleared": cleared}
-    if kind == "hold":
-        return {"ok": True, "changed": op.hold(comp, reason or "maintenance", by)}
-    return {"ok": True, "changed": op.release(comp, by)}
+    return {"ok": True, "safe_state": await op.quarantine(comp, reason or "by hand", BY)}
+
+
+async def _clear(op: Operator, req: dict[str, Any]) -> dict[str, Any]:
+    cleared = await op.clear(_component(op, req), BY)
+    return {"ok": True, "changed": bool(cleared), "cleared": cleared}
+
+
+def _hold(op: Operator, req: dict[str, Any]) -> dict[str, Any]:
+    comp = _component(op, req)
+    reason = str(req.get("reason") or "")
+    return {"ok": True, "changed": op.hold(comp, reason or "maintenance", BY)}
+
+
+def lines(op: Operator) -> Lines:
+    """The operator socket's requests."""
+    return Lines({
+        "list": lambda req, conn: {"ok": True, **op.listing()},
+        "quarantine": lambda req, conn: _quarantine(op, req),
+        "clear": lambda req, conn: _clear(op, req),
+        "hold": lambda req, conn: _hold(op, req),
+        "release": lambda req, conn: {"ok": True,
+                                      "changed": op.release(_component(op, req), BY)},
+    }, max_line=MAX_LINE)
 
 
 class OperatorServer:
@@ -90,32 +96,10 @@ class OperatorServer:
         old = os.umask(0o177)
         try:
             self._server = await asyncio.start_unix_server(
-                self._client, path=str(self.path), limit=MAX_LINE)
+                lines(self.operator).serve, path=str(self.path), limit=MAX_LINE)
         finally:
             os.umask(old)
         self.path.chmod(0o600)
-
-    async def _client(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        try:
-            while True:
-                try:
-                    line = await reader.readuntil(b"\n")
-                except (asyncio.LimitOverrunError, ValueError):
-                    writer.write(b'{"ok": false, "error": "line too long"}\n')
-                    break
-                except asyncio.IncompleteReadError:
-                    break
-                try:
-                    reply = await handle(self.operator, line)
-                except Exception as exc:  # the daemon stays up; the person hears why
-                    log.exception("operator request failed")
-                    reply = {"ok": False, "error": f"failed: {exc}"}
-                writer.write(json.dumps(reply).encode() + b"\n")
-                await writer.drain()
-        except ConnectionError:
-            pass
-        finally:
-            writer.close()
 
     async def close(self) -> None:
         if self._server is not None:

@@ -7,7 +7,8 @@ goal it belongs to. ``goal(skill, args)`` sends a goal and returns a ``GoalHandl
 ``result``; None when nothing came within ``timeout``) and ``cancel()`` asks the world to stop
 it. ``state()`` asks for the world's state. A lost connection ends every open goal with a
 failed result naming it; ``close()`` is idempotent. Messages are the world's JSON objects as
-they are: the skill layer (``host.skills.skill``) interprets them.
+they are: the skill layer (``host.skills.skill``) interprets them. The wire is
+``emulator.jsonlines``'s.
 """
 
 from __future__ import annotations
@@ -15,16 +16,13 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import itertools
-import json
 import logging
 from typing import Any
-from urllib.parse import urlsplit
 
+from emulator.jsonlines import connect, encode, messages, tcp_address
 from host.errors import RemoteError, UserError
 
 log = logging.getLogger(__name__)
-
-MAX_LINE = 65536
 
 
 class GoalHandle:
@@ -66,17 +64,12 @@ class WorldClient:
 
     @classmethod
     async def connect(cls, url: str, timeout: float = 10.0) -> WorldClient:
-        parts = urlsplit(url)
-        try:
-            port = parts.port
-        except ValueError:
-            port = None
-        if parts.scheme != "tcp" or not parts.hostname or port is None:
+        address = tcp_address(url)
+        if address is None:
             raise UserError(f"world URL {url!r} is not tcp://HOST:PORT",
                             "give the world: line `dxboard emulate --robot --world` printed")
         try:
-            reader, writer = await asyncio.wait_for(
-                asyncio.open_connection(parts.hostname, port, limit=MAX_LINE), timeout)
+            reader, writer = await connect(*address, timeout)
         except (OSError, TimeoutError) as exc:
             raise RemoteError(f"cannot reach the world at {url}: {exc}",
                               "is the emulated robot running with --world?") from None
@@ -85,7 +78,7 @@ class WorldClient:
     async def send(self, msg: dict[str, Any]) -> None:
         if self.lost:
             raise RemoteError(f"the world at {self.url} is gone: {self.lost}")
-        self._writer.write(json.dumps(msg, separators=(",", ":")).encode() + b"\n")
+        self._writer.write(encode(msg))
         await self._writer.drain()
 
     async def goal(self, skill: str, args: dict[str, Any]) -> GoalHandle:
@@ -103,15 +96,7 @@ class WorldClient:
     async def _read(self) -> None:
         why = "closed by the world"
         try:
-            while True:
-                line = await self._reader.readuntil(b"\n")
-                try:
-                    msg = json.loads(line)
-                except ValueError:
-                    log.warning("not JSON from the world: %r", line[:80])
-                    continue
-                if not isinstance(msg, dict):
-                    continue
+            async for msg in messages(self._reader):
                 if msg.get("event") == "state" and self._states:
                     self._states.pop(0).set_result(msg["state"])
                 elif msg.get("event") == "error":

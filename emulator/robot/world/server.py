@@ -31,20 +31,19 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import logging
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
+from emulator.jsonlines import MAX_LINE, Lines, send
 from emulator.robot.world.arena import Arena
 from emulator.robot.world.skills import Goal, Progress, make_goal
 from emulator.robot.world.truth import Truth
 
 log = logging.getLogger(__name__)
 
-MAX_LINE = 65536
 STEP_S = 0.05
 FEEDBACK_S = 0.2
 
@@ -69,6 +68,7 @@ class WorldServer:
         self._server: asyncio.Server | None = None
         self._task: asyncio.Task[None] | None = None
         self._preparing: asyncio.Task[None] | None = None
+        self._lines = self._requests()
         self._planner = ThreadPoolExecutor(1, thread_name_prefix="world-planner")  # one at a time
 
     @property
@@ -76,7 +76,8 @@ class WorldServer:
         return f"tcp://{self.host}:{self.port}"
 
     async def start(self) -> str:
-        self._server = await asyncio.start_server(self._client, self.host, 0, limit=MAX_LINE)
+        self._server = await asyncio.start_server(self._lines.serve, self.host, 0,
+                                                  limit=MAX_LINE)
         self.port = self._server.sockets[0].getsockname()[1]
         self._task = asyncio.get_running_loop().create_task(self._run())
         return self.url
@@ -125,56 +126,36 @@ class WorldServer:
 
     # --- requests ---------------------------------------------------------------------------
 
-    async def _client(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        try:
-            while True:
-                try:
-                    line = await reader.readuntil(b"\n")
-                except asyncio.LimitOverrunError:
-                    self._send(writer, {"event": "error", "error": "line too long"})
-                    break
-                except asyncio.IncompleteReadError:
-                    break
-                reply = self._request(line, writer)
-                if reply is not None:
-                    self._send(writer, reply)
-        except ConnectionError:
-            pass
-        finally:
-            if self.active is not None and self.active.writer is writer:
-                self._cancel("the client went away")
-            writer.transport.abort()
-
-    def _request(self, line: bytes, writer: asyncio.StreamWriter) -> dict[str, Any] | None:
-        try:
-            msg = json.loads(line)
-        except (ValueError, UnicodeDecodeError):
-            msg = None
-        if not isinstance(msg, dict):
-            return {"event": "error", "error": "not a JSON object on one line"}
-        op = msg.get("op")
-        if op == "state":
-            return {"event": "state", "state": self.state()}
-        if op == "cancel":
+    def _requests(self) -> Lines:
+        def cancel(msg: dict[str, Any], writer: Any) -> dict[str, Any] | None:
             if self.active is None or self.active.goal_id != msg.get("id"):
-                return {"event": "error", "error": f"no active goal {msg.get('id')!r}"}
+                return _error(f"no active goal {msg.get('id')!r}")
             self._cancel("canceled by the client")
             return None
-        if op == "goal":
-            return self._goal(msg, writer)
-        if op == "door":
-            return self._door(msg)
-        if op == "jam":
+
+        def jam(msg: dict[str, Any], writer: Any) -> dict[str, Any]:
             self.arena.jammed = True
             return {"event": "jam"}
-        return {"event": "error", "error": f"unknown op {op!r} (goal, cancel, state, door, jam)"}
+
+        return Lines({"goal": self._goal, "cancel": cancel,
+                      "state": lambda msg, writer: {"event": "state", "state": self.state()},
+                      "door": lambda msg, writer: self._door(msg), "jam": jam},
+                     error=_error, max_line=MAX_LINE, on_close=self._gone)
+
+    def _gone(self, writer: Any) -> None:
+        if self.active is not None and self.active.writer is writer:
+            self._cancel("the client went away")
+
+    def _request(self, line: bytes, writer: Any) -> Any:
+        """The reply to one request line (None: nothing to say at once)."""
+        return self._lines.answer(line, writer)
 
     def _goal(self, msg: dict[str, Any], writer: asyncio.StreamWriter) -> dict[str, Any] | None:
         goal_id, skill, args = msg.get("id"), msg.get("skill"), msg.get("args", {})
         if not isinstance(goal_id, str) or not isinstance(skill, str) \
                 or not isinstance(args, dict):
-            return {"event": "error", "error": 'a goal is {"op": "goal", "id": "...", '
-                    '"skill": "...", "args": {...}}'}
+            return _error('a goal is {"op": "goal", "id": "...", '
+                    '"skill": "...", "args": {...}}')
         try:
             goal = make_goal(self.arena, self.truth, skill, args)
             why = goal.check()
@@ -210,14 +191,14 @@ class WorldServer:
         door, open_, locked = msg.get("door"), msg.get("open"), msg.get("locked")
         if not isinstance(door, str) or not isinstance(open_, bool) \
                 or not isinstance(locked, bool | None):
-            return {"event": "error", "error": 'door needs "door": NAME and "open": true|false '
-                    '(and may give "locked": true|false)'}
+            return _error('door needs "door": NAME and "open": true|false '
+                          '(and may give "locked": true|false)')
         try:
             why = self.arena.set_door(door, open_)
             if locked is not None and not why:
                 why = self.arena.set_lock(door, locked)
         except ValueError as exc:
-            return {"event": "error", "error": str(exc)}
+            return _error(str(exc))
         reply: dict[str, Any] = {"event": "door", "door": door, "open": self.arena.doors()[door]}
         if why:
             reply["error"] = why
@@ -225,5 +206,8 @@ class WorldServer:
 
     @staticmethod
     def _send(writer: asyncio.StreamWriter, msg: dict[str, Any]) -> None:
-        if not writer.is_closing():
-            writer.write(json.dumps(msg, separators=(",", ":")).encode() + b"\n")
+        send(writer, msg)
+
+
+def _error(words: str) -> dict[str, Any]:
+    return {"event": "error", "error": words}
