@@ -119,6 +119,7 @@ class Journal:
         self._closing = False
         self._closed = False
         self.dropped = 0
+        self.recorded = 0  # entries recorded by this writer (ids are given without gaps)
         self.write_failures = 0  # commits that failed (and were retried), for the metrics
         self._dropped_ids: list[int] = []
         self._problem = ""  # why commits fail now ("" while they work)
@@ -140,6 +141,7 @@ class Journal:
                 raise RuntimeError(f"journal {self.path} is closed")
             ident = self._next_id
             self._next_id += 1
+            self.recorded += 1
             self._queue.append((ident, payload.kind.value, wall, mono, data))
             if len(self._queue) > self.max_pending:
                 lost = self._queue.popleft()
