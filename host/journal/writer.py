@@ -118,6 +118,7 @@ class Journal:
         self._waiters: list[tuple[int, asyncio.AbstractEventLoop, asyncio.Future[int]]] = []
         self._closing = False
         self._closed = False
+        self._wake = threading.Event()  # ends a retry's back-off early (close)
         self.dropped = 0
         self.recorded = 0  # entries recorded by this writer (ids are given without gaps)
         self.write_failures = 0  # commits that failed (and were retried), for the metrics
@@ -211,6 +212,7 @@ class Journal:
             else:
                 already = False
                 self._closing = True
+                self._wake.set()
                 self._cond.notify_all()
         if not already:
             self._thread.join()
@@ -255,9 +257,7 @@ class Journal:
                         log.error("journal %s: closing with %d entries not written (%s)",
                                   self.path, len(batch), self._problem)
                         break
-                with self._cond:  # a close wakes the wait: it need not sit out the back-off
-                    if not self._closing:
-                        self._cond.wait(backoff)
+                self._wake.wait(backoff)  # set by close(): it need not sit out the back-off
                 continue
             backoff = 0.0
             self._committed(batch)

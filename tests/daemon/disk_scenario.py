@@ -32,6 +32,7 @@ HEAL_S = 120.0
 class FullDiskRun:
     fault_to_healthy_s: float = 0.0  # hokuyo hang -> healthy, the disk full all along
     free_to_journalled_s: float = 0.0  # space back -> every entry recorded by then on disk
+    held_at_free: int = 0  # entries the daemon held in memory when the space returned
     recorded: int = 0  # entries the daemon said it recorded (the last /metrics before stop)
     lost: int = 0  # of those, not in the journal after the stop
     dropped: int = 0  # what the daemon itself counted as dropped
@@ -81,6 +82,7 @@ def full_disk_run(tmp: Path) -> FullDiskRun:
             out.repaired = [r for r in st["repairs"] if (r["started"] or 0) >= fault_wall]
             still = d.status()["journal"]
             assert still["problem"] == "disk full", f"the disk was freed meanwhile: {still}"
+            out.held_at_free = int(still["held"])
             recorded = int(metric(d, "dxboard_journal_recorded_entries_total"))
             freed = time.monotonic()
             disk.free()

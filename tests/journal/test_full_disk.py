@@ -54,3 +54,17 @@ def test_a_full_disk_holds_entries_in_memory_and_writes_them_when_space_returns(
     assert len(errors) == 2, errors
     assert "disk full" in errors[0] and "holding entries in memory" in errors[0]
     assert "writing again" in errors[1] and "entries held" in errors[1]
+
+
+def test_closing_on_a_full_disk_ends_and_says_what_was_not_written(
+        tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    with small_disk(tmp_path / "disk") as disk:
+        journal = Journal(disk.path / "j.sqlite")
+        try:
+            disk.fill()
+            for i in range(50):
+                journal.record(Note(f"held {i} {BIG}"), wall=T0 + i, mono=float(i))
+            wait_until(lambda: journal.health()[0], 30, "the journal to say the disk is full")
+        finally:
+            journal.close()  # returns: a few quick retries, then it gives up and says so
+    assert "closing with" in caplog.text and "entries not written (disk full)" in caplog.text
