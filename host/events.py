@@ -13,7 +13,8 @@ under the same ``action_id``); ``RepairEnded`` how a repair ended; ``QuarantineC
 person; ``BoardEvent`` what the board said (a trip, a state change, a fresh state after
 connecting); ``LinkChange`` the board link going up or down; ``ChannelSample`` the channels'
 states and currents and the board's input voltage a few times a second (for the page and the
-ROS 2 reports; not journaled); ``Telemetry`` a
+ROS 2 reports; not journaled); ``JournalHealth`` whether the journal can write and what it
+holds in memory until it can (not journaled); ``Telemetry`` a
 downsampled summary of the channel currents over one period (never raw samples; stored as
 compact ``[channel, samples, mean, min, max, last]`` rows in mA); ``RunStarted`` the start of
 one daemon run (its id numbers the journal's runs); ``Note`` free text.
@@ -68,6 +69,7 @@ class Kind(StrEnum):
     # not journaled (for live readers only)
     DIAGNOSIS_RUN = "diagnosis_run"
     CHANNELS = "channels"
+    JOURNAL_HEALTH = "journal_health"
 
 
 class ActionState(StrEnum):
@@ -334,6 +336,19 @@ class RunStarted(_Plain):
 
 
 @dataclass(frozen=True)
+class JournalHealth(_Plain):
+    """Whether the journal can write: ``problem`` ("" when it writes, else e.g. "disk full"),
+    ``held`` the entries it keeps in memory until it can, ``dropped`` those it lost beyond its
+    bound (for the page, the API and ``/diagnostics``; not journaled: the journal is what
+    fails)."""
+
+    problem: str
+    held: int = 0
+    dropped: int = 0
+    kind: ClassVar[Kind] = Kind.JOURNAL_HEALTH
+
+
+@dataclass(frozen=True)
 class DiagnosisRun(_Plain):
     """One diagnoser run, changed or not: its cost (for the metrics; not journaled)."""
 
@@ -557,8 +572,8 @@ class PlanDiagnosis(_Plain):
 
 Event = (Observation | DiagnosisRecord | PlanRecord | ActionRecord | BoardEvent | Telemetry
          | Note | LinkChange | RepairEnded | QuarantineChange | HoldChange | RunStarted
-         | DiagnosisRun | ChannelSample | MissionState | Dispatch | TreeChange | LayerResult
-         | KbChange | PlanDiagnosis)
+         | DiagnosisRun | JournalHealth | ChannelSample | MissionState | Dispatch | TreeChange
+         | LayerResult | KbChange | PlanDiagnosis)
 Payload = Event  # what the journal stores: the journaled events
 
 
@@ -571,7 +586,7 @@ class Stamped:
     event: Event
 
 #: the kinds a journal keeps (the rest are for live readers only)
-JOURNALED = frozenset(Kind) - {Kind.DIAGNOSIS_RUN, Kind.CHANNELS}
+JOURNALED = frozenset(Kind) - {Kind.DIAGNOSIS_RUN, Kind.CHANNELS, Kind.JOURNAL_HEALTH}
 
 _DECODERS: dict[Kind, Any] = {
     Kind.OBSERVATION: Observation.from_json,
@@ -588,6 +603,7 @@ _DECODERS: dict[Kind, Any] = {
     Kind.RUN: RunStarted.from_json,
     Kind.DIAGNOSIS_RUN: DiagnosisRun.from_json,
     Kind.CHANNELS: ChannelSample.from_json,
+    Kind.JOURNAL_HEALTH: JournalHealth.from_json,
     Kind.MISSION: MissionState.from_json,
     Kind.DISPATCH: Dispatch.from_json,
     Kind.TREE: TreeChange.from_json,
@@ -607,6 +623,14 @@ def event_from_json(kind: Kind | str, data: Mapping[str, Any]) -> Event:
 
 
 payload_from_json = event_from_json
+
+
+def journal_health_text(event: JournalHealth) -> str:
+    """``journal: disk full, 12 entries held`` (and the entries lost), or ``journal: writing``."""
+    if not event.problem:
+        return "journal: writing"
+    lost = f", {event.dropped} dropped" if event.dropped else ""
+    return f"journal: {event.problem}, {event.held} entries held{lost}"
 
 
 def _value(v: bool | None) -> str:
@@ -674,6 +698,8 @@ def describe(event: Event) -> str:
             return (f"run {event.run_id}: dxboard run {event.robot}"
                     + (f", board {event.board}" if event.board else "")
                     + (" (dry run)" if event.dry_run else ""))
+        case JournalHealth():
+            return journal_health_text(event)
         case DiagnosisRun():
             return f"diagnosed in {event.elapsed_s * 1000:.1f} ms [{event.trigger}]"
         case ChannelSample():

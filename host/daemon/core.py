@@ -70,6 +70,7 @@ from host.web.fold import StatusFold
 from host.web.server import WebServer
 from host.web.status import MemoryStatusSource, Status
 
+from . import journalwatch
 from .external import ExternalActuators, check_external
 from .stages import StopStages
 from .stream import EventStream
@@ -271,6 +272,9 @@ class Daemon:
         await self.repairs.adopt()
         self._tasks = [asyncio.ensure_future(t) for t in (
             self._board_task(), self.diagnosis.task(), self._sample_task(), self.lag.run())]
+        if self.journal is not None:  # a journal that cannot write says so (a full disk)
+            self._tasks.append(asyncio.ensure_future(journalwatch.watch(self.journal,
+                                                                        self.emit)))
 
     def _restore(self, journal: Journal, previous: Run | None) -> None:
         """Quarantines and holds that earlier runs left in the journal stay in force; a repair

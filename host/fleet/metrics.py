@@ -58,6 +58,7 @@ class JournalStats(Protocol):
     reader: JournalReader
     dropped: int
     write_failures: int
+    recorded: int
 
     @property
     def pending(self) -> int:
@@ -224,6 +225,9 @@ class FleetMetrics:
                    "Journal commits that failed (each is retried).", base, j.write_failures)
         yield _one(CounterMetricFamily, "dxboard_journal_dropped_entries",
                    "Journal entries dropped: too many waited for the disk.", base, j.dropped)
+        yield _one(CounterMetricFamily, "dxboard_journal_recorded_entries",
+                   "Journal entries the daemon recorded (written, waiting or dropped).", base,
+                   j.recorded)
         yield _one(GaugeMetricFamily, "dxboard_journal_bytes",
                    "Size of the journal file and its write-ahead log.", base,
                    j.reader.size_bytes())

@@ -8,10 +8,15 @@ one transaction and commits: a group commit whose batches grow by themselves whe
 slow, so a burst costs one fsync, not one per entry. ``await journal.flush()`` (or
 ``flush_blocking``) returns once everything recorded so far is committed, i.e. on disk:
 nothing committed is lost on kill -9, nor (with the default ``sync="full"``) on power loss.
-Nothing is dropped silently: if the disk fails, the batch stays queued and is retried with a
-back-off, logged at ERROR and counted in ``write_failures``; only when more than
-``max_pending`` entries wait are the oldest dropped, counted in ``dropped``, logged, and recorded
-as an error note once writing works again.
+Nothing is dropped silently, and a failing disk never blocks the daemon: if a commit fails
+(a full disk: SQLite's "database or disk is full", or any ``OSError``), the batch stays queued
+in memory and is retried with a back-off of at most ``MAX_BACKOFF_S`` (so it is written within
+about a second of space returning), counted in ``write_failures``; the terminal gets one ERROR
+line when writing starts failing and one line when it works again, with the number of entries
+that were held, and ``health()`` says what fails and how many entries are held, for the
+page, the API and ``/diagnostics`` (``host.daemon.journalwatch``). Only when more than
+``max_pending`` entries wait are the oldest dropped, counted in ``dropped``, logged once, and
+recorded as an error note once writing works again.
 Retention runs in the same thread: every ``prune_every`` telemetry entries, telemetry older than
 ``Retention.telemetry_max_age_s`` before the newest recorded wall time (the daemon's time, never
 read here) or beyond ``telemetry_max_rows`` is deleted; every other kind is kept.
@@ -39,6 +44,18 @@ from host.journal.store import JournalReader, connect
 log = logging.getLogger(__name__)
 
 _Row = tuple[int, str, float, float, str]
+
+MAX_BACKOFF_S = 1.0  # the longest wait between retries of a failing commit
+CLOSE_RETRIES = 3  # a closing journal that still cannot write gives up after these
+
+
+def problem_of(exc: BaseException) -> str:
+    """What a failed commit says to a person: ``disk full`` or the error itself."""
+    code = getattr(exc, "sqlite_errorcode", None)
+    if code == sqlite3.SQLITE_FULL or getattr(exc, "errno", None) == 28 \
+            or "disk is full" in str(exc) or "No space left" in str(exc):
+        return "disk full"
+    return f"cannot write ({exc})"
 
 
 def _writer_lock(path: Path) -> IO[str]:
@@ -101,9 +118,12 @@ class Journal:
         self._waiters: list[tuple[int, asyncio.AbstractEventLoop, asyncio.Future[int]]] = []
         self._closing = False
         self._closed = False
+        self._wake = threading.Event()  # ends a retry's back-off early (close)
         self.dropped = 0
+        self.recorded = 0  # entries recorded by this writer (ids are given without gaps)
         self.write_failures = 0  # commits that failed (and were retried), for the metrics
         self._dropped_ids: list[int] = []
+        self._problem = ""  # why commits fail now ("" while they work)
         self._telemetry_since_prune = 0
         self._newest_wall = 0.0
         self._newest_mono = 0.0
@@ -122,13 +142,16 @@ class Journal:
                 raise RuntimeError(f"journal {self.path} is closed")
             ident = self._next_id
             self._next_id += 1
+            self.recorded += 1
             self._queue.append((ident, payload.kind.value, wall, mono, data))
             if len(self._queue) > self.max_pending:
                 lost = self._queue.popleft()
                 self.dropped += 1
                 self._dropped_ids.append(lost[0])
-                log.error("journal %s: %d entries waiting for the disk; dropped entry %d (%s)",
-                          self.path, len(self._queue), lost[0], lost[1])
+                if len(self._dropped_ids) == 1:  # once per overflow, not once per entry
+                    log.error("journal %s: %d entries waiting for the disk; dropped entry %d "
+                              "(%s), and each older one after it (counted)",
+                              self.path, len(self._queue), lost[0], lost[1])
             self._cond.notify()
         return ident
 
@@ -142,6 +165,12 @@ class Journal:
     def pending(self) -> int:
         with self._cond:
             return len(self._queue)
+
+    def health(self) -> tuple[str, int, int]:
+        """``(problem, held, dropped)``: why commits fail ("" while they work), the entries
+        waiting in memory, and those lost beyond ``max_pending``."""
+        with self._cond:
+            return self._problem, len(self._queue), self.dropped
 
     async def flush(self) -> int:
         """Wait until every entry recorded so far is committed; returns the last id."""
@@ -183,6 +212,7 @@ class Journal:
             else:
                 already = False
                 self._closing = True
+                self._wake.set()
                 self._cond.notify_all()
         if not already:
             self._thread.join()
@@ -206,6 +236,7 @@ class Journal:
 
     def _run(self) -> None:
         backoff = 0.0
+        closing_failures = 0
         while True:
             with self._cond:
                 while not self._queue and not self._closing:
@@ -216,16 +247,17 @@ class Journal:
             try:
                 with self._db:
                     self._write(batch)
-            except sqlite3.Error as exc:
+            except (sqlite3.Error, OSError) as exc:
                 self.write_failures += 1
-                backoff = min(5.0, backoff * 2 or 0.1)
-                log.error("journal %s: cannot commit %d entries (%s); retrying in %.1f s",
-                          self.path, len(batch), exc, backoff)
-                if self._closing and backoff >= 5.0:
-                    log.error("journal %s: closing with %d entries not written",
-                              self.path, len(batch))
-                    break
-                time.sleep(backoff)
+                backoff = min(MAX_BACKOFF_S, backoff * 2 or 0.1)
+                self._failed(exc, len(batch))
+                if self._closing:
+                    closing_failures += 1
+                    if closing_failures >= CLOSE_RETRIES:
+                        log.error("journal %s: closing with %d entries not written (%s)",
+                                  self.path, len(batch), self._problem)
+                        break
+                self._wake.wait(backoff)  # set by close(): it need not sit out the back-off
                 continue
             backoff = 0.0
             self._committed(batch)
@@ -235,6 +267,18 @@ class Journal:
             waiters, self._waiters = self._waiters, []
         for _target, loop, fut in waiters:
             loop.call_soon_threadsafe(_fail, fut, RuntimeError("journal closed"))
+
+    def _failed(self, exc: BaseException, waiting: int) -> None:
+        problem = problem_of(exc)
+        with self._cond:
+            first = not self._problem
+            self._problem = problem
+        if first:
+            log.error("journal %s: cannot commit (%s); holding entries in memory (up to %d) "
+                      "and retrying",
+                      self.path, problem, self.max_pending)
+        else:
+            log.debug("journal %s: still %s, %d entries held", self.path, problem, waiting)
 
     def _write(self, batch: list[_Row]) -> None:
         conn = self._conn
@@ -258,6 +302,11 @@ class Journal:
             while self._queue and self._queue[0][0] in done:
                 self._queue.popleft()
             self._committed_id = max(self._committed_id, batch[-1][0])
+            recovered = self._problem
+            if recovered:
+                log.warning("journal %s: writing again; the %d entries held while it was %s "
+                            "are journalled", self.path, len(batch), recovered)
+                self._problem = ""
             self._newest_wall = max(self._newest_wall, newest)
             self._newest_mono = max(self._newest_mono, newest_mono_batch)
             self._telemetry_since_prune += telemetry

@@ -5,7 +5,8 @@
 
 - a ``command`` node runs as an asyncio subprocess in its own session (process group), its
   stdout and stderr appended to ``log_dir/<node>.log`` with a header line per start and a
-  footer line with the exit status; ``stop`` sends SIGTERM to the whole group, then SIGKILL
+  footer line with the exit status (rotated, and never failing a start or stop on a full disk:
+  ``host.repair.nodelog``); ``stop`` sends SIGTERM to the whole group, then SIGKILL
   after the node's ``stop_timeout_s``, and waits for the exit (no zombies, no stray children).
   A reaper task per process notes an exit the host did not ask for; ``pid(node)`` is the live
   pid, and ``on_start(node, pid)`` is called after every start so the daemon can hand it to the
@@ -47,6 +48,8 @@ import psutil
 
 from host.errors import RemoteError
 from host.lifeline import lifeline
+from host.repair import nodelog
+from host.repair.nodelog import DEFAULT_MAX_BYTES, NodeLogs
 from host.repair.processes import ProcessConfig
 
 log = logging.getLogger(__name__)
@@ -91,10 +94,12 @@ class _Running:
 class ProcessSupervisor:
     def __init__(self, configs: Mapping[str, ProcessConfig], log_dir: str | Path, *,
                  on_start: OnStart | None = None, user: bool = False,
-                 systemctl: str = "systemctl", env: Mapping[str, str] | None = None) -> None:
+                 systemctl: str = "systemctl", env: Mapping[str, str] | None = None,
+                 log_max_bytes: int = DEFAULT_MAX_BYTES) -> None:
         self.configs = dict(configs)
         self.env = dict(env or {})  # for every process, under each one's own env
         self.log_dir = Path(log_dir)
+        self.logs = NodeLogs(self.log_dir, log_max_bytes)
         self.on_start = on_start
         self.user = user
         self.systemctl = systemctl
@@ -115,7 +120,7 @@ class ProcessSupervisor:
         return self._units.get(node)
 
     def log_file(self, node: str) -> Path:
-        return self.log_dir / f"{node}.log"
+        return self.logs.path(node)
 
     # -- start / stop ----------------------------------------------------------------------
     async def start(self, node: str) -> int | None:
@@ -176,11 +181,8 @@ class ProcessSupervisor:
         r = self._running.get(node)
         if r is not None and r.code is None:
             return r.pid
-        self.log_dir.mkdir(parents=True, exist_ok=True)
-        logf = self.log_file(node).open("ab")
         stamp = time.strftime("%Y-%m-%d %H:%M:%S")
-        logf.write(f"--- {stamp} start: {' '.join(cfg.argv)}\n".encode())
-        logf.flush()
+        logf = self.logs.open(node, f"--- {stamp} start: {' '.join(cfg.argv)}\n")
         try:
             proc = await asyncio.create_subprocess_exec(
                 *cfg.argv, stdin=asyncio.subprocess.DEVNULL, stdout=logf,
@@ -188,8 +190,8 @@ class ProcessSupervisor:
                 env={**os.environ, **self.env, **cfg.env}, start_new_session=True,
                 preexec_fn=lifeline())  # dies with the daemon, even a killed one
         except OSError as exc:
-            logf.write(f"--- cannot start: {exc}\n".encode())
-            logf.close()
+            nodelog.write(logf, f"--- cannot start: {exc}\n")
+            nodelog.close(logf)
             raise ProcessError(f"cannot start {node}: {exc.strerror or exc} ({cfg.argv[0]})"
                                ) from exc
         self._watch(node, _Running(proc.pid, logf, proc))
@@ -208,8 +210,8 @@ class ProcessSupervisor:
         self.exits[node] = code
         how = ("an unknown status" if r.proc is None else
                f"signal {-code}" if code < 0 else f"status {code}")
-        r.logf.write(f"--- exited with {how}{' (stopped)' if r.stopping else ''}\n".encode())
-        r.logf.close()
+        nodelog.write(r.logf, f"--- exited with {how}{' (stopped)' if r.stopping else ''}\n")
+        nodelog.close(r.logf)
         if not r.stopping:
             log.warning("%s (pid %d) exited by itself with %s", node, r.pid, how)
         if self._running.get(node) is r:
@@ -229,10 +231,7 @@ class ProcessSupervisor:
                 rec[node] = {"pid": r.pid, "started": psutil.Process(r.pid).create_time(),
                              "argv": list(self.configs[node].argv),
                              "env": self._digest(self.configs[node])}
-        self.log_dir.mkdir(parents=True, exist_ok=True)
-        tmp = self.log_dir / (RECORD + ".tmp")
-        tmp.write_text(json.dumps(rec, indent=1))
-        os.replace(tmp, self.log_dir / RECORD)
+        self.logs.write_record(RECORD, json.dumps(rec, indent=1))
 
     async def adopt(self) -> dict[str, str]:
         """Take over the nodes an earlier daemon left running (see the module docstring);
@@ -258,10 +257,8 @@ class ProcessSupervisor:
                 self._signal(pid, signal.SIGTERM)
                 done[node] = "stopped: it ran another command or environment"
                 continue
-            logf = self.log_file(node).open("ab")
-            logf.write(f"--- {time.strftime('%Y-%m-%d %H:%M:%S')} adopted pid {pid} "
-                       "(left running by an earlier daemon)\n".encode())
-            logf.flush()
+            logf = self.logs.open(node, f"--- {time.strftime('%Y-%m-%d %H:%M:%S')} adopted "
+                                  f"pid {pid} (left running by an earlier daemon)\n")
             self._watch(node, _Running(pid, logf))
             done[node] = "adopted"
             if self.on_start is not None:

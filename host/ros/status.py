@@ -16,7 +16,10 @@ diagnoses it is abnormal, of how many), ``repair`` (its latest repair action and
 state), ``quarantined`` and ``held``. One status per board channel, ``dxboard board: NAME``
 (ERROR when tripped, latched or faulted; STALE while the link is down; key/values state, on,
 current_a, last_event), and one for the board, ``dxboard board`` (OK while the link is up,
-else ERROR with the reason; key/values link, total_current_a, input_v). ``diagnoses``,
+else ERROR with the reason; key/values link, total_current_a, input_v), and one for the
+daemon itself, ``dxboard daemon`` (hardware_id ``daemon``): OK "journal: writing", or ERROR
+"journal: disk full, N entries held" while its journal cannot write (key/values journal,
+journal_held, journal_dropped). ``diagnoses``,
 ``currents_a`` and ``input_v`` are the latest minimal diagnoses, channel currents and the
 board's input voltage, for ``/diagnosis``, ``/board_measurements`` and ``/battery_state``.
 """
@@ -32,9 +35,11 @@ from host.events import (
     ChannelSample,
     DiagnosisRecord,
     HoldChange,
+    JournalHealth,
     LinkChange,
     QuarantineChange,
     Stamped,
+    journal_health_text,
 )
 
 OK, WARN, ERROR, STALE = 0, 1, 2, 3
@@ -66,6 +71,7 @@ class StatusFold:
     link_reason: str = "not connected yet"
     _comp: dict[str, _Component] = field(default_factory=dict)
     _last_event: dict[int, str] = field(default_factory=dict)
+    journal: JournalHealth = field(default_factory=lambda: JournalHealth(""))
 
     def __post_init__(self) -> None:
         self._comp = {c: _Component() for c in self.components}
@@ -89,6 +95,8 @@ class StatusFold:
                                                        if e.quarantined else "")
             case HoldChange() if e.component in self._comp:
                 self._comp[e.component].held = e.held
+            case JournalHealth():
+                self.journal = e
             case BoardEvent() if e.channel is not None:
                 self._last_event[e.channel] = e.event
             case _:
@@ -111,7 +119,14 @@ class StatusFold:
         return [c.current_ma / 1000.0 for c in self.channels.channels] if self.channels else []
 
     def statuses(self) -> list[Status]:
-        return [*(self._component(c) for c in self.components), *self._board()]
+        return [*(self._component(c) for c in self.components), *self._board(), self._daemon()]
+
+    def _daemon(self) -> Status:
+        j = self.journal
+        return Status(ERROR if j.problem else OK, "dxboard daemon", journal_health_text(j),
+                      "daemon", (("journal", j.problem or "writing"),
+                                 ("journal_held", str(j.held)),
+                                 ("journal_dropped", str(j.dropped))))
 
     def _component(self, name: str) -> Status:
         comp = self._comp[name]

@@ -10,7 +10,8 @@ event's own stamp; in the order they started), the board link (``LinkChange``), 
 colours observations), quarantines and holds (``QuarantineChange``, ``HoldChange``: each with
 what a person does to release it — the command, with the run's operator socket when it is not
 the default, or for a channel a person switched off, switching it on again), the running
-counters that ``/metrics`` exports (``DiagnosisRun``, ``RepairEnded``, changes), and the
+counters that ``/metrics`` exports (``DiagnosisRun``, ``RepairEnded``, changes), the journal's
+health (``JournalHealth``: a full disk, the entries held), and the
 mission of paper 001's layers (``host.web.mission``: plan, current action, tree status, KB
 changes). Nothing else feeds the page: what the page shows is what the stream said, folded.
 """
@@ -28,6 +29,7 @@ from host.events import (
     DiagnosisRecord,
     DiagnosisRun,
     HoldChange,
+    JournalHealth,
     LinkChange,
     Observation,
     QuarantineChange,
@@ -94,6 +96,9 @@ class StatusFold:
             self._run = e
             changes["run_id"] = e.run_id
             changes["healthy"] = dict(e.healthy)
+        elif isinstance(e, JournalHealth):
+            changes.update(journal_problem=e.problem, journal_held=e.held,
+                           journal_dropped=e.dropped)
         elif isinstance(e, QuarantineChange | HoldChange):
             changes.update(self._out_of_repair(e, status, stamped.wall))
         elif (mission := self._mission(e)) is not None:

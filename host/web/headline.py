@@ -4,8 +4,9 @@
 the top of the page and a script reads from ``/api/status`` (``"headline": {"state", "text"}``),
 the first that holds of, in order:
 
-- ``needs_you`` — the board link is down, or components are quarantined or held: each with
-  what releases it (``dxboard quarantine clear hokuyo``);
+- ``needs_you`` — the board link is down, the journal cannot write ("journal: disk full, 12
+  entries held": free space, the entries are written then), or components are quarantined or
+  held: each with what releases it (``dxboard quarantine clear hokuyo``);
 - ``stale`` — the page has had no news from the daemon for ``stale_after_s``;
 - ``behind`` — the daemon has not diagnosed for ``BEHIND_AFTER_S`` (its safety tick is 2 s):
   what it last said is old, so it is not repeated as the truth;
@@ -18,6 +19,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from host.events import JournalHealth, journal_health_text
 from host.web.status import Status
 
 BEHIND_AFTER_S = 10.0  # five safety ticks without a diagnosis
@@ -35,6 +37,9 @@ def headline(status: Status, now: float, stale_after_s: float) -> dict[str, Any]
     needs: list[str] = []
     if not status.board_link_up:
         needs.append("board link down")
+    if status.journal_problem:
+        needs.append(journal_health_text(JournalHealth(
+            status.journal_problem, status.journal_held, status.journal_dropped)))
     for o in status.out_of_repair:
         needs.append(f"{o.component} {o.state} ({o.release})" if o.release
                      else f"{o.component} {o.state}")

@@ -6,7 +6,8 @@ or None when unknown) and the value of each that is healthy (as the model entail
 page colours by health, not truth), the current minimal diagnoses, the repair actions of the
 current and recent plans (in the order they started), the components out of automatic repair
 (quarantined or held, with what a person does to release each), whether the board link is up,
-the daemon run, the wall time of the newest data in it, and the running counters that
+the daemon run, whether the journal can write (and what it holds in memory until it can),
+the wall time of the newest data in it, and the running counters that
 ``/metrics`` exports. ``StatusSource`` is the whole contract between the
 daemon and the web server: ``snapshot()`` returns the latest ``Status`` and ``wait_changed``
 waits (on the daemon's loop) until a newer one exists. ``MemoryStatusSource`` is a complete
@@ -115,6 +116,11 @@ class Status:
     run_id: str = ""
     healthy: Mapping[str, bool] = field(default_factory=dict)  # atom -> its healthy value
     mission: Mapping[str, Any] = field(default_factory=dict)  # host.web.mission, as JSON
+    # the journal: why it cannot write ("" while it does, e.g. "disk full"), the entries it
+    # holds in memory until it can, and those it lost beyond its bound
+    journal_problem: str = ""
+    journal_held: int = 0
+    journal_dropped: int = 0
     version: int = 0
 
     def to_json(self) -> dict[str, Any]:
@@ -137,6 +143,8 @@ class Status:
             "held": dict(sorted(self.held.items())),
             "out_of_repair": [o.to_json() for o in self.out_of_repair],
             "mission": dict(self.mission),
+            "journal": {"problem": self.journal_problem, "held": self.journal_held,
+                        "dropped": self.journal_dropped},
             "counters": {
                 "observation_changes": self.observation_changes,
                 "diagnosis_runs": self.diagnosis_runs,

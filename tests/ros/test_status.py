@@ -9,6 +9,7 @@ from host.events import (
     ChannelReading,
     ChannelSample,
     DiagnosisRecord,
+    JournalHealth,
     LinkChange,
     Note,
     QuarantineChange,
@@ -67,3 +68,14 @@ def test_board_and_channels() -> None:
     s = by_name(fold)
     assert s["dxboard board"][:2] == (ERROR, "link down: timeout")
     assert s["dxboard board: sensor_head"][0] == STALE
+
+
+def test_the_daemon_has_a_status_of_its_own_that_says_a_full_disk() -> None:
+    fold = StatusFold(["hokuyo"])
+    assert by_name(fold)["dxboard daemon"][:2] == (OK, "journal: writing")
+    assert fold.feed(Stamped(0.0, 0.0, JournalHealth("disk full", 7)))
+    level, message, values = by_name(fold)["dxboard daemon"]
+    assert (level, message) == (ERROR, "journal: disk full, 7 entries held")
+    assert values["journal_held"] == "7"
+    feed(fold, JournalHealth(""))
+    assert by_name(fold)["dxboard daemon"][:2] == (OK, "journal: writing")

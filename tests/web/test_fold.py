@@ -9,6 +9,7 @@ from host.events import (
     ActionState,
     Event,
     HoldChange,
+    JournalHealth,
     QuarantineChange,
     RunStarted,
     Stamped,
@@ -84,3 +85,10 @@ def test_repairs_keep_the_order_they_started_in() -> None:
                act("a1", ActionState.SUCCEEDED, 100.0))
     assert [(r.args, r.state) for r in st.repairs] == [(("a1",), "succeeded"),
                                                        (("a2",), "started")]
+
+
+def test_the_journal_health_reaches_the_status() -> None:
+    s = _fold(RUN, JournalHealth("disk full", 40, 0))
+    assert (s.journal_problem, s.journal_held, s.journal_dropped) == ("disk full", 40, 0)
+    s = _fold(RUN, JournalHealth("disk full", 40, 0), JournalHealth("", 0, 0))
+    assert (s.journal_problem, s.journal_held) == ("", 0)

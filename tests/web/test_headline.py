@@ -76,3 +76,16 @@ async def test_the_page_says_at_the_top_whether_the_robot_is_healthy(
         source.update(unknown=(), board_link_up=False)
         assert await page.wait_for(f"{HEADLINE}.textContent === 'needs you: board link down'",
                                    60)
+
+
+async def test_a_journal_that_cannot_write_needs_you_with_the_entries_it_holds(
+        server: WebServer, source: MemoryStatusSource) -> None:
+    now = time.time()
+    source.update(updated=now, diagnosed_at=now, diagnoses=(), repairs=(),
+                  journal_problem="disk full", journal_held=12)
+    body = await status(server)
+    assert body["journal"] == {"problem": "disk full", "held": 12, "dropped": 0}
+    assert (body["headline"]["state"], body["headline"]["text"]) == (
+        "needs_you", "needs you: journal: disk full, 12 entries held")
+    source.update(journal_problem="", journal_held=0)
+    assert await head(server) == ("healthy", "healthy")
