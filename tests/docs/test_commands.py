@@ -25,7 +25,7 @@ DEADLINE_S = 600.0  # an experiment on a busy machine; a command normally takes 
 
 
 def workdir(tmp: Path) -> tuple[Path, dict[str, str]]:
-    for name in ("models", ".venv"):
+    for name in ("models", ".venv", "scripts"):
         (tmp / name).symlink_to(ROOT / name)
     env = {**os.environ, "PYTHONPATH": str(ROOT), "XDG_CACHE_HOME": str(tmp / "cache"),
            "COLUMNS": "100"}
