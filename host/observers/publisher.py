@@ -18,6 +18,7 @@ import argparse
 import math
 import time
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from types import TracebackType
 from typing import Any
 
@@ -29,9 +30,9 @@ from host.observers.sources.zenoh_peer import DEFAULT_ENDPOINT, key_of, zenoh_co
 
 class TopicPublisher:
     def __init__(self, connect: Sequence[str] = (DEFAULT_ENDPOINT,), listen: Sequence[str] = (),
-                 prefix: str = "", multicast: bool = False) -> None:
+                 prefix: str = "", multicast: bool = False, auth: Path | None = None) -> None:
         self.prefix = prefix
-        self.session = zenoh.open(zenoh_config(listen, connect, multicast))
+        self.session = zenoh.open(zenoh_config(listen, connect, multicast, auth))
         self._pubs: dict[str, zenoh.Publisher] = {}
 
     def put(self, topic: str, values: Mapping[str, Any] | bytes = b"") -> None:

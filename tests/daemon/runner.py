@@ -22,6 +22,7 @@ from typing import Any
 
 import psutil
 
+from host.events import ActionRecord, ActionState
 from host.experiment.robot import fast_model
 from host.journal import Entry, JournalReader
 from tests.ports import clashed, zenoh_endpoint
@@ -260,11 +261,18 @@ def last_id(d: RunningDaemon) -> int:
     return max((e.id for e in d.journal()), default=0)
 
 
+def actions_started(d: RunningDaemon, after: int) -> list[str]:
+    """The repair actions (``power_cycle(hokuyo)``) started since the journal entry ``after``."""
+    return [f"{p.action}({','.join(p.args)})" for e in d.journal("action") if e.id > after
+            for p in [e.payload] if isinstance(p, ActionRecord)
+            and p.state == ActionState.STARTED]
+
+
 def bad_sets(status: dict[str, Any]) -> list[set[str]]:
     return [set(d["bad"]) for d in status["diagnoses"]]
 
 
 __all__ = [
-    "KEY", "RunningDaemon", "bad_sets", "fast_copy", "healthy", "healthy_robot",
+    "KEY", "RunningDaemon", "actions_started", "bad_sets", "fast_copy", "healthy", "healthy_robot",
     "key_file", "last_id", "node_processes",
 ]
