@@ -48,6 +48,9 @@ class RunningDaemon:
         self.env = {**os.environ, **(env or {})}
         self.system_dir = system_dir
         self.journal_path = tmp / "journal.sqlite"
+        # its zenoh endpoint's credentials (host.observers.sources.zenoh_auth), for a test's
+        # own peer of the robot's topics
+        self.auth = tmp / "journal-zenoh.auth"
         self.err_path = tmp / "daemon.err"
         for _ in range(5):  # its zenoh port taken by another process meanwhile: a fresh one
             self.zenoh = zenoh or zenoh_endpoint()

@@ -13,6 +13,7 @@ from __future__ import annotations
 import asyncio
 import json
 import os
+import subprocess
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +25,7 @@ from host.errors import UserError
 from host.observers.payload import Message
 from host.observers.sources.zenoh_auth import credentials_file, read
 from host.observers.sources.zenoh_peer import ZenohSource
+from tests.observers.conftest import PYTHON
 from tests.wait import wait_until_async
 
 
@@ -79,4 +81,20 @@ async def test_a_stranger_without_the_credentials_cannot_publish_to_the_endpoint
         node.close()
         for s in strangers:
             s.close()
+        source.close()
+
+
+async def test_the_publisher_command_with_the_credentials_file_reaches_the_endpoint(
+        tmp_path: Path, endpoint: str) -> None:
+    auth = credentials_file(tmp_path / "zenoh.auth")
+    got: list[Message] = []
+    source = ZenohSource(listen=[endpoint], auth=auth)
+    source.subscribe("/odom", got.append)
+    proc = subprocess.Popen([PYTHON, "-m", "host.observers.publisher", "--connect", endpoint,
+                             "--auth", str(auth), "--rate", "50", "/odom"])
+    try:
+        await wait_until_async(lambda: len(got) >= 5, 60.0, "the publisher's messages")
+    finally:
+        proc.kill()
+        proc.wait()
         source.close()
