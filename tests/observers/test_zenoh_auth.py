@@ -14,6 +14,7 @@ import asyncio
 import json
 import os
 import subprocess
+from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Any
 
@@ -53,12 +54,26 @@ def test_the_credentials_file_is_private_made_once_and_reused(tmp_path: Path) ->
     assert "chmod 600" in str(err.value)
 
 
+class Daemonside:
+    """The daemon's side: a source listening with a credentials file, recording ``/odom``."""
+
+    def __init__(self, tmp: Path, endpoint: str) -> None:
+        self.auth = credentials_file(tmp / "zenoh.auth")
+        self.got: list[Message] = []
+        self.source = ZenohSource(listen=[endpoint], auth=self.auth)
+        self.source.subscribe("/odom", self.got.append)
+
+
+@pytest.fixture
+async def daemonside(tmp_path: Path, endpoint: str) -> AsyncIterator[Daemonside]:
+    d = Daemonside(tmp_path, endpoint)
+    yield d
+    d.source.close()
+
+
 async def test_a_stranger_without_the_credentials_cannot_publish_to_the_endpoint(
-        tmp_path: Path, endpoint: str) -> None:
-    auth = credentials_file(tmp_path / "zenoh.auth")
-    got: list[Message] = []
-    source = ZenohSource(listen=[endpoint], auth=auth)
-    source.subscribe("/odom", got.append)
+        daemonside: Daemonside, endpoint: str) -> None:
+    auth, got = daemonside.auth, daemonside.got
     user, _ = read(auth)
     strangers = [stranger(endpoint), stranger(endpoint, user, "guessed")]
     node = Bus(endpoint, auth=str(auth))
@@ -81,20 +96,15 @@ async def test_a_stranger_without_the_credentials_cannot_publish_to_the_endpoint
         node.close()
         for s in strangers:
             s.close()
-        source.close()
 
 
 async def test_the_publisher_command_with_the_credentials_file_reaches_the_endpoint(
-        tmp_path: Path, endpoint: str) -> None:
-    auth = credentials_file(tmp_path / "zenoh.auth")
-    got: list[Message] = []
-    source = ZenohSource(listen=[endpoint], auth=auth)
-    source.subscribe("/odom", got.append)
+        daemonside: Daemonside, endpoint: str) -> None:
     proc = subprocess.Popen([PYTHON, "-m", "host.observers.publisher", "--connect", endpoint,
-                             "--auth", str(auth), "--rate", "50", "/odom"])
+                             "--auth", str(daemonside.auth), "--rate", "50", "/odom"])
     try:
-        await wait_until_async(lambda: len(got) >= 5, 60.0, "the publisher's messages")
+        await wait_until_async(lambda: len(daemonside.got) >= 5, 60.0,
+                               "the publisher's messages")
     finally:
         proc.kill()
         proc.wait()
-        source.close()
