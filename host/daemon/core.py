@@ -61,7 +61,7 @@ from host.observers import ObserverHub, check_atoms, load_observers
 from host.observers.base import Update
 from host.observers.config import ObserversConfig, SourceSpec
 from host.observers.sources.zenoh_auth import ENV as AUTH_ENV
-from host.observers.sources.zenoh_auth import credentials_file
+from host.observers.sources.zenoh_auth import beside
 from host.observers.starvation import wire_probes
 from host.operator.server import OperatorServer
 from host.repair import service
@@ -185,8 +185,7 @@ class Daemon:
         self.view = BoardView()
         journal = opts.journal or Path("dxboard-journal.sqlite")
         # zenoh: the endpoint admits only peers with this file's credentials (the nodes)
-        self.zenoh_auth = credentials_file(journal.parent / (journal.stem + "-zenoh.auth")) \
-            if self.observers_cfg.source.kind == "zenoh" else None
+        self.zenoh_auth = beside(journal) if self.observers_cfg.source.kind == "zenoh" else None
         self.repairs = service.build(
             robot.planner, self.model, robot.processes, observations=self.observations,
             observable={a for o in self.hub.observers for a in o.atoms()},

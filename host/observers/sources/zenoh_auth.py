@@ -45,6 +45,11 @@ def credentials_file(path: Path) -> Path:
     return path
 
 
+def beside(journal: Path) -> Path:
+    """The daemon's credentials file for the journal ``journal`` (``JOURNAL-zenoh.auth``)."""
+    return credentials_file(journal.parent / (journal.stem + "-zenoh.auth"))
+
+
 def read(path: Path) -> tuple[str, str]:
     """The ``(user, password)`` of a credentials file."""
     try:
