@@ -4,7 +4,8 @@ The fast virtual TEDUSAR robot under ``dxboard run --emulate`` on ROS 2 (its nod
 rclpy nodes, in this test's own domain). A stranger — a plain rclpy node named ``stranger``,
 no part of the model — first publishes ``/odom`` at 300 Hz (the base's topic, 20 Hz in the
 model: taken for the base's, it is a rate the daemon repairs by power-cycling the base), then
-``/scan`` at 40 Hz (the Hokuyo's rate: taken for the Hokuyo's, it hides a hang). The daemon
+``/scan`` at 40 Hz from the moment the Hokuyo hangs (the Hokuyo's rate: taken for the
+Hokuyo's, it hides the hang). The daemon
 ignores both (issue 25 item 5): no repair while the base is healthy, the real Hokuyo hang
 repaired under the spoofed ``/scan``, and each stranger told once in the journal as a
 security note naming the topic and the node.
@@ -64,16 +65,20 @@ def test_a_stranger_on_the_domain_neither_repairs_the_base_nor_hides_a_lidar_han
                             WAIT_S, "the security note on /odom")
         odom_timer.cancel()
 
+        # the lidar hangs and, from then on, the stranger publishes /scan at its rate (matched
+        # with the daemon's reader beforehand, so that its first scans arrive at once)
         scan_pub = stranger.node.create_publisher(LaserScan, "/scan", 10)
+        stranger.wait_for(lambda: scan_pub.get_subscription_count() >= 1,
+                          "the daemon subscribed the stranger's /scan", WAIT_S)
         spoofed = scan()
-        scan_timer = stranger.node.create_timer(1 / 40, lambda: scan_pub.publish(spoofed))
-        daemon.wait_journal(lambda: any("/scan" in n for n in security_notes(daemon)),
-                            WAIT_S, "the security note on /scan")
         mark = last_id(daemon)
         daemon.inject("hokuyo", "hang")
+        scan_timer = stranger.node.create_timer(1 / 40, lambda: scan_pub.publish(spoofed))
         daemon.wait_journal(lambda: "power_cycle(hokuyo)" in actions_started(daemon, mark),
                             WAIT_S, "the hung Hokuyo power-cycled under the spoofed /scan")
         daemon.wait_for(healthy, WAIT_S, "the robot healthy again")
+        daemon.wait_journal(lambda: any("/scan" in n for n in security_notes(daemon)),
+                            WAIT_S, "the security note on /scan")
         scan_timer.cancel()
         notes = security_notes(daemon)
         assert len(notes) == 2, notes  # each stranger's topic told once
