@@ -73,7 +73,12 @@ def test_a_stranger_on_the_domain_neither_repairs_the_base_nor_hides_a_lidar_han
         spoofed = scan()
         mark = last_id(daemon)
         daemon.inject("hokuyo", "hang")
-        scan_timer = stranger.node.create_timer(1 / 40, lambda: scan_pub.publish(spoofed))
+
+        def spoof_scan() -> None:  # stamped now, as a real driver's
+            spoofed.header.stamp = stranger.node.get_clock().now().to_msg()
+            scan_pub.publish(spoofed)
+
+        scan_timer = stranger.node.create_timer(1 / 40, spoof_scan)
         daemon.wait_journal(lambda: "power_cycle(hokuyo)" in actions_started(daemon, mark),
                             WAIT_S, "the hung Hokuyo power-cycled under the spoofed /scan")
         daemon.wait_for(healthy, WAIT_S, "the robot healthy again")
