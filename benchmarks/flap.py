@@ -124,9 +124,9 @@ class Arrivals(TopicClock):
     journal's ``mono``) of the observed topics: was a gap the daemon called silent seen by
     another subscriber too?"""
 
-    def __init__(self, endpoint: str, topics: list[str]) -> None:
+    def __init__(self, endpoint: str, topics: list[str], auth: Path | None = None) -> None:
         self.times: dict[str, list[float]] = {t: [] for t in topics}
-        super().__init__(endpoint, topics)
+        super().__init__(endpoint, topics, auth)
 
     def _stamper(self, topic: str) -> Callable[[object], None]:
         return arrival_stamper(self.last, self.times[topic], topic)
@@ -249,7 +249,7 @@ def robot(tmp: Path, own_time: bool, middleware: str = "zenoh"
             from benchmarks.ros_arrivals import RosArrivals
             peer = RosArrivals(domain, TOPICS)
         else:
-            peer = Arrivals(d.zenoh, TOPICS)
+            peer = Arrivals(d.zenoh, TOPICS, d.auth)
         stack.callback(peer.close)
         yield d, peer
 

@@ -165,12 +165,13 @@ class TopicClock:
     connected to the daemon's endpoint, stamping arrivals with CLOCK_MONOTONIC as the daemon
     does (the journal's ``mono``), so a hang's silence limit as applied can be read off."""
 
-    def __init__(self, endpoint: str, topics: list[str]) -> None:
+    def __init__(self, endpoint: str, topics: list[str], auth: Path | None = None) -> None:
+        """``auth``: the daemon's credentials file (``RunningDaemon.auth``)."""
         import zenoh
 
         from host.observers.sources.zenoh_peer import key_of, zenoh_config
         self.last: dict[str, float] = {}
-        self._session = zenoh.open(zenoh_config(connect=[endpoint]))
+        self._session = zenoh.open(zenoh_config(connect=[endpoint], auth=auth))
         self._subs = [self._session.declare_subscriber(key_of(t), self._stamper(t))
                       for t in topics]
 
@@ -303,7 +304,7 @@ def part_one(res: Results, n_faults: int, seed: int, quiet_s: float) -> None:
         res.journal_rows_per_h = (rows1 - rows0) / (t1 - t0) * 3600
         tele = [e for e in d.journal("telemetry") if isinstance(e.payload, Telemetry)]
         assert tele, "no telemetry journaled"
-        clock = TopicClock(d.zenoh, sorted(set(TOPIC.values())))
+        clock = TopicClock(d.zenoh, sorted(set(TOPIC.values())), d.auth)
         c0, t0 = cpu_of([proc]), time.monotonic()
         try:
             for i, pick in enumerate(spaced(schedule(n_faults, seed))):

@@ -161,7 +161,7 @@ def main() -> None:
             if args.probe:
                 snapshot(d, probe, 1)
             sampler.phase = "faults"
-            clock = TopicClock(d.zenoh, sorted(set(TOPIC.values())))
+            clock = TopicClock(d.zenoh, sorted(set(TOPIC.values())), d.auth)
             kind = "hang" if args.hangs_only else "trip" if args.trips_only else ""
             todo = ([(kind, KINDS[kind][i % len(KINDS[kind])]) for i in range(args.faults)]
                     if kind else schedule(args.faults, args.seed))

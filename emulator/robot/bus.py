@@ -6,8 +6,11 @@ scouting off, *connect* to the daemon's endpoint (``$DXBOARD_ZENOH``, default
 ``tcp/127.0.0.1:7447``) and listen on a free loopback port so that peers introduced by gossip
 can reach each other directly; topic ``/scan`` is key ``scan``; a payload is one JSON object
 (compact, UTF-8). Zenoh retries a connection the peer refuses, so a node may start before the
-daemon. Subscribers' callbacks run on zenoh's threads; ``subscribe`` hands each message to
-the asyncio loop, in order.
+daemon. With ``$DXBOARD_ZENOH_AUTH`` (the daemon's credentials file, one ``user:password``
+line, readable only by the daemon's user) the session presents those credentials and its own
+listener accepts only peers that present them (``host.observers.sources.zenoh_auth``: a
+stranger can join neither the daemon nor a node). Subscribers' callbacks run on zenoh's
+threads; ``subscribe`` hands each message to the asyncio loop, in order.
 """
 
 from __future__ import annotations
@@ -56,8 +59,17 @@ def decode(payload: bytes) -> dict[str, Any]:
     return obj if isinstance(obj, dict) else {}
 
 
+def auth_config(path: str) -> str:
+    """The ``transport/auth/usrpwd`` value (JSON) for the credentials file ``path``."""
+    with open(path) as f:
+        user, _, password = f.read().strip().partition(":")
+    return json.dumps({"user": user, "password": password, "dictionary_file": path})
+
+
 class Bus:
-    def __init__(self, connect: str = DEFAULT_ENDPOINT, listen: str = LISTEN) -> None:
+    def __init__(self, connect: str = DEFAULT_ENDPOINT, listen: str = LISTEN,
+                 auth: str | None = None) -> None:
+        """``auth``: the daemon's credentials file (``$DXBOARD_ZENOH_AUTH``), if it has one."""
         cfg = zenoh.Config()
         cfg.insert_json5("mode", '"peer"')
         # no shared memory: a receiver keeps a gone sender's 16 MB pool mapped for good
@@ -66,6 +78,8 @@ class Bus:
         cfg.insert_json5("scouting/multicast/enabled", "false")
         cfg.insert_json5("listen/endpoints", json.dumps([listen]))
         cfg.insert_json5("connect/endpoints", json.dumps([connect]))
+        if auth:
+            cfg.insert_json5("transport/auth/usrpwd", auth_config(auth))
         self.session = zenoh.open(cfg)
         self._pubs: dict[str, zenoh.Publisher] = {}
         self._subs: list[Any] = []

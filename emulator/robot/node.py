@@ -6,6 +6,8 @@
     DXBOARD_ROBOT    the robot directory when DIR is not given (the daemon sets it for every
                      process it starts)
     DXBOARD_ZENOH    the zenoh endpoint to connect to (default tcp/127.0.0.1:7447: the daemon)
+    DXBOARD_ZENOH_AUTH  the daemon's zenoh credentials file (user:password), when its endpoint
+                     requires authentication (``dxboard run`` sets it for the nodes it starts)
     DXBOARD_MIDDLEWARE  zenoh or ros2: overrides the robot's setting (``observers: source:
                      kind:`` of system.yaml; ros2 there makes the nodes ROS 2 nodes)
     ROS_DOMAIN_ID    ROS 2 mode: the DDS domain (rclpy reads it)
@@ -204,8 +206,11 @@ def open_bus(spec: NodeSpec, env: dict[str, str]) -> TopicBus:
         log.info("ROS 2 node %s on domain %s", spec.name, env.get("ROS_DOMAIN_ID", "0"))
         return RosBus(spec.name)
     endpoint = env.get("DXBOARD_ZENOH") or DEFAULT_ENDPOINT
+    auth = env.get("DXBOARD_ZENOH_AUTH") or None
     try:
-        bus = Bus(endpoint)
+        bus = Bus(endpoint, auth=auth)
+    except OSError as exc:
+        raise NodeError(f"DXBOARD_ZENOH_AUTH={auth!r}: {exc.strerror}") from None
     except Exception as exc:  # zenoh.ZError: a malformed endpoint
         raise NodeError(f"DXBOARD_ZENOH={endpoint!r}: {exc}") from None
     log.info("zenoh peer connecting to %s", endpoint)

@@ -60,6 +60,8 @@ from host.journal.summary import Replay
 from host.observers import ObserverHub, check_atoms, load_observers
 from host.observers.base import Update
 from host.observers.config import ObserversConfig, SourceSpec
+from host.observers.sources.zenoh_auth import ENV as AUTH_ENV
+from host.observers.sources.zenoh_auth import beside
 from host.observers.starvation import wire_probes
 from host.operator.server import OperatorServer
 from host.repair import service
@@ -183,6 +185,8 @@ class Daemon:
         self.hub = ObserverHub(self.observers_cfg.observers, self._on_updates, clock=clock)
         self.view = BoardView()
         journal = opts.journal or Path("dxboard-journal.sqlite")
+        # zenoh: the endpoint admits only peers with this file's credentials (the nodes)
+        self.zenoh_auth = beside(journal) if self.observers_cfg.source.kind == "zenoh" else None
         self.repairs = service.build(
             robot.planner, self.model, robot.processes, observations=self.observations,
             observable={a for o in self.hub.observers for a in o.atoms()},
@@ -190,6 +194,7 @@ class Daemon:
             logs_dir=journal.parent / (journal.stem + "-logs"),
             env={"DXBOARD_ZENOH": self.observers_cfg.source.listen[0],
                  **_middleware_env(self.observers_cfg.source),
+                 **({AUTH_ENV: str(self.zenoh_auth)} if self.zenoh_auth else {}),
                  "DXBOARD_ROBOT": str(opts.system_dir.resolve()), **opts.node_env},
             device_boot_s=opts.device_boot_s, on_start=self._started, dry_run=opts.dry_run,
             clock=clock, max_parallel=opts.max_parallel_steps,
@@ -244,7 +249,7 @@ class Daemon:
             await self.operator.start()
         spec = self.observers_cfg.source
         try:
-            self.source = spec.open()
+            self.source = spec.open(self.zenoh_auth)
         except Exception as exc:  # zenoh raises its own ZError: say what to do instead
             raise UserError(
                 f"cannot open the topic source ({spec.kind} on {', '.join(spec.listen)}): "
@@ -252,6 +257,7 @@ class Daemon:
                 "is another dxboard run using it? give --zenoh tcp/127.0.0.1:PORT",
             ) from None
         if spec.kind == "ros2":  # the daemon reports through ROS 2 too (host.ros.publisher)
+            self.source.on_stranger = self._stranger  # type: ignore[attr-defined]
             from host.ros.lifecycle import LifecycleActuator
             from host.ros.publisher import RosPublisher
             self.ros_out = RosPublisher(list(self.model.components), spec.domain)
@@ -275,6 +281,12 @@ class Daemon:
         if self.journal is not None:  # a journal that cannot write says so (a full disk)
             self._tasks.append(asyncio.ensure_future(journalwatch.watch(self.journal,
                                                                         self.emit)))
+
+    def _stranger(self, topic: str, node: str) -> None:
+        """A node the model does not name published one of its topics (ROS 2): said once."""
+        owners = ", ".join(c.name for c in self.model.publishers(topic))
+        self.emit(Note(f"security: node {node} publishes {topic}, which the model says only "
+                       f"{owners} publishes: its messages are ignored for diagnosis", "warning"))
 
     def _restore(self, journal: Journal, previous: Run | None) -> None:
         """Quarantines and holds that earlier runs left in the journal stay in force; a repair

@@ -95,17 +95,20 @@ class SourceSpec:
     prefix: str = ""
     domain: int | None = None  # ros2: the DDS domain (None: $ROS_DOMAIN_ID)
     types: tuple[tuple[str, str], ...] = ()  # ros2: topic -> message type, where given
+    # ros2: topic -> the model's nodes that publish it; other nodes' messages are ignored
+    publishers: tuple[tuple[str, tuple[str, ...]], ...] = ()
 
-    def open(self) -> TopicSource:
-        """The topic source (a zenoh session opens here; call inside the event loop)."""
+    def open(self, auth: Path | None = None) -> TopicSource:
+        """The topic source (a zenoh session opens here; call inside the event loop); ``auth``:
+        zenoh's credentials file (``host.observers.sources.zenoh_auth``)."""
         if self.kind == "memory":
             from host.observers.sources.memory import MemorySource
             return MemorySource()
         if self.kind == "ros2":
             from host.observers.sources.ros2 import Ros2Source
-            return Ros2Source(self.domain, dict(self.types))
+            return Ros2Source(self.domain, dict(self.types), publishers=dict(self.publishers))
         from host.observers.sources.zenoh_peer import ZenohSource
-        return ZenohSource(self.listen, self.connect, self.prefix)
+        return ZenohSource(self.listen, self.connect, self.prefix, auth=auth)
 
 
 @dataclass
@@ -252,8 +255,11 @@ class _Builder:
                          f"write {key}: [tcp/127.0.0.1:7447]")
                 v = list(default)
             ends[key] = tuple(v)
+        publishers = () if self.model is None else tuple(
+            (t, tuple(sorted(c.name for c in self.model.publishers(t))))
+            for t in self.model.topics() if self.model.publishers(t))
         return SourceSpec(str(kind), ends["listen"], ends["connect"], str(spec.get("prefix", "")),
-                          domain, tuple(sorted(types.items())))
+                          domain, tuple(sorted(types.items())), publishers)
 
     def _hardware(self, value: Any) -> list[Observer[Any]]:
         p: tuple[object, ...] = ("hardware",)

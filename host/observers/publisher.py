@@ -10,28 +10,34 @@ driver is often a plain loop. Also a small command for scripts and tests::
 
 runs until killed, publishing at ``--rate`` Hz (``--count N`` stops after N messages); each
 message carries ``seq`` and its ``stamp`` (the publisher's monotonic clock, seconds).
+``dxboard run``'s endpoint admits only peers with its credentials: ``auth`` (``--auth FILE``)
+is its credentials file (``host.observers.sources.zenoh_auth``; ``$DXBOARD_ZENOH_AUTH`` in the
+processes it starts).
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
 import time
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from types import TracebackType
 from typing import Any
 
 import zenoh
 
 from host.observers.payload import encode
+from host.observers.sources.zenoh_auth import ENV
 from host.observers.sources.zenoh_peer import DEFAULT_ENDPOINT, key_of, zenoh_config
 
 
 class TopicPublisher:
     def __init__(self, connect: Sequence[str] = (DEFAULT_ENDPOINT,), listen: Sequence[str] = (),
-                 prefix: str = "", multicast: bool = False) -> None:
+                 prefix: str = "", multicast: bool = False, auth: Path | None = None) -> None:
         self.prefix = prefix
-        self.session = zenoh.open(zenoh_config(listen, connect, multicast))
+        self.session = zenoh.open(zenoh_config(listen, connect, multicast, auth))
         self._pubs: dict[str, zenoh.Publisher] = {}
 
     def put(self, topic: str, values: Mapping[str, Any] | bytes = b"") -> None:
@@ -66,6 +72,8 @@ def main(argv: Sequence[str] | None = None) -> None:
     ap.add_argument("topic")
     ap.add_argument("--connect", action="append", default=[])
     ap.add_argument("--prefix", default="")
+    ap.add_argument("--auth", type=Path, default=None,
+                    help="the daemon's zenoh credentials file (default $DXBOARD_ZENOH_AUTH)")
     ap.add_argument("--rate", type=float, default=10.0)
     ap.add_argument("--count", type=int, default=0, help="stop after N messages (0: never)")
     ap.add_argument("--value", action="append", type=_expr, default=[],
@@ -73,7 +81,9 @@ def main(argv: Sequence[str] | None = None) -> None:
     args = ap.parse_args(argv)
     env: dict[str, Any] = {k: getattr(math, k) for k in dir(math) if not k.startswith("_")}
     code = [(k, compile(e, k, "eval")) for k, e in args.value]
-    with TopicPublisher(args.connect or [DEFAULT_ENDPOINT], prefix=args.prefix) as pub:
+    auth = args.auth or (Path(os.environ[ENV]) if os.environ.get(ENV) else None)
+    with TopicPublisher(args.connect or [DEFAULT_ENDPOINT], prefix=args.prefix,
+                        auth=auth) as pub:
         start = time.monotonic()
         n = 0
         while not args.count or n < args.count:

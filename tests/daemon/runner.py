@@ -22,6 +22,7 @@ from typing import Any
 
 import psutil
 
+from host.events import ActionRecord, ActionState
 from host.experiment.robot import fast_model
 from host.journal import Entry, JournalReader
 from tests.ports import clashed, zenoh_endpoint
@@ -49,6 +50,9 @@ class RunningDaemon:
         self.env = {**os.environ, **(env or {})}
         self.system_dir = system_dir
         self.journal_path = (journal_dir or tmp) / "journal.sqlite"
+        # its zenoh endpoint's credentials (host.observers.sources.zenoh_auth: beside the
+        # journal), for a test's own peer of the robot's topics
+        self.auth = self.journal_path.parent / "journal-zenoh.auth"
         self.err_path = tmp / "daemon.err"
         for _ in range(5):  # its zenoh port taken by another process meanwhile: a fresh one
             self.zenoh = zenoh or zenoh_endpoint()
@@ -262,11 +266,18 @@ def last_id(d: RunningDaemon) -> int:
     return max((e.id for e in d.journal()), default=0)
 
 
+def actions_started(d: RunningDaemon, after: int) -> list[str]:
+    """The repair actions (``power_cycle(hokuyo)``) started since the journal entry ``after``."""
+    return [f"{p.action}({','.join(p.args)})" for e in d.journal("action") if e.id > after
+            for p in [e.payload] if isinstance(p, ActionRecord)
+            and p.state == ActionState.STARTED]
+
+
 def bad_sets(status: dict[str, Any]) -> list[set[str]]:
     return [set(d["bad"]) for d in status["diagnoses"]]
 
 
 __all__ = [
-    "KEY", "RunningDaemon", "bad_sets", "fast_copy", "healthy", "healthy_robot",
+    "KEY", "RunningDaemon", "actions_started", "bad_sets", "fast_copy", "healthy", "healthy_robot",
     "key_file", "last_id", "node_processes",
 ]

@@ -22,19 +22,25 @@ stay serialized in DDS's history and take memory only while the executor lags.
 ``GRAPH`` (``/_graph/nodes``) is not a DDS topic: subscribing it delivers, every
 ``discovery_s``, a message whose values are ``{"nodes": [names...]}`` from the ROS 2 graph,
 for ``host.observers.sources.ros2_graph.GraphObserver`` (node presence).
+
+``publishers`` (topic -> the model's node names) makes the topics authentic
+(``ros2_authentic``): a message of such a topic from another node's endpoint is not
+delivered, and ``on_stranger(topic, node)`` (set by the daemon; called on the loop) is told
+once per topic and node. A topic without an entry takes every publisher (a bag's player).
 """
 
 from __future__ import annotations
 
 import asyncio
 import logging
-from collections.abc import Mapping
+from collections.abc import Callable, Collection, Mapping
 from typing import Any
 
 from rclpy.qos import QoSHistoryPolicy, QoSProfile, QoSReliabilityPolicy
 
 from host.observers.payload import Message, encode
 from host.observers.sources.base import Callback, Subscription, TopicSource, check_topic
+from host.observers.sources.ros2_authentic import Publishers
 from host.observers.sources.ros2_convert import message_type
 from host.observers.sources.ros2_graph import GRAPH
 from host.observers.sources.ros2_message import RosMessage
@@ -72,9 +78,12 @@ class _RosSubscription(Subscription):
 class Ros2Source(TopicSource):
     def __init__(self, domain_id: int | None = None, types: Mapping[str, str] | None = None,
                  discovery_s: float = 0.5, name: str = "dxboard_observer",
+                 publishers: Mapping[str, Collection[str]] | None = None,
                  **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self.types = dict(types or {})
+        self.publishers = {t: frozenset(n) for t, n in (publishers or {}).items()}
+        self.on_stranger: Callable[[str, str], None] | None = None
         self.ros = RosNode(name, domain_id)
         self._subs: list[_RosSubscription] = []
         self._timer = self.ros.node.create_timer(discovery_s, self._discover)
@@ -110,9 +119,13 @@ class Ros2Source(TopicSource):
             sub.sub = False
             return
         clock, topic = self.clock, sub.topic
+        allowed = self.publishers.get(topic)
+        check = None if allowed is None else Publishers(
+            self.ros.node, topic, allowed, lambda t, n: self._stranger(sub.loop, t, n))
 
-        def on_raw(data: bytes) -> None:  # on the executor's thread
-            sub.deliver(RosMessage(clock(), topic, data, type_name))
+        def on_raw(data: bytes, info: Mapping[str, Any]) -> None:  # on the executor's thread
+            if check is None or check.admit(info):
+                sub.deliver(RosMessage(clock(), topic, data, type_name))
 
         pubs = self.ros.node.get_publishers_info_by_topic(topic)
         reliable = bool(pubs) and all(
@@ -121,6 +134,14 @@ class Ros2Source(TopicSource):
         sub.sub = self.ros.node.create_subscription(msg_type, topic, on_raw, qos, raw=True)
         log.info("observing %s (%s, %s)", topic, type_name,
                  "reliable" if reliable else "best effort")
+
+    def _stranger(self, loop: asyncio.AbstractEventLoop, topic: str, node: str) -> None:
+        """Tell of a stranger's endpoint (on the executor's thread; once per topic and node,
+        so one wakeup of the loop each is no flood)."""
+        log.warning("%s: ignoring messages of node %s, which the model does not say "
+                    "publishes it", topic, node)
+        if self.on_stranger is not None and not loop.is_closed():
+            loop.call_soon_threadsafe(self.on_stranger, topic, node)
 
     def _drop(self, sub: _RosSubscription) -> None:
         if sub in self._subs:

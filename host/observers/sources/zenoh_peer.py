@@ -10,6 +10,8 @@ off: zenoh would hand a message of 3 KB or more (a scan) over a publisher's 16 M
 ``/dev/shm``, and a receiver keeps every sender's pool mapped for good once the sender has gone
 (eclipse-zenoh/zenoh#2787): the daemon would grow by 19 MB with each restart of a driver.
 Without it, such peers send to the daemon over the loopback link like any other.
+With ``auth`` (a credentials file, ``host.observers.sources.zenoh_auth``) the session presents
+those credentials and accepts links only from peers that present them too.
 
 Topic names map to key expressions by dropping the leading slash and adding ``prefix``:
 ``/odom`` is ``odom`` (or ``robot1/odom`` with prefix ``robot1``). Zenoh calls subscribers on
@@ -24,11 +26,13 @@ import asyncio
 import json
 import logging
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import zenoh
 
 from host.observers.payload import Message
+from host.observers.sources import zenoh_auth
 from host.observers.sources.base import Callback, Subscription, TopicSource, check_topic
 
 log = logging.getLogger(__name__)
@@ -37,15 +41,17 @@ DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 
 
 def zenoh_config(listen: Sequence[str] = (), connect: Sequence[str] = (),
-                 multicast: bool = False) -> zenoh.Config:
+                 multicast: bool = False, auth: Path | None = None) -> zenoh.Config:
     """A peer-mode configuration: these endpoints only, multicast scouting off by default, no
-    shared memory (see the module's docstring)."""
+    shared memory, authenticated by the credentials file ``auth`` if given (see the module's
+    docstring)."""
     cfg = zenoh.Config()
     cfg.insert_json5("mode", '"peer"')
     cfg.insert_json5("transport/shared_memory/enabled", "false")
     cfg.insert_json5("scouting/multicast/enabled", json.dumps(multicast))
     cfg.insert_json5("listen/endpoints", json.dumps(list(listen)))
     cfg.insert_json5("connect/endpoints", json.dumps(list(connect)))
+    zenoh_auth.apply(cfg, auth)
     return cfg
 
 
@@ -71,10 +77,10 @@ class ZenohSource(TopicSource):
 
     def __init__(self, listen: Sequence[str] = (DEFAULT_ENDPOINT,),
                  connect: Sequence[str] = (), prefix: str = "", multicast: bool = False,
-                 **kwargs: Any) -> None:
+                 auth: Path | None = None, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self.prefix = prefix
-        self.session = zenoh.open(zenoh_config(listen, connect, multicast))
+        self.session = zenoh.open(zenoh_config(listen, connect, multicast, auth))
         self._subs: list[_ZenohSubscription] = []
         log.info("zenoh peer %s listening on %s, connecting to %s",
                  self.session.zid(), list(listen), list(connect))
