@@ -23,6 +23,7 @@ import argparse
 import contextlib
 import os
 import statistics
+import sys
 import tempfile
 import time
 import urllib.request
@@ -31,6 +32,8 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import psutil
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the checkout before benchmarks/
 
 from tests.daemon.runner import RunningDaemon
 from tests.fleet.lite import lite_model
