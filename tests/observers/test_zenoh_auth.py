@@ -24,7 +24,7 @@ import zenoh
 from emulator.robot.bus import Bus
 from host.errors import UserError
 from host.observers.payload import Message
-from host.observers.sources.zenoh_auth import credentials_file, read
+from host.observers.sources.zenoh_auth import beside, credentials_file, read
 from host.observers.sources.zenoh_peer import ZenohSource
 from tests.observers.conftest import PYTHON
 from tests.wait import wait_until_async
@@ -40,6 +40,16 @@ def stranger(endpoint: str, user: str | None = None, password: str | None = None
         cfg.insert_json5("transport/auth/usrpwd",
                          json.dumps({"user": user, "password": password}))
     return zenoh.open(cfg)
+
+
+def test_a_relative_journal_gives_an_absolute_credentials_path(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # the path goes to nodes in other working directories (DXBOARD_ZENOH_AUTH): `dxboard
+    # experiment ... --journal shutdown.sqlite` gave them 'shutdown-zenoh.auth' and none started
+    monkeypatch.chdir(tmp_path)
+    path = beside(Path("shutdown.sqlite"))
+    assert path.is_absolute() and path == tmp_path / "shutdown-zenoh.auth"
+    assert path.exists()
 
 
 def test_the_credentials_file_is_private_made_once_and_reused(tmp_path: Path) -> None:

@@ -46,7 +46,9 @@ def credentials_file(path: Path) -> Path:
 
 
 def beside(journal: Path) -> Path:
-    """The daemon's credentials file for the journal ``journal`` (``JOURNAL-zenoh.auth``)."""
+    """The daemon's credentials file for the journal ``journal`` (``JOURNAL-zenoh.auth``), as an
+    absolute path: it is handed to nodes that run in other working directories."""
+    journal = journal.absolute()
     return credentials_file(journal.parent / (journal.stem + "-zenoh.auth"))
 
 
