@@ -4,10 +4,12 @@
 mission's layers journal one per command: 3 a mission action, 2 its behaviour tree, 1 a
 skill) into ``LayerSpan``\\ s from the command's start to its end with its outcome, and the
 executive's *holds* — a guard's ``TreeChange`` to RUNNING "holding: ..." until that guard next
-changes status — into spans of layer 2 marked ``held``. A command's times are the daemon's
-clock; they are put on the axis through the entry that carried them (``at``, the timeline's
-own placement of an entry, and ``place(value, entry, entry_at)``). The chart
-(``host.report.chart``) draws them as three lanes above the repair actions.
+changes status — into spans of layer 2 marked ``held``, whose ``why`` is every reason the guard
+gave as it held, in order ("holding: layer 0: /scan down; then holding: layer 0: hokuyo
+repairing"). A command's times are the daemon's clock; they are put on the axis through the
+entry that carried them (``at``, the timeline's own placement of an entry, and
+``place(value, entry, entry_at)``). The chart (``host.report.chart``) draws them as three
+lanes above the repair actions.
 """
 
 from __future__ import annotations
@@ -51,7 +53,10 @@ def mission_spans(entries: Sequence[Entry], at: Callable[[Entry], float], place:
         elif isinstance(p, TreeChange):
             key = (p.dispatch_id, p.node)
             if p.status == "RUNNING" and p.detail.startswith("holding"):
-                holding.setdefault(key, (at(e), p.detail))
+                t0, why = holding.get(key, (at(e), ""))
+                if p.detail not in why.split("; then "):  # the reason changed as it held
+                    why = f"{why}; then {p.detail}" if why else p.detail
+                holding[key] = (t0, why)
             elif key in holding:
                 t0, why = holding.pop(key)
                 spans.append(LayerSpan(2, p.node, t0, at(e), True, held=True, why=why))

@@ -87,3 +87,23 @@ def test_the_chart_draws_the_mission_above_the_components(tmp_path: Path) -> Non
     assert near(EXECUTIVE, 14.0, HOLD_COLOR) and not near(EXECUTIVE, 18.0, HOLD_COLOR)
     assert near(SKILLS, 18.0, MISSION_OK) and not near(SKILLS, 14.0, MISSION_OK)
     assert near(MISSION, 22.0, OUTCOME_COLORS["failed"])
+
+
+def test_a_hold_keeps_every_reason_it_gave(tmp_path: Path) -> None:
+    # on a busy machine the guard holds first on the topic alone, before layer 0's diagnosis
+    # names the lidar (CI, stop 31): the hold's reason must still name the lidar
+    path = tmp_path / "m.sqlite"
+    with Journal(path) as journal:
+        for t, payload in [
+            (0.0, DiagnosisRecord(((),))),
+            (12.0, TreeChange("m1.2", "navigate available", "RUNNING", "SUCCESS", 40,
+                              "holding: layer 0: /scan down")),
+            (12.2, DiagnosisRecord((("hokuyo",),))),
+            (12.5, TreeChange("m1.2", "navigate available", "RUNNING", "RUNNING", 41,
+                              "holding: layer 0: hokuyo repairing (/scan down)")),
+            (16.0, TreeChange("m1.2", "navigate available", "SUCCESS", "RUNNING", 75)),
+        ]:
+            journal.record(payload, wall=T0 + t, mono=MONO0 + t)
+    [hold] = [s for s in load_timeline(path).mission if s.held]
+    assert (hold.start, hold.end) == (12.0, 16.0)
+    assert "/scan down" in hold.why and "hokuyo repairing" in hold.why
