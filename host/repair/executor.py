@@ -24,7 +24,9 @@ sum of every step's settle time. Each step:
    in one made since the step began that still stands once the step has settled (a process
    that dies at once, a device that trips while it boots do not pass: observers report such
    a change at once); what the step only keeps (``kept``: a reconfigured node's process) in
-   any observation that still stands. The deadline is settle + ``verify_s``
+   any observation that still stands. The deadline is settle + ``verify_s``, both times
+   ``stretch()`` (at least 1: the daemon passes ``load_stretch``, so a step started while the
+   machine is busy gets the time a busy machine needs to start a process)
    (``Beliefs.wait_for``), the settle counted again from the moment the steps it waits for
    were verified if that was later (a node whose input came late gets its own time after
    it) — after it ``failed`` with what was seen instead, and at once when the board trips
@@ -56,6 +58,7 @@ import asyncio
 import itertools
 import logging
 import math
+import os
 import time
 from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -87,6 +90,19 @@ ENABLING = frozenset({"power_up", "power_cycle", "start_node"})
 #: managed node's lifecycle transitions (a fresh connection to a device that still boots)
 EARLY = frozenset({"start_node", "reconfigure_node"})
 TRIP_MARGIN_S = 0.05  # a wait that ended this much before its deadline was ended by a trip
+MAX_STRETCH = 3.0  # a busy machine's steps get at most this many times their time
+
+
+def load_stretch(getloadavg: Callable[[], tuple[float, float, float]] = os.getloadavg,
+                 cores: int | None = None) -> float:
+    """How many times its settle and verify time a step gets: the one-minute load average
+    per core, at least 1 (an idle or normally busy machine), at most ``MAX_STRETCH`` (a
+    broken step still fails within a bounded time)."""
+    try:
+        load = getloadavg()[0]
+    except OSError:  # no load average on this system
+        return 1.0
+    return min(MAX_STRETCH, max(1.0, load / (cores or os.cpu_count() or 1)))
 
 
 class Outcome(StrEnum):
@@ -181,7 +197,8 @@ class Executor:
                  dry_run: bool = False, step_timeout: float = DEFAULT_STEP_TIMEOUT_S,
                  verify_s: float = DEFAULT_VERIFY_S, observable: Collection[str] | None = None,
                  clock: Callable[[], float] = time.monotonic,
-                 max_parallel: int | None = None) -> None:
+                 max_parallel: int | None = None,
+                 stretch: Callable[[], float] = lambda: 1.0) -> None:
         self.actuators = actuators
         self.model = actuators.model
         self.beliefs = beliefs
@@ -195,6 +212,7 @@ class Executor:
         self.observable = observable
         self.clock = clock
         self.max_parallel = max_parallel  # steps running at once; None: as the order allows
+        self.stretch = stretch  # how many times its settle and verify a step gets (>= 1)
         self.held: dict[str, str] = {}  # component -> why a person holds it (left alone)
         self._busy: set[str] = set()
         self._unsafe: set[str] = set()  # devices whose last step was unsafe to repeat
@@ -386,7 +404,8 @@ class Executor:
             finish(ActionState.FAILED, str(exc))
             return str(exc)
         end = self.clock()
-        settle = self.settle_of(step)
+        k = max(1.0, self.stretch())  # a busy machine starts a process slowly: more time
+        settle = self.settle_of(step) * k
         acted = end
         if step.action == "power_cycle":  # the channel is back on only after the off time
             acted += self.actuators.off_s
@@ -411,7 +430,7 @@ class Executor:
             # began (the process observer may see it before the actuator returns) that still
             # stands: observers report a change at once, so no refresh is waited for.
             fresh = t0
-            deadline = settled + self.verify_s
+            deadline = settled + self.verify_s * k
             abort = contradictions(step, self.observable)
             if not early and step.action not in IMMEDIATE:
                 if abort:
@@ -426,8 +445,9 @@ class Executor:
                     and not self.beliefs.missing(keeps, -math.inf)):
                 seen = {**self.beliefs.missing(new, fresh),
                         **self.beliefs.missing(keeps, -math.inf)}
-                why = "effect not observed {}: {}".format(
-                    within(deadline - end), "; ".join(f"{a} {v}" for a, v in seen.items()))
+                why = "effect not observed {}{}: {}".format(
+                    within(deadline - end), "" if k == 1.0 else f" (stretched {k:.1f}x: "
+                    "the machine is busy)", "; ".join(f"{a} {v}" for a, v in seen.items()))
                 waited = self.clock() - end
                 if waited < deadline - end - TRIP_MARGIN_S:
                     why = "the board tripped it {:.1f} s after the step: {}".format(

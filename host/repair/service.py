@@ -63,7 +63,7 @@ from host.repair.actuators import Actuators
 from host.repair.beliefs import ObservedBeliefs
 from host.repair.effects import settle_times
 from host.repair.executor import Event as ExecutorEvent
-from host.repair.executor import Executor, StepReport
+from host.repair.executor import Executor, StepReport, load_stretch
 from host.repair.limits import AttemptLimiter, Quarantined
 from host.repair.loop import RepairLoop
 from host.repair.planner import RepairPlanner
@@ -377,7 +377,9 @@ def build(planner: RepairPlanner, model: SystemModel, procs: Mapping[str, Proces
     docstring)."""
     supervisor = ProcessSupervisor(procs, logs_dir, on_start=on_start, env=dict(env))
     actuators = Actuators(model, None, supervisor)
-    kw: dict[str, Any] = {} if clock is None else {"clock": clock}
+    # on the machine's clock a busy machine stretches a step's time; on a simulated clock
+    # nothing real is slow, so nothing is stretched
+    kw: dict[str, Any] = {"stretch": load_stretch} if clock is None else {"clock": clock}
     executor = Executor(
         actuators, ObservedBeliefs(observations),
         settle=settle_times(model, procs, devices=device_boot_s),

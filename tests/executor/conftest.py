@@ -93,8 +93,11 @@ class Rig:
     def __init__(self, robot: Path, devices: Sequence[str], nodes: Sequence[str],
                  topics: Sequence[str] = (), endpoint: str | None = None,
                  max_attempts: int = 3, dry_run: bool = False, verify_s: float = VERIFY_S,
-                 refresh: float = REFRESH) -> None:
-        """``refresh``: how often observers repeat an unchanged literal (validity 3.5x)."""
+                 refresh: float = REFRESH, stretch: float = 1.0) -> None:
+        """``refresh``: how often observers repeat an unchanged literal (validity 3.5x);
+        ``stretch``: the executor's stretch of each step's time (the daemon's follows the
+        machine's load)."""
+        self.stretch = stretch
         self.robot = robot
         self.verify_s = verify_s
         self.model: SystemModel = load_system(robot)
@@ -151,7 +154,8 @@ class Rig:
             settle=settle_times(self.model, self.processes,
                                 devices=dict.fromkeys(self.model.components, 0.3)),
             limiter=AttemptLimiter(self.max_attempts, 600.0), report=self.events.append,
-            dry_run=self.dry_run, verify_s=self.verify_s, observable=self.observable)
+            dry_run=self.dry_run, verify_s=self.verify_s, observable=self.observable,
+            stretch=lambda: self.stretch)
         return self
 
     async def __aexit__(self, *exc: object) -> None:

@@ -199,9 +199,11 @@ def test_a_bag_recorded_from_a_live_board_trip_replays_to_the_daemons_diagnoses(
     # tripped device abnormal in every minimal diagnosis, then not (the recorder is another
     # process: it hears the robot's topics a little apart from the daemon, so their flaps on a
     # loaded machine are not the daemon's; nor does a bag hold the process supervisor)
+    # (the overcurrent stays injected until the test clears it: when the daemon's power-cycle
+    # comes first on a busy machine, the channel trips again, a second blame, as it should)
     daemon_blamed = blamed([((),), *diagnoses(d.journal_path, after=mark)],  # healthy at
                            DEVICE)  # the mark
-    assert daemon_blamed == [False, True, False], daemon_blamed
+    assert daemon_blamed[:2] == [False, True] and daemon_blamed[-1] is False, daemon_blamed
     assert blamed(replay_d, DEVICE) == daemon_blamed, replay_d
     # and the hardware observer saw the board as the daemon's did: the same changes
     since = next(e.wall for e in d.journal() if e.id == mark)
