@@ -42,3 +42,15 @@ def assert_no_gaps(seqs: Sequence[int], what: str) -> None:
     """Consecutive sequence numbers: nothing lost, nothing repeated."""
     gaps = [(a, b) for a, b in itertools.pairwise(seqs) if b != a + 1]
     assert not gaps, f"{what}: sequence gaps {gaps[:5]} in {len(seqs)} messages"
+
+
+def assert_mostly_delivered(seqs: Sequence[int], what: str, share: float = 0.9) -> None:
+    """Increasing sequence numbers (nothing repeated or reordered) of which at least ``share``
+    of the span arrived: for a sender that skips frames by design when its reader falls
+    behind (the board, for a client whose queue is full), which a busy machine makes it do."""
+    back = [(a, b) for a, b in itertools.pairwise(seqs) if b <= a]
+    assert not back, f"{what}: repeated or reordered {back[:5]} in {len(seqs)} messages"
+    span = seqs[-1] - seqs[0] + 1
+    assert len(seqs) >= share * span, (
+        f"{what}: {len(seqs)} of {span} arrived, under {share:.0%}; gaps "
+        f"{[(a, b) for a, b in itertools.pairwise(seqs) if b != a + 1][:5]}")
