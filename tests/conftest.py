@@ -12,10 +12,14 @@ from __future__ import annotations
 
 import asyncio
 import os
+import signal
 import subprocess
+import threading
 from typing import Any
 
 import pytest
+
+from host.lifeline import lifeline
 
 _REASON = "starts a process: make test runs it (make check runs only in-process tests)"
 
@@ -49,9 +53,29 @@ def _guarded_async(original: Any) -> Any:
     return guard
 
 
+def _tie_children_to_the_test_process() -> None:
+    """Every process started from the main thread of this pytest process (a worker, under
+    xdist) gets SIGTERM from the kernel when that process ends, however it ends
+    (``host.lifeline``): a run that is killed (a ``timeout``, Ctrl-C twice, a CI runner's
+    kill) leaves no daemon, emulator or robot behind, which a test's ``finally`` cannot
+    promise. SIGTERM, not SIGKILL, so a daemon still stops its own children. Only the main
+    thread: the kernel sends the signal when the *thread* that started the child ends."""
+    original = subprocess.Popen.__init__
+
+    def init(self: subprocess.Popen[Any], *args: Any, **kwargs: Any) -> None:
+        if (len(args) < 7 and kwargs.get("preexec_fn") is None
+                and threading.current_thread() is threading.main_thread()):
+            kwargs["preexec_fn"] = lifeline(signal.SIGTERM)
+        original(self, *args, **kwargs)
+
+    subprocess.Popen.__init__ = init  # type: ignore[method-assign]
+
+
 def pytest_configure(config: pytest.Config) -> None:
-    """With --in-process, refuse every process start inside a test (its fixtures of every scope
-    included). Outside tests (pytest's and xdist's own start-up) processes start as usual."""
+    """Processes die with the test process; with --in-process, refuse every process start
+    inside a test (its fixtures of every scope included). Outside tests (pytest's and xdist's
+    own start-up) processes start as usual."""
+    _tie_children_to_the_test_process()  # (the xdist controller's workers die with it too)
     if not config.getoption("--in-process"):
         return
     if getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput"):
