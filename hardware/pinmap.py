@@ -34,7 +34,7 @@ def pin_rows(b: dict[str, Any]) -> list[tuple[int, str, str]]:
     for ch, pin in enumerate(b["en_pins"]):
         rows.append((pin, "switch enable", f"channel {ch} high-side switch IN"))
     for ch, pin in enumerate(b["status_pins"]):
-        rows.append((pin, "switch status", f"channel {ch} high-side switch ST"))
+        rows.append((pin, "switch status", f"channel {ch} output read-back"))
     rows.append((bus["sda"], f"I2C{bus['id']} SDA", f"{sense['chip'].upper()} x {b['channels']}"))
     rows.append((bus["scl"], f"I2C{bus['id']} SCL", f"{sense['chip'].upper()} x {b['channels']}"))
     vin = b["vin"]
@@ -86,7 +86,7 @@ def svg(b: dict[str, Any]) -> str:
             f'<line x1="160" y1="{y}" x2="300" y2="{y}" stroke="black"/>',
             f'<line x1="160" y1="{y + 12}" x2="300" y2="{y + 12}" stroke="gray"/>',
             f'<rect x="300" y="{y - 8}" width="120" height="28" fill="none" stroke="black"/>',
-            f'<text x="306" y="{y + 10}">switch {ch} (IN, ST)</text>',
+            f'<text x="306" y="{y + 10}">switch {ch} (IN, OUT)</text>',
             f'<line x1="420" y1="{y + 6}" x2="470" y2="{y + 6}" stroke="black"/>',
             f'<rect x="470" y="{y}" width="60" height="12" fill="none" stroke="black"/>',
             f'<text x="474" y="{y + 10}">{sense["shunt_uohm"] / 1000:g} mOhm</text>',
