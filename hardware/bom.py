@@ -27,9 +27,8 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(HERE))
 
 import parts as P  # noqa: E402 (hardware/ is put on the path first: these are scripts)
-from pinmap import revisions  # noqa: E402
+from pinmap import write  # noqa: E402
 
-from firmware import boards  # noqa: E402
 from protocol import settings  # noqa: E402
 
 TRIP_FACTOR = next(d for name, _, d, _, _ in settings.CHANNEL if name == "trip_factor_x10") / 10
@@ -179,15 +178,7 @@ def markdown(b: dict[str, Any]) -> str:
 
 
 def generate(out: Path) -> list[Path]:
-    written = []
-    for rev in revisions():
-        b = boards.load(rev)
-        d = out / rev
-        d.mkdir(parents=True, exist_ok=True)
-        for name, text in (("bom.csv", csv_text(b)), ("board.md", markdown(b))):
-            (d / name).write_text(text)
-            written.append(d / name)
-    return written
+    return write(out, (("bom.csv", csv_text), ("board.md", markdown)))
 
 
 def main(argv: list[str]) -> int:

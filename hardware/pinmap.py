@@ -101,17 +101,21 @@ def svg(b: dict[str, Any]) -> str:
     return "\n".join(parts) + "\n"
 
 
-def generate(out: Path) -> list[Path]:
+def write(out: Path, makers: Any) -> list[Path]:
+    """Each revision's files: ``makers`` is ((file name, fn(board) -> text), ...)."""
     written = []
     for rev in revisions():
         b = boards.load(rev)
         d = out / rev
         d.mkdir(parents=True, exist_ok=True)
-        for name, text in (("pins.md", markdown(b)), ("pins.csv", csv_text(b)),
-                           ("wiring.svg", svg(b))):
-            (d / name).write_text(text)
+        for name, make in makers:
+            (d / name).write_text(make(b))
             written.append(d / name)
     return written
+
+
+def generate(out: Path) -> list[Path]:
+    return write(out, (("pins.md", markdown), ("pins.csv", csv_text), ("wiring.svg", svg)))
 
 
 if __name__ == "__main__":
