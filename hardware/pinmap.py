@@ -26,6 +26,16 @@ def revisions() -> list[str]:
     return sorted("rev-" + p.stem[4:] for p in (ROOT / "firmware" / "boards").glob("rev_*.py"))
 
 
+def sensed_by(sense: dict[str, Any], ch: int) -> tuple[int, str]:
+    """(address, "" or " input N") of the chip that senses channel ``ch``: one chip per channel
+    (``addrs`` per channel), or a multi-channel chip's input (``inputs``: per channel, the
+    chip's index in ``addrs`` and its input)."""
+    if "inputs" in sense:
+        chip, inp = sense["inputs"][ch]
+        return sense["addrs"][chip], f" input {inp + 1}"
+    return sense["addrs"][ch], ""
+
+
 def pin_rows(b: dict[str, Any]) -> list[tuple[int, str, str]]:
     """(GPIO, function, what it connects to), in GPIO order."""
     rows = []
@@ -35,8 +45,9 @@ def pin_rows(b: dict[str, Any]) -> list[tuple[int, str, str]]:
         rows.append((pin, "switch enable", f"channel {ch} high-side switch IN"))
     for ch, pin in enumerate(b["status_pins"]):
         rows.append((pin, "switch status", f"channel {ch} output read-back"))
-    rows.append((bus["sda"], f"I2C{bus['id']} SDA", f"{sense['chip'].upper()} x {b['channels']}"))
-    rows.append((bus["scl"], f"I2C{bus['id']} SCL", f"{sense['chip'].upper()} x {b['channels']}"))
+    chips = f"{sense['chip'].upper()} x {len(sense['addrs'])}"
+    rows.append((bus["sda"], f"I2C{bus['id']} SDA", chips))
+    rows.append((bus["scl"], f"I2C{bus['id']} SCL", chips))
     vin = b["vin"]
     rows.append((vin["adc_pin"], "ADC", f"input voltage through a 1:{vin['divider']} divider"))
     return sorted(rows)
@@ -51,7 +62,9 @@ def markdown(b: dict[str, Any]) -> str:
     out += ["", f"Current monitors on I2C{sense['i2c']['id']} at {sense['i2c']['freq'] // 1000} "
             f"kHz, shunts {sense['shunt_uohm'] / 1000:g} mOhm:", "",
             "| channel | address |", "|---|---|"]
-    out += [f"| {ch} | 0x{a:02x} |" for ch, a in enumerate(sense["addrs"])]
+    for ch in range(b["channels"]):
+        addr, inp = sensed_by(sense, ch)
+        out.append(f"| {ch} | 0x{addr:02x}{inp} |")
     return "\n".join(out) + "\n"
 
 
@@ -92,7 +105,7 @@ def svg(b: dict[str, Any]) -> str:
             f'<text x="474" y="{y + 10}">{sense["shunt_uohm"] / 1000:g} mOhm</text>',
             f'<line x1="530" y1="{y + 6}" x2="560" y2="{y + 6}" stroke="black"/>',
             f'<text x="565" y="{y + 10}">load {ch}; {escape(sense["chip"].upper())} '
-            f'0x{sense["addrs"][ch]:02x}</text>']
+            f'0x{sensed_by(sense, ch)[0]:02x}{sensed_by(sense, ch)[1]}</text>']
     bus = sense["i2c"]
     vin = b["vin"]
     parts += [f'<text x="20" y="{h - 14}">I2C{bus["id"]}: SDA GP{bus["sda"]}, SCL GP{bus["scl"]}'
@@ -118,6 +131,17 @@ def generate(out: Path) -> list[Path]:
     return write(out, (("pins.md", markdown), ("pins.csv", csv_text), ("wiring.svg", svg)))
 
 
-if __name__ == "__main__":
-    for path in generate(Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT / "hardware"):
+def main(argv: list[str]) -> int:
+    try:
+        paths = generate(Path(argv[0]) if argv else ROOT / "hardware")
+    except (KeyError, IndexError) as exc:
+        print(f"firmware/boards: a revision lacks {exc} (or has too few entries) for "
+              "hardware/pinmap.py; see the keys in firmware/boards/__init__.py", file=sys.stderr)
+        return 2
+    for path in paths:
         print(path)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

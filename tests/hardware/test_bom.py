@@ -76,3 +76,38 @@ def test_a_part_missing_from_the_catalogue_is_one_line(tmp_path: Path) -> None:
 def test_every_revision_has_a_bom_and_pins(rev: str) -> None:
     for name in ("bom.csv", "board.md", "pins.md", "pins.csv", "wiring.svg"):
         assert (ROOT / "hardware" / rev / name).is_file(), name
+
+
+REV_Z = '''BOARD = {
+    "name": "rev-z", "mcu": "rp2040", "channels": 4,
+    "en_pins": (2, 3, 4, 5), "status_pins": (12, 13, 14, 15),
+    "sense": {"chip": "ina3221",
+              "i2c": {"id": 0, "sda": 0, "scl": 1, "freq": 400000, "timeout_us": 2000},
+              "addrs": (0x40, 0x41), "inputs": ((0, 0), (0, 1), (0, 2), (1, 0)),
+              "shunt_uohm": 20000},
+    "vin": {"adc_pin": 26, "divider": 11, "vref_mv": 3300},
+}
+'''
+
+
+def test_a_new_revision_file_is_picked_up(tmp_path: Path) -> None:
+    """A revision file added to firmware/boards (a multi-channel sense chip, other shunts) gets
+    its pins, wiring, BOM and limits with no other change."""
+    for d in ("firmware", "protocol", "hardware"):
+        subprocess.run(["cp", "-r", str(ROOT / d), str(tmp_path / d)], check=True)
+    (tmp_path / "firmware" / "boards" / "rev_z.py").write_text(REV_Z)
+    out = tmp_path / "out"
+    for tool in ("pinmap.py", "bom.py"):
+        done = subprocess.run([sys.executable, f"hardware/{tool}", str(out)], cwd=tmp_path,
+                              capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stderr
+    pins = (out / "rev-z" / "pins.md").read_text()
+    assert "| 3 | 0x41 input 1 |" in pins and "INA3221 x 2" in pins
+    with open(out / "rev-z" / "bom.csv", newline="") as f:
+        got = {r["reference"]: r for r in csv.DictReader(f)}
+    assert got["SEN1-SEN2"]["mpn"] == "INA3221AIRGVR"  # two chips for four channels
+    # 20 mOhm at the switch's 5 A limit: 0.5 W, twice that wanted: the 1 W 2512 part
+    assert got["RS1-RS4"]["mpn"] == "WSL2512R0200FEA"
+    board = (out / "rev-z" / "board.md").read_text()
+    assert "| input voltage | 7 V to 26 V |" in board  # the INA3221's bus input: 26 V
+    assert "| sense full scale per channel | 8.17 A | 163.36 mV / 20 mOhm |" in board
