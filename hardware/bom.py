@@ -170,6 +170,24 @@ def markdown(b: dict[str, Any]) -> str:
         f"| I2C pull-up, largest | {lim['pullup_max_ohm'] / 1000:.1f} kOhm | "
         f"{P.I2C_RISE_NS} ns rise / (0.8473 x {lim['bus_pf']} pF: {lim['n_chips']} chips and "
         "the bus) |",
+        "", "## The protected channel", "",
+        "The channel the configuration marks `protected` (`dxboard flash --config`) powers the"
+        " computer that runs the dxboard host. The board never switches it off for an I2t"
+        " overload, a misreading sensor, a silent host or a shed; only the instant trip and the"
+        " input's under-voltage cut-off (`uv_off`) do, and the host only with the force flag"
+        " (`protocol/PROTOCOL.md`). Wire the host's computer to it"
+        " and nothing else: without that computer nothing diagnoses the robot or switches its"
+        f" channels back on. Its device must draw at most {lim['cont_a']:g} A continuous. Its"
+        f" {lim['fuse_a']} A fuse is its overload protection, and a short is held at"
+        f" {lim['limit_a']:g} A by the {sw['mpn']} until the switch's own thermal shutdown (the"
+        f" instant trip fires only for rated_ma up to {lim['instant_rated_a'] * 1000:.0f} mA)."
+        " A second device on that channel would be as unprotected, and its fault would take"
+        " the computer down.",
+        "", "## Microcontroller", "",
+        f"{lim['mcu']['what']} ({lim['mcu']['mfr']} {lim['mcu']['mpn']}). An ESP32-S3 module is"
+        " the better choice for a revision that senses current with the MCU's own ADC (20 ADC"
+        " channels against the RP2040's 3 at about 8.7 effective bits) or needs more RAM or"
+        " GPIOs; see `hardware/README.md`.",
         "", "## Parts", "",
         "| reference | qty | manufacturer | part number | what |", "|---|---|---|---|---|",
     ]
