@@ -59,6 +59,7 @@ def limits(b: dict[str, Any]) -> dict[str, Any]:
     in_fuse = c["input_fuse_a"]
     board_a = in_fuse / P.FUSE_MARGIN
     n_chips = -(-b["channels"] // sense["per_chip"])
+    top, bottom = P.PASSIVES["readback_series"]["ohm"], P.PASSIVES["readback_pulldown"]["ohm"]
     bus_pf = n_chips * P.I2C_PIN_PF + P.I2C_TRACE_PF
     return {
         "switch": sw, "sense": sense, "mcu": mcu, "shunt_ohm": r_ohm,
@@ -70,7 +71,7 @@ def limits(b: dict[str, Any]) -> dict[str, Any]:
         "adc_max_v": adc_max_v, "vmax": vmax[0], "vmax_by": vmax[1], "vmin": vmin[0],
         "vmin_by": vmin[1], "input_fuse_a": in_fuse, "board_a": board_a,
         "fet_loss_w": board_a * board_a * inp["mosfet"]["rds_on_ohm"],
-        "n_chips": n_chips, "bus_pf": bus_pf,
+        "n_chips": n_chips, "bus_pf": bus_pf, "readback": bottom / (top + bottom),
         "pullup_max_ohm": P.I2C_RISE_NS * 1e-9 / (0.8473 * bus_pf * 1e-12),
     }
 
@@ -121,7 +122,7 @@ def bom_rows(b: dict[str, Any]) -> list[list[str]]:
     ]
     if b.get("status_pins"):
         for ref, key in (("RB", "readback_series"), ("RG", "readback_pulldown"),
-                         ("DZ", "readback_clamp")):
+                         ("DC", "readback_clamp")):
             rows.append([f"{ref}1-{ref}{n}", n, P.PASSIVES[key]["mfr"], P.PASSIVES[key]["mpn"],
                          P.PASSIVES[key]["what"]])
     bypass = n_sw + lim["n_chips"] + 1
@@ -167,6 +168,10 @@ def markdown(b: dict[str, Any]) -> str:
         f"I^2 x {P.INPUT['mosfet']['rds_on_ohm'] * 1000:g} mOhm |",
         f"| TVS clamp at its rated surge | {P.INPUT['tvs']['clamp_v']:g} V | "
         f"{P.INPUT['tvs']['mpn']} (the {sense['mpn']} withstands {sense['abs_max_v']:g} V) |",
+        f"| output read-back at the GPIO, lowest input | {lim['vmin'] * lim['readback']:.2f} V"
+        f" | the {P.PASSIVES['readback_series']['ohm'] // 1000} k / "
+        f"{P.PASSIVES['readback_pulldown']['ohm'] // 1000} k divider at {lim['vmin']:g} V; the "
+        f"GPIO reads 1 from {lim['mcu']['io_vih_v']:g} V; clamped at 3.3 V above |",
         f"| I2C pull-up, largest | {lim['pullup_max_ohm'] / 1000:.1f} kOhm | "
         f"{P.I2C_RISE_NS} ns rise / (0.8473 x {lim['bus_pf']} pF: {lim['n_chips']} chips and "
         "the bus) |",

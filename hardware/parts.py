@@ -109,12 +109,12 @@ PASSIVES: dict[str, dict[str, Any]] = {
                     "input divider, top"},
     "divider_bottom": {"mfr": "Yageo", "mpn": "RT0603BRD0710KL", "what": "10 kOhm 0.1 % 0603: "
                        "input divider, bottom (1:11 with the 100 kOhm)"},
-    "readback_series": {"mfr": "Yageo", "mpn": "RC0603FR-0747KL", "what": "47 kOhm 1 % 0603: "
-                        "output read-back, series"},
-    "readback_pulldown": {"mfr": "Yageo", "mpn": "RC0603FR-07100KL", "what": "100 kOhm 1 % "
-                          "0603: output read-back, to ground"},
-    "readback_clamp": {"mfr": "Nexperia", "mpn": "BZX84-C3V3,215", "what": "3.3 V Zener "
-                       "(SOT-23): clamps the read-back at the GPIO"},
+    "readback_series": {"mfr": "Yageo", "mpn": "RC0603FR-07100KL", "what": "100 kOhm 1 % "
+                        "0603: output read-back divider, top", "ohm": 100000},
+    "readback_pulldown": {"mfr": "Yageo", "mpn": "RC0603FR-0756KL", "what": "56 kOhm 1 % 0603:"
+                          " output read-back divider, to ground", "ohm": 56000},
+    "readback_clamp": {"mfr": "Nexperia", "mpn": "BAT54S,215", "what": "dual Schottky in "
+                       "series (SOT-23): clamps the read-back between ground and 3.3 V"},
     "bypass": {"mfr": "Murata", "mpn": "GRM188R71H104KA93D", "what": "100 nF 50 V X7R 0603: "
                "one per IC supply pin, one at the ADC pin"},
 }
