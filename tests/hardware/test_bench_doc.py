@@ -65,3 +65,20 @@ def test_the_page_quotes_what_the_firmware_prints(tmp_path: Path) -> None:
     assert printed[0] == "network: wlan 10.0.0.7 (ssid robot)"
     assert printed[1].startswith("dxboard ") and printed[1].endswith(" rev-a rp2040")
     assert quoted_boot_lines() == printed
+
+
+def test_the_calibration_arithmetic_is_the_drivers() -> None:
+    """The page's CAL figures are what the firmware's INA226 driver writes for the shunt values
+    it names (10 mOhm as built, 10.303 mOhm after the example's correction), and the corrected
+    reading of its example is the meter's."""
+    from firmware.hal.ina226 import calibration
+
+    text = (ROOT / "docs" / "bench.md").read_text()
+    assert "0.00512 / (0.00025 x 0.010) = 2048" in text and calibration(10000) == 2048
+    assert "10 mOhm x 1.803 / 1.750 = 10.303 mOhm" in text and round(10000 * 1.803 / 1.750) == 10303
+    assert "0.00512 / (0.00025 x 0.010303) = 1987" in text and calibration(10303) == 1987
+    assert "2048 x 1.750 / 1.803 = 1987" in text and int(2048 * 1.750 / 1.803) == 1987
+    assert "`shunt_uohm` in `firmware/boards/rev_a.py` to 10303" in text
+    # the board read 1.803 A on 10 mOhm: 1803 mA = 7212 counts of 2.5 uV; over 10.303 mOhm
+    raw = 1803 * 10000 // 2500
+    assert abs(raw * 2500 // 10303 - 1750) <= 1
