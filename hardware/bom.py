@@ -153,6 +153,10 @@ def markdown(b: dict[str, Any]) -> str:
         f"{lim['vmax_by']} |",
         f"| input voltage the ADC can read | 0 V to {lim['adc_max_v']:.1f} V | "
         f"{lim['mcu']['adc_vref_v']:g} V reference x the 1:{b['vin']['divider']} divider |",
+        f"| input voltage resolution | {lim['adc_max_v'] / 2 ** lim['mcu']['adc_bits'] * 1000:.1f}"
+        f" mV per count, about {lim['adc_max_v'] / 2 ** lim['mcu']['adc_enob'] * 1000:.0f} mV"
+        f" effective | {lim['mcu']['adc_bits']}-bit ADC, {lim['mcu']['adc_enob']:g} effective"
+        " bits |",
         f"| continuous current per channel | {lim['cont_a']:g} A | {lim['cont_by']} |",
         f"| sense full scale per channel | {lim['fullscale_a']:.2f} A | "
         f"{sense['fullscale_v'] * 1000:g} mV / {lim['shunt_ohm'] * 1000:g} mOhm |",

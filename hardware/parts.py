@@ -20,7 +20,8 @@ MCU: dict[str, dict[str, Any]] = {
     "rp2040": {
         "mfr": "Raspberry Pi", "mpn": "SC0918", "what": "Raspberry Pi Pico W (RP2040, 2 MB "
         "flash, CYW43439 Wi-Fi)", "vsys_v": (1.8, 5.5), "adc_vref_v": 3.3, "adc_bits": 12,
-        "io_vih_v": 2.0, "datasheet": "Raspberry Pi Pico W datasheet; RP2040 datasheet",
+        "adc_enob": 8.7, "io_vih_v": 2.0,
+        "datasheet": "Raspberry Pi Pico W datasheet; RP2040 datasheet",
     },
 }
 
