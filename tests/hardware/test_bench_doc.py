@@ -82,3 +82,18 @@ def test_the_calibration_arithmetic_is_the_drivers() -> None:
     # the board read 1.803 A on 10 mOhm: 1803 mA = 7212 counts of 2.5 uV; over 10.303 mOhm
     raw = 1803 * 10000 // 2500
     assert abs(raw * 2500 // 10303 - 1750) <= 1
+
+
+def test_the_reference_runs_as_the_page_says(tmp_path: Path) -> None:
+    """The file the page copies to a board imports there on its own (no checkout, no
+    ``machine`` model) and ``reference_us()`` prints a time in microseconds."""
+    (tmp_path / "board_parts.py").write_text(
+        (ROOT / "benchmarks" / "board_parts.py").read_text())
+    done = subprocess.run([find_micropython(), "-c",
+                           "import board_parts; print(board_parts.reference_us())"],
+                          cwd=tmp_path, env=dict(os.environ, MICROPYPATH=".:.frozen"),
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert int(done.stdout.strip()) > 0
+    text = (ROOT / "docs" / "bench.md").read_text()
+    assert 'exec "import board_parts; print(board_parts.reference_us())"' in text
