@@ -53,6 +53,24 @@ def pin_rows(b: dict[str, Any]) -> list[tuple[int, str, str]]:
     return sorted(rows)
 
 
+# the address pins of each sense chip, most significant first; each pin tied to one of these
+# four selects an address from 0x40 on, in this order (INA226: SBOS547, INA3221: SBOS576)
+ADDRESS_PINS = {"ina226": ("A1", "A0"), "ina3221": ("A0",)}
+TIED_TO = ("GND", "VS", "SDA", "SCL")
+
+
+def straps(chip: str, addr: int) -> str:
+    """How to tie the chip's address pins for ``addr``: "A1=GND, A0=VS"; "" if unknown."""
+    pins = ADDRESS_PINS.get(chip)
+    off = addr - 0x40
+    if pins is None or not 0 <= off < 4 ** len(pins):
+        return ""
+    out = []
+    for i, pin in enumerate(pins):
+        out.append(f"{pin}={TIED_TO[(off >> (2 * (len(pins) - 1 - i))) & 3]}")
+    return ", ".join(out)
+
+
 def markdown(b: dict[str, Any]) -> str:
     sense = b["sense"]
     out = [f"# {b['name']}: pin map ({b['mcu']})", "",
@@ -61,10 +79,10 @@ def markdown(b: dict[str, Any]) -> str:
     out += [f"| {pin} | {fn} | {to} |" for pin, fn, to in pin_rows(b)]
     out += ["", f"Current monitors on I2C{sense['i2c']['id']} at {sense['i2c']['freq'] // 1000} "
             f"kHz, shunts {sense['shunt_uohm'] / 1000:g} mOhm:", "",
-            "| channel | address |", "|---|---|"]
+            "| channel | address | address pins tied to |", "|---|---|---|"]
     for ch in range(b["channels"]):
         addr, inp = sensed_by(sense, ch)
-        out.append(f"| {ch} | 0x{addr:02x}{inp} |")
+        out.append(f"| {ch} | 0x{addr:02x}{inp} | {straps(sense['chip'], addr)} |")
     return "\n".join(out) + "\n"
 
 

@@ -102,7 +102,7 @@ def test_a_new_revision_file_is_picked_up(tmp_path: Path) -> None:
                               capture_output=True, text=True, timeout=120)
         assert done.returncode == 0, done.stderr
     pins = (out / "rev-z" / "pins.md").read_text()
-    assert "| 3 | 0x41 input 1 |" in pins and "INA3221 x 2" in pins
+    assert "| 3 | 0x41 input 1 | A0=VS |" in pins and "INA3221 x 2" in pins
     with open(out / "rev-z" / "bom.csv", newline="") as f:
         got = {r["reference"]: r for r in csv.DictReader(f)}
     assert got["SEN1-SEN2"]["mpn"] == "INA3221AIRGVR"  # two chips for four channels

@@ -33,3 +33,13 @@ def test_the_pin_map_says_what_the_firmware_uses() -> None:
     assert ["21", "switch status", "channel 9 output read-back"] in rows
     assert ["26", "ADC", "input voltage through a 1:11 divider"] in rows
     ET.fromstring((ROOT / "hardware" / "rev-a" / "wiring.svg").read_text())  # well-formed
+
+
+def test_the_address_straps_are_the_datasheets() -> None:
+    """INA226 (SBOS547, its address table): A1 and A0 each tied to GND, VS, SDA or SCL; 0x40 is both to
+    GND, 0x45 both to VS, 0x49 A1 to SDA and A0 to VS."""
+    text = (ROOT / "hardware" / "rev-a" / "pins.md").read_text()
+    assert "| 0 | 0x40 | A1=GND, A0=GND |" in text
+    assert "| 5 | 0x45 | A1=VS, A0=VS |" in text
+    assert "| 9 | 0x49 | A1=SDA, A0=VS |" in text
+
