@@ -36,8 +36,8 @@ def test_the_pin_map_says_what_the_firmware_uses() -> None:
 
 
 def test_the_address_straps_are_the_datasheets() -> None:
-    """INA226 (SBOS547, its address table): A1 and A0 each tied to GND, VS, SDA or SCL; 0x40 is both to
-    GND, 0x45 both to VS, 0x49 A1 to SDA and A0 to VS."""
+    """INA226 (SBOS547, its address table): A1 and A0 each tied to GND, VS, SDA or SCL; 0x40
+    is both to GND, 0x45 both to VS, 0x49 A1 to SDA and A0 to VS."""
     text = (ROOT / "hardware" / "rev-a" / "pins.md").read_text()
     assert "| 0 | 0x40 | A1=GND, A0=GND |" in text
     assert "| 5 | 0x45 | A1=VS, A0=VS |" in text
