@@ -36,7 +36,7 @@ SENSE: dict[str, dict[str, Any]] = {
     },
     "ina3221": {
         "mfr": "Texas Instruments", "mpn": "INA3221AIRGVR", "what": "3-channel current/bus "
-        "monitor, I2C, 13 bit (VQFN-16)", "per_chip": 3, "fullscale_v": 0.16336,
+        "monitor, I2C, 13 bit (VQFN-16)", "per_chip": 3, "fullscale_v": 0.1638,
         "bus_max_v": 26.0, "abs_max_v": 26.0, "switch": "tps1h100a",
         "datasheet": "TI SBOS576",
     },

@@ -110,4 +110,4 @@ def test_a_new_revision_file_is_picked_up(tmp_path: Path) -> None:
     assert got["RS1-RS4"]["mpn"] == "WSL2512R0200FEA"
     board = (out / "rev-z" / "board.md").read_text()
     assert "| input voltage | 7 V to 26 V |" in board  # the INA3221's bus input: 26 V
-    assert "| sense full scale per channel | 8.17 A | 163.36 mV / 20 mOhm |" in board
+    assert "| sense full scale per channel | 8.19 A | 163.8 mV / 20 mOhm |" in board
