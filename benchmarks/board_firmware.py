@@ -13,6 +13,12 @@ simulated clock where time is simulated and with the wall clock only for CPU cos
   ``seq``, on both runtimes; and the firmware's heap under MicroPython (``gc.mem_alloc`` after
   ``gc.collect``, beyond its imported modules) at its peak with 4 clients subscribed at 100 Hz.
 It prints a Markdown section; ``--write`` replaces the "## Firmware" section of RESULTS.md.
+
+``--parts`` measures instead (``benchmarks/board_parts.py``), for every revision in
+``firmware/boards`` with a model of its sense chip, the shipped HAL and its chip driver and
+``Board.tick`` under MicroPython against the register-level part models (``emulator/parts``):
+CPU per 10 ms tick, I2C bus time per tick, heap; with the heap with 4 clients at 100 Hz from
+here. ``--parts --write`` replaces its own section of RESULTS.md.
 """
 
 import os
@@ -84,6 +90,22 @@ def mpy_part():
         if a > peak:
             peak = a
     print("MPY", us, after_boot, peak, base)
+
+
+def write_section(text, heading):
+    path = os.path.join(ROOT, "benchmarks", "RESULTS.md")
+    old = "# Benchmark results\n"
+    if os.path.exists(path):
+        with open(path) as f:
+            old = f.read()
+    start = old.find(heading)
+    if start < 0:
+        new = old.rstrip("\n") + "\n\n" + text
+    else:
+        end = old.find("\n## ", start + 3)
+        new = old[:start] + text + ("" if end < 0 else old[end:])
+    with open(path, "w") as f:
+        f.write(new)
 
 
 def percentiles(xs):
@@ -301,20 +323,7 @@ def main():
     text = "\n".join(lines)
     print(text)
     if "--write" in sys.argv:
-        path = "benchmarks/RESULTS.md"
-        old = "# Benchmark results\n"
-        if os.path.exists(path):
-            with open(path) as f:
-                old = f.read()
-        start = old.find("## Firmware")
-        if start < 0:
-            new = old.rstrip("\n") + "\n\n" + text
-        else:
-            end = old.find("\n## ", start + 3)
-            new = old[:start] + text + ("" if end < 0 else old[end:])
-        with open(path, "w") as f:
-            f.write(new)
-
+        write_section(text, "## Firmware\n")
 
 if __name__ == "__main__":
     if "--help" in sys.argv or "-h" in sys.argv:
@@ -324,5 +333,12 @@ if __name__ == "__main__":
         sys.exit(0)
     if "--mpy-part" in sys.argv:
         mpy_part()
+    elif "--parts" in sys.argv:
+        from benchmarks import board_parts
+
+        section = board_parts.section(mpy_peak_memory)
+        print(section)
+        if "--write" in sys.argv:
+            write_section(section, "## Board firmware on the parts (hwbench)")
     else:
         main()

@@ -26,6 +26,16 @@ def revisions() -> list[str]:
     return sorted("rev-" + p.stem[4:] for p in (ROOT / "firmware" / "boards").glob("rev_*.py"))
 
 
+def sensed_by(sense: dict[str, Any], ch: int) -> tuple[int, str]:
+    """(address, "" or " input N") of the chip that senses channel ``ch``: one chip per channel
+    (``addrs`` per channel), or a multi-channel chip's input (``inputs``: per channel, the
+    chip's index in ``addrs`` and its input)."""
+    if "inputs" in sense:
+        chip, inp = sense["inputs"][ch]
+        return sense["addrs"][chip], f" input {inp + 1}"
+    return sense["addrs"][ch], ""
+
+
 def pin_rows(b: dict[str, Any]) -> list[tuple[int, str, str]]:
     """(GPIO, function, what it connects to), in GPIO order."""
     rows = []
@@ -34,12 +44,31 @@ def pin_rows(b: dict[str, Any]) -> list[tuple[int, str, str]]:
     for ch, pin in enumerate(b["en_pins"]):
         rows.append((pin, "switch enable", f"channel {ch} high-side switch IN"))
     for ch, pin in enumerate(b["status_pins"]):
-        rows.append((pin, "switch status", f"channel {ch} high-side switch ST"))
-    rows.append((bus["sda"], f"I2C{bus['id']} SDA", f"{sense['chip'].upper()} x {b['channels']}"))
-    rows.append((bus["scl"], f"I2C{bus['id']} SCL", f"{sense['chip'].upper()} x {b['channels']}"))
+        rows.append((pin, "switch status", f"channel {ch} output read-back"))
+    chips = f"{sense['chip'].upper()} x {len(sense['addrs'])}"
+    rows.append((bus["sda"], f"I2C{bus['id']} SDA", chips))
+    rows.append((bus["scl"], f"I2C{bus['id']} SCL", chips))
     vin = b["vin"]
     rows.append((vin["adc_pin"], "ADC", f"input voltage through a 1:{vin['divider']} divider"))
     return sorted(rows)
+
+
+# the address pins of each sense chip, most significant first; each pin tied to one of these
+# four selects an address from 0x40 on, in this order (INA226: SBOS547, INA3221: SBOS576)
+ADDRESS_PINS = {"ina226": ("A1", "A0"), "ina3221": ("A0",)}
+TIED_TO = ("GND", "VS", "SDA", "SCL")
+
+
+def straps(chip: str, addr: int) -> str:
+    """How to tie the chip's address pins for ``addr``: "A1=GND, A0=VS"; "" if unknown."""
+    pins = ADDRESS_PINS.get(chip)
+    off = addr - 0x40
+    if pins is None or not 0 <= off < 4 ** len(pins):
+        return ""
+    out = []
+    for i, pin in enumerate(pins):
+        out.append(f"{pin}={TIED_TO[(off >> (2 * (len(pins) - 1 - i))) & 3]}")
+    return ", ".join(out)
 
 
 def markdown(b: dict[str, Any]) -> str:
@@ -50,8 +79,10 @@ def markdown(b: dict[str, Any]) -> str:
     out += [f"| {pin} | {fn} | {to} |" for pin, fn, to in pin_rows(b)]
     out += ["", f"Current monitors on I2C{sense['i2c']['id']} at {sense['i2c']['freq'] // 1000} "
             f"kHz, shunts {sense['shunt_uohm'] / 1000:g} mOhm:", "",
-            "| channel | address |", "|---|---|"]
-    out += [f"| {ch} | 0x{a:02x} |" for ch, a in enumerate(sense["addrs"])]
+            "| channel | address | address pins tied to |", "|---|---|---|"]
+    for ch in range(b["channels"]):
+        addr, inp = sensed_by(sense, ch)
+        out.append(f"| {ch} | 0x{addr:02x}{inp} | {straps(sense['chip'], addr)} |")
     return "\n".join(out) + "\n"
 
 
@@ -86,13 +117,13 @@ def svg(b: dict[str, Any]) -> str:
             f'<line x1="160" y1="{y}" x2="300" y2="{y}" stroke="black"/>',
             f'<line x1="160" y1="{y + 12}" x2="300" y2="{y + 12}" stroke="gray"/>',
             f'<rect x="300" y="{y - 8}" width="120" height="28" fill="none" stroke="black"/>',
-            f'<text x="306" y="{y + 10}">switch {ch} (IN, ST)</text>',
+            f'<text x="306" y="{y + 10}">switch {ch} (IN, OUT)</text>',
             f'<line x1="420" y1="{y + 6}" x2="470" y2="{y + 6}" stroke="black"/>',
             f'<rect x="470" y="{y}" width="60" height="12" fill="none" stroke="black"/>',
             f'<text x="474" y="{y + 10}">{sense["shunt_uohm"] / 1000:g} mOhm</text>',
             f'<line x1="530" y1="{y + 6}" x2="560" y2="{y + 6}" stroke="black"/>',
             f'<text x="565" y="{y + 10}">load {ch}; {escape(sense["chip"].upper())} '
-            f'0x{sense["addrs"][ch]:02x}</text>']
+            f'0x{sensed_by(sense, ch)[0]:02x}{sensed_by(sense, ch)[1]}</text>']
     bus = sense["i2c"]
     vin = b["vin"]
     parts += [f'<text x="20" y="{h - 14}">I2C{bus["id"]}: SDA GP{bus["sda"]}, SCL GP{bus["scl"]}'
@@ -101,19 +132,34 @@ def svg(b: dict[str, Any]) -> str:
     return "\n".join(parts) + "\n"
 
 
-def generate(out: Path) -> list[Path]:
+def write(out: Path, makers: Any) -> list[Path]:
+    """Each revision's files: ``makers`` is ((file name, fn(board) -> text), ...)."""
     written = []
     for rev in revisions():
         b = boards.load(rev)
         d = out / rev
         d.mkdir(parents=True, exist_ok=True)
-        for name, text in (("pins.md", markdown(b)), ("pins.csv", csv_text(b)),
-                           ("wiring.svg", svg(b))):
-            (d / name).write_text(text)
+        for name, make in makers:
+            (d / name).write_text(make(b))
             written.append(d / name)
     return written
 
 
-if __name__ == "__main__":
-    for path in generate(Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT / "hardware"):
+def generate(out: Path) -> list[Path]:
+    return write(out, (("pins.md", markdown), ("pins.csv", csv_text), ("wiring.svg", svg)))
+
+
+def main(argv: list[str]) -> int:
+    try:
+        paths = generate(Path(argv[0]) if argv else ROOT / "hardware")
+    except (KeyError, IndexError) as exc:
+        print(f"firmware/boards: a revision lacks {exc} (or has too few entries) for "
+              "hardware/pinmap.py; see the keys in firmware/boards/__init__.py", file=sys.stderr)
+        return 2
+    for path in paths:
         print(path)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -17,7 +17,9 @@ def test_committed_files_are_the_generators_output(tmp_path: Path) -> None:
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     made = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*") if p.is_file())
-    assert [str(p) for p in made] == ["rev-a/pins.csv", "rev-a/pins.md", "rev-a/wiring.svg"]
+    revs = sorted("rev-" + p.stem[4:] for p in (ROOT / "firmware" / "boards").glob("rev_*.py"))
+    assert [str(p) for p in made] == [f"{rev}/{name}" for rev in revs
+                                      for name in ("pins.csv", "pins.md", "wiring.svg")]
     for rel in made:
         assert (ROOT / "hardware" / rel).read_text() == (tmp_path / rel).read_text(), rel
 
@@ -28,6 +30,16 @@ def test_the_pin_map_says_what_the_firmware_uses() -> None:
     rows = [line.split(",") for line in text[1:]]
     assert [r[0] for r in rows] == sorted((r[0] for r in rows), key=int)
     assert ["2", "switch enable", "channel 0 high-side switch IN"] in rows
-    assert ["21", "switch status", "channel 9 high-side switch ST"] in rows
+    assert ["21", "switch status", "channel 9 output read-back"] in rows
     assert ["26", "ADC", "input voltage through a 1:11 divider"] in rows
     ET.fromstring((ROOT / "hardware" / "rev-a" / "wiring.svg").read_text())  # well-formed
+
+
+def test_the_address_straps_are_the_datasheets() -> None:
+    """INA226 (SBOS547, its address table): A1 and A0 each tied to GND, VS, SDA or SCL; 0x40
+    is both to GND, 0x45 both to VS, 0x49 A1 to SDA and A0 to VS."""
+    text = (ROOT / "hardware" / "rev-a" / "pins.md").read_text()
+    assert "| 0 | 0x40 | A1=GND, A0=GND |" in text
+    assert "| 5 | 0x45 | A1=VS, A0=VS |" in text
+    assert "| 9 | 0x49 | A1=SDA, A0=VS |" in text
+

@@ -1,0 +1,225 @@
+"""Generate each board revision's bill of materials (``bom.csv``) and its parts and limits page
+(``board.md``) from the revision's file in ``firmware/boards`` (what the firmware boots: pins,
+sense chip, addresses, shunt, divider) and the part data in ``hardware/parts.py`` (what is bought
+around it), so that the parts list, the limits and the firmware cannot drift apart.
+
+The limits are worked out, not typed: a channel's continuous current is the least of its
+switch's rating, its sense chip's full scale over the shunt and its connector; its fuse and its
+shunt's power rating follow from that (with the margins in ``parts.py``); the input range is the
+narrowest of the TVS's standoff, the switch, the sense chip's bus input, the ADC behind the
+divider and the regulator. Usage, from the repository root: ``python hardware/bom.py
+[OUT_DIR]`` (default ``hardware``); ``tests/hardware/test_bom.py`` checks that the committed
+files are its output. A revision that names a part ``parts.py`` lacks: one line saying what to
+add, exit 2.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import sys
+from pathlib import Path
+from typing import Any
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(HERE))
+
+import parts as P  # noqa: E402 (hardware/ is put on the path first: these are scripts)
+from pinmap import write  # noqa: E402
+
+from protocol import settings  # noqa: E402
+
+TRIP_FACTOR = next(d for name, _, d, _, _ in settings.CHANNEL if name == "trip_factor_x10") / 10
+
+
+def limits(b: dict[str, Any]) -> dict[str, Any]:
+    """Every current and voltage limit of a revision, with what sets it."""
+    c = P.choices(b)
+    sw = P.SWITCHES[c["switch"]]
+    sense = P.chip(b)
+    mcu = P.MCU[b["mcu"]]
+    inp = P.INPUT
+    r_ohm = b["sense"]["shunt_uohm"] / 1e6
+    fullscale_a = sense["fullscale_v"] / r_ohm
+    cont = min((sw["i_max_a"], f"the switch {sw['mpn']}"),
+               (fullscale_a, f"the {sense['mpn']}'s full scale over the shunt"),
+               (P.CONNECTORS["output_header"]["rating_a"], "the output connector"))
+    limit_a = min(sw["limit_a"], fullscale_a)
+    shunt_w, shunt_mpn, shunt_pkg = P.shunt_for(r_ohm, max(cont[0], limit_a))
+    adc_max_v = mcu["adc_vref_v"] * b["vin"]["divider"]
+    vmax = min((inp["tvs"]["standoff_v"], f"the TVS {inp['tvs']['mpn']}'s standoff"),
+               (sw["v_op"][1], f"the switch {sw['mpn']}"),
+               (sense["bus_max_v"], f"the {sense['mpn']}'s bus input"),
+               (adc_max_v, "the ADC behind the divider"),
+               (inp["regulator"]["v_in"][1], f"the regulator {inp['regulator']['mpn']}"))
+    vmin = max((sw["v_op"][0], f"the switch {sw['mpn']}"),
+               (inp["regulator"]["v_in"][0], f"the regulator {inp['regulator']['mpn']}"))
+    in_fuse = c["input_fuse_a"]
+    board_a = in_fuse / P.FUSE_MARGIN
+    n_chips = -(-b["channels"] // sense["per_chip"])
+    top, bottom = P.PASSIVES["readback_series"]["ohm"], P.PASSIVES["readback_pulldown"]["ohm"]
+    bus_pf = n_chips * P.I2C_PIN_PF + P.I2C_TRACE_PF
+    return {
+        "switch": sw, "sense": sense, "mcu": mcu, "shunt_ohm": r_ohm,
+        "fullscale_a": fullscale_a, "cont_a": cont[0], "cont_by": cont[1], "limit_a": limit_a,
+        "fuse_a": P.fuse_for(cont[0]), "shunt": (shunt_w, shunt_mpn, shunt_pkg),
+        "shunt_loss_w": limit_a * limit_a * r_ohm if limit_a > cont[0] else
+        cont[0] * cont[0] * r_ohm,
+        "instant_rated_a": limit_a / TRIP_FACTOR,
+        "adc_max_v": adc_max_v, "vmax": vmax[0], "vmax_by": vmax[1], "vmin": vmin[0],
+        "vmin_by": vmin[1], "input_fuse_a": in_fuse, "board_a": board_a,
+        "fet_loss_w": board_a * board_a * inp["mosfet"]["rds_on_ohm"],
+        "n_chips": n_chips, "bus_pf": bus_pf, "readback": bottom / (top + bottom),
+        "pullup_max_ohm": P.I2C_RISE_NS * 1e-9 / (0.8473 * bus_pf * 1e-12),
+    }
+
+
+def bom_rows(b: dict[str, Any]) -> list[list[str]]:
+    """(reference, quantity, manufacturer, part number, description), one row per part."""
+    lim = limits(b)
+    n = b["channels"]
+    sw, sense, mcu = lim["switch"], lim["sense"], lim["mcu"]
+    n_sw = -(-n // sw["per_chip"])
+    fuse_a, in_fuse = lim["fuse_a"], lim["input_fuse_a"]
+    w, shunt_mpn, pkg = lim["shunt"]
+    rows = [
+        ["U1", 1, mcu["mfr"], mcu["mpn"], mcu["what"]],
+        ["U2", 1, P.INPUT["regulator"]["mfr"], P.INPUT["regulator"]["mpn"],
+         P.INPUT["regulator"]["what"]],
+        ["U3", 1, P.INPUT["ideal_diode"]["mfr"], P.INPUT["ideal_diode"]["mpn"],
+         P.INPUT["ideal_diode"]["what"]],
+        ["Q1", 1, P.INPUT["mosfet"]["mfr"], P.INPUT["mosfet"]["mpn"], P.INPUT["mosfet"]["what"]],
+        ["D1", 1, P.INPUT["tvs"]["mfr"], P.INPUT["tvs"]["mpn"], P.INPUT["tvs"]["what"]],
+        ["F0", 1, "Littelfuse", P.FUSE_MPN.format(amps=in_fuse),
+         f"ATO blade fuse {in_fuse} A 32 V: the input"],
+        [f"F1-F{n}", n, "Littelfuse", P.FUSE_MPN.format(amps=fuse_a),
+         f"ATO blade fuse {fuse_a} A 32 V: one per channel ({lim['cont_a']:g} A continuous "
+         f"x {P.FUSE_MARGIN})"],
+        [f"XF0-XF{n}", n + 1, P.FUSE_HOLDER["mfr"], P.FUSE_HOLDER["mpn"],
+         P.FUSE_HOLDER["what"]],
+        [f"SW1-SW{n_sw}", n_sw, sw["mfr"], sw["mpn"], sw["what"]],
+        [f"SEN1-SEN{lim['n_chips']}", lim["n_chips"], sense["mfr"], sense["mpn"],
+         sense["what"]],
+        [f"RS1-RS{n}", n, "Vishay Dale", shunt_mpn,
+         f"shunt {lim['shunt_ohm'] * 1000:g} mOhm 1 % {w:g} W ({pkg}): I^2 R at "
+         f"{max(lim['cont_a'], lim['limit_a']):g} A is {lim['shunt_loss_w']:.2f} W, "
+         f"x {P.SHUNT_MARGIN:g} margin"],
+        ["J0", 1, P.CONNECTORS["input"]["mfr"], P.CONNECTORS["input"]["mpn"],
+         P.CONNECTORS["input"]["what"]],
+        [f"J1-J{n}", n, P.CONNECTORS["output_header"]["mfr"],
+         P.CONNECTORS["output_header"]["mpn"], P.CONNECTORS["output_header"]["what"]],
+        [f"P1-P{n}", n, P.CONNECTORS["output_plug"]["mfr"], P.CONNECTORS["output_plug"]["mpn"],
+         P.CONNECTORS["output_plug"]["what"]],
+        ["C0", 1, P.INPUT["bulk"]["mfr"], P.INPUT["bulk"]["mpn"], P.INPUT["bulk"]["what"]],
+        ["RP1-RP2", 2, P.PASSIVES["i2c_pullup"]["mfr"], P.PASSIVES["i2c_pullup"]["mpn"],
+         P.PASSIVES["i2c_pullup"]["what"]],
+        ["RD1", 1, P.PASSIVES["divider_top"]["mfr"], P.PASSIVES["divider_top"]["mpn"],
+         P.PASSIVES["divider_top"]["what"]],
+        ["RD2", 1, P.PASSIVES["divider_bottom"]["mfr"], P.PASSIVES["divider_bottom"]["mpn"],
+         P.PASSIVES["divider_bottom"]["what"]],
+    ]
+    if b.get("status_pins"):
+        for ref, key in (("RB", "readback_series"), ("RG", "readback_pulldown"),
+                         ("DC", "readback_clamp")):
+            rows.append([f"{ref}1-{ref}{n}", n, P.PASSIVES[key]["mfr"], P.PASSIVES[key]["mpn"],
+                         P.PASSIVES[key]["what"]])
+    bypass = n_sw + lim["n_chips"] + 1
+    rows.append([f"CB1-CB{bypass}", bypass, P.PASSIVES["bypass"]["mfr"],
+                 P.PASSIVES["bypass"]["mpn"], P.PASSIVES["bypass"]["what"]])
+    return [[str(x) for x in row] for row in rows]
+
+
+def csv_text(b: dict[str, Any]) -> str:
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["reference", "quantity", "manufacturer", "mpn", "description"])
+    w.writerows(bom_rows(b))
+    return buf.getvalue()
+
+
+def markdown(b: dict[str, Any]) -> str:
+    lim = limits(b)
+    sw, sense = lim["switch"], lim["sense"]
+    name = b["name"]
+    out = [
+        f"# {name}: parts and limits", "",
+        "Generated by `hardware/bom.py` from `firmware/boards` and `hardware/parts.py`; do not "
+        "edit. The parts to order are in `bom.csv`, the pins in `pins.md`.", "",
+        "## Limits", "",
+        "| limit | value | set by |", "|---|---|---|",
+        f"| input voltage | {lim['vmin']:g} V to {lim['vmax']:g} V | {lim['vmin_by']}; "
+        f"{lim['vmax_by']} |",
+        f"| input voltage the ADC can read | 0 V to {lim['adc_max_v']:.1f} V | "
+        f"{lim['mcu']['adc_vref_v']:g} V reference x the 1:{b['vin']['divider']} divider |",
+        f"| input voltage resolution | {lim['adc_max_v'] / 2 ** lim['mcu']['adc_bits'] * 1000:.1f}"
+        f" mV per count, about {lim['adc_max_v'] / 2 ** lim['mcu']['adc_enob'] * 1000:.0f} mV"
+        f" effective | {lim['mcu']['adc_bits']}-bit ADC, {lim['mcu']['adc_enob']:g} effective"
+        " bits |",
+        f"| continuous current per channel | {lim['cont_a']:g} A | {lim['cont_by']} |",
+        f"| sense full scale per channel | {lim['fullscale_a']:.2f} A | "
+        f"{sense['fullscale_v'] * 1000:g} mV / {lim['shunt_ohm'] * 1000:g} mOhm |",
+        f"| switch current limit per channel | {lim['limit_a']:g} A | {sw['mpn']} |",
+        f"| fuse per channel | {lim['fuse_a']} A | {lim['cont_a']:g} A x {P.FUSE_MARGIN} |",
+        f"| largest rated_ma for which the instant trip can fire | "
+        f"{lim['instant_rated_a'] * 1000:.0f} mA | trip at {TRIP_FACTOR:g} x rated must stay "
+        f"under the {lim['limit_a']:g} A the switch limits to |",
+        f"| input fuse | {lim['input_fuse_a']} A | the board's wiring |",
+        f"| continuous current, whole board | {lim['board_a']:g} A | input fuse / "
+        f"{P.FUSE_MARGIN} |",
+        f"| reverse-polarity MOSFET loss at that current | {lim['fet_loss_w']:.2f} W | "
+        f"I^2 x {P.INPUT['mosfet']['rds_on_ohm'] * 1000:g} mOhm |",
+        f"| TVS clamp at its rated surge | {P.INPUT['tvs']['clamp_v']:g} V | "
+        f"{P.INPUT['tvs']['mpn']} (the {sense['mpn']} withstands {sense['abs_max_v']:g} V) |",
+        f"| output read-back at the GPIO, lowest input | {lim['vmin'] * lim['readback']:.2f} V"
+        f" | the {P.PASSIVES['readback_series']['ohm'] // 1000} k / "
+        f"{P.PASSIVES['readback_pulldown']['ohm'] // 1000} k divider at {lim['vmin']:g} V; the "
+        f"GPIO reads 1 from {lim['mcu']['io_vih_v']:g} V; clamped at 3.3 V above |",
+        f"| I2C pull-up, largest | {lim['pullup_max_ohm'] / 1000:.1f} kOhm | "
+        f"{P.I2C_RISE_NS} ns rise / (0.8473 x {lim['bus_pf']} pF: {lim['n_chips']} chips and "
+        "the bus) |",
+        "", "## The protected channel", "",
+        "The channel the configuration marks `protected` (`dxboard flash --config`) powers the"
+        " computer that runs the dxboard host. The board never switches it off for an I2t"
+        " overload, a misreading sensor, a silent host or a shed; only the instant trip and the"
+        " input's under-voltage cut-off (`uv_off`) do, and the host only with the force flag"
+        " (`protocol/PROTOCOL.md`). Wire the host's computer to it"
+        " and nothing else: without that computer nothing diagnoses the robot or switches its"
+        f" channels back on. Its device must draw at most {lim['cont_a']:g} A continuous. Its"
+        f" {lim['fuse_a']} A fuse is its overload protection, and a short is held at"
+        f" {lim['limit_a']:g} A by the {sw['mpn']} until the switch's own thermal shutdown (the"
+        f" instant trip fires only for rated_ma up to {lim['instant_rated_a'] * 1000:.0f} mA)."
+        " A second device on that channel would be as unprotected, and its fault would take"
+        " the computer down.",
+        "", "## Microcontroller", "",
+        f"{lim['mcu']['what']} ({lim['mcu']['mfr']} {lim['mcu']['mpn']}). An ESP32-S3 module is"
+        " the better choice for a revision that senses current with the MCU's own ADC (20 ADC"
+        " channels against the RP2040's 3 at about 8.7 effective bits) or needs more RAM or"
+        " GPIOs; see `hardware/README.md`.",
+        "", "## Parts", "",
+        "| reference | qty | manufacturer | part number | what |", "|---|---|---|---|---|",
+    ]
+    out += ["| " + " | ".join(row) + " |" for row in bom_rows(b)]
+    return "\n".join(out) + "\n"
+
+
+def generate(out: Path) -> list[Path]:
+    return write(out, (("bom.csv", csv_text), ("board.md", markdown)))
+
+
+def main(argv: list[str]) -> int:
+    try:
+        paths = generate(Path(argv[0]) if argv else HERE)
+    except (P.PartsError, KeyError) as exc:
+        msg = str(exc) if isinstance(exc, P.PartsError) else (
+            f"firmware/boards: a revision lacks the key {exc}; see firmware/boards/__init__.py")
+        print(msg, file=sys.stderr)
+        return 2
+    for path in paths:
+        print(path)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -1,0 +1,176 @@
+"""The parts a builder orders, as data: manufacturer part numbers and the ratings the board's
+limits are worked out from (``hardware/bom.py`` turns this and ``firmware/boards`` into each
+revision's ``bom.csv`` and ``board.md``).
+
+The revision files in ``firmware/boards`` say what the firmware needs (pins, sense chip,
+addresses, shunt, divider); this module says what is bought around them: the microcontroller
+module, each sense chip and the high-side switch it goes with, the shunt series (one part
+number per power rating), the fuses, the input protection (TVS, reverse-polarity controller and
+its MOSFET), the 5 V regulator, the connectors and the passives. ``REVISIONS`` holds what a
+revision chooses beyond its firmware file (which switch, the input fuse); a revision without an
+entry gets its sense chip's defaults, so a new revision file is enough for a first BOM. Every
+rating here is the datasheet's (the document is named beside it); nothing is measured.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+MCU: dict[str, dict[str, Any]] = {
+    "rp2040": {
+        "mfr": "Raspberry Pi", "mpn": "SC0918", "what": "Raspberry Pi Pico W (RP2040, 2 MB "
+        "flash, CYW43439 Wi-Fi)", "vsys_v": (1.8, 5.5), "adc_vref_v": 3.3, "adc_bits": 12,
+        "adc_enob": 8.7, "io_vih_v": 2.0,
+        "datasheet": "Raspberry Pi Pico W datasheet; RP2040 datasheet",
+    },
+}
+
+# The sense chip of each revision (``BOARD["sense"]["chip"]``). ``fullscale_v`` is the shunt
+# voltage at which the chip's reading saturates; ``bus_max_v`` the highest common-mode/bus
+# voltage it measures; ``per_chip`` the channels one package serves.
+SENSE: dict[str, dict[str, Any]] = {
+    "ina226": {
+        "mfr": "Texas Instruments", "mpn": "INA226AIDGSR", "what": "current/power monitor, "
+        "I2C, 16 bit (VSSOP-10)", "per_chip": 1, "fullscale_v": 0.08192, "bus_max_v": 36.0,
+        "abs_max_v": 40.0, "switch": "tps1h100a", "datasheet": "TI SBOS547",
+    },
+    "ina3221": {
+        "mfr": "Texas Instruments", "mpn": "INA3221AIRGVR", "what": "3-channel current/bus "
+        "monitor, I2C, 13 bit (VQFN-16)", "per_chip": 3, "fullscale_v": 0.1638,
+        "bus_max_v": 26.0, "abs_max_v": 26.0, "switch": "tps1h100a",
+        "datasheet": "TI SBOS576",
+    },
+}
+
+# High-side switches. ``i_max_a``: the continuous current per channel the datasheet allows;
+# ``limit_a``: the current limit the board sets (TPS1H100-Q1: R_CL = V_cl,th x K_CL / I_lim,
+# datasheet equation 2, K_CL = 2000; the PROFET limits by itself).
+SWITCHES: dict[str, dict[str, Any]] = {
+    "tps1h100a": {
+        "mfr": "Texas Instruments", "mpn": "TPS1H100AQPWPRQ1", "what": "smart high-side "
+        "switch, 1 channel, 100 mOhm, adjustable current limit, version A (open-drain "
+        "status) (HTSSOP-14)", "per_chip": 1, "i_max_a": 4.0, "limit_a": 5.0,
+        "v_op": (5.0, 40.0), "datasheet": "TI SLVSCM2",
+    },
+    "bts7008": {
+        "mfr": "Infineon", "mpn": "BTS7008-2EPA", "what": "PROFET+2 12V smart high-side "
+        "switch, 2 x 8 mOhm, analog current sense IS (k_ILIS 4785), DEN/DSEL "
+        "(PG-TSDSO-14)", "per_chip": 2, "i_max_a": 7.5, "limit_a": 7.5,
+        "v_op": (6.0, 18.0), "datasheet": "Infineon BTS7008-2EPA data sheet rev. 1.20",
+    },
+}
+
+# Vishay Power Metal Strip shunts, 1 %, by power rating at 70 degC (WSL/WSLP data sheets):
+# the part number for a shunt of R milliohm is the pattern with R in Vishay's value code.
+SHUNTS: tuple[tuple[float, str, str], ...] = (
+    (0.25, "WSL1206R{code}FEA", "1206"),
+    (0.5, "WSL2010R{code}FEA", "2010"),
+    (1.0, "WSL2512R{code}FEA", "2512"),
+    (3.0, "WSLP2512R{code}FEA", "2512"),
+)
+SHUNT_MARGIN = 2.0  # the shunt's rating is at least twice its I^2 R at the channel's limit
+
+# Littelfuse ATO blade fuses (32 V), series 287: 0287 + the rating in amperes, three digits.
+FUSE_SIZES_A: tuple[int, ...] = (1, 2, 3, 4, 5, 10, 15, 20, 25, 30)
+FUSE_MARGIN = 1.25  # a fuse is rated at least 1.25 x the continuous current it carries
+FUSE_MPN = "0287{amps:03d}.PXCN"
+FUSE_HOLDER = {"mfr": "Keystone Electronics", "mpn": "3557-2",
+               "what": "PCB fuse holder for ATO blade fuses, 30 A"}
+
+INPUT: dict[str, dict[str, Any]] = {
+    "tvs": {"mfr": "Littelfuse", "mpn": "SMCJ26A", "what": "TVS diode 1500 W, "
+            "unidirectional, standoff 26 V, breakdown 28.9 V min, clamp 42.1 V at 35.6 A "
+            "(DO-214AB)", "standoff_v": 26.0, "clamp_v": 42.1},
+    "ideal_diode": {"mfr": "Texas Instruments", "mpn": "LM74700QDBVRQ1", "what": "ideal-diode "
+                    "controller, reverse-polarity protection, 3.2 V to 65 V (SOT-23-6)",
+                    "v_max": 65.0},
+    "mosfet": {"mfr": "Texas Instruments", "mpn": "CSD18540Q5B", "what": "N-channel MOSFET "
+               "60 V, 1.8 mOhm at VGS 10 V (SON 5x6), driven by the LM74700",
+               "rds_on_ohm": 0.0018},
+    "regulator": {"mfr": "RECOM", "mpn": "R-78E5.0-0.5", "what": "5 V 0.5 A switching "
+                  "regulator, input 7 V to 28 V (SIP-3), feeds the Pico's VSYS",
+                  "v_in": (7.0, 28.0)},
+    "bulk": {"mfr": "Panasonic", "mpn": "EEU-FR1V471", "what": "470 uF 35 V electrolytic, "
+             "input bulk capacitor"},
+}
+
+CONNECTORS: dict[str, dict[str, Any]] = {
+    "input": {"mfr": "AMASS", "mpn": "XT60PW-M", "what": "XT60 male, PCB, right angle: the "
+              "battery input", "rating_a": 30.0},
+    "output_header": {"mfr": "Phoenix Contact", "mpn": "1757242", "what": "MSTBA 2,5/ 2-G-5,08"
+                      " header, 2 pins, 12 A: one per channel output", "rating_a": 12.0},
+    "output_plug": {"mfr": "Phoenix Contact", "mpn": "1757019", "what": "MSTB 2,5/ 2-ST-5,08 "
+                    "plug, 2 positions, 12 A: the load's cable", "rating_a": 12.0},
+}
+
+PASSIVES: dict[str, dict[str, Any]] = {
+    "i2c_pullup": {"mfr": "Yageo", "mpn": "RC0603FR-072K2L", "what": "2.2 kOhm 1 % 0603: "
+                   "SDA and SCL pull-up to 3.3 V"},
+    "divider_top": {"mfr": "Yageo", "mpn": "RT0603BRD07100KL", "what": "100 kOhm 0.1 % 0603: "
+                    "input divider, top"},
+    "divider_bottom": {"mfr": "Yageo", "mpn": "RT0603BRD0710KL", "what": "10 kOhm 0.1 % 0603: "
+                       "input divider, bottom (1:11 with the 100 kOhm)"},
+    "readback_series": {"mfr": "Yageo", "mpn": "RC0603FR-07100KL", "what": "100 kOhm 1 % "
+                        "0603: output read-back divider, top", "ohm": 100000},
+    "readback_pulldown": {"mfr": "Yageo", "mpn": "RC0603FR-0756KL", "what": "56 kOhm 1 % 0603:"
+                          " output read-back divider, to ground", "ohm": 56000},
+    "readback_clamp": {"mfr": "Nexperia", "mpn": "BAT54S,215", "what": "dual Schottky in "
+                       "series (SOT-23): clamps the read-back between ground and 3.3 V"},
+    "bypass": {"mfr": "Murata", "mpn": "GRM188R71H104KA93D", "what": "100 nF 50 V X7R 0603: "
+               "one per IC supply pin, one at the ADC pin"},
+}
+
+# What a revision chooses beyond its firmware file; missing keys: the sense chip's defaults.
+REVISIONS: dict[str, dict[str, Any]] = {
+    "rev-a": {"switch": "tps1h100a", "input_fuse_a": 20},
+}
+DEFAULT_INPUT_FUSE_A = 20
+I2C_RISE_NS = 300  # fast mode (400 kHz): SDA/SCL rise time at most 300 ns (I2C-bus spec UM10204)
+I2C_PIN_PF = 10  # input capacitance per chip on the bus, pF (INA226: 3 pF typ; generous)
+I2C_TRACE_PF = 50  # the bus's copper and the Pico's pins, pF
+
+
+class PartsError(Exception):
+    """A revision names a part this catalogue does not have: the message says what to add."""
+
+
+def chip(board: dict[str, Any]) -> dict[str, Any]:
+    name = board["sense"]["chip"]
+    if name not in SENSE:
+        raise PartsError(f"hardware/parts.py: {board['name']} senses with {name!r}, which SENSE "
+                         f"does not list; add it to SENSE (one of: {', '.join(sorted(SENSE))})")
+    return SENSE[name]
+
+
+def choices(board: dict[str, Any]) -> dict[str, Any]:
+    """The revision's choices: its ``REVISIONS`` entry over its sense chip's defaults."""
+    got = {"switch": chip(board)["switch"], "input_fuse_a": DEFAULT_INPUT_FUSE_A}
+    got.update(REVISIONS.get(board["name"], {}))
+    if got["switch"] not in SWITCHES:
+        raise PartsError(f"hardware/parts.py: {board['name']} uses switch {got['switch']!r}, "
+                         f"which SWITCHES does not list; add it there")
+    if board["mcu"] not in MCU:
+        raise PartsError(f"hardware/parts.py: {board['name']} runs on {board['mcu']!r}, which "
+                         "MCU does not list; add it there")
+    return got
+
+
+def fuse_for(amps: float) -> int:
+    """The smallest fuse size of at least ``FUSE_MARGIN`` x ``amps``."""
+    for size in FUSE_SIZES_A:
+        if size >= amps * FUSE_MARGIN:
+            return size
+    raise PartsError(f"hardware/parts.py: no fuse in FUSE_SIZES_A carries {amps:g} A "
+                     f"x {FUSE_MARGIN}; add a larger size")
+
+
+def shunt_for(ohm: float, amps: float) -> tuple[float, str, str]:
+    """(rating W, part number, package) of the smallest shunt rated for ``SHUNT_MARGIN`` x
+    I^2 R at ``amps``."""
+    need = amps * amps * ohm * SHUNT_MARGIN
+    code = f"{ohm:.4f}"[2:]  # 0.0100 -> "0100": Vishay's code for 10 mOhm
+    for watts, pattern, package in SHUNTS:
+        if watts >= need:
+            return watts, pattern.format(code=code), package
+    raise PartsError(f"hardware/parts.py: no shunt in SHUNTS is rated for {need:.2f} W; add "
+                     "a larger one")

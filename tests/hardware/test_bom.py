@@ -1,0 +1,113 @@
+"""The committed BOMs and parts pages in ``hardware/`` are what ``hardware/bom.py`` makes from
+``firmware/boards`` and ``hardware/parts.py`` now, for every revision there is; the limits are
+the arithmetic of the parts' ratings (a shunt's power rating from I^2 R at its channel's
+limit, a fuse from the continuous current); and a revision naming a part the catalogue lacks
+gets one line and exit 2."""
+
+from __future__ import annotations
+
+import csv
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+REVS = sorted("rev-" + p.stem[4:] for p in (ROOT / "firmware" / "boards").glob("rev_*.py"))
+
+
+def run(*args: str, cwd: Path = ROOT) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, str(ROOT / "hardware" / "bom.py"), *args], cwd=cwd,
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_committed_files_are_the_generators_output(tmp_path: Path) -> None:
+    done = run(str(tmp_path))
+    assert done.returncode == 0, done.stderr
+    made = sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*") if p.is_file())
+    assert made == sorted(f"{rev}/{name}" for rev in REVS for name in ("board.md", "bom.csv"))
+    for rel in made:
+        assert (ROOT / "hardware" / rel).read_text() == (tmp_path / rel).read_text(), rel
+
+
+def rows(rev: str) -> dict[str, dict[str, str]]:
+    with open(ROOT / "hardware" / rev / "bom.csv", newline="") as f:
+        return {r["reference"]: r for r in csv.DictReader(f)}
+
+
+def test_rev_a_parts_follow_from_the_ratings() -> None:
+    got = rows("rev-a")
+    assert got["U1"]["mpn"] == "SC0918"  # Pico W
+    assert got["SEN1-SEN10"]["mpn"] == "INA226AIDGSR"
+    assert got["SEN1-SEN10"]["quantity"] == "10"
+    # 10 mOhm at the switch's 5 A limit: 0.25 W, twice that wanted: the 0.5 W 2010 part
+    assert got["RS1-RS10"]["mpn"] == "WSL2010R0100FEA"
+    # 4 A continuous x 1.25 = 5 A fuse per channel; one holder per fuse and one for the input
+    assert got["F1-F10"]["mpn"] == "0287005.PXCN"
+    assert got["XF0-XF10"]["quantity"] == "11"
+    assert got["D1"]["mpn"] == "SMCJ26A"
+    assert all(r["manufacturer"] and r["mpn"] for r in got.values())
+
+
+def test_rev_a_limits_are_stated() -> None:
+    text = (ROOT / "hardware" / "rev-a" / "board.md").read_text()
+    assert "| input voltage | 7 V to 26 V |" in text
+    assert "| input voltage the ADC can read | 0 V to 36.3 V |" in text
+    assert "| sense full scale per channel | 8.19 A | 81.92 mV / 10 mOhm |" in text
+    assert "| largest rated_ma for which the instant trip can fire | 1667 mA |" in text
+
+
+def test_a_part_missing_from_the_catalogue_is_one_line(tmp_path: Path) -> None:
+    """A copy of the tree whose rev-a senses with a chip ``parts.py`` does not know."""
+    for d in ("firmware", "protocol", "hardware"):
+        subprocess.run(["cp", "-r", str(ROOT / d), str(tmp_path / d)], check=True)
+    rev = tmp_path / "firmware" / "boards" / "rev_a.py"
+    rev.write_text(rev.read_text().replace('"chip": "ina226"', '"chip": "ina999"'))
+    done = subprocess.run([sys.executable, "hardware/bom.py", str(tmp_path / "out")],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120,
+                          env={"PATH": "/usr/bin:/bin"})
+    assert done.returncode == 2
+    assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
+    assert "'ina999'" in done.stderr and "add it to SENSE" in done.stderr
+
+
+@pytest.mark.parametrize("rev", REVS)
+def test_every_revision_has_a_bom_and_pins(rev: str) -> None:
+    for name in ("bom.csv", "board.md", "pins.md", "pins.csv", "wiring.svg"):
+        assert (ROOT / "hardware" / rev / name).is_file(), name
+
+
+REV_Z = '''BOARD = {
+    "name": "rev-z", "mcu": "rp2040", "channels": 4,
+    "en_pins": (2, 3, 4, 5), "status_pins": (12, 13, 14, 15),
+    "sense": {"chip": "ina3221",
+              "i2c": {"id": 0, "sda": 0, "scl": 1, "freq": 400000, "timeout_us": 2000},
+              "addrs": (0x40, 0x41), "inputs": ((0, 0), (0, 1), (0, 2), (1, 0)),
+              "shunt_uohm": 20000},
+    "vin": {"adc_pin": 26, "divider": 11, "vref_mv": 3300},
+}
+'''
+
+
+def test_a_new_revision_file_is_picked_up(tmp_path: Path) -> None:
+    """A revision file added to firmware/boards (a multi-channel sense chip, other shunts) gets
+    its pins, wiring, BOM and limits with no other change."""
+    for d in ("firmware", "protocol", "hardware"):
+        subprocess.run(["cp", "-r", str(ROOT / d), str(tmp_path / d)], check=True)
+    (tmp_path / "firmware" / "boards" / "rev_z.py").write_text(REV_Z)
+    out = tmp_path / "out"
+    for tool in ("pinmap.py", "bom.py"):
+        done = subprocess.run([sys.executable, f"hardware/{tool}", str(out)], cwd=tmp_path,
+                              capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stderr
+    pins = (out / "rev-z" / "pins.md").read_text()
+    assert "| 3 | 0x41 input 1 | A0=VS |" in pins and "INA3221 x 2" in pins
+    with open(out / "rev-z" / "bom.csv", newline="") as f:
+        got = {r["reference"]: r for r in csv.DictReader(f)}
+    assert got["SEN1-SEN2"]["mpn"] == "INA3221AIRGVR"  # two chips for four channels
+    # 20 mOhm at the switch's 5 A limit: 0.5 W, twice that wanted: the 1 W 2512 part
+    assert got["RS1-RS4"]["mpn"] == "WSL2512R0200FEA"
+    board = (out / "rev-z" / "board.md").read_text()
+    assert "| input voltage | 7 V to 26 V |" in board  # the INA3221's bus input: 26 V
+    assert "| sense full scale per channel | 8.19 A | 163.8 mV / 20 mOhm |" in board
