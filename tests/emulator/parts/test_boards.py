@@ -71,7 +71,7 @@ class BoardsTest(unittest.TestCase):
         self.assertLess(abs(mv - 24000), 240)  # within 1 %: 12 bit, ENOB 8.7
 
     def test_every_revision_is_listed_and_consistent(self):
-        self.assertEqual(boards.known()[:2], ["rev-a", "rev-b"])
+        self.assertEqual(boards.known()[:3], ["rev-a", "rev-b", "rev-c"])
         for name in boards.known():
             b = boards.load(name)
             n = b["channels"]
@@ -84,6 +84,13 @@ class BoardsTest(unittest.TestCase):
                 for chip, k in used:
                     self.assertLess(chip, len(sense["addrs"]))
                     self.assertLess(k, 3)
+            if sense["chip"] == "profet":  # two channels a part, one IS node, no status pins
+                self.assertEqual(2 * len(sense["den_pins"]), n)
+                pins = list(b["en_pins"]) + list(sense["den_pins"]) + [sense["dsel_pin"]]
+                self.assertEqual(len(set(pins)), len(pins))
+                self.assertIn(sense["is_adc_pin"], (26, 27, 28))
+                self.assertNotEqual(sense["is_adc_pin"], b["vin"]["adc_pin"])
+                self.assertGreaterEqual(sense["r_is_ohm"], 820)  # the data sheet's minimum
 
     def test_rev_b_says_which_revisions_exist_when_asked_for_another(self):
         with self.assertRaises(ValueError) as cm:

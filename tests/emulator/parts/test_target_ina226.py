@@ -37,6 +37,14 @@ class BoardBench:
     def _status(self, ch):
         return lambda: self.closed[ch]
 
+    def boot(self, protected=(), rated_ma=3000):
+        """Every channel rated ``rated_ma`` and switched on at power-up; 2 s run."""
+        cfg = {"channels": [{"name": "c" + str(i), "rated_ma": rated_ma, "powerup": True,
+                             "protected": i in protected} for i in range(self.hal.n_channels)]}
+        self.board = Board(self.hal, cfg)
+        self.board.boot(self.w.now_us // 1000)
+        self.run(2000)
+
     def run(self, ms):
         end = self.w.now_us + ms * 1000
         while self.w.now_us < end:
@@ -77,13 +85,6 @@ class Bench(BoardBench):
             amps = self.load_a[ch] if self.closed[ch] else 0.0
             return amps * SHUNT_OHM, 24.0
         return source
-
-    def boot(self):
-        cfg = {"channels": [{"name": "c" + str(i), "rated_ma": 3000, "powerup": True}
-                            for i in range(len(EN))]}
-        self.board = Board(self.hal, cfg)
-        self.board.boot(self.w.now_us // 1000)
-        self.run(2000)
 
     def reads(self, ticks=1):
         out = [0] * len(EN)

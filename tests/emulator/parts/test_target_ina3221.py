@@ -13,7 +13,6 @@ from emulator.parts import ina3221 as T
 from emulator.parts.ina3221 import Ina3221
 from emulator.parts.world import World, install
 from firmware import boards
-from firmware.board import Board
 from firmware.hal.ina3221 import limit_code
 from firmware.hal.storage import MemStorage
 from protocol.constants import EV_FAULT, EV_TRIP, F_SENSOR, F_SHORT, ST_ON
@@ -26,14 +25,13 @@ RATED_MA = 3000  # trip at 3 x rated (9 A), inrush up to 4 x rated (12 A)
 class Bench(BoardBench):
     """Rev B: ten switches, each load through a shunt into an INA3221 input."""
 
-    def __init__(self, load_a=None, faults=None, protected=()):
+    def __init__(self, load_a=None, faults=None):
         self.b = b = boards.load("rev-b")
         self.n = n = b["channels"]
         self.w = w = install(World())
         self.load_a = list(load_a or [0.1 * (ch + 1) for ch in range(n)])
         self.spike = [None] * n  # fn(t_us) -> amps, instead of load_a
         self.closed = [False] * n
-        self.protected = protected
         sense = b["sense"]
         ohm = sense["shunt_uohm"] / 1e6
         srcs = [[None, None, None] for _ in sense["addrs"]]
@@ -61,13 +59,6 @@ class Bench(BoardBench):
             amps = fn(t_us) if fn is not None else self.load_a[ch]
             return amps * ohm, 24.0
         return source
-
-    def boot(self):
-        cfg = {"channels": [{"name": "c" + str(i), "rated_ma": RATED_MA, "powerup": True,
-                             "protected": i in self.protected} for i in range(self.n)]}
-        self.board = Board(self.hal, cfg)
-        self.board.boot(self.w.now_us // 1000)
-        self.run(2000)
 
 
 class DriverTest(unittest.TestCase):
@@ -145,8 +136,8 @@ class FastTripTest(unittest.TestCase):
 
 class PartFaultTest(unittest.TestCase):
     def test_nack_is_a_sensor_fault_of_its_three_channels(self):
-        b = Bench(protected=(3,))
-        b.boot()
+        b = Bench()
+        b.boot(protected=(3,))
         b.events()
         b.chips[1].inject("nack")
         b.run(5000)
