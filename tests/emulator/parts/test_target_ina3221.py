@@ -10,7 +10,7 @@ tests/emulator/parts``).
 import unittest
 
 from emulator.parts import ina3221 as T
-from emulator.parts.ina3221 import Ina3221
+from emulator.parts.wiring import wire
 from emulator.parts.world import World, install
 from firmware import boards
 from firmware.hal.ina3221 import limit_code
@@ -32,18 +32,13 @@ class Bench(BoardBench):
         self.load_a = list(load_a or [0.1 * (ch + 1) for ch in range(n)])
         self.spike = [None] * n  # fn(t_us) -> amps, instead of load_a
         self.closed = [False] * n
-        sense = b["sense"]
-        ohm = sense["shunt_uohm"] / 1e6
-        srcs = [[None, None, None] for _ in sense["addrs"]]
-        for ch, (chip, k) in enumerate(sense["inputs"]):
-            srcs[chip][k] = self._source(ch, ohm)
+        for ch in range(n):
             w.wire_output(b["en_pins"][ch], self._switch(ch))
             w.wire_input(b["status_pins"][ch], self._status(ch))
         self.chips = []
-        for i, addr in enumerate(sense["addrs"]):
-            chip = Ina3221([s for s in srcs[i] if s is not None], seed=i + 1)
-            w.bus(0).attach(addr, chip)
-            self.chips.append(chip)
+        for chip, _k in wire(w, b, self):
+            if chip not in self.chips:
+                self.chips.append(chip)
         for i, (fault, value) in (faults or {}).items():  # already there at power-on
             self.chips[i].inject(fault, value)
         w.wire_adc(b["vin"]["adc_pin"], lambda: 24.0 / 11)
@@ -51,7 +46,7 @@ class Bench(BoardBench):
         self.board = None
         self.cursor = 0
 
-    def _source(self, ch, ohm):
+    def source(self, ch, ohm):
         def source(t_us):
             if not self.closed[ch]:
                 return 0.0, 0.0

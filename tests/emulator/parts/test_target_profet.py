@@ -9,7 +9,7 @@ tests/emulator/parts``).
 
 import unittest
 
-from emulator.parts.profet import Profet
+from emulator.parts.wiring import wire
 from emulator.parts.world import World, install
 from firmware import boards
 from firmware.hal import LOW, TRIPPED
@@ -30,37 +30,18 @@ class Bench(BoardBench):
         self.w = w = install(World())
         self.load_a = list(load_a or [0.5 + 0.25 * ch for ch in range(n)])
         self.closed = [False] * n
-        clock = lambda: w.now_us  # noqa: E731
-        self.parts = [Profet([self._load(2 * d), self._load(2 * d + 1)], seed=d + 1, clock=clock)
-                      for d in range(n // 2)]
-        for ch in range(n):
-            w.wire_output(b["en_pins"][ch], self._in(ch))
-        sense = b["sense"]
-        for d, pin in enumerate(sense["den_pins"]):
-            w.wire_output(pin, self.parts[d].set_den)
-        w.wire_output(sense["dsel_pin"], self._dsel)
-        w.wire_adc(sense["is_adc_pin"], self._node_v)
+        sensed = wire(w, b, self)
+        self.parts = [sensed[2 * d][0] for d in range(n // 2)]
         w.wire_adc(b["vin"]["adc_pin"], lambda: 24.0 / 11)
         self.hal = target_on(w).build(b, MemStorage())
         self.board = None
         self.cursor = 0
 
-    def _load(self, ch):
+    def load(self, ch):
         return lambda t: self.load_a[ch]
 
-    def _in(self, ch):
-        def drive(level):
-            self.closed[ch] = bool(level)
-            self.parts[ch // 2].set_in(ch % 2, level)
-        return drive
-
-    def _dsel(self, level):
-        for p in self.parts:
-            p.set_dsel(level)
-
-    def _node_v(self):
-        r = self.b["sense"]["r_adc_ohm"]
-        return sum(p.is_current() for p in self.parts) * r
+    def drive(self, ch, level):
+        self.closed[ch] = bool(level)
 
 
 class DriverTest(unittest.TestCase):
