@@ -41,7 +41,8 @@ Protection, per tick, from the integer current ``ma`` (no floating point on the 
   set through ``hal.set_trip_ma`` to the inrush limit in INRUSH and the trip limit in ON; a
   smart switch's fault level, its own protection having cut the load): in INRUSH or ON a sample
   at the limit for the instant trip (``trip_samples`` of them trip it, with the limit as the
-  event's value), the reported current 0, the heat held; ignored in the other states.
+  event's value), the reported current 0, the heat held; in the other states a current of at
+  least the limit for the stuck-on rule (a switch stuck on into a short).
 - Low, not measured (the HAL reads ``LOW``: below the sensing part's accurate range, as a smart
   switch's current sense is at small loads): the current counts as 0 and the open-load rule
   does not run on it (a small load is not an open one).
@@ -357,6 +358,8 @@ class Channel:
             self._blind(now, blind)
         self.current_ma = ma
         self.physical = sw
+        if tripped:  # at least the limit the part compared with, for every rule below
+            ma = self.inrush_lim if self.state == ST_INRUSH else self.trip_lim
         if self.offset_ma:  # protection uses the reading without the sensor's known offset
             ma = ma - self.offset_ma if ma > self.offset_ma else 0
         st = self.state
@@ -368,12 +371,9 @@ class Channel:
                     return
             else:
                 self.mismatch_n = 0
-            lim = self.inrush_lim if st == ST_INRUSH else self.trip_lim
-            if tripped:
-                ma = lim
             if blind:
                 self.over_n = 0
-            elif ma >= lim:
+            elif ma >= (self.inrush_lim if st == ST_INRUSH else self.trip_lim):
                 self.over_n += 1
                 if self.over_n >= self.trip_samples:
                     self._trip(now, F_INRUSH if st == ST_INRUSH else F_SHORT, ma)

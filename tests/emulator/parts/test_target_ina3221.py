@@ -15,7 +15,7 @@ from emulator.parts.world import World, install
 from firmware import boards
 from firmware.hal.ina3221 import limit_code
 from firmware.hal.storage import MemStorage
-from protocol.constants import EV_FAULT, EV_TRIP, F_SENSOR, F_SHORT, ST_ON
+from protocol.constants import EV_FAULT, EV_TRIP, F_SENSOR, F_SHORT, F_STUCK_ON, ST_ON
 from tests.emulator.parts.test_machine import target_on
 from tests.emulator.parts.test_target_ina226 import BoardBench
 
@@ -31,6 +31,7 @@ class Bench(BoardBench):
         self.w = w = install(World())
         self.load_a = list(load_a or [0.1 * (ch + 1) for ch in range(n)])
         self.spike = [None] * n  # fn(t_us) -> amps, instead of load_a
+        self.welded = set()  # channels whose switch conducts whatever its enable says
         self.closed = [False] * n
         for ch in range(n):
             w.wire_output(b["en_pins"][ch], self._switch(ch))
@@ -48,7 +49,7 @@ class Bench(BoardBench):
 
     def source(self, ch, ohm):
         def source(t_us):
-            if not self.closed[ch]:
+            if not self.closed[ch] and ch not in self.welded:
                 return 0.0, 0.0
             fn = self.spike[ch]
             amps = fn(t_us) if fn is not None else self.load_a[ch]
@@ -116,6 +117,18 @@ class FastTripTest(unittest.TestCase):
         self.assertFalse(b.closed[0])
         self.assertGreater(b.hal.ina.trips, 0)
         self.assertEqual(b.board.channels[1].state, ST_ON)
+
+    def test_a_switch_stuck_on_into_a_short_is_seen_through_the_flag(self):
+        b = Bench()
+        b.boot()
+        b.board.switch(2, False)
+        b.run(100)
+        b.welded.add(2)
+        b.closed[2] = True  # its status pin reads it on: the switch conducts
+        b.spike[2] = lambda t: 30.0  # over the shunt's 16.38 A full scale: CRITICAL every time
+        b.run(3000)
+        ch = b.board.channels[2]
+        self.assertTrue(ch.live & F_STUCK_ON)
 
     def test_without_the_critical_flag_the_average_alone_would_not_trip(self):
         b = Bench()
