@@ -12,7 +12,7 @@ import unittest
 from emulator.parts.wiring import wire
 from emulator.parts.world import World, install
 from firmware import boards
-from firmware.hal import LOW, TRIPPED
+from firmware.hal import LOW, NO_READING, TRIPPED
 from firmware.hal.storage import MemStorage
 from protocol.constants import EV_TRIP, EV_WARNING, F_OPEN_LOAD, F_SENSOR, F_SHORT, ST_ON
 from tests.emulator.parts.test_machine import target_on
@@ -119,3 +119,6 @@ class PartFaultTest(unittest.TestCase):
         b.w.set_time(b.w.now_us + 1000)
         b.hal.ina.setup()
         self.assertIn("sense node driven", b.hal.report()[0])
+        out = [0] * 10
+        b.hal.read_currents_ma(out)
+        self.assertEqual(out, [NO_READING] * 10)  # every channel: F_SENSOR, switches kept
