@@ -37,6 +37,15 @@ Protection, per tick, from the integer current ``ma`` (no floating point on the 
   every current rule (trips, I²t, open load, stuck on) suspended and the heat held, the
   reported current 0; when readings return, an EV_FAULT with 0 flags and ``F_SENSOR`` live
   cleared (unless an offset doubt below keeps it).
+- A fast trip input (the HAL reads ``TRIPPED``: an INA3221's per-conversion CRITICAL limit,
+  set through ``hal.set_trip_ma`` to the inrush limit in INRUSH and the trip limit in ON; a
+  smart switch's fault level, its own protection having cut the load): in INRUSH or ON a sample
+  at the limit for the instant trip (``trip_samples`` of them trip it, with the limit as the
+  event's value), the reported current 0, the heat held; in the other states a current of at
+  least the limit for the stuck-on rule (a switch stuck on into a short).
+- Low, not measured (the HAL reads ``LOW``: below the sensing part's accurate range, as a smart
+  switch's current sense is at small loads): the current counts as 0 and the open-load rule
+  does not run on it (a small load is not an open one).
 - Retries: after an overload, retry after ``retry_ms[0]``, ``[1]``, ... then latch; after a
   short or inrush trip retry ``short_retries`` times (after ``retry_ms[0]``), then latch. Both
   counters reset after ``retry_reset_ms`` without a fault, or by ``clear``.
@@ -57,6 +66,7 @@ Protection, per tick, from the integer current ``ma`` (no floating point on the 
 ``live`` faults are conditions present now; ``sticky`` faults accumulate until ``clear``.
 """
 
+from firmware.hal import LOW, TRIPPED
 from protocol.compat import const
 from protocol.constants import (
     E_LATCHED,
@@ -196,6 +206,8 @@ class Channel:
         self.stuck_on_ms = cfg["stuck_on_ms"]
         self.priority = cfg["priority"]
         self.protected = cfg["protected"]
+        if self.state == ST_ON:
+            self._limit(self.trip_lim)
 
     # --- the state machine ------------------------------------------------------------
 
@@ -225,6 +237,7 @@ class Channel:
             self.mismatch_n = 0
             self.cycle_at = -1
             self.hal.set_switch(self.index, True)  # type: ignore[attr-defined]
+            self._limit(self.inrush_lim)
         elif st != ST_ON:
             self.hal.set_switch(self.index, False)  # type: ignore[attr-defined]
             self.low_since = -1
@@ -233,6 +246,13 @@ class Channel:
                 self.live &= ~F_OPEN_LOAD
         else:
             self.low_since = -1
+            self._limit(self.trip_lim)
+
+    def _limit(self, ma: int) -> None:
+        """The current of the instant trip now, for a HAL with a fast trip input."""
+        setter = getattr(self.hal, "set_trip_ma", None)
+        if setter is not None:
+            setter(self.index, ma)
 
     # --- faults -------------------------------------------------------------------------
 
@@ -323,13 +343,23 @@ class Channel:
                          self.state, F_OVERLOAD, ma, now - self.boot_ms)
 
     def step(self, now: int, ma: int, sw: bool, dt: int) -> None:
-        blind = ma < 0  # no reading: the sensor did not answer (see the module docstring)
-        if blind:
+        blind = False  # no reading: the sensor did not answer (see the module docstring)
+        tripped = False  # the sensing part's fast trip input fired
+        low = False  # below the sensing part's accurate range
+        if ma < 0:
+            if ma == TRIPPED:
+                tripped = True
+            elif ma == LOW:
+                low = True
+            else:
+                blind = True  # NO_READING
             ma = 0
         if blind != self.unread:
             self._blind(now, blind)
         self.current_ma = ma
         self.physical = sw
+        if tripped:  # at least the limit the part compared with, for every rule below
+            ma = self.inrush_lim if self.state == ST_INRUSH else self.trip_lim
         if self.offset_ma:  # protection uses the reading without the sensor's known offset
             ma = ma - self.offset_ma if ma > self.offset_ma else 0
         st = self.state
@@ -354,7 +384,7 @@ class Channel:
                 if now >= self.deadline:
                     self.fire(X_INRUSH_END, now)
                 return
-            if blind:  # the thermal model holds its heat until readings come back
+            if blind or tripped:  # the thermal model holds its heat until readings come back
                 return
             r = ma * 100 // self.rated
             if r > RATIO_CAP:
@@ -370,7 +400,9 @@ class Channel:
                 self.live &= ~F_OVERLOAD  # cooled: the warning is over
                 self.log.put(EV_WARNING, self.index, st, st, 0,  # type: ignore[attr-defined]
                              ma, now - self.boot_ms)
-            if ma < self.open_ma:
+            if low:
+                self.low_since = -1  # low, not measured: no open-load judgement
+            elif ma < self.open_ma:
                 if self.low_since < 0:
                     self.low_since = now
                 elif now - self.low_since >= self.open_ms and not self.live & F_OPEN_LOAD:

@@ -2,9 +2,10 @@
 
 This is the only module that touches ``machine`` (through ``firmware.hal.target``). The board
 revision is data (``firmware.boards``: rev A is ten high-side switches with status outputs, ten
-INA226 monitors on I2C(0), the input voltage on an ADC pin through a 1:11 divider); the one
-this board was flashed as is read at boot and its HAL built from it. Everything runs on asyncio
-(``firmware.net``): the protection loop (one step per tick, then the pushes), the native
+INA226 monitors on I2C(0), the input voltage on an ADC pin through a 1:11 divider; rev B the
+same switches measured by four INA3221; rev C five dual smart switches read through the ADC);
+the one this board was flashed as is read at boot and its HAL built from it. Everything runs
+on asyncio (``firmware.net``): the protection loop (one step per tick, then the pushes), the native
 protocol on TCP port 7000 and on UART(1), Modbus TCP on port 502, each registered with the
 supervisor; the original TEDUSAR format (``firmware/tug.py``) only when ``TUG_PORT`` is set
 (it has no authentication), switching only when ``TUG_SWITCH`` is true as well. The network

@@ -29,20 +29,25 @@ FF    DIE ID       0x2260
 ====  ===========  ===========================================================================
 
 Timing: one result every (VBUSCT + VSHCT) x AVG in shunt-and-bus mode (VSHCT x AVG or
-VBUSCT x AVG for one input). Each conversion samples ``source`` in the middle of its
-conversion time; the result registers hold the mean of the AVG conversions (a real average,
-so a transient shorter than the cycle is smoothed as on the chip), then CVRF and the alert are
-set. A gap of many cycles between two ``advance`` calls runs only the last two cycles in full.
-
-Faults (``inject(name, value)``, ``clear()``): ``nack`` (the chip does not acknowledge its
-address), ``stuck_low`` (it holds SDA low: every transaction on its bus times out), ``reset``
-(a brown-out of the chip: registers back to power-on, CALIBRATION 0; a one-shot),
-``stuck`` (result registers frozen), ``open_shunt`` (a sense lead open: the differential input
-reads 0 V), ``gain`` (the shunt conversion scaled by ``value``), ``noise`` (``value`` volts rms
-added to every shunt conversion), ``die_id`` (a wrong chip at the address: FF reads ``value``).
+VBUSCT x AVG for one input), shunt first, run by ``emulator.parts.regchip`` (which also holds
+the part faults this chip shares with the INA3221: ``nack``, ``stuck_low``, ``reset``
+(CALIBRATION back to 0 with the rest), ``stuck``, ``open_shunt``, ``gain``, ``noise``,
+``die_id``). After each averaged result CVRF and the alert are set.
 """
 
-from emulator.parts.noise import Noise
+from emulator.parts.regchip import (
+    AVERAGES,
+    CONV_US,
+    DIE_ID,
+    FAULTS,
+    MANUFACTURER,
+    MANUFACTURER_ID,
+    RegisterChip,
+    signed,
+    trunc_div,
+)
+
+__all__ = ["AVERAGES", "CONV_US", "DIE_ID", "FAULTS", "MANUFACTURER", "MANUFACTURER_ID", "Ina226"]
 
 CONFIG = 0x00
 SHUNT = 0x01
@@ -52,16 +57,11 @@ CURRENT = 0x04
 CALIBRATION = 0x05
 MASK_ENABLE = 0x06
 ALERT_LIMIT = 0x07
-MANUFACTURER_ID = 0xFE
-DIE_ID = 0xFF
 
 CONFIG_POR = 0x4127
-MANUFACTURER = 0x5449
 DIE = 0x2260
 SHUNT_LSB_V = 2.5e-6
 BUS_LSB_V = 1.25e-3
-AVERAGES = (1, 4, 16, 64, 128, 256, 512, 1024)
-CONV_US = (140, 204, 332, 588, 1100, 2116, 4156, 8244)
 
 SOL = 0x8000
 SUL = 0x4000
@@ -76,8 +76,6 @@ APOL = 0x0002
 LEN = 0x0001
 ALERT_FUNCTIONS = (SOL, SUL, BOL, BUL, POL, CNVR)
 MASK_WRITABLE = 0xFC03
-
-FAULTS = ("nack", "stuck_low", "reset", "stuck", "open_shunt", "gain", "noise", "die_id")
 
 
 def config_word(avg: int, vbusct_us: int, vshct_us: int, mode: int = 7) -> int:
@@ -99,131 +97,48 @@ def cycle_us(config: int) -> int:
     return t * avg
 
 
-def _signed(v: int) -> int:
-    return v - 0x10000 if v & 0x8000 else v
+_signed = signed
+_trunc_div = trunc_div
 
 
-def _trunc_div(a: int, b: int) -> int:
-    q = abs(a) // b
-    return -q if a < 0 else q
+class Ina226(RegisterChip):
+    NAME = "INA226"
+    DIE = 0x2260
 
-
-def _zero(t_us: int) -> "tuple[float, float]":
-    return 0.0, 0.0
-
-
-class Ina226:
     def __init__(self, source: object = None, seed: int = 1, now_us: int = 0) -> None:
-        self.source = source if source is not None else _zero
-        self.rng = Noise(seed)
-        self.nack = False
-        self.stuck_low = False
-        self.stuck = False
-        self.open_shunt = False
-        self.gain = 1.0
-        self.noise_v = 0.0
-        self.die_id = DIE
-        self.pointer = 0
-        self.regs = [0] * 8
-        self.t = now_us
-        self.conversions = 0  # averaged results produced since power-on (tests, benchmarks)
-        self.power_on_reset(now_us)
+        super().__init__(None if source is None else [source], seed, now_us)
 
-    # --- power-on and faults -----------------------------------------------------------
+    @property
+    def source(self) -> object:
+        """What the chip's pins see: ``source(t_us) -> (shunt_v, bus_v)``."""
+        return self.sources[0]
 
-    def power_on_reset(self, now_us: int) -> None:
-        """Every register back to its power-on value; conversions restart (continuous mode)."""
-        self.regs = [CONFIG_POR, 0, 0, 0, 0, 0, 0, 0]
-        self.pointer = 0
-        self.t = now_us
-        self._restart(now_us)
+    @source.setter
+    def source(self, fn: object) -> None:
+        self.sources[0] = fn
 
-    def inject(self, fault: str, value: object = True, now_us: int = -1) -> None:
-        if fault not in FAULTS:
-            raise ValueError("INA226 fault {!r}: one of {}".format(fault, ", ".join(FAULTS)))
-        if fault == "nack":
-            self.nack = bool(value)
-        elif fault == "stuck_low":
-            self.stuck_low = bool(value)
-        elif fault == "reset":
-            self.power_on_reset(self.t if now_us < 0 else now_us)
-        elif fault == "stuck":
-            self.stuck = bool(value)
-        elif fault == "open_shunt":
-            self.open_shunt = bool(value)
-        elif fault == "gain":
-            self.gain = float(value)  # type: ignore[arg-type]
-        elif fault == "noise":
-            self.noise_v = float(value)  # type: ignore[arg-type]
-        else:
-            self.die_id = int(value)  # type: ignore[call-overload]
-
-    def clear(self) -> None:
-        self.nack = self.stuck_low = self.stuck = self.open_shunt = False
-        self.gain = 1.0
-        self.noise_v = 0.0
-        self.die_id = DIE
+    def power_on_values(self) -> "list[int]":
+        return [CONFIG_POR, 0, 0, 0, 0, 0, 0, 0]
 
     # --- conversions ---------------------------------------------------------------------
 
-    def _restart(self, now_us: int) -> None:
-        self.sub = 0  # which conversion of the cycle runs next
-        self.sub_start = now_us
-        self.cycle_start = now_us
+    def _round(self, cfg: int) -> "list[tuple[int, int, int]]":
+        mode = cfg & 3
+        seq = []
+        if mode & 1:
+            seq.append((1, 0, CONV_US[(cfg >> 3) & 7]))
+        if mode & 2:
+            seq.append((2, 0, CONV_US[(cfg >> 6) & 7]))
+        return seq
+
+    def _clear_acc(self) -> None:
         self.acc_shunt = 0
         self.acc_bus = 0
-        self.running = (self.regs[CONFIG] & 3) != 0
 
-    def _sub_kind(self, k: int) -> int:
-        """1: a shunt conversion, 2: a bus conversion, for the k-th conversion of a cycle."""
-        mode = self.regs[CONFIG] & 3
-        if mode == 3:
-            return 1 if k % 2 == 0 else 2
-        return mode
-
-    def advance(self, now_us: int) -> None:
-        """Run every conversion that completes by ``now_us``."""
-        if now_us <= self.t:
-            return
-        cfg = self.regs[CONFIG]
-        if self.running:
-            avg = AVERAGES[(cfg >> 9) & 7]
-            both = (cfg & 3) == 3
-            subs = avg * 2 if both else avg
-            period = cycle_us(cfg)
-            if cfg & 4 and now_us - self.cycle_start > 3 * period:
-                skip = (now_us - self.cycle_start) // period - 2  # only the last two count
-                self.cycle_start += skip * period
-                self.sub_start = self.cycle_start
-                self.sub = 0
-                self.acc_shunt = self.acc_bus = 0
-                self.conversions += skip
-            t_sh = CONV_US[(cfg >> 3) & 7]
-            t_bus = CONV_US[(cfg >> 6) & 7]
-            while self.running:
-                kind = self._sub_kind(self.sub)
-                dur = t_sh if kind == 1 else t_bus
-                end = self.sub_start + dur
-                if end > now_us:
-                    break
-                self._convert(kind, self.sub_start + dur // 2)
-                self.sub_start = end
-                self.sub += 1
-                if self.sub == subs:
-                    self._finish(avg)
-                    self.sub = 0
-                    self.cycle_start = end
-                    self.acc_shunt = self.acc_bus = 0
-                    if not cfg & 4:
-                        self.running = False  # triggered: one result, then idle
-        self.t = now_us
-
-    def _convert(self, kind: int, t_us: int) -> None:
-        shunt_v, bus_v = self.source(t_us)  # type: ignore[operator]
+    def _take(self, kind: int, ch: int, t_us: int) -> None:
+        shunt_v, bus_v = self.sources[0](t_us)
         if kind == 1:
-            v = 0.0 if self.open_shunt else shunt_v * self.gain
-            v += self.rng.gauss(self.noise_v)
-            code = round(v / SHUNT_LSB_V)
+            code = round(self.shunt_input(shunt_v) / SHUNT_LSB_V)
             self.acc_shunt += 32767 if code > 32767 else -32768 if code < -32768 else code
         else:
             code = round(bus_v / BUS_LSB_V)
@@ -231,7 +146,6 @@ class Ina226:
 
     def _finish(self, avg: int) -> None:
         regs = self.regs
-        self.conversions += 1
         mode = regs[CONFIG] & 3
         if not self.stuck:
             if mode & 1:
@@ -293,37 +207,7 @@ class Ina226:
 
     # --- the I2C side ------------------------------------------------------------------------
 
-    def acks(self) -> bool:
-        return not self.nack
-
-    def holds_sda(self) -> bool:
-        return self.stuck_low
-
-    def i2c_write(self, data: bytes, now_us: int) -> None:
-        """A write transaction's data bytes: the register pointer, then MSB and LSB."""
-        self.advance(now_us)
-        if not data:
-            return
-        self.pointer = data[0]
-        if len(data) >= 3:
-            self._write(self.pointer, (data[1] << 8) | data[2], now_us)
-
-    def i2c_read(self, n: int, now_us: int) -> bytes:
-        """A read transaction: the register the pointer names, MSB first (repeated after 2)."""
-        self.advance(now_us)
-        v = self._read(self.pointer)
-        out = bytearray(n)
-        for i in range(n):
-            out[i] = (v >> 8) if i % 2 == 0 else (v & 0xFF)
-        return bytes(out)
-
     def _read(self, reg: int) -> int:
-        if reg == MANUFACTURER_ID:
-            return MANUFACTURER
-        if reg == DIE_ID:
-            return self.die_id
-        if reg > ALERT_LIMIT:
-            return 0
         v = self.regs[reg]
         if reg == MASK_ENABLE:
             me = v & ~CVRF

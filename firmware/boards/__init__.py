@@ -9,8 +9,11 @@ flash (one line, written when the board is flashed), else ``DEFAULT``.
 
 Keys: ``name``, ``mcu``, ``channels`` (n), ``en_pins`` and ``status_pins`` (n GPIOs each),
 ``sense`` = {``chip``: "ina226", ``i2c``: {``id``, ``scl``, ``sda``, ``freq``, ``timeout_us``},
-``addrs`` (n 7-bit addresses), ``shunt_uohm``}, ``vin`` = {``adc_pin``, ``divider``: the ratio
-of the input divider (the ADC sees input / divider), ``vref_mv``}.
+``addrs`` (n 7-bit addresses), ``shunt_uohm``}; an INA3221 board (``chip``: "ina3221") names
+its chips in ``addrs`` and adds ``inputs`` (per channel: the chip's index in ``addrs`` and its
+input 0-2); a smart-switch board (``chip``: "profet") has no I2C: see ``rev_c.py``. ``vin`` =
+{``adc_pin``, ``divider``: the ratio of the input divider (the ADC sees input / divider),
+``vref_mv``}.
 """
 
 DEFAULT = "rev-a"
@@ -27,6 +30,21 @@ def selected() -> str:
     return name or DEFAULT
 
 
+def known() -> list:  # type: ignore[type-arg]
+    """The revisions this firmware has: one ``rev_x.py`` (or ``.mpy``) file each here."""
+    try:
+        import os
+
+        names = os.listdir(__file__.rsplit("/", 1)[0])
+    except (OSError, NameError, AttributeError):
+        return [DEFAULT]
+    out = []
+    for n in names:
+        if n.startswith("rev_") and (n.endswith(".py") or n.endswith(".mpy")):
+            out.append("rev-" + n[4:n.rindex(".")])
+    return sorted(out)
+
+
 def load(name: str = "") -> dict:  # type: ignore[type-arg]
     """A revision's description; ``ValueError`` naming the revisions if there is none."""
     name = name or selected()
@@ -34,7 +52,7 @@ def load(name: str = "") -> dict:  # type: ignore[type-arg]
     try:
         module = __import__("firmware.boards." + mod, None, None, ["BOARD"])
     except ImportError:
-        raise ValueError("no board revision " + repr(name) + ": rev-a") from None
+        raise ValueError("no board revision " + repr(name) + ": " + ", ".join(known())) from None
     return module.BOARD  # type: ignore[no-any-return]
 
 

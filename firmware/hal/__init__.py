@@ -9,8 +9,16 @@ so that the hot path needs no floating point: milliseconds, milliamperes, milliv
 ``ticks_ms() -> int``          monotonic milliseconds since this boot, never wrapping (a HAL on
                                a port whose ``time.ticks_ms`` wraps accumulates ``ticks_diff``)
 ``read_currents_ma(out)``      fill ``out[0:n_channels]`` with each channel's current in mA
-                               (int, >= 0), or -1 for a channel whose sensor gave no reading
-                               (no answer on its bus, a wrong chip); once per protection tick
+                               (int, >= 0), or a code below 0: ``NO_READING`` (-1) for a
+                               channel whose sensor gave no reading (no answer on its bus, a
+                               wrong chip), ``TRIPPED`` (-2) when the sensing part's own fast
+                               trip input fired (an INA3221's per-conversion CRITICAL limit,
+                               a smart switch's fault level on its sense pin while on: a flag,
+                               not a current), ``LOW`` (-3) for a current below the sensing
+                               part's accurate range (low, not measured: not an open load);
+                               once per protection tick
+``set_trip_ma(ch, ma)``        (optional) the channel's instant-trip current, for a sensing
+                               part with a fast trip input (the INA3221's CRITICAL limit)
 ``read_current_ma(ch) -> int`` one channel's current, for diagnostics outside the tick
 ``set_switch(ch, on)``         drive the channel's power switch (bool)
 ``read_switch(ch) -> bool``    read the switch back (its physical state, not the command)
@@ -32,6 +40,10 @@ A storage object holds a few small files by name (no directories):
 ``Hal`` below documents the interface as a base class (optional to inherit from).
 """
 
+NO_READING = -1  # the sensor gave no reading (read_currents_ma)
+TRIPPED = -2  # the sensing part's own fast trip input fired
+LOW = -3  # below the sensing part's accurate range: low, not measured
+
 
 class Hal:
     """The interface every HAL provides; each method documents the contract."""
@@ -51,6 +63,9 @@ class Hal:
 
     def set_switch(self, ch: int, on: bool) -> None:
         raise NotImplementedError
+
+    def set_trip_ma(self, ch: int, ma: int) -> None:
+        pass
 
     def read_switch(self, ch: int) -> bool:
         raise NotImplementedError

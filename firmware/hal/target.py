@@ -1,12 +1,16 @@
 """The real board's HAL: ``machine.Pin`` switches, ADC or INA226 current sensing, ``machine.WDT``.
 
-Only ``firmware/main.py`` builds this class, passing the pin numbers of the board revision.
-Current is read either from one ``machine.ADC`` per channel across a shunt amplifier
-(``adc_pins``, ``ma_per_count_x1000`` = mA per ADC count, times 1000) or from one INA226 per
-channel on an I2C bus (``ina226_addrs``, ``shunt_uohm`` the shunt in micro-ohms), driven by
-``firmware.hal.ina226.Ina226Bank``: IDs checked and each chip configured for the 10 ms tick at
-boot, a chip that reset configured again, and -1 (no reading: ``F_SENSOR``) for a channel whose
-chip does not answer or is not an INA226. Each switch has an enable pin and, where the board
+Only ``firmware/main.py`` builds this class (``build``, from a board revision of
+``firmware.boards``). Current is read either from one ``machine.ADC`` per channel across a
+shunt amplifier (``adc_pins``, ``ma_per_count_x1000`` = mA per ADC count, times 1000) or by a
+driver of the revision's sensing parts (``bank``, chosen by ``sense["chip"]`` in ``SENSORS``):
+``firmware.hal.ina226.Ina226Bank`` (one INA226 a channel; also built from ``ina226_addrs``
+and ``shunt_uohm``), ``firmware.hal.ina3221.Ina3221Bank`` (INA3221, three channels a chip,
+its CRITICAL limit a fast trip input, set from ``set_trip_ma``) or
+``firmware.hal.profet.ProfetBank`` (smart high-side switches read through the ADC). Each
+driver checks its parts at boot and reads ``NO_READING`` (``F_SENSOR``) for a channel whose
+part does not answer, ``TRIPPED`` or ``LOW`` where its part says so (``firmware.hal``).
+Each switch has an enable pin and, where the board
 has one, a status (read-back) pin; without one the enable pin's output latch is read back.
 ``ticks_ms`` turns the port's wrapping ``time.ticks_ms`` into a monotonic count with
 ``ticks_diff``. On the rp2 port ``machine.reset()`` reboots through the watchdog (the next boot
@@ -21,6 +25,7 @@ import machine  # type: ignore[import-not-found]
 
 from firmware import boards
 from firmware.hal.ina226 import Ina226Bank
+from firmware.hal.ina3221 import Ina3221Bank
 from protocol.constants import (
     RESET_BROWNOUT,
     RESET_POWER_ON,
@@ -35,13 +40,17 @@ REBOOT_MARK = "reboot"  # a reboot this firmware asked for (storage file)
 class TargetHal:
     def __init__(self, en_pins, status_pins=None, adc_pins=None, ma_per_count_x1000=1000,
                  i2c=None, ina226_addrs=None, shunt_uohm=10000, vin_adc_pin=None,
-                 mv_per_count_x1000=1000, wdt_timeout_ms=2000, storage=None):
+                 mv_per_count_x1000=1000, wdt_timeout_ms=2000, storage=None, bank=None):
         self.n_channels = len(en_pins)
         self.en = [machine.Pin(p, machine.Pin.OUT, value=0) for p in en_pins]
         self.status = [machine.Pin(p, machine.Pin.IN) for p in status_pins] if status_pins else None
         self.adc = [machine.ADC(machine.Pin(p)) for p in adc_pins] if adc_pins else None
         self.ma_k = ma_per_count_x1000
-        self.ina = Ina226Bank(i2c, ina226_addrs, shunt_uohm) if ina226_addrs else None
+        if bank is None and ina226_addrs:
+            bank = Ina226Bank(i2c, ina226_addrs, shunt_uohm)
+        self.ina = bank  # the sensing chips' driver (INA226, INA3221 or smart switches)
+        if bank is not None and hasattr(bank, "switches"):
+            bank.switches = self.en  # a smart switch's driver reads its inputs' state
         if self.ina is not None:
             self.ina.setup()
         self.vin = machine.ADC(machine.Pin(vin_adc_pin)) if vin_adc_pin is not None else None
@@ -93,6 +102,11 @@ class TargetHal:
         for ch in range(self.n_channels):
             out[ch] = self.read_current_ma(ch)
 
+    def set_trip_ma(self, ch, ma):
+        setter = getattr(self.ina, "set_trip_ma", None)
+        if setter is not None:
+            setter(ch, ma)
+
     def set_switch(self, ch, on):
         self.en[ch].value(1 if on else 0)
 
@@ -119,15 +133,36 @@ class TargetHal:
         machine.reset()
 
 
-def build(board, storage):
-    """The HAL of a board revision's description (``firmware.boards``): its I2C bus, its
-    chips, its pins and its input divider, as ``firmware/main.py`` boots it."""
-    sense = board["sense"]
+def _i2c(sense):
     bus = sense["i2c"]
-    i2c = machine.I2C(bus["id"], scl=machine.Pin(bus["scl"]), sda=machine.Pin(bus["sda"]),
-                      freq=bus["freq"], timeout=bus["timeout_us"])
+    return machine.I2C(bus["id"], scl=machine.Pin(bus["scl"]), sda=machine.Pin(bus["sda"]),
+                       freq=bus["freq"], timeout=bus["timeout_us"])
+
+
+def _ina226(sense):
+    return Ina226Bank(_i2c(sense), sense["addrs"], sense["shunt_uohm"])
+
+
+def _ina3221(sense):
+    return Ina3221Bank(_i2c(sense), sense["addrs"], sense["inputs"], sense["shunt_uohm"])
+
+
+def _profet(sense):
+    from firmware.hal.profet import ProfetBank
+
+    return ProfetBank(sense, machine)
+
+
+SENSORS = {"ina226": _ina226, "ina3221": _ina3221, "profet": _profet}
+
+
+def build(board, storage):
+    """The HAL of a board revision's description (``firmware.boards``): its sensing chips (by
+    ``sense["chip"]``, one of ``SENSORS``), its pins and its input divider, as
+    ``firmware/main.py`` boots it."""
+    sense = board["sense"]
+    bank = SENSORS[sense["chip"]](sense)
     vin = board["vin"]
-    return TargetHal(board["en_pins"], board["status_pins"], i2c=i2c,
-                     ina226_addrs=sense["addrs"], shunt_uohm=sense["shunt_uohm"],
+    return TargetHal(board["en_pins"], board["status_pins"] or None, bank=bank,
                      vin_adc_pin=vin["adc_pin"],
                      mv_per_count_x1000=boards.mv_per_count_x1000(vin), storage=storage)

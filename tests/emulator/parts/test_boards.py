@@ -6,15 +6,13 @@ its enable and status pins, its ten INA226 and its input divider (main.py's old 
 Runs under pytest and under the real MicroPython.
 """
 
-import sys
 import unittest
 
-from emulator.parts import machine
 from emulator.parts.ina226 import Ina226
 from emulator.parts.world import World, install
 from firmware import boards
 from firmware.hal.storage import MemStorage
-from tests.emulator.parts.test_machine import WorldTicks
+from tests.emulator.parts.test_machine import target_on
 
 
 def build(board, input_v=24.0, amps=0.5, world=None, storage=None):
@@ -30,14 +28,7 @@ def build(board, input_v=24.0, amps=0.5, world=None, storage=None):
         w.bus(board["sense"]["i2c"]["id"]).attach(addr, chip)
         chips.append(chip)
     w.wire_adc(board["vin"]["adc_pin"], lambda: input_v / board["vin"]["divider"])
-    sys.modules["machine"] = machine
-    try:
-        from firmware.hal import target
-    finally:
-        del sys.modules["machine"]
-    if not hasattr(target.time, "ticks_ms"):
-        target.time = WorldTicks(w)
-    return w, target.build(board, storage or MemStorage()), closed, chips
+    return w, target_on(w).build(board, storage or MemStorage()), closed, chips
 
 
 class BoardsTest(unittest.TestCase):
@@ -78,3 +69,30 @@ class BoardsTest(unittest.TestCase):
         _, hal, _, _ = build(b, input_v=24.0)
         mv = sum(hal.read_input_mv() for _ in range(20)) // 20
         self.assertLess(abs(mv - 24000), 240)  # within 1 %: 12 bit, ENOB 8.7
+
+    def test_every_revision_is_listed_and_consistent(self):
+        self.assertEqual(boards.known()[:3], ["rev-a", "rev-b", "rev-c"])
+        for name in boards.known():
+            b = boards.load(name)
+            n = b["channels"]
+            self.assertEqual(len(b["en_pins"]), n)
+            sense = b["sense"]
+            if sense["chip"] == "ina3221":
+                self.assertEqual(len(sense["inputs"]), n)
+                used = [tuple(i) for i in sense["inputs"]]
+                self.assertEqual(len(set(used)), n)  # no input measures two channels
+                for chip, k in used:
+                    self.assertLess(chip, len(sense["addrs"]))
+                    self.assertLess(k, 3)
+            if sense["chip"] == "profet":  # two channels a part, one IS node, no status pins
+                self.assertEqual(2 * len(sense["den_pins"]), n)
+                pins = list(b["en_pins"]) + list(sense["den_pins"]) + [sense["dsel_pin"]]
+                self.assertEqual(len(set(pins)), len(pins))
+                self.assertIn(sense["is_adc_pin"], (26, 27, 28))
+                self.assertNotEqual(sense["is_adc_pin"], b["vin"]["adc_pin"])
+                self.assertGreaterEqual(sense["r_is_ohm"], 820)  # the data sheet's minimum
+
+    def test_rev_b_says_which_revisions_exist_when_asked_for_another(self):
+        with self.assertRaises(ValueError) as cm:
+            boards.load("rev-q")
+        self.assertIn("rev-b", str(cm.exception))

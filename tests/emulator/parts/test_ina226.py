@@ -39,6 +39,12 @@ def signed(v):
     return v - 0x10000 if v & 0x8000 else v
 
 
+def spread(vals):
+    """The mean and the rms deviation of ``vals``."""
+    mean = sum(vals) / len(vals)
+    return mean, (sum((v - mean) ** 2 for v in vals) / len(vals)) ** 0.5
+
+
 def chip_with(shunt_v=0.0, bus_v=0.0):
     inputs = Inputs(shunt_v, bus_v)
     return Ina226(inputs), inputs
@@ -314,8 +320,7 @@ class FaultTest(unittest.TestCase):
         vals = []
         for k in range(1, 401):
             vals.append(signed(rd(c, I.SHUNT, 2200 * k)))
-        mean = sum(vals) / len(vals)
-        rms = (sum((v - mean) ** 2 for v in vals) / len(vals)) ** 0.5
+        mean, rms = spread(vals)
         self.assertLess(abs(mean - 4000), 3)
         self.assertGreater(rms, 8)
         self.assertLess(rms, 12)

@@ -223,6 +223,19 @@ class WorldTicks:
         return a - b
 
 
+def target_on(w):
+    """``firmware.hal.target`` imported with this ``machine`` (and, on CPython, ticks read from
+    the world ``w``), as ``firmware/main.py`` gets it on a board."""
+    sys.modules["machine"] = machine
+    try:
+        from firmware.hal import target
+    finally:
+        del sys.modules["machine"]
+    if not hasattr(target.time, "ticks_ms"):
+        target.time = WorldTicks(w)
+    return target
+
+
 class TargetHalTest(unittest.TestCase):
     """The shipped HAL (``firmware/hal/target.py``) on this ``machine``: its INA226 path."""
 

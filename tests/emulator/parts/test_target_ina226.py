@@ -6,7 +6,6 @@ Runs under pytest and under the real MicroPython (``micropython tests/mpy_run.py
 tests/emulator/parts``).
 """
 
-import sys
 import unittest
 
 from emulator.parts import ina226 as I
@@ -17,7 +16,7 @@ from firmware.board import Board
 from firmware.hal.ina226 import CONFIG_TICK, calibration
 from firmware.hal.storage import MemStorage
 from protocol.constants import EV_FAULT, EV_WARNING, F_OPEN_LOAD, F_SENSOR, ST_ON
-from tests.emulator.parts.test_machine import WorldTicks
+from tests.emulator.parts.test_machine import target_on
 
 EN = (2, 3, 4)
 STATUS = (12, 13, 14)
@@ -25,7 +24,40 @@ ADDRS = (0x40, 0x41, 0x42)
 SHUNT_OHM = 0.010
 
 
-class Bench:
+class BoardBench:
+    """What every revision's bench shares: the switches' nets, the board stepped tick by tick
+    on the world's clock, its events read in order. A subclass sets ``w``, ``closed``,
+    ``hal``, ``board`` and ``cursor``."""
+
+    def _switch(self, ch):
+        def drive(level):
+            self.closed[ch] = bool(level)
+        return drive
+
+    def _status(self, ch):
+        return lambda: self.closed[ch]
+
+    def boot(self, protected=(), rated_ma=3000):
+        """Every channel rated ``rated_ma`` and switched on at power-up; 2 s run."""
+        cfg = {"channels": [{"name": "c" + str(i), "rated_ma": rated_ma, "powerup": True,
+                             "protected": i in protected} for i in range(self.hal.n_channels)]}
+        self.board = Board(self.hal, cfg)
+        self.board.boot(self.w.now_us // 1000)
+        self.run(2000)
+
+    def run(self, ms):
+        end = self.w.now_us + ms * 1000
+        while self.w.now_us < end:
+            self.w.set_time(self.w.now_us + 10000 - self.w.now_us % 10000)
+            self.hal.wdt_feed()
+            self.board.tick(self.w.now_us // 1000)
+
+    def events(self):
+        evs, self.cursor, _ = self.board.events.read(self.cursor, 1000)
+        return evs
+
+
+class Bench(BoardBench):
     """Three channels: switch enable -> load -> shunt -> INA226, on the parts world."""
 
     def __init__(self, load_a=(0.8, 1.5, 0.3), faults=None):
@@ -41,26 +73,12 @@ class Bench:
             self.chips.append(chip)
         for ch, (fault, value) in (faults or {}).items():  # already there at power-on
             self.chips[ch].inject(fault, value)
-        sys.modules["machine"] = machine
-        try:
-            from firmware.hal import target
-        finally:
-            del sys.modules["machine"]
-        if not hasattr(target.time, "ticks_ms"):
-            target.time = WorldTicks(w)
+        target = target_on(w)
         self.hal = target.TargetHal(EN, STATUS, i2c=machine.I2C(0, freq=400000, timeout=2000),
                                     ina226_addrs=ADDRS, shunt_uohm=10000,
                                     storage=MemStorage())
         self.board = None
         self.cursor = 0
-
-    def _switch(self, ch):
-        def drive(level):
-            self.closed[ch] = bool(level)
-        return drive
-
-    def _status(self, ch):
-        return lambda: self.closed[ch]
 
     def _source(self, ch):
         def source(t_us):
@@ -68,30 +86,12 @@ class Bench:
             return amps * SHUNT_OHM, 24.0
         return source
 
-    def boot(self):
-        cfg = {"channels": [{"name": "c" + str(i), "rated_ma": 3000, "powerup": True}
-                            for i in range(len(EN))]}
-        self.board = Board(self.hal, cfg)
-        self.board.boot(self.w.now_us // 1000)
-        self.run(2000)
-
-    def run(self, ms):
-        end = self.w.now_us + ms * 1000
-        while self.w.now_us < end:
-            self.w.set_time(self.w.now_us + 10000 - self.w.now_us % 10000)
-            self.hal.wdt_feed()
-            self.board.tick(self.w.now_us // 1000)
-
     def reads(self, ticks=1):
         out = [0] * len(EN)
         for _ in range(ticks):
             self.w.set_time(self.w.now_us + 10000)
             self.hal.read_currents_ma(out)
         return out
-
-    def events(self):
-        evs, self.cursor, _ = self.board.events.read(self.cursor, 1000)
-        return evs
 
 
 class DriverTest(unittest.TestCase):

@@ -1,0 +1,103 @@
+"""The smart high-side switches of a board revision (Infineon PROFET+2, e.g. BTS7008-2EPA: two
+channels a part, analog current sense on IS), read through the microcontroller's ADC.
+
+Wiring (``firmware/boards/rev_c.py``): the switches' IN pins are the board's enable pins
+(channel 2d + k is IN k of part d); every part's IS pin joins one sense node (allowed, the
+parts sharing one supply) that goes to ground through R_IS = ``r_is_ohm`` (1.2 kOhm, the data
+sheet's typical; at least 820 Ohm) split as a divider whose lower ``r_adc_ohm`` (300 Ohm) the
+ADC pin ``is_adc_pin`` taps, so I_IS(FAULT) up to 10 mA stays under 3.3 V; one DEN pin a part
+(``den_pins``) picks which part drives the node, one shared DSEL pin (``dsel_pin``) its channel.
+
+Each read (once a tick) takes every channel in turn: DEN of its part high (the others low),
+DSEL set, ``settle_reads`` ADC conversions discarded (2 us each: at least t_sIS, 20 us), then
+two averaged. The IS current is counts x vref / 4095 / r_adc_ohm, and decodes as (thresholds
+from the description):
+
+- at or above ``fault_ua`` (3.8 mA, between I_IS(OLOFF) at most 3.5 mA and I_IS(FAULT) at
+  least 4.4 mA): the part's fault level. With IN high it is ``TRIPPED`` (the switch's own
+  protection cut the load: the channel trips; it switches IN off, which clears the latch, and
+  the retry switches it on again), a flag and never a current; with IN low the restart counter
+  still counts (DEN falling with IN low clears it) and the channel reads 0;
+- with IN low, at or above ``oloff_ua``: open load in the off state (``open_off[ch]``), 0;
+- with IN high: I_L = I_IS x ``k_ilis``; below ``accurate_ma`` (where the kILIS band is wider
+  than a third) ``LOW``: low, not measured, never an open load.
+
+A part has no ID to check: at boot (``setup``) the node must read 0 with every DEN low (a part
+whose IS is stuck driving would blind every channel); ``report`` says so per channel.
+"""
+
+from firmware.hal import LOW, NO_READING, TRIPPED
+
+
+class ProfetBank:
+    NAME = "profet"
+
+    def __init__(self, sense: dict, machine: object) -> None:  # type: ignore[type-arg]
+        pin = machine.Pin  # type: ignore[attr-defined]
+        self.den = [pin(p, pin.OUT, value=0) for p in sense["den_pins"]]
+        self.dsel = pin(sense["dsel_pin"], pin.OUT, value=0)
+        self.adc = machine.ADC(pin(sense["is_adc_pin"]))  # type: ignore[attr-defined]
+        self.n = 2 * len(self.den)
+        self.k_ilis = sense["k_ilis"]
+        self.r_adc = sense["r_adc_ohm"]
+        self.vref_uv = sense["vref_mv"] * 1000
+        self.settle_reads = sense["settle_us"] // 2 + 1
+        self.accurate_ma = sense["accurate_ma"]
+        self.fault_ua = sense["fault_ua"]
+        self.oloff_ua = sense["oloff_ua"]
+        self.switches: list = []  # type: ignore[type-arg] # the IN pins (TargetHal sets them)
+        self.open_off = [False] * self.n
+        self.faults = 0  # fault levels read with IN high (trips by the switch itself)
+        self.node_ok = True
+
+    def setup(self) -> None:
+        """Every DEN low: the node must read (almost) nothing."""
+        self.node_ok = self._is_ua() < self.oloff_ua // 2
+
+    def report(self) -> list:  # type: ignore[type-arg]
+        what = "profet ok" if self.node_ok else "sense node driven with every DEN low"
+        return ["ch%d part%d.%d %s" % (ch, ch // 2, ch % 2, what) for ch in range(self.n)]
+
+    def _is_ua(self) -> int:
+        a = self.adc.read_u16() >> 4  # type: ignore[attr-defined]
+        b = self.adc.read_u16() >> 4  # type: ignore[attr-defined]
+        return (a + b) * self.vref_uv // (2 * 4095 * self.r_adc)
+
+    def _select(self, ch: int) -> int:
+        """Part ``ch // 2`` on the node, its channel ``ch % 2`` selected; the settled IS, uA."""
+        part = ch // 2
+        for d in range(len(self.den)):
+            if d != part:
+                self.den[d].value(0)
+        self.dsel.value(ch % 2)
+        self.den[part].value(1)
+        for _ in range(self.settle_reads):
+            self.adc.read_u16()  # type: ignore[attr-defined]
+        return self._is_ua()
+
+    def _in(self, ch: int) -> bool:
+        return bool(self.switches[ch].value()) if self.switches else False
+
+    def read_one(self, ch: int) -> int:
+        if not self.node_ok:
+            return NO_READING
+        ua = self._select(ch)
+        on = self._in(ch)
+        self.open_off[ch] = False
+        if ua >= self.fault_ua:
+            if on:
+                self.faults += 1
+                return TRIPPED
+            return 0
+        if not on:
+            if ua >= self.oloff_ua:
+                self.open_off[ch] = True
+            return 0
+        ma = ua * self.k_ilis // 1000
+        return LOW if ma < self.accurate_ma else ma
+
+    def read(self, out: list) -> None:  # type: ignore[type-arg]
+        for ch in range(self.n):
+            out[ch] = self.read_one(ch)
+        for d in self.den:
+            d.value(0)  # DEN falling with IN low clears a part's restart counter

@@ -1,0 +1,124 @@
+"""Rev C as flashed: its description (``firmware/boards/rev_c.py``) builds, through
+``firmware.hal.target.build``, the smart-switch driver (``firmware/hal/profet.py``) on five
+PROFET+2 models whose IS pins join one sense node read by the world's ADC; what the driver
+reads, and what the board answers to each part fault.
+
+Runs under pytest and under the real MicroPython (``micropython tests/mpy_run.py
+tests/emulator/parts``).
+"""
+
+import unittest
+
+from emulator.parts.wiring import wire
+from emulator.parts.world import World, install
+from firmware import boards
+from firmware.hal import LOW, NO_READING, TRIPPED
+from firmware.hal.storage import MemStorage
+from protocol.constants import EV_TRIP, EV_WARNING, F_OPEN_LOAD, F_SENSOR, F_SHORT, ST_ON
+from tests.emulator.parts.test_machine import target_on
+from tests.emulator.parts.test_target_ina226 import BoardBench
+
+RATED_MA = 3000
+
+
+class Bench(BoardBench):
+    """Rev C: ten channels on five dual smart switches, every IS into one node."""
+
+    def __init__(self, load_a=None):
+        self.b = b = boards.load("rev-c")
+        self.n = n = b["channels"]
+        self.w = w = install(World())
+        self.load_a = list(load_a or [0.5 + 0.25 * ch for ch in range(n)])
+        self.closed = [False] * n
+        sensed = wire(w, b, self)
+        self.parts = [sensed[2 * d][0] for d in range(n // 2)]
+        w.wire_adc(b["vin"]["adc_pin"], lambda: 24.0 / 11)
+        self.hal = target_on(w).build(b, MemStorage())
+        self.board = None
+        self.cursor = 0
+
+    def load(self, ch):
+        return lambda t: self.load_a[ch]
+
+    def drive(self, ch, level):
+        self.closed[ch] = bool(level)
+
+
+class DriverTest(unittest.TestCase):
+    def test_readings_within_the_parts_band_and_the_adc(self):
+        b = Bench()
+        b.boot()
+        for ch, c in enumerate(b.board.channels):
+            self.assertEqual(c.state, ST_ON)
+            want = b.load_a[ch] * 1000
+            # the part's kILIS band (20 % at 0.5 A, 5 % at 2.5 A and up) and about 40 mA of
+            # ADC (12 bit, ENOB 8.7: 13 mA a count over 300 Ohm)
+            self.assertLess(abs(c.current_ma - want), want * 0.21 + 60)
+        self.assertEqual(b.hal.report()[3], "ch3 part1.1 profet ok")
+
+    def test_a_small_load_is_low_not_measured_not_open_load(self):
+        b = Bench()
+        b.load_a[2] = 0.03  # 30 mA: under the switch's accurate range
+        b.boot()
+        b.events()
+        out = [0] * 10
+        b.hal.read_currents_ma(out)
+        self.assertEqual(out[2], LOW)
+        b.run(10000)  # longer than open_load_ms
+        ch = b.board.channels[2]
+        self.assertEqual(ch.state, ST_ON)
+        self.assertEqual(ch.current_ma, 0)
+        self.assertFalse(ch.live & F_OPEN_LOAD)
+        self.assertFalse(ch.live & F_SENSOR)  # low is not a sensor fault either
+        self.assertFalse([e for e in b.events() if e[1] == EV_WARNING and e[2] == 2])
+
+    def test_a_disconnected_load_while_off_is_seen_as_open_load_off(self):
+        b = Bench()
+        b.boot()
+        b.board.switch(5, False)
+        b.parts[2].inject("open_load", 1)
+        b.run(20)
+        self.assertTrue(b.hal.ina.open_off[5])
+        self.assertFalse(b.hal.ina.open_off[4])
+
+
+class PartFaultTest(unittest.TestCase):
+    def test_a_short_is_the_switchs_fault_flag_and_the_channel_trips(self):
+        b = Bench()
+        b.boot()
+        b.events()
+        b.parts[3].inject("short", 0)  # channel 6
+        out = [0] * 10
+        b.hal.read_currents_ma(out)
+        self.assertEqual(out[6], TRIPPED)  # a flag, not I_IS(FAULT) x kILIS (20-48 A)
+        b.run(100)
+        trips = [e for e in b.events() if e[1] == EV_TRIP and e[2] == 6]
+        self.assertTrue(trips)
+        self.assertEqual(trips[0][5], F_SHORT)
+        self.assertEqual(trips[0][6], RATED_MA * 3)
+        self.assertNotEqual(b.board.channels[6].state, ST_ON)
+        self.assertEqual(b.board.channels[7].state, ST_ON)  # the part's other channel works
+        b.parts[3].clear()
+        b.run(5000)  # the retry: IN low cleared the latch, IN high switches on again
+        self.assertEqual(b.board.channels[6].state, ST_ON)
+        self.assertTrue(b.parts[3].on[0])
+
+    def test_over_temperature_trips_the_channel(self):
+        b = Bench()
+        b.boot()
+        b.parts[0].inject("overtemp", 1)
+        b.run(100)
+        self.assertNotEqual(b.board.channels[1].state, ST_ON)
+        self.assertEqual(b.board.channels[0].state, ST_ON)
+
+    def test_a_stuck_sense_node_blinds_the_board_at_boot(self):
+        b = Bench()
+        b.parts[1].set_in(0, 1)
+        b.parts[1].inject("overtemp", 0)  # its fault level on IS ...
+        b.parts[1].den = 1  # ... driven whatever its DEN pin says
+        b.w.set_time(b.w.now_us + 1000)
+        b.hal.ina.setup()
+        self.assertIn("sense node driven", b.hal.report()[0])
+        out = [0] * 10
+        b.hal.read_currents_ma(out)
+        self.assertEqual(out, [NO_READING] * 10)  # every channel: F_SENSOR, switches kept
