@@ -70,3 +70,9 @@ def test_colcon_builds_the_package_into_a_runnable_install(tmp_path: Path, env: 
     assert ran.returncode == 2, ran.stderr
     assert f"dxboard run: error: {tmp_path / 'no-robot'}: no system.yaml here" in ran.stderr
     assert "Traceback" not in ran.stderr
+
+    # docs/your-robot.md's example of a wrong type, word for word
+    wrong = sourced(tmp_path, "install/dxboard_ros/lib/dxboard_ros/dxboard "
+                              "--ros-args -p rate:=fast")
+    assert (wrong.returncode, wrong.stderr) == (
+        2, "dxboard run: error: parameter rate = 'fast' has the wrong type (give an integer)\n")
