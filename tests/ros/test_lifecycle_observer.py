@@ -30,6 +30,7 @@ from host.observers.sources.ros2_lifecycle import (
 )
 from tests.observers.conftest import TEDUSAR
 from tests.observers.test_config import model_text
+from tests.ros.conftest import Peer
 
 SUBJECT = Path(__file__).parent / "second_robot" / "lifecycle_node.py"
 WAIT_S = 90.0
@@ -144,4 +145,42 @@ async def test_the_ros2_source_observes_a_lifecycle_node_through_get_state_and_e
         proc.kill()
         proc.wait(30)
         ros.close()
+        source.close()
+
+
+async def test_a_hung_node_that_stays_in_the_graph_is_found_by_its_heartbeat(
+        peer: Peer, domain: int) -> None:
+    """A plain rclpy node beats on ``/NODE/heartbeat`` (``std_msgs/Empty``, 20 Hz); the
+    daemon's ROS 2 source learns the type from the graph; the node stops beating (hung) but
+    stays in the graph, where the graph observer still sees it: the heartbeat says it is not
+    running."""
+    from std_msgs.msg import Empty
+
+    from host.observers.sources.ros2 import Ros2Source
+    from host.observers.sources.ros2_graph import GRAPH, GraphObserver
+
+    node = peer.node.get_name()
+    beat, graph = HeartbeatObserver(node, f"/{node}/heartbeat", 0.5), GraphObserver(node)
+    publisher = peer.node.create_publisher(Empty, f"/{node}/heartbeat", 10)
+    timer = peer.node.create_timer(0.05, lambda: publisher.publish(Empty()))
+    source = Ros2Source(domain, discovery_s=0.2)
+    loop = asyncio.get_running_loop()
+    try:
+        source.subscribe(f"/{node}/heartbeat", lambda m: beat.feed(m, m.time))
+        source.subscribe(GRAPH, lambda m: graph.feed(m, m.time))
+
+        async def until(probe: Any, what: str) -> None:
+            end = loop.time() + WAIT_S
+            while not probe():
+                assert loop.time() < end, f"{what}: heartbeat {beat.asserted}, graph " \
+                                          f"{graph.asserted}"
+                beat.tick(source.clock())
+                await asyncio.sleep(0.05)
+
+        await until(lambda: beat.asserted.get(beat.atom) is True
+                    and graph.asserted.get(graph.atom) is True, "beating, in the graph")
+        timer.cancel()  # hung: no more beats, still in the graph
+        await until(lambda: beat.asserted.get(beat.atom) is False, "the beats stopped")
+        assert graph.asserted.get(graph.atom) is True  # the graph alone still says running
+    finally:
         source.close()
