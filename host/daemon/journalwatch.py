@@ -6,7 +6,7 @@ emit)`` is the daemon task that tells everyone else: it reads ``journal.health()
 ``PERIOD_S`` and emits ``JournalHealth`` on the event stream when the problem appears or goes,
 and, while it lasts, when the number of entries held changed (at most once per
 ``RECOUNT_S``), so the page, ``/api/status`` (``host.web.fold``, ``host.web.headline``) and
-``/diagnostics`` (``host.ros.status``: ``dxboard daemon``) say "journal: disk full, N entries
+``/diagnostics`` (``host.ros.status``: ``dxboard/daemon``) say "journal: disk full, N entries
 held" and then that it writes again. Polling, not a callback from the writer's thread: the
 writer never waits for the loop, and the loop never waits for the disk.
 """

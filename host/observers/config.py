@@ -16,6 +16,8 @@
         hector_mapping: {match: 'hector_mapping'}     # regex on the command line (pgrep -f)
         jaguar_node: {supervised: true}               # the daemon starts it and tracks its pid
         hokuyo_node: {graph: true}                    # ROS 2 source: present in the ROS 2 graph
+        camera_driver: {lifecycle: true}              # ROS 2 managed node: its state is active
+        planner: {heartbeat: /planner/heartbeat, timeout: 0.5}  # a message at least every 0.5 s
       topics:                 # general observer: ok(/t) iff |f - rate| < tolerance over window
         /odom: {rate: 10, tolerance: 3, window: 1.0, silence: 4}   # silence in periods (default 4)
         /scan: {rate: 40, tolerance: 10, window: 0.5, own_time: false}   # see below
@@ -62,6 +64,11 @@ from host.observers.hardware import (
 from host.observers.processes import NodeObserver, PropertyObserver
 from host.observers.sources.base import TopicSource
 from host.observers.sources.ros2_graph import GraphObserver
+from host.observers.sources.ros2_lifecycle import (
+    DEFAULT_HEARTBEAT_TIMEOUT,
+    HeartbeatObserver,
+    LifecycleObserver,
+)
 from host.observers.topics import DEFAULT_SILENCE, FrequencyObserver, ResponseObserver
 from host.observers.values import (
     DiagnosticObserver,
@@ -76,6 +83,7 @@ SECTION = "observers"
 _TOP = {"refresh", "validity", "poll", "source", "hardware", "nodes", "topics", "trends",
         "matched", "diagnostics", "properties", "responses"}
 _TIMING = {"refresh", "validity"}
+_NODE_WAYS = ("pid", "match", "supervised", "graph", "lifecycle", "heartbeat")
 
 
 class Timing(TypedDict):
@@ -326,19 +334,31 @@ class _Builder:
         out: list[Observer[Any]] = []
         for name, spec in (nodes or {}).items():
             p = ("nodes", name)
-            s = self.mapping(p, spec, {"pid", "match", "supervised", "graph", *_TIMING},
+            s = self.mapping(p, spec, {*_NODE_WAYS, "timeout", *_TIMING},
                              "{match: 'regex'} or {pid: 1234} or {supervised: true}")
             if s is None or not self.node(p, str(name)):
                 continue
-            given = [k for k in ("pid", "match", "supervised", "graph")
-                     if s.get(k) not in (None, False)]
+            given = [k for k in _NODE_WAYS if s.get(k) not in (None, False)]
             if len(given) != 1:
-                self.err(p, f"node {name!r} gives {given or 'none'} of pid, match, supervised, "
-                         "graph", "give exactly one: {match: 'hector_mapping'}, {pid: N}, "
-                         "{supervised: true} or {graph: true} (ROS 2)")
+                self.err(p, f"node {name!r} gives {given or 'none'} of "
+                         f"{', '.join(_NODE_WAYS)}", "give exactly one: {match: "
+                         "'hector_mapping'}, {pid: N}, {supervised: true}, or on ROS 2 "
+                         "{graph: true}, {lifecycle: true} or {heartbeat: /NODE/heartbeat}")
+                continue
+            if s.get("timeout") is not None and given != ["heartbeat"]:
+                self.err((*p, "timeout"), "timeout is the heartbeat's",
+                         "drop it, or give heartbeat: TOPIC with it")
                 continue
             if given == ["graph"]:
                 out.append(GraphObserver(str(name), **self.timing(p, s)))
+                continue
+            if given == ["lifecycle"]:
+                out.append(LifecycleObserver(str(name), **self.timing(p, s)))
+                continue
+            if given == ["heartbeat"]:
+                beat = self._heartbeat(p, str(name), s)
+                if beat is not None:
+                    out.append(beat)
                 continue
             pid, match = s.get("pid"), s.get("match")
             if pid is not None and (not isinstance(pid, int) or isinstance(pid, bool) or pid < 1):
@@ -355,6 +375,19 @@ class _Builder:
                                            bool(s.get("supervised", False)))
             out.append(NodeObserver(str(name), **self.timing(p, s)))
         return out
+
+    def _heartbeat(self, p: tuple[object, ...], name: str,
+                   s: dict[str, Any]) -> HeartbeatObserver | None:
+        topic = s["heartbeat"]
+        if not isinstance(topic, str) or not topic.startswith("/"):
+            self.err((*p, "heartbeat"), f"heartbeat {topic!r} is not a topic",
+                     f"give heartbeat: /{name}/heartbeat")
+            return None
+        timeout = self.number((*p, "timeout"), s.get("timeout"), DEFAULT_HEARTBEAT_TIMEOUT,
+                              what="s")
+        if timeout is None:
+            return None
+        return HeartbeatObserver(name, topic, timeout, **self.timing(p, s))
 
     def _topics(self, value: Any) -> list[Observer[Any]]:
         topics = self.mapping(("topics",), value, set(value) if isinstance(value, dict) else set(),

@@ -2,8 +2,18 @@
 
 ``StatusFold(components)`` reads ``Stamped`` events (``host.events``) and keeps what a ROS 2
 robot monitor shows; it is pure (no rclpy, no clock), so it is tested on its own and the
-publisher (``host.ros.publisher``) only turns its ``Status`` values into messages. One status
-per component of the model, named ``dxboard: COMPONENT`` (``hardware_id`` the component)::
+publisher (``host.ros.publisher``) only turns its ``Status`` values into messages. Status names
+are paths under ``dxboard/`` that the standard ``diagnostic_aggregator`` groups into one tree
+(``ros/dxboard_ros/config/analyzers.yaml``; rqt_robot_monitor shows it as it is)::
+
+    dxboard/components/NAME       one per component of the model (hardware_id: the component)
+    dxboard/board/link            the board (hardware_id ``board``)
+    dxboard/board/channels/NAME   one per board channel (hardware_id ``channel N``)
+    dxboard/diagnosis             the minimal diagnoses (hardware_id ``dxboard``)
+    dxboard/repair                the latest repair step (hardware_id ``dxboard``)
+    dxboard/daemon                the daemon itself (hardware_id ``daemon``)
+
+A component's level::
 
     level   when
     STALE   no diagnosis yet
@@ -13,15 +23,18 @@ per component of the model, named ``dxboard: COMPONENT`` (``hardware_id`` the co
 
 with the reason as the message and the key/values ``diagnoses`` (in how many minimal
 diagnoses it is abnormal, of how many), ``repair`` (its latest repair action and that action's
-state), ``quarantined`` and ``held``. One status per board channel, ``dxboard board: NAME``
-(ERROR when tripped, latched or faulted; STALE while the link is down; key/values state, on,
-current_a, last_event), and one for the board, ``dxboard board`` (OK while the link is up,
-else ERROR with the reason; key/values link, total_current_a, input_v), and one for the
-daemon itself, ``dxboard daemon`` (hardware_id ``daemon``): OK "journal: writing", or ERROR
-"journal: disk full, N entries held" while its journal cannot write (key/values journal,
-journal_held, journal_dropped). ``diagnoses``,
-``currents_a`` and ``input_v`` are the latest minimal diagnoses, channel currents and the
-board's input voltage, for ``/diagnosis``, ``/board_measurements`` and ``/battery_state``.
+state), ``quarantined`` and ``held``. A channel is ERROR when tripped, latched or faulted,
+STALE while the link is down (key/values state, on, current_a, last_event); the board link is
+OK while up, else ERROR with the reason (key/values link, total_current_a, input_v). The
+diagnosis is STALE before the first (or when nothing is found broken but some components went
+unobserved), OK when every component is normal, else ERROR with the best diagnosis as the
+message (key/values best, diagnoses, all, unknown). The repair is OK with no step yet or the
+latest one started or succeeded, ERROR when it failed or timed out (key/values action,
+state). The daemon is OK "journal: writing", or ERROR "journal: disk
+full, N entries held" while its journal cannot write (key/values journal, journal_held,
+journal_dropped). ``diagnoses``, ``currents_a`` and ``input_v`` are the latest minimal
+diagnoses, channel currents and the board's input voltage, for ``/diagnosis``,
+``/board_measurements`` and ``/battery_state``.
 """
 
 from __future__ import annotations
@@ -44,6 +57,8 @@ from host.events import (
 
 OK, WARN, ERROR, STALE = 0, 1, 2, 3
 BAD_STATES = ("tripped", "latched", "faulted")
+PREFIX = "dxboard"  # the root of every status name: one tree in the aggregator
+BAD_ACTION_STATES = ("failed", "timeout")
 
 
 @dataclass(frozen=True)
@@ -72,6 +87,7 @@ class StatusFold:
     _comp: dict[str, _Component] = field(default_factory=dict)
     _last_event: dict[int, str] = field(default_factory=dict)
     journal: JournalHealth = field(default_factory=lambda: JournalHealth(""))
+    last_action: ActionRecord | None = None
 
     def __post_init__(self) -> None:
         self._comp = {c: _Component() for c in self.components}
@@ -87,6 +103,7 @@ class StatusFold:
             case LinkChange():
                 self.link_up, self.link_reason = e.up, e.reason
             case ActionRecord():
+                self.last_action = e
                 for arg in e.args:
                     if arg in self._comp:
                         self._comp[arg].repair = f"{e.action}({', '.join(e.args)}) {e.state}"
@@ -119,11 +136,37 @@ class StatusFold:
         return [c.current_ma / 1000.0 for c in self.channels.channels] if self.channels else []
 
     def statuses(self) -> list[Status]:
-        return [*(self._component(c) for c in self.components), *self._board(), self._daemon()]
+        return [*(self._component(c) for c in self.components), *self._board(),
+                self._diagnosis(), self._repair(), self._daemon()]
+
+    def _diagnosis(self) -> Status:
+        name = f"{PREFIX}/diagnosis"
+        if self.diagnosis is None:
+            return Status(STALE, name, "not diagnosed yet", PREFIX)
+        diags = self.diagnoses
+        best = diags[0] if diags else ()
+        values = (("best", ", ".join(best) or "none"), ("diagnoses", str(len(diags))),
+                  ("all", "; ".join("{" + ", ".join(d) + "}" for d in diags)),
+                  ("unknown", ", ".join(self.diagnosis.unknown)))
+        if not best and self.diagnosis.unknown:  # unobserved is not healthy
+            return Status(STALE, name, "unknown: " + ", ".join(self.diagnosis.unknown), PREFIX,
+                          values)
+        if not best:
+            return Status(OK, name, "every component normal", PREFIX, values)
+        return Status(ERROR, name, "best diagnosis {" + ", ".join(best) + "}", PREFIX, values)
+
+    def _repair(self) -> Status:
+        name = f"{PREFIX}/repair"
+        a = self.last_action
+        if a is None:
+            return Status(OK, name, "no repair yet", PREFIX, (("action", "none"), ("state", "")))
+        text = f"{a.action}({', '.join(a.args)})"
+        return Status(ERROR if a.state in BAD_ACTION_STATES else OK, name, f"{text} {a.state}",
+                      PREFIX, (("action", text), ("state", str(a.state))))
 
     def _daemon(self) -> Status:
         j = self.journal
-        return Status(ERROR if j.problem else OK, "dxboard daemon", journal_health_text(j),
+        return Status(ERROR if j.problem else OK, f"{PREFIX}/daemon", journal_health_text(j),
                       "daemon", (("journal", j.problem or "writing"),
                                  ("journal_held", str(j.held)),
                                  ("journal_dropped", str(j.dropped))))
@@ -144,13 +187,13 @@ class StatusFold:
             level, message = OK, "normal in every minimal diagnosis"
         if comp.quarantined:
             level, message = ERROR, f"{message}; quarantined: {comp.quarantined}"
-        return Status(level, f"dxboard: {name}", message, name, (
+        return Status(level, f"{PREFIX}/components/{name}", message, name, (
             ("diagnoses", f"{inside} of {len(diags)}"), ("repair", comp.repair),
             ("quarantined", "true" if comp.quarantined else "false"),
             ("held", "true" if comp.held else "false")))
 
     def _board(self) -> list[Status]:
-        out = [Status(OK if self.link_up else ERROR, "dxboard board",
+        out = [Status(OK if self.link_up else ERROR, f"{PREFIX}/board/link",
                       "link up" if self.link_up else f"link down: {self.link_reason}", "board",
                       (("link", "up" if self.link_up else "down"),
                        ("total_current_a", f"{sum(self.currents_a):.3f}"),
@@ -163,7 +206,8 @@ class StatusFold:
                 level, message = ERROR, c.state
             else:
                 level, message = OK, c.state
-            out.append(Status(level, f"dxboard board: {c.name}", message, f"channel {c.id}", (
+            out.append(Status(level, f"{PREFIX}/board/channels/{c.name}", message,
+                              f"channel {c.id}", (
                 ("channel", str(c.id)), ("state", c.state), ("on", str(c.on).lower()),
                 ("current_a", f"{c.current_ma / 1000.0:.3f}"),
                 ("last_event", self._last_event.get(c.id, "none")))))

@@ -42,7 +42,7 @@ def repair_of(peer: Peer, component: str) -> str:
     """The ``repair`` key/value of the component's latest status."""
     msgs = peer.messages("/diagnostics")
     return next((kv.value for s in (msgs[-1].status if msgs else ())
-                 if s.name == f"dxboard: {component}" for kv in s.values
+                 if s.name == f"dxboard/components/{component}" for kv in s.values
                  if kv.key == "repair"), "")
 
 
@@ -72,9 +72,9 @@ def test_an_independent_subscriber_sees_the_hokuyo_go_error_on_a_hang_and_ok_aft
         # the power-up: everything starts off, the daemon brings the robot up by itself (only
         # the Hokuyo, its driver and the board matter here: on a loaded machine another
         # component may flap meanwhile)
-        peer.wait_for(lambda: latest(peer, "dxboard: hokuyo") == OK
-                      and latest(peer, "dxboard: hokuyo_node") == OK
-                      and latest(peer, "dxboard board") == OK, "the Hokuyo up", WAIT_S)
+        peer.wait_for(lambda: latest(peer, "dxboard/components/hokuyo") == OK
+                      and latest(peer, "dxboard/components/hokuyo_node") == OK
+                      and latest(peer, "dxboard/board/link") == OK, "the Hokuyo up", WAIT_S)
         peer.wait_for(lambda: "hokuyo_node" in peer.nodes(),  # the driver is a ROS 2 node
                       "hokuyo_node in the peer's graph", WAIT_S)  # (discovery may lag)
         board = peer.collect("/board_measurements", 3)[-1]
@@ -89,10 +89,10 @@ def test_an_independent_subscriber_sees_the_hokuyo_go_error_on_a_hang_and_ok_aft
         # hang below, published long after discovery)
 
         daemon.inject("hokuyo", "hang")
-        peer.wait_for(lambda: latest(peer, "dxboard: hokuyo") == ERROR,
+        peer.wait_for(lambda: latest(peer, "dxboard/components/hokuyo") == ERROR,
                       "the Hokuyo ERROR after the hang", WAIT_S)
         status = next(s for s in peer.messages("/diagnostics")[-1].status
-                      if s.name == "dxboard: hokuyo")
+                      if s.name == "dxboard/components/hokuyo")
         assert "abnormal in the best diagnosis" in status.message
         peer.wait_for(lambda: any(s.name.startswith("dxboard diagnosis ") and s.level == b"\x02"
                                   and "hokuyo" in [kv.key for kv in s.values]
@@ -100,7 +100,7 @@ def test_an_independent_subscriber_sees_the_hokuyo_go_error_on_a_hang_and_ok_aft
                       "/diagnosis naming the Hokuyo", WAIT_S)
         # OK again, and the repair action on it recorded as succeeded (the diagnosis may clear
         # it a moment before the executor has verified the action's effects)
-        peer.wait_for(lambda: latest(peer, "dxboard: hokuyo") == OK
+        peer.wait_for(lambda: latest(peer, "dxboard/components/hokuyo") == OK
                       and repair_of(peer, "hokuyo").startswith("power_cycle(hokuyo)")
                       and repair_of(peer, "hokuyo").endswith("succeeded"),
                       "the Hokuyo OK after a successful power cycle", WAIT_S)
@@ -108,7 +108,7 @@ def test_an_independent_subscriber_sees_the_hokuyo_go_error_on_a_hang_and_ok_aft
         peer.wait_for(lambda: repair_of(peer, "hokuyo_node").endswith("succeeded"),
                       "the Hokuyo driver's repair verified", WAIT_S)
         assert repair_of(peer, "hokuyo_node").startswith("reconfigure_node(hokuyo_node)")
-        assert latest(peer, "dxboard: hokuyo_node") == OK
+        assert latest(peer, "dxboard/components/hokuyo_node") == OK
 
         # nothing that switches power is reachable from ROS 2: no subscription, no service
         # but rclpy's own parameter and type-description services

@@ -51,7 +51,7 @@ def test_a_node_started_by_another_launcher_is_restarted_by_its_command(
     daemon = RunningDaemon(tmp_path, system)
     try:
         # (the daemon's /diagnostics, not its web page: a loaded machine slows that down)
-        peer.wait_for(lambda: latest(peer, f"dxboard: {NODE}") == OK, "the driver OK",
+        peer.wait_for(lambda: latest(peer, f"dxboard/components/{NODE}") == OK, "the driver OK",
                       DAEMON_WAIT_S)
         peer.collect(TOPIC, 9, DAEMON_WAIT_S)
         launched.kill()  # the driver dies
@@ -62,8 +62,8 @@ def test_a_node_started_by_another_launcher_is_restarted_by_its_command(
         wait_until(lambda: pidfile.read_text() != str(launched.pid), DAEMON_WAIT_S,
                    "the restarted process's pid")
         peer.collect(TOPIC, 9, DAEMON_WAIT_S)  # the new process publishes
-        peer.wait_for(lambda: latest(peer, f"dxboard: {NODE}") == OK, "the driver OK again",
-                      DAEMON_WAIT_S)
+        peer.wait_for(lambda: latest(peer, f"dxboard/components/{NODE}") == OK,
+                      "the driver OK again", DAEMON_WAIT_S)
         assert {a for a, _ in actions(daemon, NODE)} <= {"restart_node"}
     finally:
         daemon.close()

@@ -21,7 +21,11 @@ stay serialized in DDS's history and take memory only while the executor lags.
 
 ``GRAPH`` (``/_graph/nodes``) is not a DDS topic: subscribing it delivers, every
 ``discovery_s``, a message whose values are ``{"nodes": [names...]}`` from the ROS 2 graph,
-for ``host.observers.sources.ros2_graph.GraphObserver`` (node presence).
+for ``host.observers.sources.ros2_graph.GraphObserver`` (node presence). Nor is
+``/_lifecycle/NODE`` (``ros2_lifecycle.LIFECYCLE``): subscribing it asks ``/NODE/get_state``
+every ``discovery_s`` (one call at a time; a node that does not answer gets no message, so
+its observer's literal expires) and delivers ``{"state": LABEL}``, or ``{"state": "absent"}``
+while the node is not in the graph, for ``ros2_lifecycle.LifecycleObserver``.
 
 ``publishers`` (topic -> the model's node names) makes the topics authentic
 (``ros2_authentic``): a message of such a topic from another node's endpoint is not
@@ -43,11 +47,13 @@ from host.observers.sources.base import Callback, Subscription, TopicSource, che
 from host.observers.sources.ros2_authentic import Publishers
 from host.observers.sources.ros2_convert import message_type
 from host.observers.sources.ros2_graph import GRAPH
+from host.observers.sources.ros2_lifecycle import ABSENT, LIFECYCLE
 from host.observers.sources.ros2_message import RosMessage
 from host.observers.sources.ros2_node import RosNode
 
 log = logging.getLogger(__name__)
 
+STATE_CALL_S = 10.0  # a get_state call unanswered this long is asked again
 DEPTH = 100  # messages kept per topic while the executor lags (see the module docstring)
 BEST_EFFORT = QoSProfile(history=QoSHistoryPolicy.KEEP_LAST, depth=DEPTH,
                          reliability=QoSReliabilityPolicy.BEST_EFFORT)
@@ -86,12 +92,14 @@ class Ros2Source(TopicSource):
         self.on_stranger: Callable[[str, str], None] | None = None
         self.ros = RosNode(name, domain_id)
         self._subs: list[_RosSubscription] = []
+        self._state_clients: dict[str, Any] = {}  # node -> its get_state client
+        self._asking: dict[str, float] = {}  # node -> when its get_state call was made
         self._timer = self.ros.node.create_timer(discovery_s, self._discover)
 
     def subscribe(self, topic: str, callback: Callback) -> Subscription:
         sub = _RosSubscription(self, check_topic(topic), callback, asyncio.get_running_loop())
         self._subs.append(sub)
-        if topic != GRAPH and topic in self.types:
+        if topic != GRAPH and not topic.startswith(LIFECYCLE) and topic in self.types:
             self._attach(sub, self.types[topic])
         return sub
 
@@ -104,12 +112,43 @@ class Ros2Source(TopicSource):
         for sub in list(self._subs):
             if sub.topic == GRAPH:
                 sub.deliver(Message(self.clock(), GRAPH, encode({"nodes": self.nodes()})))
+            elif sub.topic.startswith(LIFECYCLE):
+                self._ask_state(sub)
             elif sub.sub is None:
                 if graph is None:
                     graph = dict(self.ros.node.get_topic_names_and_types())
                 found = graph.get(sub.topic)
                 if found:
                     self._attach(sub, found[0])
+
+    def _ask_state(self, sub: _RosSubscription) -> None:
+        """Ask the node of a ``/_lifecycle/NODE`` subscription its state (executor thread)."""
+        from lifecycle_msgs.srv import GetState
+
+        node = sub.topic[len(LIFECYCLE):]
+        asked = self._asking.get(node)
+        if asked is not None and self.clock() - asked < STATE_CALL_S:
+            return  # the last call is still under way: a busy or hung node
+        if node not in self.nodes():
+            sub.deliver(Message(self.clock(), sub.topic, encode({"state": ABSENT})))
+            return
+        client = self._state_clients.get(node)
+        if client is None:
+            client = self._state_clients[node] = self.ros.node.create_client(
+                GetState, f"/{node}/get_state")
+        if not client.service_is_ready():
+            return  # in the graph, its service not discovered yet
+        self._asking[node] = self.clock()
+        future = client.call_async(GetState.Request())
+
+        def done(f: Any) -> None:
+            self._asking.pop(node, None)
+            result = f.result() if not f.cancelled() and f.exception() is None else None
+            if result is not None:
+                state = str(result.current_state.label)
+                sub.deliver(Message(self.clock(), sub.topic, encode({"state": state})))
+
+        future.add_done_callback(done)
 
     def _attach(self, sub: _RosSubscription, type_name: str) -> None:
         try:

@@ -1,0 +1,1 @@
+"""dxboard's daemon as a ROS 2 node (the ``dxboard`` executable of this package)."""
