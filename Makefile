@@ -48,7 +48,7 @@ check: $(STAMP) lint
 	$(BIN)/pytest --in-process -n $(PYTEST_WORKERS) --dist loadfile
 
 lint: $(STAMP)
-	$(BIN)/ruff check protocol firmware emulator host tests benchmarks scripts
+	$(BIN)/ruff check protocol firmware emulator host tests benchmarks scripts hardware ros
 	$(BIN)/mypy
 	$(BIN)/python scripts/layers.py
 
