@@ -68,7 +68,7 @@ from host.board.types import (
 )
 from host.errors import RemoteError
 from host.transports import open_transport
-from host.transports.base import NAMES, Transport
+from host.transports.base import CLIENT_MAX_REQ_ID, NAMES, Transport
 from host.transports.errors import (
     AuthRefused,
     BadChannel,
@@ -393,7 +393,7 @@ class BoardClient(LinkMixin, ActuateMixin, ConfigMixin):
     # --- requests ---------------------------------------------------------------------
 
     def _next_req(self) -> int:
-        self._req = self._req % 0xFFFF + 1
+        self._req = self._req % CLIENT_MAX_REQ_ID + 1  # the transports' own ids lie above
         return self._req
 
     async def _request_now(self, msg: Message) -> Message:

@@ -42,6 +42,13 @@ CONFIG = "config"  # channel and board configuration can be read and written
 SAVE = "save"  # the configuration can be persisted on the board
 NAMES = "names"  # channel names can be read from the board
 
+# Request ids (PROTOCOL.md §3: 1-65535; 0 is a push): the board client numbers its requests
+# 1..CLIENT_MAX_REQ_ID, a transport's own requests use ids above it, so that a late answer to
+# one of them can never be taken for the answer to one of the client's.
+CLIENT_MAX_REQ_ID = 0xFFFD
+HELLO_REQ_ID = 0xFFFE  # HELLO_REQUEST when the board's greeting does not come at once
+CLAIM_REQ_ID = 0xFFFF  # AUTH_PING, the key proved at open
+
 
 class Transport:
     """Base of every transport; see the module docstring."""

@@ -24,7 +24,18 @@ import collections
 import logging
 import random
 
-from host.transports.base import AUTH, CONFIG, CYCLE, EVENTS, NAMES, PUSH, SAVE, Transport
+from host.transports.base import (
+    AUTH,
+    CLAIM_REQ_ID,
+    CONFIG,
+    CYCLE,
+    EVENTS,
+    HELLO_REQ_ID,
+    NAMES,
+    PUSH,
+    SAVE,
+    Transport,
+)
 from host.transports.errors import LinkLost, VersionMismatch
 from protocol.connection import HOST, Connection
 from protocol.constants import E_AUTH_REQUIRED, E_BAD_TAG, E_VERSION, PROTOCOL_VERSION
@@ -35,7 +46,6 @@ log = logging.getLogger(__name__)
 
 HELLO_WAIT_S = 0.3
 CLAIM_WAIT_S = 2.0
-CLAIM_REQ_ID = 0xFFFF  # the board client numbers its own requests from 1
 KEY_REFUSED = (E_BAD_TAG, E_AUTH_REQUIRED)  # the key is wrong, or the board has none
 READ_SIZE = 4096
 PER_FRAME = "per_frame"  # the URL parameter every native transport takes (1-10)
@@ -61,7 +71,7 @@ class StreamTransport(Transport):
         try:
             hello = await asyncio.wait_for(self._await_hello(None), HELLO_WAIT_S)
         except TimeoutError:
-            req = HelloRequest(req_id=self.conn.next_request_id())
+            req = HelloRequest(req_id=HELLO_REQ_ID)  # never an id the board client uses
             await self._write(self.conn.send(req))
             hello = await self._await_hello(req.req_id)
         if self.key is not None:

@@ -28,7 +28,17 @@ from host.transports.tcp import QUEUE_HIGH, TcpTransport
 from protocol.connection import BOARD, Connection
 from protocol.constants import E_TRUNCATED
 from protocol.framing import BadFrame
-from protocol.messages import Ack, AuthPing, Measurement, Message, Ping, Pong, Subscribe
+from protocol.messages import (
+    Ack,
+    AuthPing,
+    Hello,
+    HelloRequest,
+    Measurement,
+    Message,
+    Ping,
+    Pong,
+    Subscribe,
+)
 from tests.host.emulate import KEY_HEX, Emulate
 from tests.protocol.util import hello
 from tests.wait import wait_until_async
@@ -331,3 +341,52 @@ async def test_the_board_client_over_tcp_against_the_emulator() -> None:
             task.cancel()
     finally:
         await asyncio.to_thread(emu.kill)
+
+
+async def test_a_late_greeting_s_second_hello_never_answers_the_clients_first_request() -> None:
+    """Found under load (a rev-a board, `dxboard board ... status`: "expected State, got
+    Hello"): the board's greeting came after HELLO_WAIT_S, so the transport asked with
+    HELLO_REQUEST; it took the greeting, and the board's answer to the request came after the
+    board client had sent its first request, with the same request id (both counted from 1).
+    The transport's own requests use ids the board client never does."""
+    asked: list[int] = []
+
+    async def board(reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        conn = Connection(BOARD, None)
+        try:
+            while True:
+                data = await reader.read(4096)
+                if not data:
+                    return
+                conn.receive_data(data)
+                for ev in conn.events():
+                    if isinstance(ev, HelloRequest):  # the greeting, late; the answer held
+                        asked.append(ev.req_id)
+                        writer.write(conn.send(hello()))
+                    elif isinstance(ev, Ping):  # the client's first request
+                        writer.write(conn.send(Hello(*hello_fields(), req_id=asked[0]))
+                                     + conn.send(Pong(ev.token, 0, req_id=ev.req_id)))
+        finally:
+            writer.close()
+
+    server = await asyncio.start_server(board, "127.0.0.1", 0)
+    port = server.sockets[0].getsockname()[1]
+    try:
+        t = open_transport(f"tcp://127.0.0.1:{port}")
+        await t.open()
+        first = 1  # the board client's first request id
+        await t.send(Ping(7, req_id=first))
+        got: list[Message | BadFrame] = []
+        async with asyncio.timeout(60):
+            while not any(isinstance(m, Pong) for m in got):
+                got.append(await t.receive())
+        await t.close()
+    finally:
+        server.close()
+    assert [type(m) for m in got if getattr(m, "req_id", 0) == first] == [Pong]
+
+
+def hello_fields() -> tuple[object, ...]:
+    h = hello()
+    return (h.version, h.board_id, h.firmware, h.channels, h.capabilities, h.boot_id, h.nonce,
+            h.reset_cause, h.config_status)
