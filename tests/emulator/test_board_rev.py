@@ -77,7 +77,7 @@ def test_the_shipped_main_boots_and_reads_its_chips(emu: Emulator) -> None:
     st = emu.status()
     assert st["config_status"] == "ok"
     assert abs(st["input_mv"] - emu.electronics.input_mv) < 0.02 * emu.electronics.input_mv
-    for ch in DEVICES + (PC,):
+    for ch in (*DEVICES, PC):
         c = st["channels"][ch]
         assert c["state"] == "on" and c["physical"] and not c["live"], c
     # every reading is a real INA226 average of the noisy loads: near the true current
@@ -178,3 +178,15 @@ def test_bad_revision_options_are_one_line_exit_2(args: list[str], said: str) ->
     assert p.stdout == ""
     assert len(p.stderr.strip().splitlines()) == 1, p.stderr
     assert said in p.stderr
+
+
+def test_a_deep_brownout_holds_the_board_in_reset(emu: Emulator) -> None:
+    boots = emu.status()["boots"]
+    emu.inject("board", "brownout", {"volts": "3", "seconds": "0.5"})
+    emu.advance(200)
+    assert not any(s.closed for s in emu.electronics.switches)  # in reset: every switch open
+    emu.advance(1500)
+    st = emu.status()
+    assert st["boots"] == boots + 1
+    assert st["reset_cause"] == "power_on"  # the RP2040 restarts by its power-on reset
+    assert st["channels"][PC]["state"] == "on"
