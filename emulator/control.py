@@ -21,8 +21,9 @@ converts and checks them (``emulator.faults``). Any error is ``{"ok": false, "er
 with a message meant for a person; a bad line never closes the connection or touches the board.
 The URL printed for this endpoint is ``control://HOST:PORT``.
 
-``run_wallclock`` advances the emulator with the wall clock (a host too busy to keep up makes
-the simulated clock slip, at most ``MAX_BURST_MS`` run at once, rather than starve the loop);
+``run_wallclock`` advances the emulator with the wall clock, ``CHUNK_MS`` at a time when it
+catches up so that the front ends run in between (a host too busy to keep up for more than
+``MAX_LAG_MS`` makes the simulated clock slip rather than starve them);
 ``Background`` runs it and the control server on an event loop in a thread (for ``dxboard
 emulate`` and tests), and ``call`` runs a function on that loop so that nothing touches the
 emulator from two threads.
@@ -42,7 +43,8 @@ from emulator.jsonlines import MAX_LINE, Lines
 from emulator.sim import Emulator
 
 SCHEME = "control://"
-MAX_BURST_MS = 200  # the most simulated time run_wallclock runs without yielding to the loop
+CHUNK_MS = 50  # the most simulated time run_wallclock runs without yielding to the loop
+MAX_LAG_MS = 2000  # how far the simulated clock may fall behind the wall clock and catch up
 T = TypeVar("T")
 
 
@@ -94,12 +96,13 @@ async def run_wallclock(emu: Emulator, stop: asyncio.Event, tick_ms: int = 10) -
     start = emu.now
     while not stop.is_set():
         target = start + int((clock() - t0) * 1000)
-        if target - emu.now > MAX_BURST_MS:
-            # far behind (a starved host): the simulated clock slips rather than the steps
-            # holding this loop, and with it the front ends and the stop, for ever longer
-            t0 += (target - emu.now - MAX_BURST_MS) / 1000
-            target = emu.now + MAX_BURST_MS
-        emu.advance_to(target)
+        if target - emu.now > MAX_LAG_MS:  # a host too busy to keep up: the clock slips
+            t0 += (target - emu.now - MAX_LAG_MS) / 1000
+            target = emu.now + MAX_LAG_MS
+        emu.advance_to(min(target, emu.now + CHUNK_MS))
+        if emu.now < target:  # behind: catch up, letting the front ends and the stop in between
+            await asyncio.sleep(0)
+            continue
         with contextlib.suppress(TimeoutError):
             await asyncio.wait_for(stop.wait(), tick_ms / 1000)
 

@@ -35,7 +35,7 @@ from typing import Any, TextIO
 from emulator import model as emodel
 from emulator import scenario as escenario
 from emulator.control import Background
-from emulator.errors import InputError
+from emulator.errors import InputError, PartFailure
 from emulator.frontends import FrontEnds
 from emulator.sim import Emulator, make_config
 from firmware.hal.storage import FileStorage
@@ -208,6 +208,9 @@ def start(opts: Options, stack: contextlib.ExitStack) -> dict[str, str]:
     except OSError as exc:
         raise StartError(f"cannot boot the emulated board: {exc}",
                          "check the --flash directory") from None
+    except PartFailure as exc:  # the micropython firmware failed to boot (it said why above)
+        raise StartError(f"cannot boot the emulated board: {exc}",
+                         "see what the firmware printed before this line") from None
     if opts.board_rev is not None:
         emu.parts = mpy
     if scen is not None:
