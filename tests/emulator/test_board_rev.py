@@ -27,8 +27,12 @@ from emulator.parts.ina226 import CONFIG_POR
 from emulator.sim import Emulator
 from firmware.hal.ina226 import CONFIG_TICK, calibration
 from firmware.hal.storage import FileStorage
+from host.board import BoardClient
+from host.board.types import ChannelState
+from protocol.constants import F_SENSOR
 from tests.emulator.conftest import tedusar
-from tests.emulator.wire import DXBOARD, TEDUSAR
+from tests.emulator.wire import DXBOARD, KEY, RUNTIMES, TEDUSAR, Emulate
+from tests.wait import wait_until_async
 
 PC, HOKUYO, KINECT, ROUTER = 2, 3, 4, 5
 DEVICES = (0, 1, 3, 4, 5, 6, 7)
@@ -190,3 +194,21 @@ def test_a_deep_brownout_holds_the_board_in_reset(emu: Emulator) -> None:
     assert st["boots"] == boots + 1
     assert st["reset_cause"] == "power_on"  # the RP2040 restarts by its power-on reset
     assert st["channels"][PC]["state"] == "on"
+
+
+async def test_a_part_fault_injected_from_the_command_line_reaches_the_host() -> None:
+    """``dxboard inject CONTROL chip_nack`` on a running ``emulate --board-rev``: the host's
+    own client reads the ``sensor`` fault of that channel; no switch moves for it."""
+    with Emulate(*RUNTIMES["rev-a"]) as board:
+        done = subprocess.run([DXBOARD, "inject", board.urls["control"], "hokuyo",
+                               "chip_nack"], capture_output=True, text=True, timeout=60)
+        assert done.returncode == 0, done.stderr
+        assert "injected chip_nack on 3" in done.stdout
+        async with BoardClient(board.urls["board"], KEY) as client:
+            async def sensor_fault() -> ChannelState | None:
+                ch = (await client.state()).channels[HOKUYO]
+                return ch if ch.live_faults & F_SENSOR else None
+
+            got = await wait_until_async(sensor_fault, what="the sensor fault of hokuyo")
+            assert got is not None and got.state_name == "off"  # left as it was (off)
+            assert (await client.state()).channels[PC].state_name == "on"
