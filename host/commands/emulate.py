@@ -2,7 +2,8 @@
 
 ``dxboard emulate SYSTEM_DIR [--listen H:P] [--control H:P] [--modbus H:P] [--serial]
 [--can INTERFACE:CHANNEL] [--tug H:P [--tug-switch]] [--runtime cpython|micropython]
-[--scenario FILE] [--seed N] [--key-file FILE] [--robot [--world]] [--flash DIR]`` loads
+[--scenario FILE] [--seed N] [--key-file FILE] [--robot [--world]] [--flash DIR]
+[--board-rev REV]`` loads
 ``SYSTEM_DIR/emulator.yaml`` (the loads) and ``board.json`` (the board configuration, written
 to the emulated flash on first boot; ``--flash DIR`` keeps that flash in a directory, so that
 ``config save`` survives a restart), boots the firmware, starts its front ends and prints one
@@ -23,6 +24,13 @@ without one the board refuses every actuation. ``--runtime micropython`` runs th
 inside the ``micropython`` interpreter: its own TCP, Modbus and tug servers (behind the same
 link-fault proxies), its serial front end (the pty's bytes relayed to it) and its CAN node
 (frames carried between the bus and it), so every front end runs there too.
+``--board-rev REV`` (with ``--runtime micropython``) boots instead the shipped
+``firmware/boot.py`` and ``firmware/main.py``, unmodified, on register-level models of that
+revision's parts (``emulator.board_rt``): its own HAL reads the chips over the model of
+``machine.I2C``, fed by the same simulated electronics in lock-step; the part faults
+(``dxboard inject ... chip_nack`` and the other ``chip_*``) reach those chips. ``main.py``
+serves no CAN and (``TUG_PORT = 0``) no tug; its Modbus server listens on ``--modbus``
+directly. An unknown revision is refused with the known ones.
 ``--tug`` serves the original TEDUSAR board's format (``firmware/tug.py``), which has no
 authentication: read-only unless ``--tug-switch`` is given, and even then it never switches a
 protected channel off.
@@ -78,6 +86,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--flash", metavar="DIR",
                         help="keep the board's flash (saved configuration, boot record) in "
                              "this directory, so that it survives a restart; default: memory")
+    parser.add_argument("--board-rev", metavar="REV",
+                        help="with --runtime micropython: boot the shipped boot.py and main.py "
+                             "of this board revision (firmware/boards, e.g. rev-a) on "
+                             "register-level models of its parts")
     parser.add_argument("--world", action="store_true",
                         help="with --robot: also serve the arena's skill servers "
                              "(SYSTEM_DIR/arena/world.yaml)")
@@ -107,6 +119,19 @@ def run(args: argparse.Namespace) -> int:
 
     if args.tug_switch and not args.tug:
         raise UserError("--tug-switch needs --tug H:P", "add --tug 127.0.0.1:5000, say")
+    if args.board_rev is not None:
+        from host.commands.flash import check_revision
+
+        check_revision(args.board_rev)
+        if args.runtime != "micropython":
+            raise UserError("--board-rev needs --runtime micropython",
+                            "add --runtime micropython: the shipped main.py runs there")
+        for given, what in ((args.can, "--can"), (args.tug, "--tug")):
+            if given:
+                raise UserError(f"{what} with --board-rev: the shipped main.py serves no "
+                                f"{'CAN' if what == '--can' else 'tug'}",
+                                f"drop {what}, or use --runtime micropython without "
+                                "--board-rev")
     if args.world and not args.robot:
         raise UserError("--world needs --robot", "add --robot: the world moves the robot's devices")
     opts = Options(
@@ -125,6 +150,7 @@ def run(args: argparse.Namespace) -> int:
         robot=args.robot,
         world=args.world,
         flash=Path(args.flash) if args.flash else None,
+        board_rev=args.board_rev,
     )
     try:
         return run_emulator(opts, sys.stdout)

@@ -11,13 +11,13 @@ from pymodbus.client import AsyncModbusTcpClient
 
 from protocol.constants import ST_ON
 from protocol.messages import Ack, GetState, Measurement, State, Subscribe, Switch, Switched
-from tests.emulator.wire import Emulate, Wire
+from tests.emulator.wire import RUNTIMES, Emulate, Wire
 from tests.wait import wait_until_async
 
 
-@pytest.fixture(scope="module", params=["cpython", "micropython"])
+@pytest.fixture(scope="module", params=list(RUNTIMES))
 def board(request: pytest.FixtureRequest) -> Iterator[Emulate]:
-    with Emulate("--runtime", request.param, "--modbus", "127.0.0.1:0") as emu:
+    with Emulate(*RUNTIMES[request.param], "--modbus", "127.0.0.1:0") as emu:
         yield emu
 
 

@@ -31,6 +31,16 @@ KEY = bytes(range(32))
 DXBOARD = str(Path(sys.executable).parent / "dxboard")
 
 
+#: how a conformance test names the firmware it runs against -> the options that start it:
+#: the firmware's App in this interpreter or in micropython (on a remote HAL), or the shipped
+#: boot.py and main.py of a board revision on its part models (``--board-rev``)
+RUNTIMES: dict[str, tuple[str, ...]] = {
+    "cpython": ("--runtime", "cpython"),
+    "micropython": ("--runtime", "micropython"),
+    "rev-a": ("--runtime", "micropython", "--board-rev", "rev-a"),
+}
+
+
 class Emulate:
     def __init__(self, *options: str, key: bytes | None = KEY) -> None:
         env = dict(os.environ)

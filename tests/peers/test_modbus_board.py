@@ -14,12 +14,12 @@ import pytest
 from pymodbus.client import AsyncModbusTcpClient
 
 from host.board import BoardClient
-from tests.emulator.wire import KEY, Emulate
+from tests.emulator.wire import KEY, RUNTIMES, Emulate
 
 
-@pytest.fixture(scope="module", params=["cpython", "micropython"])
+@pytest.fixture(scope="module", params=list(RUNTIMES))
 def board(request: pytest.FixtureRequest) -> Iterator[Emulate]:
-    with Emulate("--runtime", request.param, "--modbus", "127.0.0.1:0") as emu:
+    with Emulate(*RUNTIMES[request.param], "--modbus", "127.0.0.1:0") as emu:
         yield emu
 
 

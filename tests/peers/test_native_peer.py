@@ -19,15 +19,13 @@ from pathlib import Path
 import pytest
 import serial
 
-from tests.emulator.wire import KEY, Emulate
+from tests.emulator.wire import KEY, RUNTIMES, Emulate
 from tests.peers import spec_client as sc
 
-RUNTIMES = ["cpython", "micropython"]
 
-
-@pytest.fixture(scope="module", params=RUNTIMES)
+@pytest.fixture(scope="module", params=list(RUNTIMES))
 def board(request: pytest.FixtureRequest) -> Iterator[Emulate]:
-    with Emulate("--runtime", request.param, "--serial") as emu:
+    with Emulate(*RUNTIMES[request.param], "--serial") as emu:
         yield emu
 
 
