@@ -49,10 +49,10 @@ def up(network: object, wifi: "dict | None", sleep_ms: object, ticks_ms: object)
         return "network: none (no network module: the host's sockets stand in)"
     if hasattr(network, "LAN"):
         try:
-            lan = network.LAN()  # type: ignore[attr-defined]
+            lan = network.LAN()
             lan.active(True)
             if _wait(lan, LAN_WAIT_MS, sleep_ms, ticks_ms):
-                return "network: lan " + lan.ifconfig()[0]
+                return "network: lan " + str(lan.ifconfig()[0])
             lan.active(False)
         except (OSError, ValueError):
             pass
@@ -64,10 +64,10 @@ def up(network: object, wifi: "dict | None", sleep_ms: object, ticks_ms: object)
     sta.active(True)
     sta.connect(wifi["ssid"], wifi.get("password", ""))
     if _wait(sta, WIFI_WAIT_MS, sleep_ms, ticks_ms):
-        return "network: wlan " + sta.ifconfig()[0] + " (ssid " + wifi["ssid"] + ")"
+        return "network: wlan " + str(sta.ifconfig()[0]) + " (ssid " + str(wifi["ssid"]) + ")"
     status = sta.status()
     sta.active(False)
-    return "network: none (Wi-Fi " + wifi["ssid"] + " not joined, status " + str(status) + ")"
+    return "network: none (Wi-Fi " + str(wifi["ssid"]) + " not joined, status " + str(status) + ")"
 
 
 def run() -> str:

@@ -58,4 +58,4 @@ def load(name: str = "") -> dict:  # type: ignore[type-arg]
 
 def mv_per_count_x1000(vin: dict) -> int:  # type: ignore[type-arg]
     """The input voltage per count of ``read_u16`` (16 bit full scale = vref), in mV x 1000."""
-    return vin["vref_mv"] * vin["divider"] * 1000 // 65535
+    return int(vin["vref_mv"] * vin["divider"] * 1000 // 65535)

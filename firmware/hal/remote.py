@@ -105,7 +105,7 @@ class RemoteHal:
             out[ch] = ma[ch]
 
     def read_current_ma(self, ch: int) -> int:
-        return self.ma[ch]  # type: ignore[no-any-return]
+        return self.ma[ch]
 
     def set_switch(self, ch: int, on: bool) -> None:
         self.sw = self.link.call(["set_switch", ch, on])  # type: ignore[assignment]
