@@ -1,7 +1,8 @@
 """Run the shared protocol and firmware tests under the real MicroPython interpreter.
 
 Usage (from the project root): ``micropython tests/mpy_run.py [DIR ...]``. It imports every
-``test_*.py`` in ``tests/protocol`` and ``tests/firmware`` (or the folders named), runs each
+``test_*.py`` in ``tests/protocol``, ``tests/firmware`` and ``tests/emulator/parts`` (the
+register-level part models: they run on the board too; or the folders named), runs each
 ``TestCase`` method, prints a line per failure with its traceback, then the count as
 ``N passed, N failed``, and exits 1 if anything failed. A file whose first line contains
 ``cpython-only`` (hypothesis, sockets of CPython) is listed as not run here.
@@ -15,7 +16,7 @@ sys.path.insert(0, ".")
 
 import unittest  # the shim in tests/mpy
 
-DEFAULT_DIRS = ("tests/protocol", "tests/firmware")
+DEFAULT_DIRS = ("tests/protocol", "tests/firmware", "tests/emulator/parts")
 
 
 def _test_files(folder):
