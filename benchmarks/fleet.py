@@ -89,11 +89,11 @@ def render_cost_us(robot: RunningDaemon) -> tuple[int, int, float]:
     series = sum(1 for line in body.decode().splitlines() if line and line[0] != "#")
     from host.fleet.metrics import FleetMetrics, LagProbe
     from host.web import MemoryStatusSource
-    from host.web.status import ChannelStatus, Status
+    from host.web.status import ChannelView, Status
 
     status = robot.status()
     source = MemoryStatusSource(Status(
-        channels=tuple(ChannelStatus(c["id"], c["name"], c["on"], c["state"], c["current_ma"])
+        channels=tuple(ChannelView(c["id"], c["name"], c["on"], c["state"], c["current_ma"])
                        for c in status["channels"]),
         observations=status["observations"], robot="rover-1"))
     metrics = FleetMetrics(source, robot="rover-1", site="bench",

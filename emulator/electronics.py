@@ -9,7 +9,7 @@ knows about them:
   ``dropout`` (0 mA for the first ``duty`` of every ``period_s``), ``drift`` (+``amps_per_s``
   since injection), ``hang`` (draws ``idle_ma``, never ready; a power-cycle cures it unless
   ``permanent``).
-- ``Switch``: follows the command unless ``stuck_on`` / ``stuck_off``.
+- ``SimSwitch``: follows the command unless ``stuck_on`` / ``stuck_off``.
 - ``Sensor``: reads ``true·gain + offset + noise``, at least 0; ``sensor_offset``,
   ``sensor_gain``, ``sensor_noise``, ``sensor_stuck`` (freezes the last reading).
 
@@ -93,7 +93,7 @@ class Load:
         return max(0.0, base)
 
 
-class Switch:
+class SimSwitch:
     def __init__(self) -> None:
         self.command = False
         self.stuck: bool | None = None
@@ -134,7 +134,7 @@ class Electronics:
     def __init__(self, loads: list[LoadSpec], input_mv: int, seed: int) -> None:
         self.rng = random.Random(seed)
         self.loads = [Load(s, self.rng) for s in loads]
-        self.switches = [Switch() for _ in loads]
+        self.switches = [SimSwitch() for _ in loads]
         self.sensors = [Sensor(self.rng) for _ in loads]
         self.nominal_mv = input_mv
         self.input_mv = input_mv

@@ -77,7 +77,7 @@ class Options:
     board_rev: str | None = None  # the shipped main.py on part models (emulator.board_rt)
 
 
-class _Stop:
+class _StopEmulator:
     """SIGTERM/SIGINT set an event; the previous handlers come back on ``restore``."""
 
     def __init__(self) -> None:
@@ -263,7 +263,7 @@ def url_lines(urls: dict[str, str]) -> list[str]:
 
 def run(opts: Options, out: TextIO) -> int:
     """Run the emulated board until SIGTERM or SIGINT; 0 on a clean stop."""
-    stop = _Stop()
+    stop = _StopEmulator()
     stop.install()  # before anything is started or printed: no signal can kill us half-way
     try:
         with contextlib.ExitStack() as stack:

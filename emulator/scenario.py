@@ -37,7 +37,7 @@ class ScenarioError(InputError):
 
 
 @dataclass(frozen=True)
-class Step:
+class ScenarioStep:
     at_ms: int
     kind: str  # "inject", "clear" or "switch"
     channel: str | int | None
@@ -47,12 +47,12 @@ class Step:
 
 @dataclass(frozen=True)
 class Scenario:
-    steps: tuple[Step, ...]
+    steps: tuple[ScenarioStep, ...]
     duration_ms: int
     description: str = ""
 
 
-def _step(where: str, ev: Any) -> Step:
+def _step(where: str, ev: Any) -> ScenarioStep:
     if not isinstance(ev, dict) or "at" not in ev:
         raise ScenarioError(f"{where}: each event is a mapping with 'at' (seconds)")
     at = ev["at"]
@@ -74,12 +74,13 @@ def _step(where: str, ev: Any) -> Step:
                 channel = BOARD
             elif channel is None:
                 raise ScenarioError(f"{where}: {fault} needs a channel")
-            return Step(at_ms, kind, channel, fault, params)
+            return ScenarioStep(at_ms, kind, channel, fault, params)
     except F.FaultError as exc:
         raise ScenarioError(f"{where}: {exc}") from exc
     if kind == "clear":
         target = ev["clear"]
-        return Step(at_ms, kind, None if target == "all" else target, str(ev.get("fault") or ""))
+        return ScenarioStep(at_ms, kind, None if target == "all" else target,
+                            str(ev.get("fault") or ""))
     action = ev["switch"]
     if isinstance(action, bool):  # YAML 1.1 reads a bare on/off as a boolean
         action = "on" if action else "off"
@@ -88,7 +89,8 @@ def _step(where: str, ev: Any) -> Step:
     off_ms = ev.get("off_ms", 1000)
     if not isinstance(off_ms, int) or isinstance(off_ms, bool):
         raise ScenarioError(f"{where}: off_ms must be an integer")
-    return Step(at_ms, kind, channel, action, {"off_ms": off_ms, "force": bool(ev.get("force"))})
+    return ScenarioStep(at_ms, kind, channel, action,
+                        {"off_ms": off_ms, "force": bool(ev.get("force"))})
 
 
 def parse(data: Any, source: str = "scenario") -> Scenario:
@@ -118,7 +120,7 @@ def load(path: str | Path) -> Scenario:
     return parse(data, str(path))
 
 
-def _run(emu: Emulator, step: Step) -> None:
+def _run(emu: Emulator, step: ScenarioStep) -> None:
     if step.kind == "inject":
         assert step.channel is not None
         emu.inject(step.channel, step.name, step.params)

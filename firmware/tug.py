@@ -41,7 +41,7 @@ class TugSession:
     def __init__(self, board: object, switching: bool, now: int) -> None:
         self.board = board
         self.switching = switching
-        self.decoder = tw.Decoder(tw.FROM_HOST)
+        self.decoder = tw.TugDecoder(tw.FROM_HOST)
         self.rate_hz = 0  # 1 while broadcasting (``Net.pump`` counts skips by it)
         self.due = now
         self.bad = 0  # malformed input, in events (``protocol.tug.Bad``)

@@ -210,7 +210,7 @@ def _count_ok(command: int, length: int, count: int) -> bool:
     return True
 
 
-class Decoder:
+class TugDecoder:
     """Bytes in (``feed``), ``Frame`` or ``Bad`` out (``next``); see the module docstring."""
 
     def __init__(self, accept: tuple) -> None:  # type: ignore[type-arg]

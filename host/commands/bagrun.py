@@ -39,7 +39,7 @@ from host.errors import UserError
 from host.events import JOURNALED, Note, Stamped
 from host.journal import Journal
 from host.observers.base import Update
-from host.observers.payload import Message
+from host.observers.payload import TopicMessage
 from host.observers.sources.ros2_graph import GRAPH
 from host.observers.sources.ros2_message import RosMessage
 from host.ros import graphlog
@@ -114,7 +114,7 @@ async def record(robot: RobotFiles, bag_path: Path, journal: Journal | None,
 
     def on_message(msg: object) -> None:
         if not isinstance(msg, RosMessage):  # a sample of the graph: in the bag's form
-            assert isinstance(msg, Message) and msg.topic == GRAPH
+            assert isinstance(msg, TopicMessage) and msg.topic == GRAPH
             msg = graphlog.to_bag(msg)
         msg = dataclasses.replace(msg, time=whole_ns(msg.time))  # as the bag will say it
         writer.write(msg)

@@ -29,7 +29,7 @@ from py_trees.common import Status
 
 from host.events import Event, LayerResult, TreeChange
 from host.executive.nodes import Trace
-from host.executive.trees import Context, Recipe, build
+from host.executive.trees import Recipe, TreeContext, build
 from host.layers import EXECUTIVE, Command, Result
 from host.skills import Layer0View, Skill
 
@@ -70,7 +70,7 @@ class Executive:
     async def _run(self, recipe: Recipe, command: Command, dispatch_id: str) -> Result:
         params = dict(zip(self.parameters.get(command.name, ()), command.args, strict=False))
         trace = Trace()
-        ctx = Context(self.skills, self.layer0, self.clock, self.emit, trace, self.max_hold_s,
+        ctx = TreeContext(self.skills, self.layer0, self.clock, self.emit, trace, self.max_hold_s,
                       dispatch_id)
         root = build(recipe, params, ctx, flat=self.flat)
         tree = py_trees.trees.BehaviourTree(root)

@@ -98,7 +98,7 @@ def parse_recipe(action: str, raw: Any) -> Recipe:
 
 
 @dataclass
-class Context:
+class TreeContext:
     """What the leaves of one tree share."""
 
     skills: Mapping[str, Skill]
@@ -110,7 +110,7 @@ class Context:
     dispatch_id: str = ""
 
 
-def build(recipe: Recipe, params: Mapping[str, str], ctx: Context,
+def build(recipe: Recipe, params: Mapping[str, str], ctx: TreeContext,
           flat: bool = False) -> py_trees.behaviour.Behaviour:
     """The tree for one dispatch of ``recipe``'s action with ``params`` (``?x`` -> value)."""
 

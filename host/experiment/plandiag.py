@@ -72,7 +72,7 @@ def _close(door: str, locked: bool | None = None) -> tuple[dict[str, Any],
 
 
 @dataclass(frozen=True)
-class Scenario:
+class PlanScenario:
     name: str
     label: str  # M2, M3, M4
     what: str
@@ -112,12 +112,12 @@ async def _lock_lab(url: str) -> None:
 
 
 SCENARIOS = {
-    "door-closed": Scenario("door-closed", "M2", "door_office closes behind the robot while it "
+    "door-closed": PlanScenario("door-closed", "M2", "door_office closes behind the robot while it "
                             "marks the victim in the office",
                             trigger=_marking_in_office, during=_door_closes),
-    "marker-missing": Scenario("marker-missing", "M3", "the marker dispenser jams: the first "
+    "marker-missing": PlanScenario("marker-missing", "M3", "the marker dispenser jams: the first "
                                "marking reports success and leaves nothing", prepare=_jam),
-    "plan-error": Scenario("plan-error", "M4", "door_office is closed and door_lab locked; "
+    "plan-error": PlanScenario("plan-error", "M4", "door_office is closed and door_lab locked; "
                            "the domain's open_door ignores locks", prepare=_lock_lab),
 }
 

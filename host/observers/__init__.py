@@ -29,7 +29,7 @@ from host.observers.config import (
 )
 from host.observers.hardware import Device, HardwareObserver
 from host.observers.hub import ObserverHub
-from host.observers.payload import Message, decode, encode, pick
+from host.observers.payload import TopicMessage, decode, encode, pick
 from host.observers.processes import NodeObserver, ProcessSample, PropertyObserver
 from host.observers.topics import FrequencyObserver, ResponseObserver
 from host.observers.values import (
@@ -42,10 +42,33 @@ from host.observers.values import (
 from host.observers.watcher import ProcessSpec, ProcessWatcher
 
 __all__ = [
-    "Device", "DiagnosticObserver", "FrequencyObserver", "HardwareObserver", "MatchObserver",
-    "Message", "NodeObserver", "ObservationSink", "Observer", "ObserverConfigError",
-    "ObserverHub", "ObserversConfig", "ProcessSample", "ProcessSpec", "ProcessWatcher",
-    "PropertyObserver", "ResponseObserver", "Retraction", "SourceSpec", "Threshold",
-    "TrendObserver", "Update", "ValueRef", "apply_updates", "check_atoms", "decode", "encode",
-    "load_observers", "pick",
+    "Device",
+    "DiagnosticObserver",
+    "FrequencyObserver",
+    "HardwareObserver",
+    "MatchObserver",
+    "NodeObserver",
+    "ObservationSink",
+    "Observer",
+    "ObserverConfigError",
+    "ObserverHub",
+    "ObserversConfig",
+    "ProcessSample",
+    "ProcessSpec",
+    "ProcessWatcher",
+    "PropertyObserver",
+    "ResponseObserver",
+    "Retraction",
+    "SourceSpec",
+    "Threshold",
+    "TopicMessage",
+    "TrendObserver",
+    "Update",
+    "ValueRef",
+    "apply_updates",
+    "check_atoms",
+    "decode",
+    "encode",
+    "load_observers",
+    "pick",
 ]

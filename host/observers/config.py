@@ -132,7 +132,7 @@ def load_observers(path: str | Path, model: SystemModel | None = None) -> Observ
     """Read and validate the ``observers:`` section of ``path`` (a robot directory or its
     ``system.yaml``) and build its observers. Raises ``ObserverConfigError``."""
     file, section, lines = read_section(path, SECTION, ObserverConfigError)
-    b = _Builder(file, lines, model)
+    b = _ConfigBuilder(file, lines, model)
     config = b.build(section)
     if b.problems:
         raise ObserverConfigError(b.problems)
@@ -145,7 +145,7 @@ def check_atoms(config: ObserversConfig, theory: Theory) -> list[str]:
     return [a for o in config.observers for a in o.atoms() if a not in known]
 
 
-class _Builder:
+class _ConfigBuilder:
     def __init__(self, file: Path, lines: yamlpos.Lines, model: SystemModel | None) -> None:
         self.file = file
         self.lines = lines

@@ -22,7 +22,7 @@ from typing import Any
 
 from host.observers.base import Observer, Update
 from host.observers.hardware import BoardInput, HardwareObserver
-from host.observers.payload import Message
+from host.observers.payload import TopicMessage
 from host.observers.processes import ProcessObserver, ProcessSample
 from host.observers.sources.base import Subscription, TopicSource
 from host.observers.topics import FrequencyObserver, TopicObserver, WayIn
@@ -105,7 +105,7 @@ class ObserverHub:
                 self.sink(updates)
 
     # -- inputs ----------------------------------------------------------------------------
-    def feed_message(self, msg: Message) -> None:
+    def feed_message(self, msg: TopicMessage) -> None:
         self.way_in.arrived(msg.time)
         for o in self._by_topic.get(msg.topic, ()):
             self._deliver(o, o.feed(msg, msg.time))

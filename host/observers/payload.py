@@ -1,4 +1,4 @@
-"""The payload convention for topic values, and the topic ``Message`` every source delivers.
+"""The payload convention for topic values, and the topic ``TopicMessage`` every source delivers.
 
 A topic payload is one JSON object in UTF-8 (``{"twist": {"angular": {"z": 0.1}}}``), so an
 observer picks a value by key: ``pick(obj, "twist.angular.z")`` follows dots through nested
@@ -80,7 +80,7 @@ def stamp_of(obj: Mapping[str, Any] | None) -> float | None:
 
 
 @dataclass(frozen=True)
-class Message:
+class TopicMessage:
     """One message of ``topic`` received at ``time`` (host monotonic seconds)."""
 
     time: float

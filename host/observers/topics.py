@@ -89,7 +89,7 @@ from typing import Protocol
 import host.atoms as A
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
 from host.observers.owntime import WindowWait
-from host.observers.payload import Message
+from host.observers.payload import TopicMessage
 from host.observers.silence import (
     JITTER_GAIN,
     JITTER_MEMORY_S,
@@ -145,7 +145,7 @@ class WayIn:
         return total
 
 
-class TopicObserver(Observer[Message]):
+class TopicObserver(Observer[TopicMessage]):
     """An observer fed with the messages of ``topics``."""
 
     topics: tuple[str, ...] = ()
@@ -207,7 +207,7 @@ class FrequencyObserver(TopicObserver):
         worst = self._delays.get() or 0.0
         return min(self.window, max(JITTER_FLOOR_S, JITTER_GAIN * worst))
 
-    def _feed(self, item: Message, now: float) -> None:
+    def _feed(self, item: TopicMessage, now: float) -> None:
         if self._start is None:
             self._start = now
         gap = None if self._arrived is None else now - self._arrived
@@ -392,7 +392,7 @@ class ResponseObserver(TopicObserver):
     def atoms(self) -> list[str]:
         return [self.atom]
 
-    def _feed(self, item: Message, now: float) -> None:
+    def _feed(self, item: TopicMessage, now: float) -> None:
         self._check(now)
         if item.topic == self.input:
             if self._pending is None:

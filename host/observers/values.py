@@ -31,7 +31,7 @@ import numpy as np
 
 import host.atoms as A
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY
-from host.observers.payload import Message, pick
+from host.observers.payload import TopicMessage, pick
 from host.observers.topics import TopicObserver
 
 TRENDS = A.TRENDS
@@ -104,7 +104,7 @@ class TrendObserver(TopicObserver):
     def atoms(self) -> list[str]:
         return [str(A.trend(t, self.value.name)) for t in TRENDS]
 
-    def _feed(self, item: Message, now: float) -> None:
+    def _feed(self, item: TopicMessage, now: float) -> None:
         v = item.number(self.value.key)
         if v is not None:
             self.trend.add(now, v)
@@ -142,7 +142,7 @@ class MatchObserver(TopicObserver):
     def atoms(self) -> list[str]:
         return [self.atom]
 
-    def _feed(self, item: Message, now: float) -> None:
+    def _feed(self, item: TopicMessage, now: float) -> None:
         for ref, trend in zip(self.refs, self.trends, strict=True):
             if item.topic == ref.topic:
                 v = item.number(ref.key)
@@ -202,7 +202,7 @@ class DiagnosticObserver(TopicObserver):
     def atoms(self) -> list[str]:
         return [r.atom for r in self.rules]
 
-    def _feed(self, item: Message, now: float) -> None:
+    def _feed(self, item: TopicMessage, now: float) -> None:
         values = item.values
         for rule in self.rules:
             value = pick(values, rule.key)

@@ -96,14 +96,14 @@ def load_processes(path: str | Path, model: SystemModel | None = None) -> dict[s
 
     With ``model``, every name must be a node of it. Raises ``ProcessConfigError``."""
     file, section, lines = read_section(path, SECTION, ProcessConfigError)
-    b = _Builder(file, lines, model, project_root(file.parent))
+    b = _ProcessBuilder(file, lines, model, project_root(file.parent))
     out = b.build(section)
     if b.problems:
         raise ProcessConfigError(b.problems)
     return out
 
 
-class _Builder:
+class _ProcessBuilder:
     def __init__(self, file: Path, lines: yamlpos.Lines, model: SystemModel | None,
                  root: Path) -> None:
         self.file = file

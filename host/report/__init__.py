@@ -11,27 +11,27 @@ draws it with matplotlib (Agg) into a PNG or an SVG. ``dxboard report`` is the c
 from host.report.diagnosis import DiagnosisMark
 from host.report.timeline import (
     ActionSpan,
-    Bound,
     ComponentRow,
     Group,
+    HealthState,
     Interval,
     PlanMark,
     Recovery,
-    State,
     Timeline,
+    WindowBound,
     build_timeline,
 )
 
 __all__ = [
     "ActionSpan",
-    "Bound",
     "ComponentRow",
     "DiagnosisMark",
     "Group",
+    "HealthState",
     "Interval",
     "PlanMark",
     "Recovery",
-    "State",
     "Timeline",
+    "WindowBound",
     "build_timeline",
 ]

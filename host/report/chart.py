@@ -54,16 +54,17 @@ from host.report.timeline import (
     RUNNING,
     ActionSpan,
     ComponentRow,
-    State,
+    HealthState,
     Timeline,
 )
 
 log = logging.getLogger(__name__)
 
 # colours (also what the tests look for in the image)
-STATE_COLORS = {State.NORMAL: "#bfe3c6", State.ABNORMAL: "#d7263d", State.UNKNOWN: "#e3e3e3",
-                State.RETRACTED: "#f2c46d"}  # retracted: amber, outlined, never the fault red
-STATE_LABELS = {State.RETRACTED: "retracted within the debounce (not repaired)"}
+STATE_COLORS = {HealthState.NORMAL: "#bfe3c6", HealthState.ABNORMAL: "#d7263d",
+                HealthState.UNKNOWN: "#e3e3e3",
+                HealthState.RETRACTED: "#f2c46d"}  # retracted: amber, outlined, never the fault red
+STATE_LABELS = {HealthState.RETRACTED: "retracted within the debounce (not repaired)"}
 OUTCOME_COLORS = {"succeeded": "#2b6cb0", "failed": "#e8590c", "timeout": "#b7791f",
                   RUNNING: "#7f8c9a"}
 OUTCOME_HATCH = {"failed": "xxxx", "timeout": "....", RUNNING: "////"}
@@ -282,14 +283,15 @@ def draw(t: Timeline, *, title: str | None = None, dpi: int = _DPI) -> tuple[Fig
         row = t.row(name)
         row_y[name] = y + h / 2
         for iv in row.intervals:
-            if iv.state is State.RETRACTED:  # thin: a verdict taken back, not a fault's band
+            if iv.state is HealthState.RETRACTED:  # thin: a verdict taken back, not a fault's band
                 ax.add_patch(Rectangle((iv.start, y + 0.3 * h), iv.duration, 0.4 * h,
                                        facecolor=STATE_COLORS[iv.state], lw=0, zorder=2))
                 continue
             ax.add_patch(Rectangle(
                 (iv.start, y + 0.14 * h), iv.duration, 0.72 * h,
                 facecolor=STATE_COLORS[iv.state], edgecolor="white" if iv.state is
-                State.UNKNOWN else "none", hatch="////" if iv.state is State.UNKNOWN else None,
+                HealthState.UNKNOWN else "none",
+                hatch="////" if iv.state is HealthState.UNKNOWN else None,
                 lw=0, zorder=2))
         ax.text(-0.1 / axw, y + h / 2, name, transform=_blend(ax), ha="right", va="center",
                 fontsize=_ROW_PT, color=TEXT)
@@ -443,10 +445,11 @@ def _legend_count(t: Timeline) -> int:
 
 
 def _legend(fig: Figure, t: Timeline, height: float, rows: int) -> None:
-    states = [s for s in State if any(iv.state is s for r in t.rows for iv in r.intervals)]
+    states = [s for s in HealthState if any(iv.state is s for r in t.rows for iv in r.intervals)]
     handles: list[Patch | Line2D] = [
-        Patch(facecolor=STATE_COLORS[s], edgecolor="white" if s is State.UNKNOWN else "none",
-              hatch="////" if s is State.UNKNOWN else None, label=STATE_LABELS.get(s, s.value))
+        Patch(facecolor=STATE_COLORS[s], edgecolor="white" if s is HealthState.UNKNOWN else "none",
+              hatch="////" if s is HealthState.UNKNOWN else None,
+              label=STATE_LABELS.get(s, s.value))
         for s in states]
     outcomes = sorted({a.outcome for a in t.actions},
                       key=lambda o: list(OUTCOME_COLORS).index(o) if o in OUTCOME_COLORS else 9)

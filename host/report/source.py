@@ -22,7 +22,7 @@ from host.errors import UserError
 from host.events import DiagnosisRecord
 from host.journal.runs import list_runs, pick
 from host.journal.store import JournalReader
-from host.report.timeline import Bound, EmptyWindow, Group, Timeline, build_timeline
+from host.report.timeline import EmptyWindow, Group, Timeline, WindowBound, build_timeline
 
 log = logging.getLogger(__name__)
 
@@ -38,12 +38,12 @@ def model_groups(system_dir: str | Path) -> tuple[str, dict[str, Group]]:
     return model.name, {c.name: by_kind[c.kind] for c in model.components.values()}
 
 
-def parse_bound(flag: str, text: str | None) -> Bound | None:
-    """``--from``/``--to`` into a ``Bound``; ``UserError`` naming the flag if malformed."""
+def parse_bound(flag: str, text: str | None) -> WindowBound | None:
+    """``--from``/``--to`` into a ``WindowBound``; ``UserError`` naming the flag if malformed."""
     if text is None:
         return None
     try:
-        return Bound.parse(text)
+        return WindowBound.parse(text)
     except ValueError as exc:
         raise UserError(f"{flag} {text!r}: {exc}",
                         f"give {flag} seconds from the journal's start (e.g. 12.5) or a "
@@ -51,7 +51,7 @@ def parse_bound(flag: str, text: str | None) -> Bound | None:
 
 
 def load_timeline(journal: str | os.PathLike[str], *, model: str | None = None,
-                  start: Bound | None = None, end: Bound | None = None,
+                  start: WindowBound | None = None, end: WindowBound | None = None,
                   name: str | None = None, run: str | None = None) -> Timeline:
     """The ``Timeline`` of one run of ``journal`` (the latest, or the one ``run`` names;
     optionally ordered by ``model``, cut to a window)."""

@@ -25,7 +25,7 @@ mission, its layers' commands (``host.report.mission``) and its plan-execution d
   the entry's two clocks (wall or monotonic) they were taken on.
 - The entries are one daemon run's (``host.journal.runs``: each run numbers its actions
   afresh, so two runs' ``a1`` are different actions). The time axis is in seconds from the
-  start of the run, or of the window when one is chosen (``Bound``: seconds on the run's axis,
+  start of the run, or of the window when one is chosen (``WindowBound``: seconds on the run's axis,
   or ``#ID`` a journal id). It follows the daemon's monotonic clock, so a wall-clock step
   cannot distort durations, unless that clock goes backwards within the entries (entries of an
   older daemon that wrote no run ids, across a reboot): then it follows wall time.
@@ -62,7 +62,7 @@ from host.report.mission import LayerSpan, clip_spans, mission_spans
 log = logging.getLogger(__name__)
 
 
-class State(StrEnum):
+class HealthState(StrEnum):
     NORMAL = "normal"
     ABNORMAL = "abnormal"
     UNKNOWN = "unknown"
@@ -99,7 +99,7 @@ class Interval:
 
     start: float
     end: float
-    state: State
+    state: HealthState
 
     @property
     def duration(self) -> float:
@@ -114,14 +114,14 @@ class ComponentRow:
     group: Group
     intervals: tuple[Interval, ...]
 
-    def state_at(self, t: float) -> State:
+    def state_at(self, t: float) -> HealthState:
         """The state at ``t`` (an interval holds its start, not its end; past the end: last)."""
         for iv in self.intervals:
             if iv.start <= t < iv.end:
                 return iv.state
-        return self.intervals[-1].state if self.intervals else State.UNKNOWN
+        return self.intervals[-1].state if self.intervals else HealthState.UNKNOWN
 
-    def time_in(self, state: State) -> float:
+    def time_in(self, state: HealthState) -> float:
         return sum(iv.duration for iv in self.intervals if iv.state is state)
 
 
@@ -201,14 +201,14 @@ class Timeline:
 
 
 @dataclass(frozen=True)
-class Bound:
+class WindowBound:
     """One end of a window: seconds on the journal's axis, or a journal id (``#ID``)."""
 
     value: float
     is_id: bool = False
 
     @classmethod
-    def parse(cls, text: str) -> Bound:
+    def parse(cls, text: str) -> WindowBound:
         """``12.5`` / ``12.5s`` seconds, ``#120`` / ``id:120`` an id; ``ValueError`` else."""
         t = text.strip()
         for prefix in ("#", "id:"):
@@ -274,8 +274,8 @@ def _action_time(value: float, entry: Entry, entry_at: float) -> float:
 
 
 def build_timeline(entries: Sequence[Entry], *, name: str, robot: str = "",
-                   groups: Mapping[str, Group] | None = None, start: Bound | None = None,
-                   end: Bound | None = None, run: str = "",
+                   groups: Mapping[str, Group] | None = None, start: WindowBound | None = None,
+                   end: WindowBound | None = None, run: str = "",
                    debounce_s: float = DEBOUNCE_S) -> Timeline:
     """Fold ``entries`` (one daemon run, ``run``, in id order) into a ``Timeline`` of the
     window.
@@ -328,7 +328,7 @@ def build_timeline(entries: Sequence[Entry], *, name: str, robot: str = "",
                                 frec.plan_id or rec.plan_id, frec.detail))
 
     # --- the window -------------------------------------------------------------------------
-    def resolve(b: Bound, is_start: bool) -> float:
+    def resolve(b: WindowBound, is_start: bool) -> float:
         if not b.is_id:
             return b.value
         ids = [e for e in entries if (e.id >= b.value if is_start else e.id <= b.value)]
@@ -400,10 +400,10 @@ def _wall_at(entries: Sequence[Entry], t: float, at: Callable[[Entry], float]) -
 def _intervals(comp: str, changes: Sequence[tuple[float, frozenset[str] | None]], ws: float,
                we: float) -> tuple[Interval, ...]:
     """The component's states between ``ws`` and ``we``, merged, relative to ``ws``."""
-    points: list[tuple[float, State]] = [(min(0.0, ws), State.UNKNOWN)]
+    points: list[tuple[float, HealthState]] = [(min(0.0, ws), HealthState.UNKNOWN)]
     for t, bad in changes:
-        state = State.UNKNOWN if bad is None else (
-            State.ABNORMAL if comp in bad else State.NORMAL)
+        state = HealthState.UNKNOWN if bad is None else (
+            HealthState.ABNORMAL if comp in bad else HealthState.NORMAL)
         points.append((t, state))
     out: list[Interval] = []
     for i, (t, state) in enumerate(points):
@@ -424,8 +424,8 @@ def _retracted(intervals: tuple[Interval, ...], action_starts: Sequence[float],
     ``end`` and with no action started in it, marked ``RETRACTED``."""
     out = []
     for iv in intervals:
-        if (iv.state is State.ABNORMAL and iv.duration < debounce_s and iv.end < end - 1e-9
+        if (iv.state is HealthState.ABNORMAL and iv.duration < debounce_s and iv.end < end - 1e-9
                 and not any(iv.start <= a <= iv.end for a in action_starts)):
-            iv = Interval(iv.start, iv.end, State.RETRACTED)
+            iv = Interval(iv.start, iv.end, HealthState.RETRACTED)
         out.append(iv)
     return tuple(out)

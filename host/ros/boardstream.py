@@ -21,7 +21,7 @@ the link going down and up and reboots. So the daemon also publishes, on ``/boar
   the fields of ``ChannelState``; a ``link_up`` adds one, ``dxboard board stream: info``, with
   the fields of ``BoardInfo`` (HELLO).
 
-``encode(item)`` gives the array's statuses as plain ``Record`` values, ``message(item)`` the
+``encode(item)`` gives the array's statuses as plain ``StreamRecord`` values, ``message(item)`` the
 message the publisher sends, and ``decode(msg)`` turns a recorded message back into the
 item, so ``dxboard record`` / ``dxboard replay`` feed the hardware observer what the daemon's
 was fed, at the stamp's time (``when``). Anything that does not decode is None (logged).
@@ -61,7 +61,7 @@ OK, ERROR = 0, 2
 
 
 @dataclass(frozen=True)
-class Record:
+class StreamRecord:
     """One ``DiagnosticStatus`` of a ``/board_stream`` message."""
 
     level: int
@@ -70,16 +70,16 @@ class Record:
     values: tuple[tuple[str, str], ...]
 
 
-def encode(item: BoardInput) -> list[Record]:
+def encode(item: BoardInput) -> list[StreamRecord]:
     """The statuses that carry ``item``."""
     kind = _KIND_OF[type(item)]
     level = ERROR if kind == "link_down" else OK
-    out = [Record(level, NAME, kind, _values(item))]
+    out = [StreamRecord(level, NAME, kind, _values(item))]
     if isinstance(item, BoardState):
-        out += [Record(OK, f"{CHANNEL}{c.channel}", "channel", _values(c))
+        out += [StreamRecord(OK, f"{CHANNEL}{c.channel}", "channel", _values(c))
                 for c in item.channels]
     elif isinstance(item, LinkUp):
-        out.append(Record(OK, INFO, "info", _values(item.info)))
+        out.append(StreamRecord(OK, INFO, "info", _values(item.info)))
     return out
 
 

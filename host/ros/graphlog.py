@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import logging
 
-from host.observers.payload import Message, encode
+from host.observers.payload import TopicMessage, encode
 from host.observers.sources.ros2_graph import GRAPH
 from host.observers.sources.ros2_message import RosMessage
 from host.ros.boardstream import set_stamp
@@ -31,7 +31,7 @@ TYPE = "diagnostic_msgs/msg/DiagnosticArray"
 NAME = "dxboard graph"
 
 
-def to_bag(sample: Message) -> RosMessage:
+def to_bag(sample: TopicMessage) -> RosMessage:
     """A ``GRAPH`` sample as the message the bag holds (at the sample's time)."""
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
     from rclpy.serialization import serialize_message
@@ -46,7 +46,7 @@ def to_bag(sample: Message) -> RosMessage:
     return RosMessage(sample.time, TOPIC, bytes(serialize_message(msg)), TYPE)
 
 
-def from_bag(msg: RosMessage) -> Message | None:
+def from_bag(msg: RosMessage) -> TopicMessage | None:
     """The graph sample a recorded ``/dxboard/graph`` message carries, at its bag time."""
     from diagnostic_msgs.msg import DiagnosticArray
     from rclpy.serialization import deserialize_message
@@ -57,4 +57,4 @@ def from_bag(msg: RosMessage) -> Message | None:
     except Exception as exc:  # bad CDR, no such status
         log.warning("%s at %.3f: not a graph sample (%s)", msg.topic, msg.time, exc)
         return None
-    return Message(msg.time, GRAPH, encode({"nodes": [kv.key for kv in status.values]}))
+    return TopicMessage(msg.time, GRAPH, encode({"nodes": [kv.key for kv in status.values]}))

@@ -33,7 +33,7 @@ from typing import Any
 import can as pycan
 
 from host.transports.base import AUTH, CYCLE, PUSH
-from host.transports.translate import Handler, Refused, TranslatingTransport
+from host.transports.translate import Handler, TranslatingTransport, WireRefused
 from host.transports.url import BoardUrl
 from protocol import can as layout
 from protocol.can import (
@@ -189,7 +189,7 @@ class CanTransport(TranslatingTransport):
 
     async def _command(self, op: int, ch: int, force: bool = False, off_100ms: int = 0) -> bytes:
         if self.key is None:
-            raise Refused(E_AUTH_REQUIRED, "no key: set DXBOARD_KEY or --key-file")
+            raise WireRefused(E_AUTH_REQUIRED, "no key: set DXBOARD_KEY or --key-file")
         self.counter = max(self.counter + 1, int((time.time() - EPOCH_2024) * 10))
         cmd = layout.command_frame(op, ch, force, off_100ms, self.counter & 0xFFFFFFFF)
         tag = layout.command_tag(self.key, self.nonce, cmd)
@@ -205,7 +205,7 @@ class CanTransport(TranslatingTransport):
         result = await fut
         err = layout.parse_result(result)[2]
         if err:
-            raise Refused(err)
+            raise WireRefused(err)
         return result
 
     @staticmethod

@@ -42,7 +42,7 @@ from pymodbus.exceptions import ModbusException
 
 from host.transports.base import PUSH, SAVE
 from host.transports.errors import BadUrl, UnexpectedDevice
-from host.transports.translate import Handler, Refused, TranslatingTransport
+from host.transports.translate import Handler, TranslatingTransport, WireRefused
 from host.transports.url import BoardUrl
 from protocol import modbus_map as M
 from protocol.constants import (
@@ -174,7 +174,7 @@ class ModbusTransport(TranslatingTransport):
                 raise ConnectionResetError(f"Modbus: {exc}") from exc
         if reply.isError():
             code, text = _EXCEPTIONS.get(reply.exception_code, (E_INTERNAL, "Modbus exception"))
-            raise Refused(code, text, reply.exception_code)
+            raise WireRefused(code, text, reply.exception_code)
         return reply
 
     async def _bits(self, fn: str, base: int, n: int) -> list[bool]:
@@ -257,7 +257,7 @@ class ModbusTransport(TranslatingTransport):
             raise ConnectionRefusedError(f"no Modbus server at {self.where}")
         try:
             return await self._learn(self.map)
-        except Refused as exc:
+        except WireRefused as exc:
             raise self._unexpected(exc) from None
 
     async def _learn(self, m: dict[str, Any]) -> Hello:
@@ -284,7 +284,7 @@ class ModbusTransport(TranslatingTransport):
         self._last_uptime = snap.uptime_ms if snap.uptime_ms is not None else -1
         return self._hello(snap)
 
-    def _unexpected(self, exc: Refused) -> UnexpectedDevice:
+    def _unexpected(self, exc: WireRefused) -> UnexpectedDevice:
         if exc.modbus == M.X_DEVICE:
             return UnexpectedDevice(
                 f"{self.url.text}: the device answered exception 04 (device failure) for "
@@ -302,7 +302,7 @@ class ModbusTransport(TranslatingTransport):
             self._seq += 1
             try:
                 snap = await self.snapshot()
-            except Refused as exc:
+            except WireRefused as exc:
                 log.warning("%s: poll refused: %s", self.url.text, exc)
             except OSError as exc:
                 self.lose(f"link lost while polling: {exc}")
@@ -350,7 +350,7 @@ class ModbusTransport(TranslatingTransport):
 
     async def _switch(self, ch: int, on: bool) -> None:
         if not 0 <= ch < self.n:
-            raise Refused(E_BAD_CHANNEL)
+            raise WireRefused(E_BAD_CHANNEL)
         await self._call("write_coil", self.map["switch_coils"] + ch, on)
 
     async def _read_back(self, ch: int, want: bool) -> Switched:

@@ -32,7 +32,7 @@ log = logging.getLogger(__name__)
 Handler = Callable[[Any], Awaitable[Message | None]]
 
 
-class Refused(Exception):
+class WireRefused(Exception):
     """The board (or the wire's server) refused a request: ``code`` is an E_* code."""
 
     def __init__(self, code: int, text: str = "", modbus: int = 0) -> None:
@@ -86,7 +86,7 @@ class TranslatingTransport(Transport):
     async def _run(self, handler: Handler, msg: Message) -> None:
         try:
             reply = await handler(msg)
-        except Refused as exc:
+        except WireRefused as exc:
             self.push(Error(exc.code, msg.TYPE, exc.text, req_id=msg.req_id))
             return
         except (OSError, LinkLost) as exc:
@@ -124,7 +124,7 @@ class TranslatingTransport(Transport):
             await asyncio.sleep(off_ms / 1000)
             try:
                 await switch(ch, True)
-            except (OSError, Refused) as exc:
+            except (OSError, WireRefused) as exc:
                 log.warning("%s: power cycle of channel %d: switching on failed: %s",
                             self.url.text, ch, exc)
 

@@ -39,7 +39,7 @@ import socket
 from typing import Any
 
 from host.transports.base import PUSH
-from host.transports.translate import Handler, Refused, TranslatingTransport
+from host.transports.translate import Handler, TranslatingTransport, WireRefused
 from host.transports.url import BoardUrl
 from protocol import tug as tw
 from protocol.constants import (
@@ -126,7 +126,7 @@ class TugTransport(TranslatingTransport):
         return fut
 
     async def _read_loop(self, reader: asyncio.StreamReader) -> None:
-        decoder = tw.Decoder(tw.FROM_BOARD)
+        decoder = tw.TugDecoder(tw.FROM_BOARD)
         reason = "the board closed the link"
         try:
             while True:
@@ -208,11 +208,11 @@ class TugTransport(TranslatingTransport):
 
     async def _switch(self, ch: int, on: bool) -> None:
         if not 0 <= ch <= 0xFF:
-            raise Refused(E_BAD_CHANNEL, f"no channel {ch}")
+            raise WireRefused(E_BAD_CHANNEL, f"no channel {ch}")
         code, _ = await self._command(tw.channel(ch, on))
         if code:
             text = tw.ACK_TEXT.get(code, f"error code {code}")
-            raise Refused(tw.error_of(code), f"channel {ch}: {text}")
+            raise WireRefused(tw.error_of(code), f"channel {ch}: {text}")
 
     async def _set_frequency(self, hz: int) -> None:
         async with self._lock:
@@ -259,7 +259,7 @@ class TugTransport(TranslatingTransport):
         while True:
             chans = await self._measure()
             if not 0 <= ch < len(chans):
-                raise Refused(E_BAD_CHANNEL, f"no channel {ch}")
+                raise WireRefused(E_BAD_CHANNEL, f"no channel {ch}")
             on = _on(chans[ch][0])
             if on == want or loop.time() >= end:
                 return Switched(ch, want, on, ST_ON if on else ST_OFF)

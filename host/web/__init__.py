@@ -9,7 +9,7 @@ no build step, nothing fetched from the internet).
 
 from host.web.server import JournalView, WebServer, parse_listen
 from host.web.status import (
-    ChannelStatus,
+    ChannelView,
     DiagnosisStatus,
     MemoryStatusSource,
     OutOfRepair,
@@ -19,7 +19,7 @@ from host.web.status import (
 )
 
 __all__ = [
-    "ChannelStatus",
+    "ChannelView",
     "DiagnosisStatus",
     "JournalView",
     "MemoryStatusSource",

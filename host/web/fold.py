@@ -40,7 +40,7 @@ from host.events import (
 from host.operator.client import DEFAULT_SOCKET
 from host.web.mission import MissionFold
 from host.web.status import (
-    ChannelStatus,
+    ChannelView,
     DiagnosisStatus,
     MemoryStatusSource,
     OutOfRepair,
@@ -142,12 +142,12 @@ class StatusFold:
             return list(e.probabilities)
         return [None] * len(e.diagnoses)
 
-    def _channels(self, e: ChannelSample) -> tuple[ChannelStatus, ...]:
+    def _channels(self, e: ChannelSample) -> tuple[ChannelView, ...]:
         out = []
         for c in e.channels:
             history = self._history.setdefault(c.name, deque(maxlen=HISTORY))
             history.append(c.current_ma)
-            out.append(ChannelStatus(c.id, c.name, c.on, c.state, c.current_ma, tuple(history)))
+            out.append(ChannelView(c.id, c.name, c.on, c.state, c.current_ma, tuple(history)))
         return tuple(out)
 
     def _action(self, e: ActionRecord, stamped: Stamped) -> tuple[RepairStatus, ...]:

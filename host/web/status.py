@@ -35,7 +35,7 @@ CHANNEL_STATES: tuple[str, ...] = tuple(STATE_NAMES)
 
 
 @dataclass(frozen=True)
-class ChannelStatus:
+class ChannelView:
     id: int
     name: str
     on: bool
@@ -91,7 +91,7 @@ class OutOfRepair:
 class Status:
     """One snapshot; ``version`` grows with every change (the source sets it)."""
 
-    channels: tuple[ChannelStatus, ...] = ()
+    channels: tuple[ChannelView, ...] = ()
     observations: Mapping[str, bool | None] = field(default_factory=dict)
     diagnoses: tuple[DiagnosisStatus, ...] = ()
     diagnosis_complete: bool = True

@@ -38,7 +38,7 @@ from host.diagnosis import Diagnoser, generate, load_system
 from host.diagnosis.healthy import healthy_values
 from host.diagnosis.logic import Literal
 from host.diagnosis.satctx import SatContext
-from host.observers.payload import Message
+from host.observers.payload import TopicMessage
 from host.observers.sources.zenoh_peer import ZenohSource
 from host.repair.actuators import RECENT, Actuators
 from tests.daemon.runner import TEDUSAR
@@ -79,7 +79,7 @@ async def test_driver_restarts_leave_no_shared_memory_mapped_in_the_daemon() -> 
     seen: list[int] = []
     gens: Counter[int] = Counter()  # generation -> its messages received
 
-    def on_message(msg: Message) -> None:
+    def on_message(msg: TopicMessage) -> None:
         seen.append(len(msg.payload))
         gens[int(json.loads(msg.payload)["gen"])] += 1
 

@@ -19,7 +19,7 @@ class Link:
         self.r = Rig(channels=kw.pop("channels", CHANNELS), **kw)
         self.r.run(500)  # the protected PC comes on at power-up
         self.s = TugSession(self.r.board, switching, self.r.hal.now)
-        self.host = tw.Decoder(tw.FROM_BOARD)
+        self.host = tw.TugDecoder(tw.FROM_BOARD)
         self.host.feed(self.s.start(self.r.hal.now))
 
     def send(self, data):

@@ -29,7 +29,7 @@ from host.events import (
 from host.fleet.metrics import FleetMetrics, LagProbe
 from host.journal import Journal
 from host.web import MemoryStatusSource, WebServer
-from host.web.status import ChannelStatus, Status
+from host.web.status import ChannelView, Status
 from tests.daemon.runner import RunningDaemon
 from tests.fleet.lite import lite_model
 from tests.fleet.tools import promtool, samples
@@ -107,7 +107,7 @@ async def test_without_metrics_the_server_says_so() -> None:
 
 def test_label_values_are_escaped() -> None:
     source = MemoryStatusSource(Status(
-        channels=(ChannelStatus(0, 'odd "name"\\x\n', True, "on", 1500.0),)))
+        channels=(ChannelView(0, 'odd "name"\\x\n', True, "on", 1500.0),)))
     text = FleetMetrics(source, robot="r").render().decode()
     assert 'name="odd \\"name\\"\\\\x\\n"' in text
     assert promtool("check", "metrics", stdin=text)[0] == 0

@@ -36,7 +36,7 @@ def address(url: str) -> tuple[str, int]:
 
 def read_frames(sock: socket.socket, want: int) -> list[tw.Frame]:
     """Frames from a raw socket until ``want`` arrived or the board closed the link."""
-    d = tw.Decoder(tw.FROM_BOARD)
+    d = tw.TugDecoder(tw.FROM_BOARD)
     out: list[tw.Frame] = []
     while len(out) < want:
         data = sock.recv(4096)

@@ -13,7 +13,14 @@ import asyncio
 import pytest
 
 from host.board.types import Reading
-from host.observers import Device, FrequencyObserver, HardwareObserver, Message, ObserverHub, Update
+from host.observers import (
+    Device,
+    FrequencyObserver,
+    HardwareObserver,
+    ObserverHub,
+    TopicMessage,
+    Update,
+)
 from host.observers.payload import encode
 from host.observers.silence import JITTER_S
 
@@ -77,7 +84,7 @@ async def test_every_topic_message_is_the_way_in_of_every_frequency_observer() -
     imu = FrequencyObserver("/imu_data", rate=100, tolerance=25, window=0.5)
     hub = ObserverHub([scan, imu], lambda _: None, clock=loop.time)
     assert scan.way_in is hub.way_in and imu.way_in is hub.way_in
-    hub.feed_message(Message(loop.time() + 0.5, "/imu_data", encode({"stamp": 0.5})))
+    hub.feed_message(TopicMessage(loop.time() + 0.5, "/imu_data", encode({"stamp": 0.5})))
     assert scan.way_in is not None and scan.way_in.last == pytest.approx(loop.time() + 0.5)
     await hub.close()
 

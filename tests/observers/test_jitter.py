@@ -13,7 +13,7 @@ import functools
 import pytest
 
 import host.atoms as A
-from host.observers import FrequencyObserver, Message
+from host.observers import FrequencyObserver, TopicMessage
 from host.observers.payload import encode, stamp_of
 from host.observers.silence import JITTER_S
 from host.observers.topics import JITTER_FLOOR_S
@@ -37,9 +37,9 @@ class Loaded(LoadedBase):
         return self.verdicts(str(A.ok(TOPIC)))
 
 
-def message(seq: int, stamp: float | None, arrival: float) -> Message:
+def message(seq: int, stamp: float | None, arrival: float) -> TopicMessage:
     payload = encode({"seq": seq} if stamp is None else {"seq": seq, "stamp": stamp})
-    return Message(arrival, TOPIC, payload)
+    return TopicMessage(arrival, TOPIC, payload)
 
 
 def stream(start: float, end: float, rate: float, stamped: bool = True
@@ -140,4 +140,4 @@ def test_stamps_are_read_from_the_publishers_conventions() -> None:
     assert stamp_of({"header": {"stamp": {"sec": 7, "nanosec": 250_000_000}}}) == 7.25
     assert stamp_of({"stamp": "soon"}) is None and stamp_of({"seq": 1}) is None
     assert stamp_of(None) is None
-    assert Message(0.0, TOPIC, b"not json").stamp is None
+    assert TopicMessage(0.0, TOPIC, b"not json").stamp is None

@@ -16,7 +16,7 @@ import logging
 import pytest
 
 import host.atoms as A
-from host.observers import FrequencyObserver, Message
+from host.observers import FrequencyObserver, TopicMessage
 from host.observers.base import Update
 from host.observers.payload import encode
 from host.observers.silence import CATCH_UP, JITTER_S, STARVED_CAP_S, ChainState
@@ -62,7 +62,7 @@ class Observed(FrequencyObserver):
 
     chain: Chain
 
-    def feed(self, item: Message, now: float) -> list[Update]:
+    def feed(self, item: TopicMessage, now: float) -> list[Update]:
         self.chain.now = now
         return super().feed(item, now)
 
@@ -79,16 +79,16 @@ def scan(chain: Chain | None) -> Observed:
     return obs
 
 
-def message(seq: int, stamp: float, arrival: float) -> Message:
-    return Message(arrival, TOPIC, encode({"seq": seq, "stamp": stamp}))
+def message(seq: int, stamp: float, arrival: float) -> TopicMessage:
+    return TopicMessage(arrival, TOPIC, encode({"seq": seq, "stamp": stamp}))
 
 
 def publisher(chain: Chain, start: float, end: float, *, resume_s: float = 0.005
-              ) -> list[tuple[float, functools.partial[Message]]]:
+              ) -> list[tuple[float, functools.partial[TopicMessage]]]:
     """A publisher at ``RATE`` that sends nothing while starved; a message due during a spell
     goes out ``resume_s`` (its own CPU time) after the spell ends, stamped when due, and the
     messages after it follow in order."""
-    out: list[tuple[float, functools.partial[Message]]] = []
+    out: list[tuple[float, functools.partial[TopicMessage]]] = []
     k, sent = 0, 0.0
     while (due := start + k / RATE) < end:
         sent = max(sent, due)
@@ -250,7 +250,7 @@ class Beside(Observed):
         while self.others and self.others[0] <= now:
             self.way_in.arrived(self.others.pop(0))
 
-    def feed(self, item: Message, now: float) -> list[Update]:
+    def feed(self, item: TopicMessage, now: float) -> list[Update]:
         self._take(now)
         assert self.way_in is not None
         self.way_in.arrived(now)

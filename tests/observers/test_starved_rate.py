@@ -20,7 +20,7 @@ import functools
 import pytest
 
 import host.atoms as A
-from host.observers import FrequencyObserver, Message
+from host.observers import FrequencyObserver, TopicMessage
 from host.observers.owntime import WindowWait
 from host.observers.payload import encode
 from host.observers.silence import STARVED_CAP_S, ChainState
@@ -32,9 +32,9 @@ RATE = 40.0
 WINDOW = 0.5
 
 
-def message(topic: str, seq: int, stamp: float | None, arrival: float) -> Message:
+def message(topic: str, seq: int, stamp: float | None, arrival: float) -> TopicMessage:
     values = {"seq": seq} if stamp is None else {"seq": seq, "stamp": stamp}
-    return Message(arrival, topic, encode(values))
+    return TopicMessage(arrival, topic, encode(values))
 
 
 def publishing(chain: Chain, start: float, end: float, rate: float = RATE, *,

@@ -7,9 +7,9 @@ import pytest
 from host.diagnosis.observations import Observation, ObservationSet
 from host.observers import (
     FrequencyObserver,
-    Message,
     ResponseObserver,
     Retraction,
+    TopicMessage,
     apply_updates,
 )
 from host.observers.silence import JITTER_S
@@ -39,7 +39,7 @@ def test_frequency_ok_then_silence_at_its_deadline() -> None:
     f = FrequencyObserver("/odom", rate=10, tolerance=2, window=1.0, silence=5)
     out = []
     for i in range(10):
-        out += f.feed(Message(i * 0.1, "/odom"), i * 0.1)
+        out += f.feed(TopicMessage(i * 0.1, "/odom"), i * 0.1)
     assert [(str(o.literal), o.time) for o in out] == [("ok(/odom)", 0.1)]
     assert out[0].source == "frequency:/odom" and out[0].validity == 3.0
     # silence after t=0.9: ~ok 5 periods and the least delay tolerated later (confirmed
@@ -57,10 +57,10 @@ def test_frequency_wrong_rate_and_recovery() -> None:
     out = []
     t = 0.0
     for _ in range(10):  # 10 Hz
-        out += f.feed(Message(t, "/scan"), t)
+        out += f.feed(TopicMessage(t, "/scan"), t)
         t += 0.1
     for _ in range(10):  # 20 Hz: too fast once the window holds the new regime
-        out += f.feed(Message(t, "/scan"), t)
+        out += f.feed(TopicMessage(t, "/scan"), t)
         t += 0.05
     lits = [str(o.literal) for o in out]
     assert lits == ["ok(/scan)", "~ok(/scan)"]
@@ -72,7 +72,7 @@ def test_refresh_keeps_it_and_expiry_makes_it_unknown() -> None:
     sink = SetSink()
     t = 0.0
     while t < 2.0:
-        apply_updates(f.feed(Message(t, "/imu_data"), t), sink)
+        apply_updates(f.feed(TopicMessage(t, "/imu_data"), t), sink)
         apply_updates(f.tick(t), sink)
         t += 0.01
     o = sink.s.get("ok(/imu_data)")
@@ -93,21 +93,21 @@ def test_topic_never_heard_is_not_ok_after_the_silence_limit() -> None:
 
 def test_response_within_and_missed() -> None:
     r = ResponseObserver("/cmd_vel", "/odom", within=0.2)
-    out = r.feed(Message(1.0, "/cmd_vel"), 1.0)
-    out += r.feed(Message(1.1, "/odom"), 1.1)
+    out = r.feed(TopicMessage(1.0, "/cmd_vel"), 1.0)
+    out += r.feed(TopicMessage(1.1, "/odom"), 1.1)
     assert [(str(o.literal), o.time) for o in out] == [("ok(/odom)", 1.1)]
-    out = r.feed(Message(2.0, "/cmd_vel"), 2.0)
-    out += r.feed(Message(2.05, "/cmd_vel"), 2.05)  # the oldest unanswered input counts
+    out = r.feed(TopicMessage(2.0, "/cmd_vel"), 2.0)
+    out += r.feed(TopicMessage(2.05, "/cmd_vel"), 2.05)  # the oldest unanswered input counts
     out += run_until(r, 2.2)
     assert [(str(o.literal), o.time) for o in out] == [("ok(/odom)", 2.1), ("~ok(/odom)", 2.2)]
-    assert r.feed(Message(2.3, "/odom"), 2.3) == []  # too late: answers nothing
+    assert r.feed(TopicMessage(2.3, "/odom"), 2.3) == []  # too late: answers nothing
     assert r.next_deadline() == pytest.approx(3.2)  # refresh only
 
 
 def test_stop_retracts() -> None:
     r = ResponseObserver("/a", "/b", within=1.0, atom="ok(b_follows_a)")
-    r.feed(Message(0.0, "/a"), 0.0)
-    r.feed(Message(0.5, "/b"), 0.5)
+    r.feed(TopicMessage(0.0, "/a"), 0.0)
+    r.feed(TopicMessage(0.5, "/b"), 0.5)
     assert r.stop(0.6) == [Retraction("ok(b_follows_a)", 0.6, "response:/a->/b")]
 
 

@@ -7,9 +7,9 @@ import pytest
 from host.observers import (
     DiagnosticObserver,
     MatchObserver,
-    Message,
     Retraction,
     Threshold,
+    TopicMessage,
     TrendObserver,
     ValueRef,
     encode,
@@ -17,8 +17,8 @@ from host.observers import (
 )
 
 
-def msg(t: float, topic: str, **values: object) -> Message:
-    return Message(t, topic, encode(values))
+def msg(t: float, topic: str, **values: object) -> TopicMessage:
+    return TopicMessage(t, topic, encode(values))
 
 
 def signs(updates: list) -> dict[str, bool | None]:
@@ -34,14 +34,14 @@ def test_trend_inc_dec_const_by_regression() -> None:
     out = []
     for i in range(20):  # rising 0.5 per second
         t = i * 0.05
-        out += tr.feed(Message(t, "/odom", encode({"twist": {"z": 0.5 * t}})), t)
+        out += tr.feed(TopicMessage(t, "/odom", encode({"twist": {"z": 0.5 * t}})), t)
     assert signs(out) == {"inc(yaw)": True, "dec(yaw)": False, "const(yaw)": False}
     assert out[0].time == pytest.approx(0.1)  # judged at the third sample
     assert tr.trend.fitted == pytest.approx(0.5)
     out = []
     for i in range(20, 80):  # flat: const once the window holds only flat samples
         t = i * 0.05
-        out += tr.feed(Message(t, "/odom", encode({"twist": {"z": 0.5}})), t)
+        out += tr.feed(TopicMessage(t, "/odom", encode({"twist": {"z": 0.5}})), t)
     assert signs(out)["const(yaw)"] is True and signs(out)["inc(yaw)"] is False
     # no messages: the window runs dry and the trend becomes unknown (retracted)
     gone = []
@@ -79,7 +79,7 @@ def test_diagnostic_thresholds_on_key_values() -> None:
     assert signs(out) == {"ok(temp_cpu1)": True, "ok(battery)": True, "ok(mode)": True}
     out = d.feed(msg(2.0, "/diagnostics", cpu={"temp": 41}), 2.0)  # only this key: one change
     assert [(str(o.literal), o.time) for o in out] == [("~ok(temp_cpu1)", 2.0)]
-    assert d.feed(Message(2.5, "/diagnostics", b"not json"), 2.5) == []
+    assert d.feed(TopicMessage(2.5, "/diagnostics", b"not json"), 2.5) == []
     # no message for the validity: everything is retracted, not left stale
     out = []
     while (t := d.next_deadline()) is not None and t <= 6.0:

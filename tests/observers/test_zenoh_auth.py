@@ -23,7 +23,7 @@ import zenoh
 
 from emulator.robot.bus import Bus
 from host.errors import UserError
-from host.observers.payload import Message
+from host.observers.payload import TopicMessage
 from host.observers.sources.zenoh_auth import beside, credentials_file, read
 from host.observers.sources.zenoh_peer import ZenohSource
 from tests.observers.conftest import PYTHON
@@ -69,7 +69,7 @@ class Daemonside:
 
     def __init__(self, tmp: Path, endpoint: str) -> None:
         self.auth = credentials_file(tmp / "zenoh.auth")
-        self.got: list[Message] = []
+        self.got: list[TopicMessage] = []
         self.source = ZenohSource(listen=[endpoint], auth=self.auth)
         self.source.subscribe("/odom", self.got.append)
 

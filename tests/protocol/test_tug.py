@@ -18,7 +18,7 @@ BOARD_FRAMES = [tw.specs([(1.5, 24.0), (5.0, 24.0)]),
 
 
 def decode(accept, data, how="whole"):
-    d = tw.Decoder(accept)
+    d = tw.TugDecoder(accept)
     out = []
     for chunk in chunks(data, how):
         d.feed(chunk)
@@ -126,7 +126,7 @@ class TestDecoder(unittest.TestCase):
                         self.assertEqual(raw(f), tw.channel(5, False), "cut %d" % cut)
 
     def test_need_more_data(self):
-        d = tw.Decoder(tw.FROM_BOARD)
+        d = tw.TugDecoder(tw.FROM_BOARD)
         frame = tw.measurements([(1, 2.0, 3.0)] * 3)
         d.feed(frame[:-1])
         self.assertIsNone(d.next())
@@ -136,7 +136,7 @@ class TestDecoder(unittest.TestCase):
         self.assertIsNone(d.next())
 
     def test_a_flood_is_capped_and_never_raises(self):
-        d = tw.Decoder(tw.FROM_HOST)
+        d = tw.TugDecoder(tw.FROM_HOST)
         flood = bytes([2, 1]) * 4000 + bytes(range(256)) * 20
         for i in range(0, len(flood), 1000):
             d.feed(flood[i:i + 1000])

@@ -27,7 +27,7 @@ TRAILER = {tw.FROM_HOST: tw.channel(9, True), tw.FROM_BOARD: tw.ack(6)}
 
 
 def decode(accept: tuple[int, ...], data: bytes, cuts: list[int]) -> list[object]:
-    d = tw.Decoder(accept)
+    d = tw.TugDecoder(accept)
     out: list[object] = []
     prev = 0
     for cut in [*sorted(c % (len(data) + 1) for c in cuts), len(data)]:

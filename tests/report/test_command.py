@@ -17,7 +17,7 @@ from host.cli import main
 from host.journal import Journal, Note
 from host.report.chart import OUTCOME_COLORS, STATE_COLORS, render
 from host.report.source import load_timeline
-from host.report.timeline import State
+from host.report.timeline import HealthState
 from tests.report.journals import COMPONENTS, T0, device_shut_down, power_up
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -51,7 +51,7 @@ def test_png_has_the_abnormal_colour_exactly_where_the_journal_says(
     def pixel(component: str, t: float) -> np.ndarray:
         return img[round(layout.row_y_px[component]), round(layout.x_px(t))]
 
-    abnormal, normal = STATE_COLORS[State.ABNORMAL], STATE_COLORS[State.NORMAL]
+    abnormal, normal = STATE_COLORS[HealthState.ABNORMAL], STATE_COLORS[HealthState.NORMAL]
     assert _close(pixel("jaguar", 11.0), abnormal)  # off from 10.2 s to 12.2 s
     assert _close(pixel("jaguar", 5.0), normal)
     assert _close(pixel("jaguar", 14.0), normal)

@@ -28,7 +28,7 @@ from host.layers import MISSION, SKILLS, Cause
 from host.report.chart import DIAGNOSIS_STYLE, render
 from host.report.diagnosis import short_explanation
 from host.report.source import load_timeline
-from host.report.timeline import Bound
+from host.report.timeline import WindowBound
 from tests.report.test_mission import mission_journal
 
 T0, MONO0 = 1_800_000_000.0, 5_000.0
@@ -120,7 +120,7 @@ def test_the_timeline_holds_each_diagnosis_with_its_time_class_and_text(
     (m4,) = load_timeline(journal).plan_diagnoses  # the latest run: m4's, on its own axis
     assert m4.time == pytest.approx(8.3) and m4.cls == "plan error"
     assert "the domain may lack (not (locked ?d))" in m4.label
-    assert load_timeline(journal, run="m2", end=Bound(30.0)).plan_diagnoses == ()
+    assert load_timeline(journal, run="m2", end=WindowBound(30.0)).plan_diagnoses == ()
 
 
 def test_the_chart_draws_each_diagnosis_in_the_mission_band(tmp_path: Path) -> None:

@@ -22,7 +22,7 @@ from matplotlib.transforms import Bbox
 
 from host.report.chart import STATE_COLORS, draw, render
 from host.report.source import load_timeline
-from host.report.timeline import State, Timeline
+from host.report.timeline import HealthState, Timeline
 from tests.report.journals import TEDUSAR_DIR, device_shut_down, load_flaps, power_up
 
 
@@ -81,9 +81,9 @@ def test_diagnoses_retracted_within_the_debounce_are_drawn_as_such(tmp_path: Pat
     t = timeline_of(load_flaps(tmp_path / "j.sqlite"))
     imu = t.row("imu")
     # the five blips are retracted, not abnormal; the base's real fault is abnormal
-    assert imu.time_in(State.ABNORMAL) == 0.0
-    assert sum(1 for iv in imu.intervals if iv.state is State.RETRACTED) == 5
-    assert t.row("jaguar").state_at(31.0) is State.ABNORMAL
+    assert imu.time_in(HealthState.ABNORMAL) == 0.0
+    assert sum(1 for iv in imu.intervals if iv.state is HealthState.RETRACTED) == 5
+    assert t.row("jaguar").state_at(31.0) is HealthState.ABNORMAL
     # a retraction is no recovery: the only "all normal" is after the real repair
     assert [round(r.normal_at, 1) for r in t.recoveries] == [35.0]
     out = tmp_path / "j.png"
@@ -98,7 +98,7 @@ def test_diagnoses_retracted_within_the_debounce_are_drawn_as_such(tmp_path: Pat
         return bool(np.abs(pixel - np.array(to_rgb(colour))).max() < 0.03)
 
     blip = colour_at(4.2)
-    assert not near(blip, STATE_COLORS[State.ABNORMAL]), blip
-    assert near(blip, STATE_COLORS[State.RETRACTED]) or near(blip, "#ffffff"), blip
+    assert not near(blip, STATE_COLORS[HealthState.ABNORMAL]), blip
+    assert near(blip, STATE_COLORS[HealthState.RETRACTED]) or near(blip, "#ffffff"), blip
     jrow = round(layout.row_y_px["jaguar"])
-    assert near(img[jrow, round(layout.x_px(31.0))][:3], STATE_COLORS[State.ABNORMAL])
+    assert near(img[jrow, round(layout.x_px(31.0))][:3], STATE_COLORS[HealthState.ABNORMAL])

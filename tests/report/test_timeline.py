@@ -12,10 +12,10 @@ import pytest
 
 from host.journal import DiagnosisRecord, Journal, JournalReader
 from host.report.source import load_timeline
-from host.report.timeline import Bound, EmptyWindow, Group, State, build_timeline
+from host.report.timeline import EmptyWindow, Group, HealthState, WindowBound, build_timeline
 from tests.report.journals import COMPONENTS, HARDWARE, NODES, T0, device_shut_down, power_up
 
-A, N, U = State.ABNORMAL, State.NORMAL, State.UNKNOWN
+A, N, U = HealthState.ABNORMAL, HealthState.NORMAL, HealthState.UNKNOWN
 
 
 def test_device_shut_down_intervals_and_actions_are_as_recorded(tmp_path: Path) -> None:
@@ -75,7 +75,7 @@ def test_action_times_on_the_monotonic_clock_land_in_the_same_place(tmp_path: Pa
 
 def test_a_window_cuts_and_rebases_the_axis(tmp_path: Path) -> None:
     path = device_shut_down(tmp_path / "d.sqlite")
-    t = load_timeline(path, start=Bound(9.0), end=Bound(13.0))
+    t = load_timeline(path, start=WindowBound(9.0), end=WindowBound(13.0))
     assert t.end == pytest.approx(4.0)
     jaguar = [(pytest.approx(i.start), pytest.approx(i.end), i.state)
               for i in t.row("jaguar").intervals]
@@ -89,7 +89,7 @@ def test_a_window_cuts_and_rebases_the_axis(tmp_path: Path) -> None:
     with JournalReader(path) as reader:
         first_bad = next(e for e in reader.since(0, limit=None)
                          if isinstance(e.payload, DiagnosisRecord) and e.payload.diagnoses[0])
-    by_id = load_timeline(path, start=Bound(first_bad.id, is_id=True))
+    by_id = load_timeline(path, start=WindowBound(first_bad.id, is_id=True))
     assert by_id.first_id == first_bad.id
     first = by_id.row("jaguar").intervals[0]
     assert (first.start, first.end, first.state) == (0.0, pytest.approx(2.0), A)
@@ -123,16 +123,16 @@ def test_no_diagnosis_in_a_record_makes_everything_unknown(tmp_path: Path) -> No
     (rec,) = t.recoveries
     assert (rec.abnormal_since, rec.first_action, rec.normal_at) == (0.0, None, 3.0)
     with pytest.raises(EmptyWindow):
-        build_timeline(entries, name="c", start=Bound(5.0))
+        build_timeline(entries, name="c", start=WindowBound(5.0))
     with pytest.raises(EmptyWindow):
-        build_timeline(entries, name="c", start=Bound(99, is_id=True))
+        build_timeline(entries, name="c", start=WindowBound(99, is_id=True))
 
 
 def test_bounds_parse_seconds_and_ids() -> None:
-    assert Bound.parse("12.5") == Bound(12.5)
-    assert Bound.parse("3s") == Bound(3.0)
-    assert Bound.parse("#120") == Bound(120.0, True)
-    assert Bound.parse("id:7") == Bound(7.0, True)
+    assert WindowBound.parse("12.5") == WindowBound(12.5)
+    assert WindowBound.parse("3s") == WindowBound(3.0)
+    assert WindowBound.parse("#120") == WindowBound(120.0, True)
+    assert WindowBound.parse("id:7") == WindowBound(7.0, True)
     for bad in ("x", "#0", "#", "nan", "inf"):
         with pytest.raises(ValueError):
-            Bound.parse(bad)
+            WindowBound.parse(bad)

@@ -12,14 +12,14 @@ from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.serialization import deserialize_message
 
 from host.observers import Retraction, Update
-from host.observers.payload import Message, encode
+from host.observers.payload import TopicMessage, encode
 from host.observers.sources.ros2_graph import GRAPH, GraphObserver
 from host.ros import graphlog
 from host.ros.offline import ClockedObservers, bag_observers
 
 
-def sample(t: float, *nodes: str) -> Message:
-    return Message(t, GRAPH, encode({"nodes": list(nodes)}))
+def sample(t: float, *nodes: str) -> TopicMessage:
+    return TopicMessage(t, GRAPH, encode({"nodes": list(nodes)}))
 
 
 def test_a_graph_sample_goes_into_the_bag_and_back() -> None:

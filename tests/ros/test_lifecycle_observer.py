@@ -21,7 +21,7 @@ import pytest
 from host.diagnosis import load_system
 from host.observers import ObserverConfigError, load_observers
 from host.observers.base import Observer
-from host.observers.payload import Message, encode
+from host.observers.payload import TopicMessage, encode
 from host.observers.sources.ros2_lifecycle import (
     LIFECYCLE,
     HeartbeatObserver,
@@ -40,8 +40,8 @@ def said(updates: list[Any]) -> list[tuple[str, bool]]:
     return [(str(u.literal.atom), u.literal.positive) for u in updates if hasattr(u, "literal")]
 
 
-def state_msg(node: str, state: str, t: float) -> Message:
-    return Message(t, f"{LIFECYCLE}{node}", encode({"state": state}))
+def state_msg(node: str, state: str, t: float) -> TopicMessage:
+    return TopicMessage(t, f"{LIFECYCLE}{node}", encode({"state": state}))
 
 
 def test_lifecycle_state_is_running_only_while_active() -> None:
@@ -51,7 +51,7 @@ def test_lifecycle_state_is_running_only_while_active() -> None:
     assert said(o.feed(state_msg("cam", "unconfigured", 0.0), 0.0)) == [("running(cam)", False)]
     assert said(o.feed(state_msg("cam", "configuring", 0.1), 0.1)) == []  # in transition
     assert o.state == "configuring"
-    event = Message(0.2, "/cam/transition_event",
+    event = TopicMessage(0.2, "/cam/transition_event",
                     encode({"goal_state": {"id": 3, "label": "active"}}))
     assert said(o.feed(event, 0.2)) == [("running(cam)", True)]
     assert said(o.feed(state_msg("cam", "inactive", 0.3), 0.3)) == [("running(cam)", False)]
@@ -65,14 +65,15 @@ def test_lifecycle_state_is_running_only_while_active() -> None:
 def test_a_heartbeat_that_stops_is_not_running_after_its_timeout() -> None:
     o = HeartbeatObserver("planner", "/planner/heartbeat", timeout=0.5)
     assert o.tick(0.0) == [] and o.next_deadline() == 0.5  # the first beat is due by then
-    beat = Message(0.1, "/planner/heartbeat")
+    beat = TopicMessage(0.1, "/planner/heartbeat")
     assert said(o.feed(beat, 0.1)) == [("running(planner)", True)]
     for t in (0.2, 0.3, 0.4):
-        o.feed(Message(t, "/planner/heartbeat"), t)
+        o.feed(TopicMessage(t, "/planner/heartbeat"), t)
     assert o.next_deadline() == pytest.approx(0.9)
     assert said(o.tick(0.85)) == []
     assert said(o.tick(0.9)) == [("running(planner)", False)]  # 0.5 s after the last beat
-    assert said(o.feed(Message(2.0, "/planner/heartbeat"), 2.0)) == [("running(planner)", True)]
+    assert said(o.feed(TopicMessage(2.0, "/planner/heartbeat"), 2.0)) == [
+        ("running(planner)", True)]
 
 
 def test_a_node_that_never_beats_is_not_running_after_its_timeout() -> None:
@@ -126,7 +127,7 @@ async def test_the_ros2_source_observes_a_lifecycle_node_through_get_state_and_e
     o = LifecycleObserver(node)
     topics: list[str] = []
     try:
-        def on(msg: Message) -> None:
+        def on(msg: TopicMessage) -> None:
             topics.append(msg.topic)
             o.feed(msg, msg.time)
         for topic in o.topics:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from std_msgs.msg import Int32
 
-from host.observers.payload import Message
+from host.observers.payload import TopicMessage
 from host.observers.sources.ros2 import Ros2Source
 from host.observers.sources.ros2_message import RosMessage
 from tests.ros.conftest import Peer
@@ -20,7 +20,7 @@ from tests.wait import wait_until_async
 QOS = 100
 
 
-def value(msg: Message) -> int:
+def value(msg: TopicMessage) -> int:
     assert isinstance(msg, RosMessage)
     values = msg.values
     assert values is not None
@@ -32,7 +32,7 @@ async def test_a_strangers_messages_are_ignored_and_told_once(domain: int) -> No
     source = Ros2Source(domain, publishers={"/odom": ["base_node"]})
     told: list[tuple[str, str]] = []
     source.on_stranger = lambda topic, node: told.append((topic, node))
-    got: list[Message] = []
+    got: list[TopicMessage] = []
     try:
         real = base.node.create_publisher(Int32, "/odom", QOS)
         fake = stranger.node.create_publisher(Int32, "/odom", QOS)
@@ -64,7 +64,7 @@ async def test_a_strangers_messages_are_ignored_and_told_once(domain: int) -> No
 async def test_a_topic_without_a_model_publisher_takes_every_publisher(domain: int) -> None:
     stranger = Peer(domain, "stranger")
     source = Ros2Source(domain, publishers={"/odom": ["base_node"]})
-    got: list[Message] = []
+    got: list[TopicMessage] = []
     try:
         pub = stranger.node.create_publisher(Int32, "/chatter", QOS)
         source.subscribe("/chatter", got.append)

@@ -17,7 +17,7 @@ from rclpy.duration import Duration
 from rclpy.qos import QoSHistoryPolicy, QoSProfile, QoSReliabilityPolicy
 from std_msgs.msg import Int32
 
-from host.observers.payload import Message
+from host.observers.payload import TopicMessage
 from host.observers.sources.ros2 import Ros2Source
 from tests.ros.conftest import Peer
 from tests.wait import wait_until_async
@@ -26,7 +26,7 @@ BURST = 60  # 0.6 s of a 100 Hz topic
 
 
 async def test_a_burst_sent_while_the_source_is_held_up_is_received_whole(domain: int) -> None:
-    got: list[Message] = []
+    got: list[TopicMessage] = []
     peer = Peer(domain, "burst_publisher")
     source = Ros2Source(domain)  # the type and a reliable reader from the graph
     try:

@@ -27,7 +27,7 @@ from host.journal import (
     PlanRecord,
     PlanStep,
 )
-from host.web import ChannelStatus, DiagnosisStatus, MemoryStatusSource, RepairStatus, Status
+from host.web import ChannelView, DiagnosisStatus, MemoryStatusSource, RepairStatus, Status
 
 CHANNELS = [  # id, name, state, current in mA
     (0, "sensor_head", "on", 820.0), (1, "laser_alignment", "on", 310.0), (2, "pc", "on", 3900.0),
@@ -53,7 +53,7 @@ def _history(ma: float, seed: int, n: int = 120) -> tuple[float, ...]:
 
 def demo_status(now: float) -> Status:
     channels = tuple(
-        ChannelStatus(cid, name, state in ("on", "inrush"), state, ma, _history(ma, cid))
+        ChannelView(cid, name, state in ("on", "inrush"), state, ma, _history(ma, cid))
         for cid, name, state, ma in CHANNELS)
     return Status(
         channels=channels,

@@ -1,4 +1,4 @@
-"""The topic-source interface: subscribe a topic name, get ``Message`` callbacks.
+"""The topic-source interface: subscribe a topic name, get ``TopicMessage`` callbacks.
 
 A source owns its clock (``clock``, seconds, monotonic by default): it stamps each message
 with the host time it arrived, since it is the I/O edge; observers below it never read a clock.
@@ -17,10 +17,10 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable
 from types import TracebackType
 
-from host.observers.payload import Message
+from host.observers.payload import TopicMessage
 from host.observers.sources.inbox import Inbox
 
-Callback = Callable[[Message], None]
+Callback = Callable[[TopicMessage], None]
 Clock = Callable[[], float]
 
 
@@ -34,9 +34,9 @@ class TopicSource(ABC):
     def __init__(self, clock: Clock = time.monotonic) -> None:
         self.clock = clock
         self._closed = False
-        self._inbox: Inbox[tuple[Callback, Message]] | None = None
+        self._inbox: Inbox[tuple[Callback, TopicMessage]] | None = None
 
-    def _post(self, loop: asyncio.AbstractEventLoop, callback: Callback, msg: Message) -> None:
+    def _post(self, loop: asyncio.AbstractEventLoop, callback: Callback, msg: TopicMessage) -> None:
         """Hand ``callback(msg)`` to ``loop`` from a middleware thread (batched, bounded)."""
         inbox = self._inbox
         if inbox is None:
@@ -68,7 +68,7 @@ class TopicSource(ABC):
         self.close()
 
 
-def _call(item: tuple[Callback, Message]) -> None:
+def _call(item: tuple[Callback, TopicMessage]) -> None:
     item[0](item[1])
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from host.observers.payload import Message, encode
+from host.observers.payload import TopicMessage, encode
 from host.observers.sources.base import Callback, Subscription, TopicSource, check_topic
 
 
@@ -37,9 +37,9 @@ class MemorySource(TopicSource):
         return sub
 
     def publish(self, topic: str, payload: bytes | Mapping[str, Any] = b"",
-                time: float | None = None) -> Message:
+                time: float | None = None) -> TopicMessage:
         data = payload if isinstance(payload, bytes) else encode(payload)
-        msg = Message(self.clock() if time is None else time, topic, data)
+        msg = TopicMessage(self.clock() if time is None else time, topic, data)
         for sub in list(self._subs.get(topic, ())):
             sub.callback(msg)
         return msg

@@ -42,7 +42,7 @@ from typing import Any
 
 from rclpy.qos import QoSHistoryPolicy, QoSProfile, QoSReliabilityPolicy
 
-from host.observers.payload import Message, encode
+from host.observers.payload import TopicMessage, encode
 from host.observers.sources.base import Callback, Subscription, TopicSource, check_topic
 from host.observers.sources.ros2_authentic import Publishers
 from host.observers.sources.ros2_convert import message_type
@@ -71,7 +71,7 @@ class _RosSubscription(Subscription):
         self.sub: Any = None  # the rclpy subscription once the type is known
         self.open = True
 
-    def deliver(self, msg: Message) -> None:  # on the executor's thread
+    def deliver(self, msg: TopicMessage) -> None:  # on the executor's thread
         if self.open:
             self.source._post(self.loop, self.callback, msg)
 
@@ -111,7 +111,7 @@ class Ros2Source(TopicSource):
         graph = None
         for sub in list(self._subs):
             if sub.topic == GRAPH:
-                sub.deliver(Message(self.clock(), GRAPH, encode({"nodes": self.nodes()})))
+                sub.deliver(TopicMessage(self.clock(), GRAPH, encode({"nodes": self.nodes()})))
             elif sub.topic.startswith(LIFECYCLE):
                 self._ask_state(sub)
             elif sub.sub is None:
@@ -130,7 +130,7 @@ class Ros2Source(TopicSource):
         if asked is not None and self.clock() - asked < STATE_CALL_S:
             return  # the last call is still under way: a busy or hung node
         if node not in self.nodes():
-            sub.deliver(Message(self.clock(), sub.topic, encode({"state": ABSENT})))
+            sub.deliver(TopicMessage(self.clock(), sub.topic, encode({"state": ABSENT})))
             return
         client = self._state_clients.get(node)
         if client is None:
@@ -146,7 +146,7 @@ class Ros2Source(TopicSource):
             result = f.result() if not f.cancelled() and f.exception() is None else None
             if result is not None:
                 state = str(result.current_state.label)
-                sub.deliver(Message(self.clock(), sub.topic, encode({"state": state})))
+                sub.deliver(TopicMessage(self.clock(), sub.topic, encode({"state": state})))
 
         future.add_done_callback(done)
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import host.atoms as A
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY
-from host.observers.payload import Message
+from host.observers.payload import TopicMessage
 from host.observers.topics import TopicObserver
 
 GRAPH = "/_graph/nodes"  # = host.observers.sources.ros2.GRAPH (kept free of rclpy imports)
@@ -34,7 +34,7 @@ class GraphObserver(TopicObserver):
     def atoms(self) -> list[str]:
         return [self.atom]
 
-    def _feed(self, item: Message, now: float) -> None:
+    def _feed(self, item: TopicMessage, now: float) -> None:
         nodes = (item.values or {}).get("nodes")
         if isinstance(nodes, list):
             self._say(self.atom, self.node in nodes, now)

@@ -32,7 +32,7 @@ from typing import Any
 
 import host.atoms as A
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY
-from host.observers.payload import Message
+from host.observers.payload import TopicMessage
 from host.observers.topics import TopicObserver
 
 LIFECYCLE = "/_lifecycle/"  # = the ROS 2 source's pseudo-topic prefix (free of rclpy here)
@@ -59,7 +59,7 @@ class LifecycleObserver(TopicObserver):
     def atoms(self) -> list[str]:
         return [self.atom]
 
-    def _feed(self, item: Message, now: float) -> None:
+    def _feed(self, item: TopicMessage, now: float) -> None:
         state = _state(item.values)
         if state is None:
             return
@@ -100,7 +100,7 @@ class HeartbeatObserver(TopicObserver):
     def atoms(self) -> list[str]:
         return [self.atom]
 
-    def _feed(self, item: Message, now: float) -> None:
+    def _feed(self, item: TopicMessage, now: float) -> None:
         self._last = now
         self._say(self.atom, True, now)
 

@@ -1,6 +1,6 @@
 """A topic message from ROS 2: the CDR bytes as they came, decoded only when values are read.
 
-``RosMessage`` is the observers' ``Message`` (time, topic, payload) with the message type's
+``RosMessage`` is the observers' ``TopicMessage`` (time, topic, payload) with the message type's
 name: a frequency observer counts it without deserialising anything (its ``stamp``, which the
 frequency observer reads for every message, is read straight from the CDR bytes of the
 ``header`` that stamped types carry first: deserialising a 4 MB map to find it would starve the
@@ -22,7 +22,7 @@ from typing import Any
 
 from rclpy.serialization import deserialize_message
 
-from host.observers.payload import Message
+from host.observers.payload import TopicMessage
 from host.observers.sources.ros2_convert import message_type, to_dict
 
 log = logging.getLogger(__name__)
@@ -43,7 +43,7 @@ def _header_first(type_name: str) -> bool:
 
 
 @dataclass(frozen=True)
-class RosMessage(Message):
+class RosMessage(TopicMessage):
     type_name: str = ""
 
     @property

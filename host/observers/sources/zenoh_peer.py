@@ -31,7 +31,7 @@ from typing import Any
 
 import zenoh
 
-from host.observers.payload import Message
+from host.observers.payload import TopicMessage
 from host.observers.sources import zenoh_auth
 from host.observers.sources.base import Callback, Subscription, TopicSource, check_topic
 
@@ -90,7 +90,7 @@ class ZenohSource(TopicSource):
         clock = self.clock
 
         def on_sample(sample: zenoh.Sample) -> None:  # on a zenoh thread
-            self._post(loop, callback, Message(clock(), topic, sample.payload.to_bytes()))
+            self._post(loop, callback, TopicMessage(clock(), topic, sample.payload.to_bytes()))
 
         sub = _ZenohSubscription(
             self.session.declare_subscriber(key_of(topic, self.prefix), on_sample))
