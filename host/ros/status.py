@@ -18,8 +18,9 @@ state), ``quarantined`` and ``held``. One status per board channel, ``dxboard bo
 current_a, last_event), and one for the board, ``dxboard board`` (OK while the link is up,
 else ERROR with the reason; key/values link, total_current_a, input_v), and one for the
 daemon itself, ``dxboard daemon`` (hardware_id ``daemon``): OK "journal: writing", or ERROR
-"journal: disk full, N entries held" while its journal cannot write (key/values journal,
-journal_held, journal_dropped). ``diagnoses``,
+"journal: disk full, N entries held" while its journal cannot write, WARN "behind: its event
+loop runs N s late" while its loop lags over 1 s (``host.daemon.lagwatch``; key/values journal,
+journal_held, journal_dropped, behind, loop_lag_s). ``diagnoses``,
 ``currents_a`` and ``input_v`` are the latest minimal diagnoses, channel currents and the
 board's input voltage, for ``/diagnosis``, ``/board_measurements`` and ``/battery_state``.
 """
@@ -37,9 +38,11 @@ from host.events import (
     HoldChange,
     JournalHealth,
     LinkChange,
+    LoopLag,
     QuarantineChange,
     Stamped,
     journal_health_text,
+    loop_lag_text,
 )
 
 OK, WARN, ERROR, STALE = 0, 1, 2, 3
@@ -72,6 +75,7 @@ class StatusFold:
     _comp: dict[str, _Component] = field(default_factory=dict)
     _last_event: dict[int, str] = field(default_factory=dict)
     journal: JournalHealth = field(default_factory=lambda: JournalHealth(""))
+    lag: LoopLag = field(default_factory=lambda: LoopLag(0.0, False))
 
     def __post_init__(self) -> None:
         self._comp = {c: _Component() for c in self.components}
@@ -97,6 +101,8 @@ class StatusFold:
                 self._comp[e.component].held = e.held
             case JournalHealth():
                 self.journal = e
+            case LoopLag():
+                self.lag = e
             case BoardEvent() if e.channel is not None:
                 self._last_event[e.channel] = e.event
             case _:
@@ -122,11 +128,16 @@ class StatusFold:
         return [*(self._component(c) for c in self.components), *self._board(), self._daemon()]
 
     def _daemon(self) -> Status:
-        j = self.journal
-        return Status(ERROR if j.problem else OK, "dxboard daemon", journal_health_text(j),
+        j, lag = self.journal, self.lag
+        level = ERROR if j.problem else WARN if lag.behind else OK
+        message = "; ".join([journal_health_text(j)] + ([loop_lag_text(lag)] if lag.behind
+                                                         else []))
+        return Status(level, "dxboard daemon", message,
                       "daemon", (("journal", j.problem or "writing"),
                                  ("journal_held", str(j.held)),
-                                 ("journal_dropped", str(j.dropped))))
+                                 ("journal_dropped", str(j.dropped)),
+                                 ("behind", "true" if lag.behind else "false"),
+                                 ("loop_lag_s", f"{lag.lag_s:.3f}")))
 
     def _component(self, name: str) -> Status:
         comp = self._comp[name]
