@@ -192,11 +192,16 @@ class RepairService:
         except RemoteError as exc:  # the link went down under us: wait for it like the rest
             return f"the board does not answer ({exc.message})"
         self._hold_shed(state)
+        shed = [c.name for c in state.channels if c.live_faults & F_SHED_UV]
+        if shed or state.board_flags & (B_UV_SHED | B_UV_OFF):
+            # the devices lose power through no fault of their own, and their drivers their
+            # devices: bringing them back spends no repair attempt (a fourth brown-out within
+            # the limiter's window quarantined every driver, issue 25 item 7)
+            self.executor.limiter.board_rebooted()
         if state.board_flags & (B_UV_SHED | B_UV_OFF):
             return "the board sheds channels for input under-voltage"
         if state.board_flags & B_OVER_TOTAL:
             return "the board is over its total-current limit"
-        shed = [c.name for c in state.channels if c.live_faults & F_SHED_UV]
         if shed:
             return f"the board is restoring {', '.join(shed)} after an under-voltage"
         return ""
