@@ -42,7 +42,8 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from host.journal import Note, QuarantineChange  # noqa: E402
+from host.events import LinkChange  # noqa: E402
+from host.journal import QuarantineChange  # noqa: E402
 from tests.daemon.board import Board, daemon  # noqa: E402
 from tests.daemon.runner import (  # noqa: E402
     RunningDaemon,
@@ -67,14 +68,14 @@ def false_since(d: RunningDaemon, mark: int, extra: tuple[str, ...] = ()) -> lis
     quarantines, key-refusal notes."""
     d.caught_up()
     out = [a for a in actions_started(d, mark) if a.split("(")[0] in POWER + extra]
-    for e in d.journal(("quarantine", "note")):
+    for e in d.journal(("quarantine", "link")):
         p = e.payload
         if e.id <= mark:
             continue
         if isinstance(p, QuarantineChange) and p.quarantined:
             out.append(f"quarantine({p.component})")
-        elif isinstance(p, Note) and "refused this daemon's key" in p.text:
-            out.append("key refused")
+        elif isinstance(p, LinkChange) and p.up and p.key.startswith("refused"):
+            out.append("key refused")  # said on the terminal, the page and the journal
     return out
 
 
