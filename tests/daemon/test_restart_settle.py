@@ -6,6 +6,10 @@ A real ``dxboard emulate --robot`` board (the fast TEDUSAR copy) outlives two re
 ``dxboard run --board`` daemons: the first brings the robot up and is killed with SIGKILL (its
 nodes die with it, ``host.lifeline``); the second must start the nodes again and nothing else —
 no device power-cycled or switched, no node it started stopped again.
+
+The finding needs a loaded machine (nodes that publish late); at a load average of 10 this test
+passes on the code from before the fix too. The rule itself is tested without timing in
+``tests/repair/test_booting.py``.
 """
 
 from __future__ import annotations
