@@ -14,7 +14,8 @@ person; ``BoardEvent`` what the board said (a trip, a state change, a fresh stat
 connecting); ``LinkChange`` the board link going up or down; ``ChannelSample`` the channels'
 states and currents and the board's input voltage a few times a second (for the page and the
 ROS 2 reports; not journaled); ``JournalHealth`` whether the journal can write and what it
-holds in memory until it can (not journaled); ``Telemetry`` a
+holds in memory until it can (not journaled); ``LoopLag`` the daemon falling behind (its event
+loop running late) and catching up (not journaled); ``Telemetry`` a
 downsampled summary of the channel currents over one period (never raw samples; stored as
 compact ``[channel, samples, mean, min, max, last]`` rows in mA); ``RunStarted`` the start of
 one daemon run (its id numbers the journal's runs); ``Note`` free text.
@@ -70,6 +71,7 @@ class Kind(StrEnum):
     DIAGNOSIS_RUN = "diagnosis_run"
     CHANNELS = "channels"
     JOURNAL_HEALTH = "journal_health"
+    LOOP_LAG = "loop_lag"
 
 
 class ActionState(StrEnum):
@@ -349,6 +351,26 @@ class JournalHealth(_Plain):
 
 
 @dataclass(frozen=True)
+class LoopLag(_Plain):
+    """How late the daemon's event loop runs (``lag_s``, the worst of the last few seconds) and
+    whether that is over the limit it is judged behind at (``behind``): for the page and
+    ``/diagnostics`` (not journaled)."""
+
+    lag_s: float
+    behind: bool
+    limit_s: float = 1.0
+    kind: ClassVar[Kind] = Kind.LOOP_LAG
+
+
+def loop_lag_text(event: LoopLag) -> str:
+    """``behind: its event loop runs 2.3 s late`` or ``on time (loop lag 0.01 s)``."""
+    if event.behind:
+        return f"behind: its event loop runs {event.lag_s:.1f} s late " \
+               f"(over {event.limit_s:g} s)"
+    return f"on time (loop lag {event.lag_s:.2f} s)"
+
+
+@dataclass(frozen=True)
 class DiagnosisRun(_Plain):
     """One diagnoser run, changed or not: its cost (for the metrics; not journaled)."""
 
@@ -573,7 +595,7 @@ class PlanDiagnosis(_Plain):
 Event = (Observation | DiagnosisRecord | PlanRecord | ActionRecord | BoardEvent | Telemetry
          | Note | LinkChange | RepairEnded | QuarantineChange | HoldChange | RunStarted
          | DiagnosisRun | JournalHealth | ChannelSample | MissionState | Dispatch | TreeChange
-         | LayerResult | KbChange | PlanDiagnosis)
+         | LayerResult | KbChange | PlanDiagnosis | LoopLag)
 Payload = Event  # what the journal stores: the journaled events
 
 
@@ -586,7 +608,8 @@ class Stamped:
     event: Event
 
 #: the kinds a journal keeps (the rest are for live readers only)
-JOURNALED = frozenset(Kind) - {Kind.DIAGNOSIS_RUN, Kind.CHANNELS, Kind.JOURNAL_HEALTH}
+JOURNALED = frozenset(Kind) - {Kind.DIAGNOSIS_RUN, Kind.CHANNELS, Kind.JOURNAL_HEALTH,
+                               Kind.LOOP_LAG}
 
 _DECODERS: dict[Kind, Any] = {
     Kind.OBSERVATION: Observation.from_json,
@@ -610,6 +633,7 @@ _DECODERS: dict[Kind, Any] = {
     Kind.RESULT: LayerResult.from_json,
     Kind.KB: KbChange.from_json,
     Kind.PLAN_DIAGNOSIS: PlanDiagnosis.from_json,
+    Kind.LOOP_LAG: LoopLag.from_json,
 }
 
 
@@ -700,6 +724,8 @@ def describe(event: Event) -> str:
                     + (" (dry run)" if event.dry_run else ""))
         case JournalHealth():
             return journal_health_text(event)
+        case LoopLag():
+            return f"daemon {loop_lag_text(event)}"
         case DiagnosisRun():
             return f"diagnosed in {event.elapsed_s * 1000:.1f} ms [{event.trigger}]"
         case ChannelSample():

@@ -10,23 +10,37 @@ daemon. With ``$DXBOARD_ZENOH_AUTH`` (the daemon's credentials file, one ``user:
 line, readable only by the daemon's user) the session presents those credentials and its own
 listener accepts only peers that present them (``host.observers.sources.zenoh_auth``: a
 stranger can join neither the daemon nor a node). Subscribers' callbacks run on zenoh's
-threads; ``subscribe`` hands each message to the asyncio loop, in order.
+threads; ``subscribe`` hands each message to the asyncio loop, in order, through one
+``emulator.inbox.Inbox`` per bus: one wakeup of the loop per batch, never one per message (a
+flood must not fill the loop's self-pipe, issue 25), oldest dropped and counted past its bound.
 """
 
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import json
 from collections.abc import Callable
 from typing import Any, Protocol
 
 import zenoh
 
+from emulator.inbox import Inbox
+
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 LISTEN = "tcp/127.0.0.1:0"
 
 Handler = Callable[[str, dict[str, Any]], None]
+Delivery = tuple[Handler, str, dict[str, Any]]  # a message on its way to its handler
+
+
+def _deliver(item: Delivery) -> None:
+    handler, topic, values = item
+    handler(topic, values)
+
+
+def inbox_for(loop: asyncio.AbstractEventLoop) -> Inbox[Delivery]:
+    """The hand-over point of a bus's messages to ``loop`` (either middleware)."""
+    return Inbox(loop, _deliver, name="topic messages")
 
 
 class TopicBus(Protocol):
@@ -83,6 +97,7 @@ class Bus:
         self.session = zenoh.open(cfg)
         self._pubs: dict[str, zenoh.Publisher] = {}
         self._subs: list[Any] = []
+        self._inbox: Inbox[Delivery] | None = None
 
     def publish(self, topic: str, values: dict[str, Any]) -> None:
         pub = self._pubs.get(topic)
@@ -92,12 +107,12 @@ class Bus:
 
     def subscribe(self, topic: str, handler: Handler) -> None:
         """Call ``handler(topic, values)`` on the running loop for every message."""
-        loop = asyncio.get_running_loop()
+        if self._inbox is None:
+            self._inbox = inbox_for(asyncio.get_running_loop())
+        inbox = self._inbox
 
         def on_sample(sample: zenoh.Sample) -> None:  # on a zenoh thread
-            values = decode(sample.payload.to_bytes())
-            with contextlib.suppress(RuntimeError):  # the loop closed while zenoh delivered
-                loop.call_soon_threadsafe(handler, topic, values)
+            inbox.put((handler, topic, decode(sample.payload.to_bytes())))
 
         self._subs.append(self.session.declare_subscriber(key_of(topic), on_sample))
 

@@ -20,7 +20,10 @@ standard messages (``emulator.robot.ros_msgs``), and a driver also publishes its
 a ROS 2 managed (lifecycle) node in ROS 2 mode (``emulator.robot.managed``); in Zenoh mode,
 which has no lifecycle, it is ignored.
 
-It logs to stderr, runs until SIGTERM or SIGINT and then exits 0. A wrong name, directory or
+It logs to stderr, runs until SIGTERM or SIGINT and then exits 0. The signals are heard on a
+thread of their own (``emulator.stopsignals``, as ``dxboard run`` hears them), never through
+the loop's self-pipe that messages could fill; a second one, or a stop still running 9 s
+after the first, ends the process at once. A wrong name, directory or
 environment is one line on stderr and exit code 2.
 """
 
@@ -31,7 +34,6 @@ import contextlib
 import json
 import logging
 import os
-import signal
 import sys
 import time
 from collections.abc import Sequence
@@ -44,6 +46,7 @@ from emulator.robot import behaviours as B
 from emulator.robot.bus import DEFAULT_ENDPOINT, Bus, TopicBus
 from emulator.robot.config import MIDDLEWARES, NodeSpec, load_node
 from emulator.robot.driver_status import PERIOD_S, DriverStatus
+from emulator.stopsignals import StopSignals
 
 log = logging.getLogger("emulator.robot.node")
 
@@ -243,23 +246,27 @@ async def main_async(spec: NodeSpec, env: dict[str, str], managed: bool = False)
     if managed and not driver:
         raise NodeError(f"{spec.name} is not a driver: only drivers are managed nodes")
     device, address = device_address(spec, env) if driver else ("", ("", 0))
-    loop = asyncio.get_running_loop()
     stop = asyncio.Event()
-    for sig in (signal.SIGTERM, signal.SIGINT):
-        loop.add_signal_handler(sig, stop.set)
-    if managed and middleware(spec, env) == "ros2":
-        await run_managed(spec, device, address, stop)
-        log.info("stopped")
-        return
-    bus = open_bus(spec, env)
+    # not loop.add_signal_handler: its signal byte shares the loop's self-pipe with every
+    # message handed over from the middleware's threads, and a full pipe lost SIGTERM (issue 25)
+    signals = StopSignals(asyncio.get_running_loop(), stop.set).install()
     try:
-        if driver:
-            await run_driver(spec, bus, device, address, stop)
-        else:
-            await run_node(spec, bus, stop)
+        if managed and middleware(spec, env) == "ros2":
+            await run_managed(spec, device, address, stop)
+            log.info("stopped")
+            return
+        bus = open_bus(spec, env)
+        try:
+            if driver:
+                await run_driver(spec, bus, device, address, stop)
+            else:
+                await run_node(spec, bus, stop)
+        finally:
+            bus.close()
+        log.info("stopped")
     finally:
-        bus.close()
-    log.info("stopped")
+        signals.done()
+        signals.close()
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -6,7 +6,8 @@ middleware carries its topics; ``emulator.robot.ros_msgs`` turns the dicts into 
 messages and back. The process is one ROS 2 node named after its component (``hokuyo_node``),
 in its own rclpy ``Context`` on the domain of ``$ROS_DOMAIN_ID``. rclpy runs in a thread of its
 own with its own executor; subscription callbacks hand each converted message to the asyncio
-loop with ``call_soon_threadsafe``, in order. rclpy's signal handlers are not installed: the
+loop in order, through the bus's batching inbox (``emulator.robot.bus.inbox_for``: one wakeup
+per batch, not one per message). rclpy's signal handlers are not installed: the
 node program's asyncio loop owns SIGTERM and SIGINT.
 
 QoS: reliable, keep last 10 (the default profile), which every default subscriber matches.
@@ -40,7 +41,8 @@ from rclpy.publisher import Publisher
 from rclpy.signals import SignalHandlerOptions
 from rclpy.time import Time
 
-from emulator.robot.bus import Handler
+from emulator.inbox import Inbox
+from emulator.robot.bus import Delivery, Handler, inbox_for
 from emulator.robot.ros_msgs import topic_type
 
 log = logging.getLogger(__name__)
@@ -90,6 +92,7 @@ class RosBus:
         self.node = node
         self._pubs: dict[str, Publisher[Any]] = {}
         self._clocks: dict[str, DeviceClock] = {}  # per topic a driver publishes
+        self._inbox: Inbox[Delivery] | None = None
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(node)
         self._thread = threading.Thread(target=self._spin, name=f"rclpy-{name}", daemon=True)
@@ -120,13 +123,13 @@ class RosBus:
 
     def subscribe(self, topic: str, handler: Handler) -> None:
         """Call ``handler(topic, values)`` on the running loop for every message."""
-        loop = asyncio.get_running_loop()
+        if self._inbox is None:
+            self._inbox = inbox_for(asyncio.get_running_loop())
+        inbox = self._inbox
         kind = topic_type(topic)
 
         def on_msg(msg: Any) -> None:  # on the executor's thread
-            values = kind.from_msg(msg)
-            with contextlib.suppress(RuntimeError):  # the loop closed while rclpy delivered
-                loop.call_soon_threadsafe(handler, topic, values)
+            inbox.put((handler, topic, kind.from_msg(msg)))
 
         self.node.create_subscription(kind.type, topic, on_msg, DEPTH)
 

@@ -16,7 +16,8 @@ Theory of operation. ``Daemon`` builds the pieces from the robot directory and o
 Tasks on one asyncio loop: the board task keeps a ``BoardClient`` subscribed (reconnecting with
 backoff) and feeds every reading, event and link notice to the hub and the ``BoardView``; the
 diagnosis runner's task; the sample task that emits the channels a few times a second; the
-lag probe of the metrics (``host.fleet.metrics.LagProbe``: how late the loop runs). Nothing
+lag probe of the metrics (``host.fleet.metrics.LagProbe``: how late the loop runs) and its
+watch (``lagwatch``: a ``LoopLag`` event when the daemon falls behind or catches up). Nothing
 below the daemon reads the clock: the daemon owns one monotonic clock (``clock``) for
 observations and deadlines and one wall clock (``wall``) for the journal and the page.
 """
@@ -72,7 +73,7 @@ from host.web.fold import StatusFold
 from host.web.server import WebServer
 from host.web.status import MemoryStatusSource, Status
 
-from . import journalwatch
+from . import journalwatch, lagwatch
 from .external import ExternalActuators, check_external
 from .stages import StopStages
 from .stream import EventStream
@@ -277,7 +278,8 @@ class Daemon:
             f"{t} ({' '.join(n + f)})" for t, (n, f) in wired.items()) or "none")
         await self.repairs.adopt()
         self._tasks = [asyncio.ensure_future(t) for t in (
-            self._board_task(), self.diagnosis.task(), self._sample_task(), self.lag.run())]
+            self._board_task(), self.diagnosis.task(), self._sample_task(), self.lag.run(),
+            lagwatch.watch(self.lag, self.emit))]
         if self.journal is not None:  # a journal that cannot write says so (a full disk)
             self._tasks.append(asyncio.ensure_future(journalwatch.watch(self.journal,
                                                                         self.emit)))

@@ -43,6 +43,11 @@ last one showed — the same switches and live faults, each switched-on device's
 same band — after looking at that one changed nothing and said nothing, would not either, and
 is not looked at further (``tests/observers/test_steady.py`` proves that nothing said differs).
 
+A noisy current sensor (``host.observers.noise``: the raw band changing ``NOISY_CHANGES`` times
+within a second, faster than any device fault) is the sensor's fault, not the device's: while it
+lasts ``in_band(d)`` is retracted (unknown) and every reading is looked at, as while the board
+itself doubts the sensor (its ``sensor`` flag).
+
 Detection latency (``settle`` readings, default 3): ``on`` after 3 readings (30 ms at 100 Hz,
 20 ms more than believing the first); ``in_band`` after 3 readings; a trip 3 readings after the
 board switched the channel off (the event itself comes first; at 100 Hz the trip counts about
@@ -69,6 +74,7 @@ from host.board.types import (
     StreamItem,
 )
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer, Update
+from host.observers.noise import NoiseMeter
 from host.observers.silence import JITTER_GAIN, JITTER_MEMORY_S, Confirmation, SlidingExtreme
 from protocol.constants import (
     EV_FAULT,
@@ -187,6 +193,8 @@ class HardwareObserver(Observer[BoardInput]):
         self.link_atom = link_atom
         self.bands: dict[str, str] = {}  # device -> the settled band (nominal, over, under)
         self.doubted: set[str] = set()  # devices whose current sensor the board doubts
+        self.noisy: set[str] = set()  # devices whose current sensor the readings show noisy
+        self._noise = {d.name: NoiseMeter() for d in self.devices.values() if d.band}
         self._ev = {d: self._fresh() for d in self.devices}
         self._last_reading: float | None = None  # the last sign of life (reading, STATE)
         self._prev_reading: float | None = None  # the last reading since a reconnect
@@ -257,7 +265,7 @@ class HardwareObserver(Observer[BoardInput]):
             self._gaps.push(now, now - prev)  # a shorter gap cannot raise the link limit
         self._link_up(now)
         shows = self._shows(r)
-        if shows == self._steady:
+        if shows == self._steady and not self.noisy:  # a noisy sensor's quiet is looked for
             return
         before, said = self._evidence(), len(self._out)
         for d in self.devices.values():
@@ -306,8 +314,12 @@ class HardwareObserver(Observer[BoardInput]):
         ev = self._ev[d.name]
         if ev.on.add(on) and ev.on.value is not None:
             self._switch(d, ev.on.value, now)
-        if d.band is not None and on and d.name not in self.doubted:  # judged: on, sensed
-            ev.band.add(d.classify(current_ma / 1000.0))
+        band = d.classify(current_ma / 1000.0) if d.band is not None and on else None
+        meter = self._noise.get(d.name)
+        if meter is not None and (turned := meter.add(band, now)) is not None:
+            self._noisy(d, turned, now)
+        if band is not None and d.name not in self.doubted and d.name not in self.noisy:
+            ev.band.add(band)  # judged: on, sensed, and the sensor not noisy
             if ev.on.value and ev.band.value is not None:
                 self.bands[d.name] = ev.band.value
                 self._say(self._atoms[d.name][2], ev.band.value == "nominal", now)
@@ -382,6 +394,23 @@ class HardwareObserver(Observer[BoardInput]):
         else:
             self.doubted.discard(d.name)
             log.info("%s: the current sensor of %s's channel %d reads again", self.name,
+                     d.name, d.channel)
+
+    def _noisy(self, d: Device, noisy: bool, now: float) -> None:
+        """The readings show ``d``'s current sensor noisy (``host.observers.noise``), or quiet
+        again: while noisy, ``d``'s current is not judged (``in_band(d)`` unknown)."""
+        if noisy:
+            self.noisy.add(d.name)
+            self._ev[d.name].band.force(None)
+            self.bands.pop(d.name, None)
+            self._forget(self._atoms[d.name][2], now)
+            log.warning("%s: the current sensor of %s's channel %d is noisy (its readings "
+                        "jump in and out of the band many times a second): a sensor fault, "
+                        "not %s's; its current is not judged until the readings calm down",
+                        self.name, d.name, d.channel, d.name)
+        else:
+            self.noisy.discard(d.name)
+            log.info("%s: the current sensor of %s's channel %d is quiet again", self.name,
                      d.name, d.channel)
 
     # -- the link rule ---------------------------------------------------------------------

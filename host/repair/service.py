@@ -61,6 +61,7 @@ from host.errors import RemoteError
 from host.events import Event, HoldChange, Note, PlanRecord, QuarantineChange, RepairEnded
 from host.repair.actuators import Actuators
 from host.repair.beliefs import ObservedBeliefs
+from host.repair.booting import MAX_WAIT_FACTOR, booting, came_back, describe
 from host.repair.effects import settle_times
 from host.repair.executor import Event as ExecutorEvent
 from host.repair.executor import Executor, StepReport, load_stretch
@@ -191,11 +192,16 @@ class RepairService:
         except RemoteError as exc:  # the link went down under us: wait for it like the rest
             return f"the board does not answer ({exc.message})"
         self._hold_shed(state)
+        shed = [c.name for c in state.channels if c.live_faults & F_SHED_UV]
+        if shed or state.board_flags & (B_UV_SHED | B_UV_OFF):
+            # the devices lose power through no fault of their own, and their drivers their
+            # devices: bringing them back spends no repair attempt (a fourth brown-out within
+            # the limiter's window quarantined every driver, issue 25 item 7)
+            self.executor.limiter.board_rebooted()
         if state.board_flags & (B_UV_SHED | B_UV_OFF):
             return "the board sheds channels for input under-voltage"
         if state.board_flags & B_OVER_TOTAL:
             return "the board is over its total-current limit"
-        shed = [c.name for c in state.channels if c.live_faults & F_SHED_UV]
         if shed:
             return f"the board is restoring {', '.join(shed)} after an under-voltage"
         return ""
@@ -216,13 +222,25 @@ class RepairService:
                 self.release(c.name, by="board")
 
     async def _wait_for_board(self) -> None:
-        """Wait (noting why, once) while the board's own protection has the channels."""
+        """Wait (noting why, once) while the board's own protection has the channels, then
+        while a component that came up by other means than a repair step is still booting
+        (``host.repair.booting``; at most ``MAX_WAIT_FACTOR`` times the longest settle)."""
         said = ""
         while reason := await self._board_busy():
             if reason != said:
                 self._emit(Note(f"repairs wait: {reason}"))
                 said = reason
             await asyncio.sleep(BOARD_POLL_S)
+        ex = self.executor
+        comps = [(c.name, c.is_node) for c in ex.model.components.values()
+                 if c.is_node or c.channel is not None]
+        end = ex.clock() + MAX_WAIT_FACTOR * max(ex.settle.values(), default=0.0)
+        while (left := booting(self.observations, ex.settle, comps, ex.clock())) \
+                and ex.clock() < end:
+            if (reason := describe(left)).split(":")[0] != said.split(":")[0]:
+                self._emit(Note(f"repairs wait: {reason}"))
+                said = reason
+            await asyncio.sleep(min(BOARD_POLL_S, max(left.values())))
 
     async def _repair(self) -> None:
         try:
@@ -241,7 +259,24 @@ class RepairService:
         await self._wait_for_board()
         result = await self._fresh()
         cands = [Candidate(frozenset(d.bad), d.probability) for d in result.diagnoses]
-        return cands, self.observations.literals()
+        return self._spare_restored(cands), self.observations.literals()
+
+    def _spare_restored(self, cands: list[Candidate]) -> list[Candidate]:
+        """Leave out the candidates that blame a device the board has just restored by itself
+        (``host.repair.booting.came_back``) when others explain the fault without it: its
+        driver, which lost the device, is restarted instead of the device power-cycled again."""
+        ex = self.executor
+        back = came_back(self.observations, ex.settle,
+                         [(c.name, c.channel) for c in ex.model.components.values()
+                          if c.channel is not None and not c.is_node],
+                         ex.actuators.commands, ex.clock())
+        keep = [c for c in cands if not c.bad & back]
+        if not keep or len(keep) == len(cands):
+            return cands
+        spared = sorted(back & set().union(*(c.bad for c in cands)))
+        self._emit(Note(f"{', '.join(spared)}: came on without a repair and booted; not blamed "
+                        "while another diagnosis explains what is seen"))
+        return keep
 
     # --- reporting ----------------------------------------------------------------------
     def _plan(self, record: PlanRecord) -> None:

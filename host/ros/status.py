@@ -30,9 +30,10 @@ diagnosis is STALE before the first (or when nothing is found broken but some co
 unobserved), OK when every component is normal, else ERROR with the best diagnosis as the
 message (key/values best, diagnoses, all, unknown). The repair is OK with no step yet or the
 latest one started or succeeded, ERROR when it failed or timed out (key/values action,
-state). The daemon is OK "journal: writing", or ERROR "journal: disk
-full, N entries held" while its journal cannot write (key/values journal, journal_held,
-journal_dropped). ``diagnoses``, ``currents_a`` and ``input_v`` are the latest minimal
+state). The daemon is OK "journal: writing", ERROR "journal: disk
+full, N entries held" while its journal cannot write, WARN "behind: its event loop runs N s
+late" while its loop lags over 1 s (``host.daemon.lagwatch``; key/values journal,
+journal_held, journal_dropped, behind, loop_lag_s). ``diagnoses``, ``currents_a`` and ``input_v`` are the latest minimal
 diagnoses, channel currents and the board's input voltage, for ``/diagnosis``,
 ``/board_measurements`` and ``/battery_state``.
 """
@@ -50,9 +51,11 @@ from host.events import (
     HoldChange,
     JournalHealth,
     LinkChange,
+    LoopLag,
     QuarantineChange,
     Stamped,
     journal_health_text,
+    loop_lag_text,
 )
 
 OK, WARN, ERROR, STALE = 0, 1, 2, 3
@@ -88,6 +91,7 @@ class StatusFold:
     _last_event: dict[int, str] = field(default_factory=dict)
     journal: JournalHealth = field(default_factory=lambda: JournalHealth(""))
     last_action: ActionRecord | None = None
+    lag: LoopLag = field(default_factory=lambda: LoopLag(0.0, False))
 
     def __post_init__(self) -> None:
         self._comp = {c: _Component() for c in self.components}
@@ -114,6 +118,8 @@ class StatusFold:
                 self._comp[e.component].held = e.held
             case JournalHealth():
                 self.journal = e
+            case LoopLag():
+                self.lag = e
             case BoardEvent() if e.channel is not None:
                 self._last_event[e.channel] = e.event
             case _:
@@ -165,11 +171,16 @@ class StatusFold:
                       PREFIX, (("action", text), ("state", str(a.state))))
 
     def _daemon(self) -> Status:
-        j = self.journal
-        return Status(ERROR if j.problem else OK, f"{PREFIX}/daemon", journal_health_text(j),
+        j, lag = self.journal, self.lag
+        level = ERROR if j.problem else WARN if lag.behind else OK
+        message = "; ".join([journal_health_text(j)] + ([loop_lag_text(lag)] if lag.behind
+                                                         else []))
+        return Status(level, f"{PREFIX}/daemon", message,
                       "daemon", (("journal", j.problem or "writing"),
                                  ("journal_held", str(j.held)),
-                                 ("journal_dropped", str(j.dropped))))
+                                 ("journal_dropped", str(j.dropped)),
+                                 ("behind", "true" if lag.behind else "false"),
+                                 ("loop_lag_s", f"{lag.lag_s:.3f}")))
 
     def _component(self, name: str) -> Status:
         comp = self._comp[name]

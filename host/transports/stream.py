@@ -3,13 +3,15 @@
 Theory of operation. A ``StreamTransport`` owns a ``Connection(HOST, key)``. ``_open`` connects
 the backend, then waits for the board's HELLO: a board that greets on connect (TCP) sends it at
 once; if none arrives within ``HELLO_WAIT_S`` (a serial line to a board that booted long ago),
-the host asks with HELLO_REQUEST and takes the HELLO that answers it. Messages before the first
-HELLO cannot be trusted to belong to this session and are dropped. With a key, the host then
-proves it holds it (AUTH_PING) before anything else: the board counts the session as the
-host's, keeps it open on its PINGs and never evicts it for a newcomer. ``_send`` signs through the
-codec (the key signs actuation, PROTOCOL.md §5); ``_receive`` feeds bytes to the codec until it
-yields an event, and turns the end of the stream into ``LinkLost``. A frame left incomplete
-when the stream ends becomes a ``BadFrame`` (E_TRUNCATED), never an exception.
+the host asks with HELLO_REQUEST and takes the HELLO that answers it (a greeting that comes
+first, held up with the request by a frozen link, belongs to the session the answer replaces).
+Messages before the first HELLO cannot be trusted to belong to this session and are dropped.
+With a key, the host then proves it holds it (AUTH_PING) before anything else: the board counts
+the session as the host's, keeps it open on its PINGs and never evicts it for a newcomer.
+``_send`` signs through the codec (the key signs actuation, PROTOCOL.md §5); ``_receive`` feeds
+bytes to the codec until it yields an event, and turns the end of the stream into ``LinkLost``.
+A frame left incomplete when the stream ends becomes a ``BadFrame`` (E_TRUNCATED), never an
+exception.
 
 Backends implement ``_connect()``, ``_read() -> bytes`` (``b""`` at the end of the stream),
 ``_write(data)`` and ``_disconnect()``. Every native URL takes ``per_frame=K`` (1-10): the
@@ -73,7 +75,7 @@ class StreamTransport(Transport):
         except TimeoutError:
             req = HelloRequest(req_id=HELLO_REQ_ID)  # never an id the board client uses
             await self._write(self.conn.send(req))
-            hello = await self._await_hello(req.req_id)
+            hello = await self._answer(req.req_id)
         if self.key is not None:
             await self._claim()
         return hello
@@ -102,10 +104,26 @@ class StreamTransport(Transport):
             log.info("%s: no answer to AUTH_PING within %g s", self.url.text, CLAIM_WAIT_S)
         self._events.extendleft(reversed(others))
 
-    async def _await_hello(self, req_id: int | None) -> Hello:
+    async def _answer(self, req_id: int) -> Hello:
+        """The HELLO that answers HELLO_REQUEST ``req_id``. A greeting (req_id 0) that comes
+        first was sent before the board read the request (a link frozen for seconds holds
+        both), and the answer starts a newer session: a claim signed for the greeting's nonce
+        would be refused as a bad tag, a frozen link taken for a wrong key (issue 25, item 7).
+        So the answer is awaited a while longer; a board that never sends one keeps the
+        greeting's session."""
+        hello = await self._await_hello(req_id)
+        if hello.req_id == req_id:
+            return hello
+        try:
+            return await asyncio.wait_for(self._await_hello(req_id, exact=True), CLAIM_WAIT_S)
+        except TimeoutError:
+            return hello
+
+    async def _await_hello(self, req_id: int | None, exact: bool = False) -> Hello:
         while True:
             ev = await self._next_event()
-            if isinstance(ev, Hello) and (req_id is None or ev.req_id in (0, req_id)):
+            if isinstance(ev, Hello) and (req_id is None or ev.req_id == req_id
+                                          or (ev.req_id == 0 and not exact)):
                 return ev
             if isinstance(ev, BadFrame) and ev.code == E_VERSION:
                 raise VersionMismatch(

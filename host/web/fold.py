@@ -31,6 +31,7 @@ from host.events import (
     HoldChange,
     JournalHealth,
     LinkChange,
+    LoopLag,
     Observation,
     QuarantineChange,
     RepairEnded,
@@ -99,6 +100,8 @@ class StatusFold:
         elif isinstance(e, JournalHealth):
             changes.update(journal_problem=e.problem, journal_held=e.held,
                            journal_dropped=e.dropped)
+        elif isinstance(e, LoopLag):
+            changes.update(loop_lag_s=e.lag_s, loop_behind=e.behind)
         elif isinstance(e, QuarantineChange | HoldChange):
             changes.update(self._out_of_repair(e, status, stamped.wall))
         elif (mission := self._mission(e)) is not None:

@@ -8,8 +8,9 @@ the first that holds of, in order:
   entries held": free space, the entries are written then), or components are quarantined or
   held: each with what releases it (``dxboard quarantine clear hokuyo``);
 - ``stale`` — the page has had no news from the daemon for ``stale_after_s``;
-- ``behind`` — the daemon has not diagnosed for ``BEHIND_AFTER_S`` (its safety tick is 2 s):
-  what it last said is old, so it is not repeated as the truth;
+- ``behind`` — the daemon's event loop runs late (over 1 s: ``host.daemon.lagwatch``), or it
+  has not diagnosed for ``BEHIND_AFTER_S`` (its safety tick is 2 s): what it last said is old,
+  so it is not repeated as the truth;
 - ``repairing`` — something is diagnosed broken or a repair action runs: what;
 - ``unknown`` — nothing is found broken but observations expired: what is unknown;
 - ``healthy`` — nothing broken, nothing unknown, nothing held.
@@ -47,6 +48,9 @@ def headline(status: Status, now: float, stale_after_s: float) -> dict[str, Any]
         return said("needs_you", "needs you: " + "; ".join(needs))
     if status.updated and now - status.updated > stale_after_s:
         return said("stale", f"no news from the daemon for {now - status.updated:.0f} s")
+    if status.loop_behind:
+        return said("behind", f"behind: the daemon's event loop runs {status.loop_lag_s:.1f} s "
+                    "late; what is shown may be old")
     age = diagnosis_age(status, now)
     if age is not None and age > BEHIND_AFTER_S:
         return said("behind", f"behind: the last diagnosis is {age:.0f} s old")

@@ -167,7 +167,8 @@ class WebServer:
         age = diagnosis_age(status, now)
         return {**status.to_json(), "server_time": now, "stale_after_s": self.stale_after_s,
                 "stale": now - status.updated > self.stale_after_s,
-                "diagnosis_age_s": age, "behind": age is not None and age > BEHIND_AFTER_S,
+                "diagnosis_age_s": age,
+                "behind": status.loop_behind or (age is not None and age > BEHIND_AFTER_S),
                 "headline": headline(status, now, self.stale_after_s)}
 
     def _status_message(self, status: Status) -> str:

@@ -121,6 +121,10 @@ class Status:
     journal_problem: str = ""
     journal_held: int = 0
     journal_dropped: int = 0
+    # the daemon behind: its event loop's lag (s, host.daemon.lagwatch) and whether it is over
+    # the limit
+    loop_lag_s: float = 0.0
+    loop_behind: bool = False
     version: int = 0
 
     def to_json(self) -> dict[str, Any]:
@@ -145,6 +149,7 @@ class Status:
             "mission": dict(self.mission),
             "journal": {"problem": self.journal_problem, "held": self.journal_held,
                         "dropped": self.journal_dropped},
+            "daemon": {"loop_lag_s": self.loop_lag_s, "behind": self.loop_behind},
             "counters": {
                 "observation_changes": self.observation_changes,
                 "diagnosis_runs": self.diagnosis_runs,

@@ -41,12 +41,14 @@ def fast_copy(tmp: Path) -> Path:
 class RunningDaemon:
     def __init__(self, tmp: Path, system_dir: Path = TEDUSAR,
                  extra_args: tuple[str, ...] = (), zenoh: str | None = None,
-                 env: Mapping[str, str] | None = None, journal_dir: Path | None = None) -> None:
+                 env: Mapping[str, str] | None = None, journal_dir: Path | None = None,
+                 board: str | None = None) -> None:
         """``zenoh``: the topic endpoint to use (a restarted daemon takes its predecessor's,
         where the nodes it left behind reconnect); default: a fresh one. ``env``: variables
         to set for it (and the nodes it starts), e.g. a ROS 2 domain of the test's own.
         ``journal_dir``: where the journal and the node logs go (default ``tmp``; a small
-        disk of the test's own, ``tests.fulldisk``)."""
+        disk of the test's own, ``tests.fulldisk``). ``board``: the URL of a board that runs
+        on its own (``--board``; default ``--emulate``, a board that dies with the daemon)."""
         self.env = {**os.environ, **(env or {})}
         self.system_dir = system_dir
         self.journal_path = (journal_dir or tmp) / "journal.sqlite"
@@ -56,7 +58,8 @@ class RunningDaemon:
         self.err_path = tmp / "daemon.err"
         for _ in range(5):  # its zenoh port taken by another process meanwhile: a fresh one
             self.zenoh = zenoh or zenoh_endpoint()
-            argv = [sys.executable, "-m", "host.cli", "run", str(system_dir), "--emulate",
+            where = ["--emulate"] if board is None else ["--board", board]
+            argv = [sys.executable, "-m", "host.cli", "run", str(system_dir), *where,
                     "--web", "127.0.0.1:0", "--journal", str(self.journal_path),
                     "--zenoh", self.zenoh, *extra_args]
             if self._start(argv) or zenoh or not clashed(self.err_path.read_text()):
