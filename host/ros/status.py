@@ -30,10 +30,10 @@ diagnosis is STALE before the first (or when nothing is found broken but some co
 unobserved), OK when every component is normal, else ERROR with the best diagnosis as the
 message (key/values best, diagnoses, all, unknown). The repair is OK with no step yet or the
 latest one started or succeeded, ERROR when it failed or timed out (key/values action,
-state). The daemon is OK "journal: writing", ERROR "journal: disk
-full, N entries held" while its journal cannot write, WARN "behind: its event loop runs N s
-late" while its loop lags over 1 s (``host.daemon.lagwatch``; key/values journal,
-journal_held, journal_dropped, behind, loop_lag_s). ``diagnoses``, ``currents_a`` and ``input_v`` are the latest minimal
+state). The daemon is OK "journal: writing", ERROR "journal: disk full, N entries held"
+while its journal cannot write, WARN "behind: its event loop runs N s late" while its loop
+lags over 1 s (``host.daemon.lagwatch``; key/values journal, journal_held, journal_dropped,
+behind, loop_lag_s). ``diagnoses``, ``currents_a`` and ``input_v`` are the latest minimal
 diagnoses, channel currents and the board's input voltage, for ``/diagnosis``,
 ``/board_measurements`` and ``/battery_state``.
 """

@@ -61,7 +61,7 @@ def test_a_stalled_loop_is_told_behind_then_caught_up() -> None:
 def test_diagnostics_warn_with_the_lag() -> None:
     fold = StatusFold(["hokuyo"])
     daemon = fold.statuses()[-1]
-    assert (daemon.name, daemon.level) == ("dxboard daemon", OK)
+    assert (daemon.name, daemon.level) == ("dxboard/daemon", OK)
     assert fold.feed(Stamped(0.0, 0.0, LoopLag(2.345, True, 1.0)))
     daemon = fold.statuses()[-1]
     assert daemon.level == WARN
