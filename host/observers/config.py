@@ -44,7 +44,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, TypedDict
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import host.atoms as A
 from host.diagnosis import yamlpos
@@ -59,8 +59,7 @@ from host.observers.hardware import (
     Device,
     HardwareObserver,
 )
-from host.observers.processes import NodeObserver, PropertyObserver
-from host.observers.sources.base import TopicSource
+from host.observers.processes import DEFAULT_POLL, NodeObserver, ProcessSpec, PropertyObserver
 from host.observers.sources.ros2_graph import GraphObserver
 from host.observers.topics import DEFAULT_SILENCE, FrequencyObserver, ResponseObserver
 from host.observers.values import (
@@ -70,7 +69,9 @@ from host.observers.values import (
     TrendObserver,
     ValueRef,
 )
-from host.observers.watcher import DEFAULT_POLL, ProcessSpec
+
+if TYPE_CHECKING:
+    from host.observers.sources.base import TopicSource
 
 SECTION = "observers"
 _TOP = {"refresh", "validity", "poll", "source", "hardware", "nodes", "topics", "trends",
