@@ -12,6 +12,11 @@ that the machine's load falls on both alike; CPU is the child's user + system ti
 bootstrapped Python does), so neither pays the ROS wheels' re-exec; ``--from-shell`` clears it,
 so that both pay it, as a command typed in a shell does.
 
+Beside them, Fast Downward's whole ``--alias lama-first`` command (its driver, translator and
+search: ``host.planning.downward.run_fast_downward``, as benchmarks/planning.py runs it) on the
+problem files ``dxboard plan --write-problem`` writes for the same diagnosis (``repair.pddl`` and
+the problem), when ``up-fast-downward`` is installed (``pip install -e '.[bench]'``).
+
 ``--base DIR`` adds each command run from another checkout (``PYTHONPATH=DIR``, e.g. ``git
 archive main | tar -x -C DIR``), interleaved too: before against after in the same run.
 
@@ -33,6 +38,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+FD = "fast-downward --alias lama-first (same problem files)"
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
@@ -49,6 +55,21 @@ def _run(cmd: list[str], env: dict[str, str]) -> tuple[float, float]:
                          f"{proc.stderr.decode(errors='replace')[-400:]}")
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     return wall, cpu
+
+
+def _run_fd(domain: Path, problem: Path, workdir: Path) -> tuple[float, float]:
+    """Wall and CPU seconds of Fast Downward's whole lama-first command (its driver and the
+    translator and search processes the driver starts and waits for)."""
+    from host.planning.downward import run_fast_downward
+
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    run = run_fast_downward(domain, problem, workdir, "--alias lama-first", 60)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if not run.steps:
+        raise SystemExit(f"fast-downward found no plan for {problem}")
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
 def fifty_step_history(where: Path) -> Path:
@@ -97,6 +118,12 @@ def main() -> int:
         env.pop("PYTHONDONTWRITEBYTECODE", None)
         env["PYTHONPYCACHEPREFIX"] = str(Path(t) / "pycache")
         cmds = commands(Path(t))
+        from host.planning.downward import driver_path
+
+        fd_problem = Path(t) / "jaguar-problem.pddl" if driver_path() is not None else None
+        if fd_problem is not None:
+            _run([*cmds["plan models/tedusar --bad jaguar"], "--write-problem", str(fd_problem)],
+                 env)
         envs = {name: env for name in cmds}
         if args.base:
             base_env = dict(env, PYTHONPATH=str(Path(args.base).resolve()),
@@ -115,6 +142,10 @@ def main() -> int:
                 w, c = _run(cmd, envs[name])
                 wall[name].append(w)
                 cpu[name].append(c)
+            if fd_problem is not None:
+                w, c = _run_fd(ROOT / "models/tedusar/repair.pddl", fd_problem, Path(t))
+                wall.setdefault(FD, []).append(w)
+                cpu.setdefault(FD, []).append(c)
             load.append(os.getloadavg()[0])
     base_cpu = statistics.median(cpu["python -c pass"])
     base_wall = statistics.median(wall["python -c pass"])
@@ -122,11 +153,18 @@ def main() -> int:
           f"{'ROS re-exec paid by both' if args.from_shell else 'no ROS re-exec'}")
     print("| command | CPU median (best) | x bare CPU | wall median (best) | x bare wall |")
     print("|---|---|---|---|---|")
-    for name in cmds:
+    for name in cpu:
         c, w = cpu[name], wall[name]
         print(f"| `{name}` | {statistics.median(c) * 1e3:.0f} ms ({min(c) * 1e3:.0f}) | "
               f"{statistics.median(c) / base_cpu:.2f}x | {statistics.median(w) * 1e3:.0f} ms "
               f"({min(w) * 1e3:.0f}) | {statistics.median(w) / base_wall:.2f}x |")
+    if FD in cpu:
+        ours = "plan models/tedusar --bad jaguar"
+        print(f"\nFast Downward's whole command / dxboard plan's whole command: CPU "
+              f"{statistics.median(cpu[FD]) / statistics.median(cpu[ours]):.2f}x, wall "
+              f"{statistics.median(wall[FD]) / statistics.median(wall[ours]):.2f}x")
+    else:
+        print("\nFast Downward is not installed: pip install -e '.[bench]'")
     return 0
 
 
