@@ -9,7 +9,13 @@ silences ``k`` random topics or devices at once (k = 1..4, harder searches as k 
 brings them back, diagnosing after every change with the daemon's bounds (no cardinality
 bound, at most 20 diagnoses, 0.5 s budget). A ticker task on the same loop sleeps 1 ms at a
 time and records how late it wakes: the loop's stall. Baseline, in the same run: the same
-diagnoses called directly on the loop, as the daemon did before.
+diagnoses called directly on the loop, as the daemon did before; and the loop with no diagnosis
+at all for as long (*idle*): the machine's own floor, what the operating system's scheduler
+alone costs the loop at the run's load. The worker thread is measured as the daemon ran it before
+(*worker thread*) and as it runs it now (*frozen*): the model's objects moved out of the cyclic
+collector's reach after start-up (``gc.freeze()``, as ``Daemon.start`` does), so that a full
+collection, which holds the GIL and so stops the loop too, no longer walks the 10,000-component
+model. *gc max*: the longest collection during the rounds (``gc.callbacks``), any thread.
 
     .venv/bin/python benchmarks/stall.py [--size N] [--rounds R] [--write]
 
@@ -20,7 +26,9 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import gc
 import importlib.util
+import os
 import platform
 import random
 import re
@@ -72,6 +80,34 @@ class Ticker:
         self._task.cancel()
 
 
+class GcPauses:
+    """The longest cyclic collection while entered (``gc.callbacks``), in seconds."""
+
+    def __init__(self) -> None:
+        self.longest = 0.0
+        self._start = 0.0
+
+    def _callback(self, phase: str, info: dict[str, int]) -> None:
+        if phase == "start":
+            self._start = time.perf_counter()
+        else:
+            self.longest = max(self.longest, time.perf_counter() - self._start)
+
+    def __enter__(self) -> GcPauses:
+        gc.callbacks.append(self._callback)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        gc.callbacks.remove(self._callback)
+
+
+async def idle(seconds: float) -> list[float]:
+    """The loop's lateness with nothing but the ticker on it, for ``seconds``."""
+    with Ticker() as ticker:
+        await asyncio.sleep(seconds)
+    return ticker.lateness
+
+
 async def scenario(diagnose: Callable[[str], Awaitable[object]], obs: ObservationSet,
                    candidates: list[Literal], rounds: int, rng: random.Random
                    ) -> tuple[list[float], list[float]]:
@@ -110,7 +146,16 @@ async def run(size: int, rounds: int) -> list[str]:
     healthy = bench_diagnosis.healthy_observations(theory)
     candidates = [o for o in healthy if o.positive]
     rows = []
-    for label in ("on the loop (before)", "worker thread (now)"):
+    took = 0.0
+    for label in ("on the loop (before)", "worker thread (before)", "worker thread, frozen (now)",
+                  "idle (no diagnosis)"):
+        if label.startswith("idle"):
+            load = os.getloadavg()[0]
+            lateness, times = await idle(took), []
+            rows.append(f"| {label} | - | - | - | {ms(pct(lateness, 0.99))} | "
+                        f"{ms(max(lateness))} | - | {load:.1f} |")
+            print(rows[-1], flush=True)
+            continue
         obs = ObservationSet()
         for lit in healthy:
             obs.add(Observation(lit, time.monotonic(), "bench"))
@@ -118,18 +163,29 @@ async def run(size: int, rounds: int) -> list[str]:
         d.diagnose(literals=obs.literals(), **BOUNDS)  # type: ignore[arg-type]
         if label.startswith("worker"):
             runner = DiagnosisRunner(d, obs, lambda e: None, **BOUNDS)  # type: ignore[arg-type]
-            lateness, times = await scenario(runner.run, obs, candidates, rounds,
-                                             random.Random(5))
+            if "frozen" in label:
+                gc.collect()
+                gc.freeze()
+            load = os.getloadavg()[0]
+            start = time.perf_counter()
+            with GcPauses() as pauses:
+                lateness, times = await scenario(runner.run, obs, candidates, rounds,
+                                                 random.Random(5))
+            took = max(took, time.perf_counter() - start)
             runner.close()
+            gc.unfreeze()
         else:
             async def direct(trigger: str, d: Diagnoser = d, obs: ObservationSet = obs) -> None:
                 d.diagnose(literals=obs.literals(), **BOUNDS)  # type: ignore[arg-type]
 
-            lateness, times = await scenario(direct, obs, candidates, rounds,
-                                             random.Random(5))
+            load = os.getloadavg()[0]
+            with GcPauses() as pauses:
+                lateness, times = await scenario(direct, obs, candidates, rounds,
+                                                 random.Random(5))
             d.close()
         rows.append(f"| {label} | {len(times)} | {ms(pct(times, 0.5))} | {ms(max(times))} | "
-                    f"{ms(pct(lateness, 0.99))} | {ms(max(lateness))} |")
+                    f"{ms(pct(lateness, 0.99))} | {ms(max(lateness))} | {ms(pauses.longest)} | "
+                    f"{load:.1f} |")
         print(rows[-1], flush=True)
     return [
         "## Loop stall during diagnosis\n",
@@ -139,8 +195,8 @@ async def run(size: int, rounds: int) -> list[str]:
         "minimal diagnoses up to 20, 0.5 s budget); a 1 ms ticker on the daemon's loop "
         f"records its stalls. {platform.python_version()}, one run.\n",
         "| diagnosis runs | diagnoses | diagnosis p50 | diagnosis max | loop stall p99 | "
-        "loop stall max |",
-        "|---|---|---|---|---|---|",
+        "loop stall max | gc max | load |",
+        "|---|---|---|---|---|---|---|---|",
         *rows,
         "",
     ]

@@ -12,6 +12,12 @@ measures:
    over ``tcp://``, through one ``BoardClient`` each on one event loop, and the host CPU that
    takes (process CPU time over wall time, in % of one core), with any readings missed.
 
+3. where a request's time goes (``--split``, issue 30 item 9): for each protocol in a block of
+   its own, the CPU per request of this process (the client: codec, matching, event loop) and
+   of the emulator's process (its front end, the firmware's handling, its event loop) over
+   ``N_REQUESTS`` back-to-back requests, beside the wall time per request. What neither
+   process spends is the kernel's loopback and the wait for the other to be scheduled.
+
 It prints a Markdown section; ``--write`` also replaces the ``## Transport`` section of
 ``benchmarks/RESULTS.md``.
 """
@@ -86,6 +92,36 @@ async def round_trips(urls: dict[str, str]) -> dict[str, list[float]]:
     return out
 
 
+async def cpu_split(urls: dict[str, str], pid: int) -> dict[str, tuple[float, float, float]]:
+    """Per protocol: (wall, client CPU, emulator CPU) seconds per request, in blocks."""
+    import psutil
+    from pymodbus.client import AsyncModbusTcpClient
+
+    emulator = psutil.Process(pid)
+
+    def cpu() -> tuple[float, float, float]:
+        t = emulator.cpu_times()
+        return time.perf_counter(), time.process_time(), t.user + t.system
+
+    host, port = urls["modbus"].removeprefix("modbus+tcp://").rsplit(":", 1)
+    out = {}
+    async with BoardClient(urls["board"], bytes.fromhex(KEY_HEX)) as native:
+        mb = AsyncModbusTcpClient(host, port=int(port))
+        await mb.connect()
+        await native.state()
+        for name in ("native", "modbus", "native again"):
+            a = cpu()
+            for _ in range(N_REQUESTS):
+                if name.startswith("native"):
+                    await native.request(_get_state())
+                else:
+                    await mb.read_input_registers(0, count=110, device_id=1)
+            b = cpu()
+            out[name] = tuple((y - x) / N_REQUESTS for x, y in zip(a, b, strict=True))
+        mb.close()
+    return out  # type: ignore[return-value]
+
+
 def _get_state() -> Message:
     from protocol.messages import GetState
 
@@ -126,7 +162,23 @@ async def ingest(urls: list[str]) -> dict[str, float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", action="store_true", help="update benchmarks/RESULTS.md")
+    parser.add_argument("--split", action="store_true",
+                        help="only where a request's time goes (client and emulator CPU)")
     args = parser.parse_args()
+    if args.split:
+        proc, urls = emulate("--modbus", "127.0.0.1:0")
+        try:
+            load = os.getloadavg()[0]
+            split = asyncio.run(cpu_split(urls, proc.pid))
+        finally:
+            proc.terminate()
+            proc.wait(10)
+        print(f"{N_REQUESTS} requests a block, load average {load:.1f} at the start")
+        print("| requests | wall / request | client CPU / request | emulator CPU / request |")
+        print("|---|---|---|---|")
+        for name, (w, c, e) in split.items():
+            print(f"| {name} | {w * 1e6:.0f} us | {c * 1e6:.0f} us | {e * 1e6:.0f} us |")
+        return
     procs = []
     try:
         proc, urls = emulate("--modbus", "127.0.0.1:0")

@@ -100,3 +100,19 @@ def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None) -> 
         return (yield)
     finally:
         _IN_TEST[0] = False
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _suite_cache_dir(tmp_path_factory: pytest.TempPathFactory) -> Any:
+    """dxboard keeps parsed domains and models in the user's cache directory: the suite (and
+    every process it starts) uses one of its own, never the person's ~/.cache. Tests that
+    check the cache itself set a fresh one each."""
+    old = os.environ.get("XDG_CACHE_HOME")
+    os.environ["XDG_CACHE_HOME"] = str(tmp_path_factory.mktemp("suite-xdg-cache"))
+    try:
+        yield
+    finally:
+        if old is None:
+            os.environ.pop("XDG_CACHE_HOME", None)
+        else:
+            os.environ["XDG_CACHE_HOME"] = old

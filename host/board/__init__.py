@@ -7,7 +7,8 @@ reboot detection); ``host.board.types`` the typed values
 where the key comes from. Errors are those of ``host.transports.errors``.
 """
 
-from host.board.client import BoardClient
+from typing import TYPE_CHECKING, Any
+
 from host.board.types import (
     BoardEvent,
     BoardInfo,
@@ -21,5 +22,18 @@ from host.board.types import (
     SwitchResult,
 )
 
+if TYPE_CHECKING:
+    from host.board.client import BoardClient
+
 __all__ = ["BoardClient", "BoardEvent", "BoardInfo", "BoardState", "ChannelState", "LinkDown",
            "LinkUp", "Reading", "Rebooted", "StreamItem", "SwitchResult"]
+
+
+def __getattr__(name: str) -> Any:
+    """``BoardClient`` is loaded on first use (PEP 562): the typed values alone do not bring
+    the client, asyncio and the transports in (``dxboard plan`` reads the board's devices)."""
+    if name == "BoardClient":
+        from host.board.client import BoardClient
+
+        return BoardClient
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -115,7 +115,7 @@ def _managed(args: argparse.Namespace) -> list[str]:
     """The robot's managed nodes on its middleware, as the daemon finds them."""
     from host.diagnosis.model import SYSTEM_FILE, load_system
     from host.errors import UserError
-    from host.observers.config import load_observers
+    from host.observers.section import load_source
     from host.repair.processes import load_processes, managed_nodes
 
     path = Path(args.system)
@@ -133,7 +133,8 @@ def _managed(args: argparse.Namespace) -> list[str]:
     processes = load_processes(path, model)
     if not any(p.lifecycle for p in processes.values()):
         return []  # nothing to decide: the observers need not be read
-    return managed_nodes(processes, middleware or load_observers(path, model).source.kind)
+    # the source alone: the observers themselves are the daemon's (and model check's) to build
+    return managed_nodes(processes, middleware or load_source(path, model).kind)
 
 
 def _problem_file(args: argparse.Namespace) -> int:

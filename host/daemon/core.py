@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
+import gc
 import logging
 import os
 import time
@@ -155,6 +156,18 @@ def _middleware_env(source: SourceSpec) -> dict[str, str]:
     return env
 
 
+def freeze_long_lived() -> None:
+    """Move what the process holds now (the model, its clauses, the diagnoser's encoding, the
+    observers) out of the cyclic collector's reach, once the daemon has started. A full
+    collection holds the GIL while it walks every tracked object, so it stops the event loop
+    even while a diagnosis runs in its worker thread: with a 10,000-component model one took
+    0.3-3 s on this machine, over the board link's 0.25 s deadline (benchmarks/stall.py). The
+    frozen objects live as long as the run anyway; what is made later is collected as before.
+    """
+    gc.collect()
+    gc.freeze()
+
+
 class Daemon:
     def __init__(self, opts: DaemonOptions, clock: Callable[[], float] = time.monotonic,
                  wall: Callable[[], float] = time.time, files: RobotFiles | None = None) -> None:
@@ -277,6 +290,7 @@ class Daemon:
         log.info("silences judged in the publishers' own time: %s", ", ".join(
             f"{t} ({' '.join(n + f)})" for t, (n, f) in wired.items()) or "none")
         await self.repairs.adopt()
+        freeze_long_lived()
         self._tasks = [asyncio.ensure_future(t) for t in (
             self._board_task(), self.diagnosis.task(), self._sample_task(), self.lag.run(),
             lagwatch.watch(self.lag, self.emit))]
@@ -378,6 +392,7 @@ class Daemon:
                           "deadline", journal.path)
             await stages.run("the journal file", journal.close, 0.5)
         await stages.run("the diagnosis engine", self.diagnosis.close, 0.5)
+        gc.unfreeze()  # what the run kept may be collected again (tests run daemons in turn)
         self.closing = "the rest"
 
     @property

@@ -13,33 +13,85 @@ them from ``system.yaml``'s ``observers:`` section; ``ObserverHub`` routes topic
 to them and runs their deadlines.
 """
 
-from host.observers.base import (
-    ObservationSink,
-    Observer,
-    Retraction,
-    Update,
-    apply_updates,
-)
-from host.observers.config import (
-    ObserverConfigError,
-    ObserversConfig,
-    SourceSpec,
-    check_atoms,
-    load_observers,
-)
-from host.observers.hardware import Device, HardwareObserver
-from host.observers.hub import ObserverHub
-from host.observers.payload import TopicMessage, decode, encode, pick
-from host.observers.processes import NodeObserver, ProcessSample, PropertyObserver
-from host.observers.topics import FrequencyObserver, ResponseObserver
-from host.observers.values import (
-    DiagnosticObserver,
-    MatchObserver,
-    Threshold,
-    TrendObserver,
-    ValueRef,
-)
-from host.observers.watcher import ProcessSpec, ProcessWatcher
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from host.observers.base import (
+        ObservationSink,
+        Observer,
+        Retraction,
+        Update,
+        apply_updates,
+    )
+    from host.observers.config import (
+        ObserverConfigError,
+        ObserversConfig,
+        SourceSpec,
+        check_atoms,
+        load_observers,
+    )
+    from host.observers.hardware import Device, HardwareObserver
+    from host.observers.hub import ObserverHub
+    from host.observers.payload import TopicMessage, decode, encode, pick
+    from host.observers.processes import (
+        NodeObserver,
+        ProcessSample,
+        ProcessSpec,
+        PropertyObserver,
+    )
+    from host.observers.topics import FrequencyObserver, ResponseObserver
+    from host.observers.values import (
+        DiagnosticObserver,
+        MatchObserver,
+        Threshold,
+        TrendObserver,
+        ValueRef,
+    )
+    from host.observers.watcher import ProcessWatcher
+
+# name -> the module defining it: loaded on first use (PEP 562), so that a command reading
+# the observers' section (dxboard plan, model check) does not load numpy, psutil and the
+# board client with it
+_HOMES = {
+    "Device": "host.observers.hardware",
+    "DiagnosticObserver": "host.observers.values",
+    "FrequencyObserver": "host.observers.topics",
+    "HardwareObserver": "host.observers.hardware",
+    "MatchObserver": "host.observers.values",
+    "NodeObserver": "host.observers.processes",
+    "ObservationSink": "host.observers.base",
+    "Observer": "host.observers.base",
+    "ObserverConfigError": "host.observers.config",
+    "ObserverHub": "host.observers.hub",
+    "ObserversConfig": "host.observers.config",
+    "ProcessSample": "host.observers.processes",
+    "ProcessSpec": "host.observers.processes",
+    "ProcessWatcher": "host.observers.watcher",
+    "PropertyObserver": "host.observers.processes",
+    "ResponseObserver": "host.observers.topics",
+    "Retraction": "host.observers.base",
+    "SourceSpec": "host.observers.config",
+    "Threshold": "host.observers.values",
+    "TopicMessage": "host.observers.payload",
+    "TrendObserver": "host.observers.values",
+    "Update": "host.observers.base",
+    "ValueRef": "host.observers.values",
+    "apply_updates": "host.observers.base",
+    "check_atoms": "host.observers.config",
+    "decode": "host.observers.payload",
+    "encode": "host.observers.payload",
+    "load_observers": "host.observers.config",
+    "pick": "host.observers.payload",
+}
+
+
+def __getattr__(name: str) -> Any:
+    import importlib
+
+    if name in _HOMES:
+        return getattr(importlib.import_module(_HOMES[name]), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "Device",

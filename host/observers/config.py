@@ -51,7 +51,7 @@ from typing import Any, TypedDict
 import host.atoms as A
 from host.diagnosis import yamlpos
 from host.diagnosis.logic import Theory, parse_literal
-from host.diagnosis.model import Kind, ModelError, Problem, SystemModel, read_section
+from host.diagnosis.model import Kind, Problem, SystemModel, read_section
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
 from host.observers.hardware import (
     DEFAULT_LINK_ATOM,
@@ -61,8 +61,10 @@ from host.observers.hardware import (
     Device,
     HardwareObserver,
 )
-from host.observers.processes import NodeObserver, PropertyObserver
-from host.observers.sources.base import TopicSource
+from host.observers.processes import DEFAULT_POLL, NodeObserver, ProcessSpec, PropertyObserver
+from host.observers.section import SECTION, SectionReader
+from host.observers.section import ObserverConfigError as ObserverConfigError
+from host.observers.section import SourceSpec as SourceSpec
 from host.observers.sources.ros2_graph import GraphObserver
 from host.observers.sources.ros2_lifecycle import (
     DEFAULT_HEARTBEAT_TIMEOUT,
@@ -77,9 +79,7 @@ from host.observers.values import (
     TrendObserver,
     ValueRef,
 )
-from host.observers.watcher import DEFAULT_POLL, ProcessSpec
 
-SECTION = "observers"
 _TOP = {"refresh", "validity", "poll", "source", "hardware", "nodes", "topics", "trends",
         "matched", "diagnostics", "properties", "responses"}
 _TIMING = {"refresh", "validity"}
@@ -89,34 +89,6 @@ _NODE_WAYS = ("pid", "match", "supervised", "graph", "lifecycle", "heartbeat")
 class Timing(TypedDict):
     refresh: float
     validity: float
-
-
-class ObserverConfigError(ModelError):
-    """The ``observers:`` section has problems; ``problems`` lists all of them."""
-
-
-@dataclass(frozen=True)
-class SourceSpec:
-    kind: str = "zenoh"
-    listen: tuple[str, ...] = ("tcp/127.0.0.1:7447",)
-    connect: tuple[str, ...] = ()
-    prefix: str = ""
-    domain: int | None = None  # ros2: the DDS domain (None: $ROS_DOMAIN_ID)
-    types: tuple[tuple[str, str], ...] = ()  # ros2: topic -> message type, where given
-    # ros2: topic -> the model's nodes that publish it; other nodes' messages are ignored
-    publishers: tuple[tuple[str, tuple[str, ...]], ...] = ()
-
-    def open(self, auth: Path | None = None) -> TopicSource:
-        """The topic source (a zenoh session opens here; call inside the event loop); ``auth``:
-        zenoh's credentials file (``host.observers.sources.zenoh_auth``)."""
-        if self.kind == "memory":
-            from host.observers.sources.memory import MemorySource
-            return MemorySource()
-        if self.kind == "ros2":
-            from host.observers.sources.ros2 import Ros2Source
-            return Ros2Source(self.domain, dict(self.types), publishers=dict(self.publishers))
-        from host.observers.sources.zenoh_peer import ZenohSource
-        return ZenohSource(self.listen, self.connect, self.prefix, auth=auth)
 
 
 @dataclass
@@ -145,31 +117,11 @@ def check_atoms(config: ObserversConfig, theory: Theory) -> list[str]:
     return [a for o in config.observers for a in o.atoms() if a not in known]
 
 
-class _ConfigBuilder:
+class _ConfigBuilder(SectionReader):
     def __init__(self, file: Path, lines: yamlpos.Lines, model: SystemModel | None) -> None:
-        self.file = file
-        self.lines = lines
-        self.model = model
-        self.problems: list[Problem] = []
+        super().__init__(file, lines, model)
         self.refresh = DEFAULT_REFRESH
         self.validity = DEFAULT_VALIDITY
-
-    def err(self, path: tuple[object, ...], message: str, fix: str) -> None:
-        self.problems.append(Problem(self.file, self.lines(SECTION, *path), message, fix))
-
-    # -- helpers ---------------------------------------------------------------------------
-    def mapping(self, path: tuple[object, ...], value: Any, allowed: set[str],
-                example: str) -> dict[str, Any] | None:
-        if value is None:
-            return {}
-        if not isinstance(value, dict):
-            self.err(path, f"{'.'.join(map(str, path)) or SECTION} is not a mapping",
-                     f"write {example}")
-            return None
-        for key in value:
-            if key not in allowed:
-                self.err((*path, key), f"unknown key {key!r}", f"use one of {sorted(allowed)}")
-        return value
 
     def number(self, path: tuple[object, ...], value: Any, default: float | None,
                minimum: float = 0.0, what: str = "seconds") -> float | None:
@@ -219,7 +171,7 @@ class _ConfigBuilder:
         t = self.timing((), top)
         self.refresh, self.validity = t["refresh"], t["validity"]
         config.poll = self.number(("poll",), top.get("poll"), DEFAULT_POLL) or DEFAULT_POLL
-        config.source = self._source(top.get("source"))
+        config.source = self.source(top.get("source"))
         obs = config.observers
         if "hardware" in top:
             obs += self._hardware(top["hardware"])
@@ -232,42 +184,6 @@ class _ConfigBuilder:
         obs += self._responses(top.get("responses"))
         self._unique(obs)
         return config
-
-    def _source(self, value: Any) -> SourceSpec:
-        spec = self.mapping(("source",), value,
-                            {"kind", "listen", "connect", "prefix", "domain", "types"},
-                            "source: {kind: zenoh, listen: [tcp/127.0.0.1:7447]}")
-        if not spec:
-            return SourceSpec()
-        kind = spec.get("kind", "zenoh")
-        if kind not in ("zenoh", "memory", "ros2"):
-            self.err(("source", "kind"), f"source kind {kind!r} is unknown",
-                     "use zenoh (the robot's topics), ros2 (ROS 2 topics) or memory")
-        domain, types = spec.get("domain"), spec.get("types") or {}
-        if domain is not None and (not isinstance(domain, int) or isinstance(domain, bool)
-                                   or not 0 <= domain <= 232):
-            self.err(("source", "domain"), f"domain {domain!r} is not a ROS 2 domain id",
-                     "give an integer 0..232 (or leave it out for $ROS_DOMAIN_ID)")
-            domain = None
-        if not isinstance(types, dict) or not all(
-                isinstance(t, str) and isinstance(m, str) and m.count("/") == 2
-                for t, m in types.items()):
-            self.err(("source", "types"), f"types {types!r} is not a mapping of topics to types",
-                     "write types: {/scan: sensor_msgs/msg/LaserScan}")
-            types = {}
-        ends: dict[str, tuple[str, ...]] = {}
-        for key, default in (("listen", SourceSpec.listen), ("connect", ())):
-            v = spec.get(key, list(default))
-            if not isinstance(v, list) or not all(isinstance(e, str) and "/" in e for e in v):
-                self.err(("source", key), f"{key} {v!r} is not a list of endpoints",
-                         f"write {key}: [tcp/127.0.0.1:7447]")
-                v = list(default)
-            ends[key] = tuple(v)
-        publishers = () if self.model is None else tuple(
-            (t, tuple(sorted(c.name for c in self.model.publishers(t))))
-            for t in self.model.topics() if self.model.publishers(t))
-        return SourceSpec(str(kind), ends["listen"], ends["connect"], str(spec.get("prefix", "")),
-                          domain, tuple(sorted(types.items())), publishers)
 
     def _hardware(self, value: Any) -> list[Observer[Any]]:
         p: tuple[object, ...] = ("hardware",)

@@ -20,6 +20,22 @@ from dataclasses import dataclass
 import host.atoms as A
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
 
+#: how often the watcher looks for processes and samples them, seconds
+DEFAULT_POLL = 0.5
+
+
+@dataclass(frozen=True)
+class ProcessSpec:
+    """How to find node ``node``'s process: a fixed ``pid``, a command-line ``match``, or
+    ``supervised`` (the pid comes through ``ProcessWatcher.track``). Here, beside the
+    samples, not in the watcher: reading the observers' section needs neither psutil nor
+    asyncio."""
+
+    node: str
+    pid: int | None = None
+    match: str | None = None
+    supervised: bool = False
+
 
 @dataclass(frozen=True)
 class ProcessSample:

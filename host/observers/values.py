@@ -27,8 +27,6 @@ from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import numpy as np
-
 import host.atoms as A
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY
 from host.observers.payload import TopicMessage, pick
@@ -65,6 +63,8 @@ class Trend:
         if len(self._t) < self.min_samples or self._t[-1] == self._t[0]:
             self.fitted = None
             return None
+        import numpy as np  # here, not at the top: reading the observers' section needs no numpy
+
         t = np.fromiter(self._t, float, len(self._t))
         v = np.fromiter(self._v, float, len(self._v))
         self.fitted = float(np.polyfit(t - t[-1], v, 1)[0])

@@ -28,26 +28,15 @@ import os
 import re
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 
 import psutil
 
+from host.observers.processes import DEFAULT_POLL as DEFAULT_POLL
 from host.observers.processes import ProcessSample
+from host.observers.processes import ProcessSpec as ProcessSpec
 
 log = logging.getLogger(__name__)
 
-DEFAULT_POLL = 0.5
-
-
-@dataclass(frozen=True)
-class ProcessSpec:
-    """How to find node ``node``'s process: a fixed ``pid``, a command-line ``match``, or
-    ``supervised`` (the pid comes through ``ProcessWatcher.track``)."""
-
-    node: str
-    pid: int | None = None
-    match: str | None = None
-    supervised: bool = False
 
 
 class _Tracked:

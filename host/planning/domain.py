@@ -158,7 +158,8 @@ def domain_file(system_dir: str | Path) -> Path:
 
 
 def load_domain(path: str | Path) -> Domain:
-    """Parse a PDDL domain file (cached by path and modification time)."""
+    """Parse a PDDL domain file (cached by path and modification time, in this process and in
+    the user's cache directory)."""
     file = domain_file(path)
     try:
         mtime = file.stat().st_mtime_ns
@@ -178,7 +179,14 @@ def _load_cached(file: Path, _mtime: int) -> Domain:
 @lru_cache(maxsize=32)
 def parse_domain_text(text: str, path: Path = Path("<domain>")) -> Domain:
     """Parse PDDL domain text with the ``pddl`` library and convert it (the same text is
-    parsed once: a new parser builds its grammar, ~0.3 s, and keeps state between calls)."""
+    parsed once: a new parser builds its grammar, ~0.3 s, and keeps state between calls; a
+    new process reads text parsed before from the user's cache: ``domain_cache.py``)."""
+    from host.planning.domain_cache import stored
+
+    return stored(text, path, lambda: _parse_with_library(text, path))
+
+
+def _parse_with_library(text: str, path: Path) -> Domain:
     from pddl.parser.domain import DomainParser
 
     try:

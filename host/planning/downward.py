@@ -15,9 +15,7 @@ from __future__ import annotations
 import importlib.util
 import logging
 import re
-import subprocess
 import sys
-import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -76,6 +74,8 @@ def run_fast_downward(
         cmd[4:4] = search.split()
     else:
         cmd += ["--search", search]
+    import subprocess  # here: a planner that never runs FD (every command's) need not load it
+
     start = time.perf_counter()
     proc = subprocess.run(cmd, cwd=workdir, capture_output=True, text=True)
     elapsed = time.perf_counter() - start
@@ -101,6 +101,8 @@ def fast_downward(inp: SearchInput, search: str = DEFAULT_SEARCH) -> SearchResul
     """The ``fast-downward`` entry of the planner registry."""
     if inp.domain_path is None or inp.problem_pddl is None:
         raise ValueError("fast-downward needs the domain file and the problem text")
+    import tempfile
+
     with tempfile.TemporaryDirectory(prefix="dxboard-fd-") as tmp:
         problem = Path(tmp) / "problem.pddl"
         problem.write_text(inp.problem_pddl)

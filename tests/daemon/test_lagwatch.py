@@ -1,5 +1,5 @@
 """A daemon that falls behind says so (issue 25): ``host.daemon.lagwatch`` turns the metrics'
-loop-lag probe into ``LoopLag`` events, and ``/diagnostics`` (``dxboard daemon``: WARN with the
+loop-lag probe into ``LoopLag`` events, and ``/diagnostics`` (``dxboard/daemon``: WARN with the
 lag in its values) and the page's headline say it.
 
 The probe and the watch run on a real event loop that is held up for 1.5 s (as a daemon on an

@@ -12,7 +12,26 @@ way.
 
 from __future__ import annotations
 
-from host.observers.sources.base import Callback, Subscription, TopicSource
-from host.observers.sources.memory import MemorySource
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from host.observers.sources.base import Callback, Subscription, TopicSource
+    from host.observers.sources.memory import MemorySource
+
+# loaded on first use (PEP 562): ros2_graph, a module of this package that the observers'
+# section reads, needs none of them (nor asyncio, which they bring)
+_HOMES = {"Callback": "host.observers.sources.base",
+          "MemorySource": "host.observers.sources.memory",
+          "Subscription": "host.observers.sources.base",
+          "TopicSource": "host.observers.sources.base"}
+
+
+def __getattr__(name: str) -> Any:
+    import importlib
+
+    if name in _HOMES:
+        return getattr(importlib.import_module(_HOMES[name]), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = ["Callback", "MemorySource", "Subscription", "TopicSource"]
