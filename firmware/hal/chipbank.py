@@ -158,8 +158,9 @@ class ChipBank:
                 out[ch] = NO_READING
             return
         last = -1
+        chip_of, state, sample = self.chip_of, self.state, self._sample
         for ch in range(self.n):
-            chip = self.chip_of[ch]
+            chip = chip_of[ch]
             if chip != last:
                 last = chip
                 try:
@@ -167,7 +168,14 @@ class ChipBank:
                         self._before(chip)
                 except OSError as exc:
                     self._failed(chip, exc)
-            out[ch] = self.read_one(ch)
+            if state[chip] == C_OK and not self.bus_wait:  # read_one's path for a ready chip
+                try:
+                    out[ch] = sample(ch)
+                except OSError as exc:
+                    self._failed(chip, exc)
+                    out[ch] = NO_READING
+            else:
+                out[ch] = self.read_one(ch)
         self._check()
 
     def _check(self) -> None:

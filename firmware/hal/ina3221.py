@@ -97,7 +97,8 @@ class Ina3221Bank(ChipBank):
             self.flags[chip] &= ~(CF1 >> k)
             self.trips += 1
             return TRIPPED
-        raw = self._get(chip, 1 + 2 * k)
-        if raw & 0x8000:
+        buf = self.buf  # _get inlined: this runs for every channel every tick
+        self.i2c.readfrom_mem_into(self.chips[chip], 1 + 2 * k, buf)  # type: ignore[attr-defined]
+        if buf[0] & 0x80:
             return 0  # current flowing back: none drawn
-        return (raw >> 3) * 40000 // self.shunt_uohm  # 40 uV/LSB over the shunt, in mA
+        return (((buf[0] << 8) | buf[1]) >> 3) * 40000 // self.shunt_uohm  # 40 uV/LSB, mA
