@@ -51,6 +51,7 @@ def limit_code(trip_ma: int, shunt_uohm: int) -> int:
 class Ina3221Bank(ChipBank):
     NAME = "ina3221"
     DIE = 0x3220
+    BEFORE = True  # MASK/ENABLE read once a chip, before its inputs
 
     def __init__(self, i2c: object, chips: tuple, inputs: tuple, shunt_uohm: int) -> None:  # type: ignore[type-arg]
         super().__init__(i2c, chips, [c for c, _ in inputs], [k for _, k in inputs])
