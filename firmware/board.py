@@ -182,13 +182,16 @@ class Board:
         hal.read_currents_ma(samples)  # type: ignore[attr-defined]
         total = 0
         live = 0  # the current of channels still switched on after this step
+        read_switch = hal.read_switch  # type: ignore[attr-defined] # (hot loop: one lookup)
         for ch in self.channels:
-            ma = samples[ch.index]  # -1: no reading (the sensor did not answer)
+            i = ch.index
+            ma = samples[i]  # < 0: a code (no reading, tripped, low: firmware.hal)
+            ch.step(now, ma, read_switch(i), dt)
             if ma > 0:
                 total += ma
-            ch.step(now, ma, hal.read_switch(ch.index), dt)  # type: ignore[attr-defined]
-            if (ch.state == ST_ON or ch.state == ST_INRUSH) and ma > 0:
-                live += ma
+                st = ch.state
+                if st == ST_ON or st == ST_INRUSH:  # noqa: SIM109 (no tuple on the hot path)
+                    live += ma
         self.total_ma = total
         self.input_mv = hal.read_input_mv()  # type: ignore[attr-defined]
         if self.queue and now >= self.queue_at:

@@ -41,13 +41,24 @@ def limits(b: dict[str, Any]) -> dict[str, Any]:
     sense = P.chip(b)
     mcu = P.MCU[b["mcu"]]
     inp = P.INPUT
-    r_ohm = b["sense"]["shunt_uohm"] / 1e6
-    fullscale_a = sense["fullscale_v"] / r_ohm
+    smart = "is_adc_pin" in b["sense"]
+    if smart:  # no shunt: the switch's IS reads as a fault from fault_ua on
+        r_ohm = 0.0
+        fullscale_a = b["sense"]["fault_ua"] / 1e6 * b["sense"]["k_ilis"]
+    else:
+        r_ohm = b["sense"]["shunt_uohm"] / 1e6
+        fullscale_a = sense["fullscale_v"] / r_ohm
     cont = min((sw["i_max_a"], f"the switch {sw['mpn']}"),
-               (fullscale_a, f"the {sense['mpn']}'s full scale over the shunt"),
+               (fullscale_a, f"the {sense['mpn']}'s full scale" + ("" if smart else
+                                                                   " over the shunt")),
                (P.CONNECTORS["output_header"]["rating_a"], "the output connector"))
-    limit_a = min(sw["limit_a"], fullscale_a)
-    shunt_w, shunt_mpn, shunt_pkg = P.shunt_for(r_ohm, max(cont[0], limit_a))
+    # a smart switch protects itself at its own limit; a monitor's reading saturates at its full
+    # scale, so the instant trip (and, for the TPS1H100, the limit it is set to) stays under it
+    limit_a = sw["limit_a"] if smart else min(sw["limit_a"], fullscale_a)
+    trip_cap = min((limit_a, f"the {limit_a:g} A the switch limits to"),
+                   (fullscale_a, f"the {fullscale_a:.2f} A the sense reads up to"))
+    shunt_w, shunt_mpn, shunt_pkg = (0.0, "", "") if smart else P.shunt_for(
+        r_ohm, max(cont[0], limit_a))
     adc_max_v = mcu["adc_vref_v"] * b["vin"]["divider"]
     vmax = min((inp["tvs"]["standoff_v"], f"the TVS {inp['tvs']['mpn']}'s standoff"),
                (sw["v_op"][1], f"the switch {sw['mpn']}"),
@@ -58,7 +69,7 @@ def limits(b: dict[str, Any]) -> dict[str, Any]:
                (inp["regulator"]["v_in"][0], f"the regulator {inp['regulator']['mpn']}"))
     in_fuse = c["input_fuse_a"]
     board_a = in_fuse / P.FUSE_MARGIN
-    n_chips = -(-b["channels"] // sense["per_chip"])
+    n_chips = 0 if smart else -(-b["channels"] // sense["per_chip"])
     top, bottom = P.PASSIVES["readback_series"]["ohm"], P.PASSIVES["readback_pulldown"]["ohm"]
     bus_pf = n_chips * P.I2C_PIN_PF + P.I2C_TRACE_PF
     return {
@@ -67,23 +78,42 @@ def limits(b: dict[str, Any]) -> dict[str, Any]:
         "fuse_a": P.fuse_for(cont[0]), "shunt": (shunt_w, shunt_mpn, shunt_pkg),
         "shunt_loss_w": limit_a * limit_a * r_ohm if limit_a > cont[0] else
         cont[0] * cont[0] * r_ohm,
-        "instant_rated_a": limit_a / TRIP_FACTOR,
+        "instant_rated_a": trip_cap[0] / TRIP_FACTOR, "trip_cap_by": trip_cap[1],
         "adc_max_v": adc_max_v, "vmax": vmax[0], "vmax_by": vmax[1], "vmin": vmin[0],
         "vmin_by": vmin[1], "input_fuse_a": in_fuse, "board_a": board_a,
         "fet_loss_w": board_a * board_a * inp["mosfet"]["rds_on_ohm"],
         "n_chips": n_chips, "bus_pf": bus_pf, "readback": bottom / (top + bottom),
-        "pullup_max_ohm": P.I2C_RISE_NS * 1e-9 / (0.8473 * bus_pf * 1e-12),
+        "pullup_max_ohm": P.I2C_RISE_NS * 1e-9 / (0.8473 * bus_pf * 1e-12), "smart": smart,
     }
+
+
+def sense_parts(b: dict[str, Any], lim: dict[str, Any]) -> list[list[Any]]:
+    """The rows that sense the currents: the monitors, their shunts and the I2C pull-ups, or
+    a smart-switch board's two legs of the IS sense resistor."""
+    if lim["smart"]:
+        return [[ref, 1, P.PASSIVES[key]["mfr"], P.PASSIVES[key]["mpn"], P.PASSIVES[key]["what"]]
+                for ref, key in (("RIS1", "is_top"), ("RIS2", "is_adc"))]
+    n, sense = b["channels"], lim["sense"]
+    w, shunt_mpn, pkg = lim["shunt"]
+    return [
+        [f"SEN1-SEN{lim['n_chips']}", lim["n_chips"], sense["mfr"], sense["mpn"],
+         sense["what"]],
+        [f"RS1-RS{n}", n, "Vishay Dale", shunt_mpn,
+         f"shunt {lim['shunt_ohm'] * 1000:g} mOhm 1 % {w:g} W ({pkg}): I^2 R at "
+         f"{max(lim['cont_a'], lim['limit_a']):g} A is {lim['shunt_loss_w']:.2f} W, "
+         f"x {P.SHUNT_MARGIN:g} margin"],
+        ["RP1-RP2", 2, P.PASSIVES["i2c_pullup"]["mfr"], P.PASSIVES["i2c_pullup"]["mpn"],
+         P.PASSIVES["i2c_pullup"]["what"]],
+    ]
 
 
 def bom_rows(b: dict[str, Any]) -> list[list[str]]:
     """(reference, quantity, manufacturer, part number, description), one row per part."""
     lim = limits(b)
     n = b["channels"]
-    sw, sense, mcu = lim["switch"], lim["sense"], lim["mcu"]
+    sw, mcu = lim["switch"], lim["mcu"]
     n_sw = -(-n // sw["per_chip"])
     fuse_a, in_fuse = lim["fuse_a"], lim["input_fuse_a"]
-    w, shunt_mpn, pkg = lim["shunt"]
     rows = [
         ["U1", 1, mcu["mfr"], mcu["mpn"], mcu["what"]],
         ["U2", 1, P.INPUT["regulator"]["mfr"], P.INPUT["regulator"]["mpn"],
@@ -100,12 +130,7 @@ def bom_rows(b: dict[str, Any]) -> list[list[str]]:
         [f"XF0-XF{n}", n + 1, P.FUSE_HOLDER["mfr"], P.FUSE_HOLDER["mpn"],
          P.FUSE_HOLDER["what"]],
         [f"SW1-SW{n_sw}", n_sw, sw["mfr"], sw["mpn"], sw["what"]],
-        [f"SEN1-SEN{lim['n_chips']}", lim["n_chips"], sense["mfr"], sense["mpn"],
-         sense["what"]],
-        [f"RS1-RS{n}", n, "Vishay Dale", shunt_mpn,
-         f"shunt {lim['shunt_ohm'] * 1000:g} mOhm 1 % {w:g} W ({pkg}): I^2 R at "
-         f"{max(lim['cont_a'], lim['limit_a']):g} A is {lim['shunt_loss_w']:.2f} W, "
-         f"x {P.SHUNT_MARGIN:g} margin"],
+        *sense_parts(b, lim),
         ["J0", 1, P.CONNECTORS["input"]["mfr"], P.CONNECTORS["input"]["mpn"],
          P.CONNECTORS["input"]["what"]],
         [f"J1-J{n}", n, P.CONNECTORS["output_header"]["mfr"],
@@ -113,8 +138,6 @@ def bom_rows(b: dict[str, Any]) -> list[list[str]]:
         [f"P1-P{n}", n, P.CONNECTORS["output_plug"]["mfr"], P.CONNECTORS["output_plug"]["mpn"],
          P.CONNECTORS["output_plug"]["what"]],
         ["C0", 1, P.INPUT["bulk"]["mfr"], P.INPUT["bulk"]["mpn"], P.INPUT["bulk"]["what"]],
-        ["RP1-RP2", 2, P.PASSIVES["i2c_pullup"]["mfr"], P.PASSIVES["i2c_pullup"]["mpn"],
-         P.PASSIVES["i2c_pullup"]["what"]],
         ["RD1", 1, P.PASSIVES["divider_top"]["mfr"], P.PASSIVES["divider_top"]["mpn"],
          P.PASSIVES["divider_top"]["what"]],
         ["RD2", 1, P.PASSIVES["divider_bottom"]["mfr"], P.PASSIVES["divider_bottom"]["mpn"],
@@ -139,6 +162,52 @@ def csv_text(b: dict[str, Any]) -> str:
     return buf.getvalue()
 
 
+def sense_limits(b: dict[str, Any], lim: dict[str, Any]) -> list[str]:
+    """The limit rows of the current sensing: its full scale first, then the read-back and I2C
+    pull-up (a monitor board), or the IS sense node's resolution, voltage and power (a
+    smart-switch board)."""
+    sense, mcu = lim["sense"], lim["mcu"]
+    if not lim["smart"]:
+        rows = [f"| sense full scale per channel | {lim['fullscale_a']:.2f} A | "
+                f"{sense['fullscale_v'] * 1000:g} mV / {lim['shunt_ohm'] * 1000:g} mOhm |"]
+    else:
+        s, sw = b["sense"], lim["switch"]
+        vref, r_adc = s["vref_mv"] / 1000, s["r_adc_ohm"]
+        hi = sw["i_is_fault_a"][1]
+        per_count = vref / 2 ** mcu["adc_bits"] / r_adc * s["k_ilis"]
+        rows = [
+            f"| sense full scale per channel | {lim['fullscale_a']:.2f} A | IS from "
+            f"{s['fault_ua'] / 1000:g} mA on reads as a fault; x k_ILIS {s['k_ilis']} |",
+            f"| load current per ADC count | {per_count * 1000:.1f} mA, about "
+            f"{vref / 2 ** mcu['adc_enob'] / r_adc * s['k_ilis'] * 1000:.0f} mA effective | "
+            f"{vref:g} V / {mcu['adc_bits']} bit / {r_adc} Ohm x k_ILIS {s['k_ilis']} |",
+            f"| smallest load measured | {s['accurate_ma']} mA | below it k_ILIS is known only "
+            "to about +-34 %: low, not measured |",
+            f"| ADC pin at the highest fault current | {hi * r_adc:.2f} V | I_IS(FAULT) "
+            f"{hi * 1000:g} mA x {r_adc} Ohm, under the {vref:g} V reference |",
+            f"| sense resistor power at that current | upper leg "
+            f"{hi * hi * (s['r_is_ohm'] - r_adc) * 1000:.0f} mW (rated "
+            f"{P.PASSIVES['is_top']['watts'] * 1000:g} mW), lower leg {hi * hi * r_adc * 1000:.0f}"
+            f" mW (rated {P.PASSIVES['is_adc']['watts'] * 1000:g} mW) | ({hi * 1000:g} mA)^2 x "
+            f"{s['r_is_ohm'] - r_adc} Ohm and x {r_adc} Ohm |",
+            f"| switch on-resistance per channel | {sw['rds_on_ohm'] * 1000:g} mOhm, "
+            f"{lim['cont_a'] ** 2 * sw['rds_on_ohm']:.2f} W at {lim['cont_a']:g} A | "
+            f"{sw['mpn']}, typical at 25 degC |",
+        ]
+    if b.get("status_pins"):
+        rows.append(
+            f"| output read-back at the GPIO, lowest input | {lim['vmin'] * lim['readback']:.2f}"
+            f" V | the {P.PASSIVES['readback_series']['ohm'] // 1000} k / "
+            f"{P.PASSIVES['readback_pulldown']['ohm'] // 1000} k divider at {lim['vmin']:g} V; "
+            f"the GPIO reads 1 from {mcu['io_vih_v']:g} V; clamped at 3.3 V above |")
+    if not lim["smart"]:
+        rows.append(
+            f"| I2C pull-up, largest | {lim['pullup_max_ohm'] / 1000:.1f} kOhm | "
+            f"{P.I2C_RISE_NS} ns rise / (0.8473 x {lim['bus_pf']} pF: {lim['n_chips']} chips "
+            "and the bus) |")
+    return rows
+
+
 def markdown(b: dict[str, Any]) -> str:
     lim = limits(b)
     sw, sense = lim["switch"], lim["sense"]
@@ -158,13 +227,12 @@ def markdown(b: dict[str, Any]) -> str:
         f" effective | {lim['mcu']['adc_bits']}-bit ADC, {lim['mcu']['adc_enob']:g} effective"
         " bits |",
         f"| continuous current per channel | {lim['cont_a']:g} A | {lim['cont_by']} |",
-        f"| sense full scale per channel | {lim['fullscale_a']:.2f} A | "
-        f"{sense['fullscale_v'] * 1000:g} mV / {lim['shunt_ohm'] * 1000:g} mOhm |",
+        *sense_limits(b, lim)[:1],
         f"| switch current limit per channel | {lim['limit_a']:g} A | {sw['mpn']} |",
         f"| fuse per channel | {lim['fuse_a']} A | {lim['cont_a']:g} A x {P.FUSE_MARGIN} |",
         f"| largest rated_ma for which the instant trip can fire | "
         f"{lim['instant_rated_a'] * 1000:.0f} mA | trip at {TRIP_FACTOR:g} x rated must stay "
-        f"under the {lim['limit_a']:g} A the switch limits to |",
+        f"under {lim['trip_cap_by']} |",
         f"| input fuse | {lim['input_fuse_a']} A | the board's wiring |",
         f"| continuous current, whole board | {lim['board_a']:g} A | input fuse / "
         f"{P.FUSE_MARGIN} |",
@@ -172,13 +240,7 @@ def markdown(b: dict[str, Any]) -> str:
         f"I^2 x {P.INPUT['mosfet']['rds_on_ohm'] * 1000:g} mOhm |",
         f"| TVS clamp at its rated surge | {P.INPUT['tvs']['clamp_v']:g} V | "
         f"{P.INPUT['tvs']['mpn']} (the {sense['mpn']} withstands {sense['abs_max_v']:g} V) |",
-        f"| output read-back at the GPIO, lowest input | {lim['vmin'] * lim['readback']:.2f} V"
-        f" | the {P.PASSIVES['readback_series']['ohm'] // 1000} k / "
-        f"{P.PASSIVES['readback_pulldown']['ohm'] // 1000} k divider at {lim['vmin']:g} V; the "
-        f"GPIO reads 1 from {lim['mcu']['io_vih_v']:g} V; clamped at 3.3 V above |",
-        f"| I2C pull-up, largest | {lim['pullup_max_ohm'] / 1000:.1f} kOhm | "
-        f"{P.I2C_RISE_NS} ns rise / (0.8473 x {lim['bus_pf']} pF: {lim['n_chips']} chips and "
-        "the bus) |",
+        *sense_limits(b, lim)[1:],
         "", "## The protected channel", "",
         "The channel the configuration marks `protected` (`dxboard flash --config`) powers the"
         " computer that runs the dxboard host. The board never switches it off for an I2t"
@@ -187,8 +249,10 @@ def markdown(b: dict[str, Any]) -> str:
         " (`protocol/PROTOCOL.md`). Wire the host's computer to it"
         " and nothing else: without that computer nothing diagnoses the robot or switches its"
         f" channels back on. Its device must draw at most {lim['cont_a']:g} A continuous. Its"
-        f" {lim['fuse_a']} A fuse is its overload protection, and a short is held at"
-        f" {lim['limit_a']:g} A by the {sw['mpn']} until the switch's own thermal shutdown (the"
+        f" {lim['fuse_a']} A fuse is its overload protection, and a short is "
+        + ("switched off and latched at" if lim["smart"] else "held at")
+        + f" {lim['limit_a']:g} A by the {sw['mpn']}"
+        + ("" if lim["smart"] else " until the switch's own thermal shutdown") + " (the"
         f" instant trip fires only for rated_ma up to {lim['instant_rated_a'] * 1000:.0f} mA)."
         " A second device on that channel would be as unprotected, and its fault would take"
         " the computer down.",

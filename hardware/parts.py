@@ -40,11 +40,22 @@ SENSE: dict[str, dict[str, Any]] = {
         "bus_max_v": 26.0, "abs_max_v": 26.0, "switch": "tps1h100a",
         "datasheet": "TI SBOS576",
     },
+    # a smart-switch board: the switch senses its own current (IS = I_L / k_ILIS into the
+    # board's sense resistor, read by the MCU's ADC); no sense chip is bought. ``fullscale``
+    # is worked out in bom.py from the revision's fault threshold on IS.
+    "profet": {
+        "mfr": "Infineon", "mpn": "BTS7008-2EPA", "what": "the switches' own current sense "
+        "(IS), read by the MCU's ADC", "per_chip": 2, "bus_max_v": 28.0, "abs_max_v": 28.0,
+        "switch": "bts7008", "datasheet": "Infineon BTS7008-2EPA data sheet rev. 1.20",
+    },
 }
 
 # High-side switches. ``i_max_a``: the continuous current per channel the datasheet allows;
 # ``limit_a``: the current limit the board sets (TPS1H100-Q1: R_CL = V_cl,th x K_CL / I_lim,
-# datasheet equation 2, K_CL = 2000; the PROFET limits by itself).
+# datasheet equation 2, K_CL = 2000; the PROFET limits by itself: its overload detection
+# current I_L(OVL), 40 A, as emulator/parts/profet.py models it). The PROFET's ``rds_on_ohm``
+# (8 mOhm typical at 25 degC), ``k_ilis`` (I_L / I_IS, nominal) and ``i_is_fault_a`` (the
+# current on IS for a fault, I_IS(FAULT) min and max) are its data sheet's.
 SWITCHES: dict[str, dict[str, Any]] = {
     "tps1h100a": {
         "mfr": "Texas Instruments", "mpn": "TPS1H100AQPWPRQ1", "what": "smart high-side "
@@ -55,7 +66,8 @@ SWITCHES: dict[str, dict[str, Any]] = {
     "bts7008": {
         "mfr": "Infineon", "mpn": "BTS7008-2EPA", "what": "PROFET+2 12V smart high-side "
         "switch, 2 x 8 mOhm, analog current sense IS (k_ILIS 4785), DEN/DSEL "
-        "(PG-TSDSO-14)", "per_chip": 2, "i_max_a": 7.5, "limit_a": 7.5,
+        "(PG-TSDSO-14)", "per_chip": 2, "i_max_a": 7.5, "limit_a": 40.0,
+        "rds_on_ohm": 0.008, "k_ilis": 4785, "i_is_fault_a": (4.4e-3, 10e-3),
         "v_op": (6.0, 18.0), "datasheet": "Infineon BTS7008-2EPA data sheet rev. 1.20",
     },
 }
@@ -116,6 +128,11 @@ PASSIVES: dict[str, dict[str, Any]] = {
                           " output read-back divider, to ground", "ohm": 56000},
     "readback_clamp": {"mfr": "Nexperia", "mpn": "BAT54S,215", "what": "dual Schottky in "
                        "series (SOT-23): clamps the read-back between ground and 3.3 V"},
+    "is_top": {"mfr": "Yageo", "mpn": "RT1206BRD07909RL", "what": "909 Ohm 0.1 % 1206 0.25 W:"
+               " the IS sense node to ground, upper leg (the revision's 900 Ohm, nearest E96 "
+               "value; only the lower leg sets the reading)", "watts": 0.25},
+    "is_adc": {"mfr": "Yageo", "mpn": "RT0603BRD07300RL", "what": "300 Ohm 0.1 % 0603: the "
+               "IS sense node to ground, lower leg, read by the ADC", "watts": 0.1},
     "bypass": {"mfr": "Murata", "mpn": "GRM188R71H104KA93D", "what": "100 nF 50 V X7R 0603: "
                "one per IC supply pin, one at the ADC pin"},
 }
@@ -123,6 +140,8 @@ PASSIVES: dict[str, dict[str, Any]] = {
 # What a revision chooses beyond its firmware file; missing keys: the sense chip's defaults.
 REVISIONS: dict[str, dict[str, Any]] = {
     "rev-a": {"switch": "tps1h100a", "input_fuse_a": 20},
+    "rev-b": {"switch": "tps1h100a", "input_fuse_a": 20},
+    "rev-c": {"switch": "bts7008", "input_fuse_a": 20},
 }
 DEFAULT_INPUT_FUSE_A = 20
 I2C_RISE_NS = 300  # fast mode (400 kHz): SDA/SCL rise time at most 300 ns (I2C-bus spec UM10204)

@@ -40,6 +40,7 @@ class ChipBank:
     NAME = "chip"
     DIE = 0
     CONFIG_TICK = 0
+    BEFORE = False  # True when _before does something (the read then calls it every tick)
 
     def __init__(self, i2c: object, chips: tuple, chip_of: list, input_of: list) -> None:  # type: ignore[type-arg]
         self.i2c = i2c
@@ -158,16 +159,27 @@ class ChipBank:
                 out[ch] = NO_READING
             return
         last = -1
+        chip_of, state, sample = self.chip_of, self.state, self._sample
+        before = self.BEFORE
         for ch in range(self.n):
-            chip = self.chip_of[ch]
-            if chip != last:
-                last = chip
+            chip = chip_of[ch]
+            # a new chip: made ready and its flags fetched, unless it is ready already and has
+            # no flags (then _ready would return True doing nothing, and _before nothing)
+            if chip != last and (before or state[chip] != C_OK or self.bus_wait):
                 try:
                     if self._ready(chip):
                         self._before(chip)
                 except OSError as exc:
                     self._failed(chip, exc)
-            out[ch] = self.read_one(ch)
+            last = chip
+            if state[chip] == C_OK and not self.bus_wait:  # read_one's path for a ready chip
+                try:
+                    out[ch] = sample(ch)
+                except OSError as exc:
+                    self._failed(chip, exc)
+                    out[ch] = NO_READING
+            else:
+                out[ch] = self.read_one(ch)
         self._check()
 
     def _check(self) -> None:

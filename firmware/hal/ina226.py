@@ -47,7 +47,8 @@ class Ina226Bank(ChipBank):
         self._put(chip, REG_CALIBRATION, calibration(self.shunt_uohm))
 
     def _sample(self, ch: int) -> int:
-        raw = self._get(ch, REG_SHUNT)
-        if raw & 0x8000:
+        buf = self.buf  # _get inlined: this runs for every channel every tick
+        self.i2c.readfrom_mem_into(self.chips[ch], REG_SHUNT, buf)  # type: ignore[attr-defined]
+        if buf[0] & 0x80:
             return 0  # current flowing back: none drawn
-        return raw * 2500 // self.shunt_uohm  # 2.5 uV/LSB over the shunt, in mA
+        return ((buf[0] << 8) | buf[1]) * 2500 // self.shunt_uohm  # 2.5 uV/LSB, in mA

@@ -51,6 +51,7 @@ def limit_code(trip_ma: int, shunt_uohm: int) -> int:
 class Ina3221Bank(ChipBank):
     NAME = "ina3221"
     DIE = 0x3220
+    BEFORE = True  # MASK/ENABLE read once a chip, before its inputs
 
     def __init__(self, i2c: object, chips: tuple, inputs: tuple, shunt_uohm: int) -> None:  # type: ignore[type-arg]
         super().__init__(i2c, chips, [c for c, _ in inputs], [k for _, k in inputs])
@@ -97,7 +98,8 @@ class Ina3221Bank(ChipBank):
             self.flags[chip] &= ~(CF1 >> k)
             self.trips += 1
             return TRIPPED
-        raw = self._get(chip, 1 + 2 * k)
-        if raw & 0x8000:
+        buf = self.buf  # _get inlined: this runs for every channel every tick
+        self.i2c.readfrom_mem_into(self.chips[chip], 1 + 2 * k, buf)  # type: ignore[attr-defined]
+        if buf[0] & 0x80:
             return 0  # current flowing back: none drawn
-        return (raw >> 3) * 40000 // self.shunt_uohm  # 40 uV/LSB over the shunt, in mA
+        return (((buf[0] << 8) | buf[1]) >> 3) * 40000 // self.shunt_uohm  # 40 uV/LSB, mA

@@ -97,7 +97,50 @@ class ProfetBank:
         return LOW if ma < self.accurate_ma else ma
 
     def read(self, out: list) -> None:  # type: ignore[type-arg]
+        """Every channel into ``out``, as ``read_one`` each in turn, in one loop (the tick's hot
+        path: the bound methods in locals, each part's DEN raised once for its two channels
+        rather than every other DEN lowered again per channel: the same levels on the pins)."""
+        if not self.node_ok:
+            for ch in range(self.n):
+                out[ch] = NO_READING
+            return
+        rd = self.adc.read_u16  # type: ignore[attr-defined]
+        dsel = self.dsel.value
+        den = self.den
+        sw = self.switches
+        open_off = self.open_off
+        settle = self.settle_reads
+        k = self.vref_uv
+        div = 2 * 4095 * self.r_adc
+        fault_ua, oloff_ua = self.fault_ua, self.oloff_ua
+        for d in den:
+            d.value(0)
         for ch in range(self.n):
-            out[ch] = self.read_one(ch)
-        for d in self.den:
+            if ch & 1:
+                dsel(1)
+            else:  # a new part: the last one off the node, this one on (as _select)
+                part = ch >> 1
+                if part:
+                    den[part - 1].value(0)
+                dsel(0)
+                den[part].value(1)
+            for _ in range(settle):
+                rd()
+            ua = ((rd() >> 4) + (rd() >> 4)) * k // div
+            on = bool(sw[ch].value()) if sw else False
+            open_off[ch] = False
+            if ua >= fault_ua:
+                if on:
+                    self.faults += 1
+                    out[ch] = TRIPPED
+                else:
+                    out[ch] = 0
+            elif not on:
+                if ua >= oloff_ua:
+                    open_off[ch] = True
+                out[ch] = 0
+            else:
+                ma = ua * self.k_ilis // 1000
+                out[ch] = LOW if ma < self.accurate_ma else ma
+        for d in den:
             d.value(0)  # DEN falling with IN low clears a part's restart counter

@@ -111,3 +111,24 @@ def test_a_new_revision_file_is_picked_up(tmp_path: Path) -> None:
     board = (out / "rev-z" / "board.md").read_text()
     assert "| input voltage | 7 V to 26 V |" in board  # the INA3221's bus input: 26 V
     assert "| sense full scale per channel | 8.19 A | 163.8 mV / 20 mOhm |" in board
+
+
+def test_rev_b_and_rev_c_parts_follow_from_the_ratings() -> None:
+    """Rev B: four INA3221 for ten channels (3 + 3 + 2 + 2), 16.38 A full scale over 10 mOhm.
+    Rev C: five dual BTS7008-2EPA, no monitor, shunt or I2C pull-up, but the IS node's two
+    resistors; its full scale is the IS fault threshold (3.8 mA) x k_ILIS 4785 = 18.18 A, and
+    the ADC sees at most 10 mA x 300 Ohm = 3.0 V."""
+    b = rows("rev-b")
+    assert b["SEN1-SEN4"]["mpn"] == "INA3221AIRGVR" and b["SEN1-SEN4"]["quantity"] == "4"
+    assert "| sense full scale per channel | 16.38 A |" in (
+        ROOT / "hardware" / "rev-b" / "board.md").read_text()
+    c = rows("rev-c")
+    assert c["SW1-SW5"]["mpn"] == "BTS7008-2EPA" and c["SW1-SW5"]["quantity"] == "5"
+    assert not any(ref.startswith(("SEN", "RS", "RP", "RB")) for ref in c)
+    assert {"RIS1", "RIS2"} <= set(c)
+    assert c["F1-F10"]["mpn"] == "0287010.PXCN"  # 7.5 A x 1.25 -> 10 A
+    text = (ROOT / "hardware" / "rev-c" / "board.md").read_text()
+    assert "| input voltage | 7 V to 18 V |" in text
+    assert "| sense full scale per channel | 18.18 A |" in text
+    assert "| ADC pin at the highest fault current | 3.00 V |" in text
+    assert "I2C" not in text.split("## Parts")[0]

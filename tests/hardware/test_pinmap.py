@@ -43,3 +43,24 @@ def test_the_address_straps_are_the_datasheets() -> None:
     assert "| 5 | 0x45 | A1=VS, A0=VS |" in text
     assert "| 9 | 0x49 | A1=SDA, A0=VS |" in text
 
+
+
+def test_rev_c_pins_are_the_smart_switches() -> None:
+    """Rev C: IN0/IN1 of each dual part are the enable pins, one DEN per part, one shared DSEL,
+    the shared IS node on ADC1 (GPIO 27), and no I2C."""
+    rows = [line.split(",", 2) for line in
+            (ROOT / "hardware" / "rev-c" / "pins.csv").read_text().splitlines()[1:]]
+    by_pin = {int(r[0]): (r[1], r[2]) for r in rows}
+    assert by_pin[3] == ("switch enable", "channel 1: BTS7008-2EPA U1 IN1")
+    assert by_pin[16] == ("switch diagnosis enable", "BTS7008-2EPA U5 DEN")
+    assert by_pin[17][0] == "switch diagnosis select"
+    assert by_pin[27][0] == "ADC" and "IS sense node" in by_pin[27][1]
+    assert not any("I2C" in fn for fn, _ in by_pin.values())
+    md = (ROOT / "hardware" / "rev-c" / "pins.md").read_text()
+    assert "| 9 | U5 | IN1 | GP16 | high |" in md
+    ET.fromstring((ROOT / "hardware" / "rev-c" / "wiring.svg").read_text())
+
+
+def test_rev_b_channels_name_their_chip_input() -> None:
+    md = (ROOT / "hardware" / "rev-b" / "pins.md").read_text()
+    assert "| 2 | 0x40 input 3 | A0=GND |" in md and "| 9 | 0x43 input 2 | A0=SCL |" in md
