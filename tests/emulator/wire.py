@@ -33,11 +33,14 @@ DXBOARD = str(Path(sys.executable).parent / "dxboard")
 
 #: how a conformance test names the firmware it runs against -> the options that start it:
 #: the firmware's App in this interpreter or in micropython (on a remote HAL), or the shipped
-#: boot.py and main.py of a board revision on its part models (``--board-rev``)
+#: boot.py and main.py of each board revision on its part models (``--board-rev``: rev A's
+#: INA226, rev B's INA3221, rev C's PROFET smart switches)
 RUNTIMES: dict[str, tuple[str, ...]] = {
     "cpython": ("--runtime", "cpython"),
     "micropython": ("--runtime", "micropython"),
     "rev-a": ("--runtime", "micropython", "--board-rev", "rev-a"),
+    "rev-b": ("--runtime", "micropython", "--board-rev", "rev-b"),
+    "rev-c": ("--runtime", "micropython", "--board-rev", "rev-c"),
 }
 
 
