@@ -298,7 +298,12 @@ class Bench:
                 self.follow()
             return {"ok": 1}
         if op == "part_clear":
-            self.sensed[req["ch"]][0].clear()  # type: ignore[attr-defined]
+            part, k = self.sensed[req["ch"]]
+            if hasattr(part, "regs"):
+                part.clear()  # type: ignore[attr-defined]
+            else:  # this channel's faults only: the other half of the part keeps its own
+                for fault in ("short", "overtemp", "open_load"):
+                    part.inject(fault, k, False)  # type: ignore[attr-defined]
             return {"ok": 1}
         if op == "regs":  # the bench's logic analyser: what the chip holds now
             part = self.sensed[req["ch"]][0]
