@@ -14,20 +14,15 @@ it has. The conformance peers (spec-only client, pymodbus, Modbus TCP) run again
 
 from __future__ import annotations
 
-import json
 from collections.abc import Iterator
 
 import pytest
 
-from emulator import model
-from emulator.board_rt import BoardRuntime
 from emulator.faults import FaultError
 from emulator.sim import Emulator
-from firmware.hal.storage import FileStorage
-from tests.emulator.wire import TEDUSAR
+from tests.emulator.wire import DEVICES, board_bench, devices_on
 
 PC, HOKUYO, KINECT, ROUTER = 2, 3, 4, 5
-DEVICES = (0, 1, 3, 4, 5, 6, 7)
 # the part's own error on top of the loads' noise: INA3221 4 mA a count (40 uV over 10 mOhm);
 # a PROFET's kILIS band (+-34 % at 50 mA to +-4 % from 5 A) and the ADC's 13 mA a count
 TOLERANCE = {"rev-b": 0.15, "rev-c": 0.3}
@@ -37,31 +32,15 @@ TOLERANCE = {"rev-b": 0.15, "rev-c": 0.3}
 def bench(request: pytest.FixtureRequest,
           tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, Emulator]]:
     rev: str = request.param
-    flash = tmp_path_factory.mktemp("flash-" + rev)
-    rt = BoardRuntime(rev, flash)
-    try:
-        cfg = json.loads((TEDUSAR / "board.json").read_text())
-        emu = Emulator(model.load(TEDUSAR), storage=FileStorage(str(flash)), board_config=cfg,
-                       firmware_factory=rt.factory)
-        emu.parts = rt
-        emu.advance(500)
-        for ch in DEVICES:
-            assert emu.board.switch(ch, True)[0] == 0
-        emu.advance(2000)
+    with board_bench(rev, tmp_path_factory.mktemp("flash-" + rev)) as (emu, _rt):
         yield rev, emu
-    finally:
-        rt.close()
 
 
 @pytest.fixture
 def emu(bench: tuple[str, Emulator]) -> Iterator[Emulator]:
     """The board with every device on and no fault; faults cleared after the test."""
     e = bench[1]
-    for ch in DEVICES:
-        if not e.board.channel_status(ch)[0]:
-            e.board.clear(ch)
-            e.board.switch(ch, True)
-    e.advance(1500)
+    devices_on(e)
     try:
         yield e
     finally:
