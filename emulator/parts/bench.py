@@ -292,25 +292,25 @@ class Bench:
         if op == "part":
             part, k = self.sensed[req["ch"]]
             if hasattr(part, "regs"):  # a shunt monitor: its faults are the chip's
-                part.inject(req["fault"], req["value"], self.world.now_us)  # type: ignore[attr-defined]
+                part.inject(req["fault"], req["value"], self.world.now_us)
             else:  # a smart switch: its faults are its channel's
-                part.inject(req["fault"], k, req["value"])  # type: ignore[attr-defined]
+                part.inject(req["fault"], k, req["value"])
                 self.follow()
             return {"ok": 1}
         if op == "part_clear":
             part, k = self.sensed[req["ch"]]
             if hasattr(part, "regs"):
-                part.clear()  # type: ignore[attr-defined]
+                part.clear()
             else:  # this channel's faults only: the other half of the part keeps its own
                 for fault in ("short", "overtemp", "open_load"):
-                    part.inject(fault, k, False)  # type: ignore[attr-defined]
+                    part.inject(fault, k, False)
             return {"ok": 1}
         if op == "regs":  # the bench's logic analyser: what the chip holds now
             part = self.sensed[req["ch"]][0]
             if not hasattr(part, "regs"):
                 return {"regs": []}  # a smart switch has no registers
-            part.advance(self.world.now_us)  # type: ignore[attr-defined]
-            return {"regs": list(part.regs)}  # type: ignore[attr-defined]
+            part.advance(self.world.now_us)
+            return {"regs": list(part.regs)}
         if op == "mem":
             import gc
 

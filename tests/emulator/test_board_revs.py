@@ -14,13 +14,14 @@ it has. The conformance peers (spec-only client, pymodbus, Modbus TCP) run again
 
 from __future__ import annotations
 
+import subprocess
 from collections.abc import Iterator
 
 import pytest
 
 from emulator.faults import FaultError
 from emulator.sim import Emulator
-from tests.emulator.wire import DEVICES, board_bench, devices_on
+from tests.emulator.wire import DEVICES, DXBOARD, RUNTIMES, Emulate, board_bench, devices_on
 
 PC, HOKUYO, KINECT, ROUTER = 2, 3, 4, 5
 # the part's own error on top of the loads' noise: INA3221 4 mA a count (40 uV over 10 mOhm);
@@ -108,3 +109,20 @@ def test_a_fault_the_part_does_not_have_is_refused(bench: tuple[str, Emulator],
         emu.inject("hokuyo", wrong, {})
     assert len(str(got.value).splitlines()) == 1
     assert not emu.faults()  # nothing recorded for it
+
+
+def test_the_command_line_refuses_a_fault_the_part_lacks_in_one_line() -> None:
+    """``dxboard inject`` on a running ``emulate --board-rev rev-c``: a shunt monitor's fault is
+    refused (exit 2, one line naming the switch's faults); the switch's own is injected."""
+    with Emulate(*RUNTIMES["rev-c"]) as board:
+        def inject(fault: str) -> subprocess.CompletedProcess[str]:
+            return subprocess.run([DXBOARD, "inject", board.urls["control"], "hokuyo", fault],
+                                  capture_output=True, text=True, timeout=60)
+
+        refused = inject("chip_nack")
+        assert refused.returncode == 2 and refused.stdout == "", refused
+        assert len(refused.stderr.strip().splitlines()) == 1, refused.stderr
+        assert "switch_short" in refused.stderr and "Traceback" not in refused.stderr
+        done = inject("switch_short")
+        assert done.returncode == 0, done.stderr
+        assert "injected switch_short on 3" in done.stdout
