@@ -19,7 +19,9 @@ The Modbus server of ``main.py`` (its port 502) listens directly on the ``--modb
 so it sees each client's own address as on a network; the native protocol (its port 7000)
 sits behind the link-fault proxies of ``FrontEnds``. Resets stay the emulator's (``sim.py``):
 a reset the firmware makes itself comes back as ``reboot`` in a step's answer. Part faults
-(``chip_*`` in ``emulator/faults.py``) go to the chip that senses the channel.
+(``emulator/faults.py``) go to the part that senses the channel, as ``emulator.parts.wiring``
+wired it: ``chip_*`` to a shunt monitor (rev A, rev B), ``switch_*`` to that channel of a
+smart switch (rev C); a revision whose part has no such fault refuses it in one line.
 """
 
 from __future__ import annotations
@@ -30,9 +32,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from emulator.faults import FaultError
 from emulator.frontends import FrontEnds
 from emulator.hal import SimHal
 from emulator.mpy import ROOT, MicroFirmware, MicroRuntime, find_micropython, free_port
+from firmware import boards
 
 BOOT_TIMEOUT_S = 60.0  # the first boot compiles every firmware module (slow on a loaded host)
 # part fault of the emulator (``emulator/faults.py``) -> the chip model's fault and its value
@@ -45,7 +49,15 @@ PART_FAULTS: dict[str, tuple[str, Callable[[dict[str, Any]], Any]]] = {
     "chip_gain": ("gain", lambda p: p["factor"]),
     "chip_noise": ("noise", lambda p: p["volts"]),
     "chip_die_id": ("die_id", lambda p: int(p["id"])),
+    "switch_short": ("short", lambda p: p["amps"]),
+    "switch_overtemp": ("overtemp", lambda p: True),
+    "switch_open_load": ("open_load", lambda p: True),
 }
+# a revision's sense part (``sense["chip"]`` of ``firmware/boards``) -> the part faults it has
+CHIP_FAULTS = tuple(f for f in PART_FAULTS if f.startswith("chip_"))
+SWITCH_FAULTS = tuple(f for f in PART_FAULTS if f.startswith("switch_"))
+PART_OF: dict[str, tuple[str, ...]] = {"ina226": CHIP_FAULTS, "ina3221": CHIP_FAULTS,
+                                       "profet": SWITCH_FAULTS}
 ONE_SHOT = ("chip_reset",)  # happens once: not applied again when other faults are cleared
 
 
@@ -53,6 +65,7 @@ class BoardRuntime(MicroRuntime):
     def __init__(self, rev: str, flash: Path, modbus: tuple[str, int] | None = None,
                  micropython: str | None = None) -> None:
         self.rev = rev
+        self.chip = boards.load(rev)["sense"]["chip"]
         self.flash = flash
         self.tcp_port = free_port()
         self.modbus_at = modbus
@@ -96,6 +109,10 @@ class BoardRuntime(MicroRuntime):
     # --- part faults (``Emulator.parts``) ---------------------------------------------------
 
     def inject_part(self, ch: int, fault: str, params: dict[str, Any]) -> None:
+        has = PART_OF.get(self.chip, ())
+        if fault not in has:
+            raise FaultError(f"{fault}: the {self.rev} board senses with {self.chip}, which has "
+                             f"no such fault (its part faults: {', '.join(has) or 'none'})")
         name, value = PART_FAULTS[fault]
         self.request({"op": "part", "ch": ch, "fault": name, "value": value(params)})
 

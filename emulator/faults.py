@@ -4,11 +4,14 @@
 parameters with their types and defaults. ``parse_params`` turns the strings of ``dxboard
 inject ... key=value`` (or the values of a scenario file) into typed values, and rejects
 unknown faults, unknown parameters and bad values with a ``FaultError`` that says what is
-accepted. Part faults (``chip_*``: the sense chip of a channel does not acknowledge, holds the
-bus low, resets to its power-on registers, freezes its results, has an open shunt lead, a gain
-error, noise in volts rms, or is another chip, ``id`` its die ID) exist only on a board of part
-models (``--board-rev``). The control server and the scenario player both go through here, so
-both accept exactly the same faults.
+accepted. Part faults exist only on a board of part models (``--board-rev``), and each only
+where the revision's part has it: ``chip_*`` on a shunt monitor (rev A's INA226, rev B's
+INA3221: the sense chip of a channel does not acknowledge, holds the bus low, resets to its
+power-on registers, freezes its results, has an open shunt lead, a gain error, noise in volts
+rms, or is another chip, ``id`` its die ID), ``switch_*`` on a smart switch (rev C's PROFET:
+the channel's output shorted, ``amps`` drawn, over its overload current by default; its die
+over temperature; its load disconnected, which IS reports in the off state). The control server
+and the scenario player both go through here, so both accept exactly the same faults.
 """
 
 from __future__ import annotations
@@ -43,6 +46,10 @@ FAULTS: dict[str, tuple[str, dict[str, tuple[type, Any]]]] = {
     "chip_gain": ("part", {"factor": (float, None)}),
     "chip_noise": ("part", {"volts": (float, None)}),
     "chip_die_id": ("part", {"id": (float, 0x3220)}),
+    # part faults of a smart switch (rev C's PROFET): the channel's own output stage
+    "switch_short": ("part", {"amps": (float, 60.0)}),
+    "switch_overtemp": ("part", {}),
+    "switch_open_load": ("part", {}),
     # board faults
     "brownout": ("board", {"volts": (float, None), "seconds": (float, 1.0)}),
     "wdt_reset": ("board", {}),
@@ -94,7 +101,7 @@ def parse_params(fault: str, raw: dict[str, Any]) -> dict[str, Any]:
             out[key] = default
     if fault == "dropout" and not (out["period_s"] > 0 and 0 <= out["duty"] <= 1):
         raise FaultError("dropout: needs period_s > 0 and 0 <= duty <= 1")
-    if fault in ("overcurrent", "sensor_noise") and out["amps"] < 0:
+    if fault in ("overcurrent", "sensor_noise", "switch_short") and out["amps"] < 0:
         raise FaultError(f"{fault}: amps must be >= 0")
     if fault == "brownout" and (out["volts"] < 0 or out["seconds"] <= 0):
         raise FaultError("brownout: needs volts >= 0 and seconds > 0")

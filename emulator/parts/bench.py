@@ -3,8 +3,10 @@
 ``micropython -m emulator.parts.bench HOST PORT REV TCP MODBUS`` (started by
 ``emulator/board_rt.py``, with ``emulator/parts/clock`` and ``emulator/parts`` first on
 ``MICROPYPATH`` and the board's flash directory as its working directory) builds a ``World``
-wired from the board revision's data (``firmware/boards``: the switches' enable and status pins,
-the current-sense chips by ``WIRING[sense["chip"]]``, the input divider on its ADC pin), then
+wired from the board revision's data (``firmware/boards``): the sensing parts by
+``emulator.parts.wiring.wire``, with this ``Bench`` as their electronics (``source``, ``load``,
+``drive``), the switches' enable and status pins the parts do not take, the input divider on its
+ADC pin, then
 boots the firmware as a board does: ``firmware.boot.run()`` (the network: the wired interface,
 whose cable is plugged into the host's loopback), then ``import firmware.main``, unmodified,
 which builds its HAL through ``machine`` (the parts' model), reads the flashed ``board_rev`` and
@@ -22,12 +24,14 @@ emulator moves. It connects three times to the emulator, each link naming itself
   "feeds": 0|1, "reboot": bool}``: the emulator time its next timer is due, whether the
   watchdog was fed, whether the microcontroller reset itself), ``{"op": "part", "ch": CH,
   "fault": NAME, "value": V}`` and ``{"op": "part_clear", "ch": CH}`` (a part-level fault of the
-  chip that senses channel CH: ``nack``, ``stuck_low``, ``reset``, ``stuck``, ``open_shunt``,
-  ``gain``, ``noise``, ``die_id``), ``{"op": "regs", "ch": CH}`` (that chip's registers as it
-  holds them now: ``{"regs": [..]}``, what a logic analyser on the bench shows), ``{"op":
-  "halt"}`` (held in reset: every socket closed,
-  nothing runs until the next boot), ``{"op": "call", "m": NAME, "a": [..]}`` (a ``Board``
-  method: the emulator's status, scenario commands) and ``{"op": "mem"}``.
+  part that senses channel CH, as ``emulator.parts.wiring`` wired it: a shunt monitor's
+  ``nack``, ``stuck_low``, ``reset``, ``stuck``, ``open_shunt``, ``gain``, ``noise``,
+  ``die_id``, or a smart switch's ``short``, ``overtemp``, ``open_load`` of that channel),
+  ``{"op": "regs", "ch": CH}`` (that chip's registers as it holds them now: ``{"regs": [..]}``,
+  what a logic analyser on the bench shows; a smart switch has none), ``{"op": "halt"}`` (held
+  in reset: every socket closed, nothing runs until the next boot), ``{"op": "call", "m":
+  NAME, "a": [..]}`` (a ``Board`` method: the emulator's status, scenario commands) and
+  ``{"op": "mem"}``.
 - link B (board -> emulator): ``["set_switch", ch, on]`` the moment an enable pin changes; the
   answer (every switch's output) is what the status pins then read (``firmware.hal.remote.Link``).
 - link U: the UART's wires: ``machine.UART(1)`` is this socket (asyncio on the unix port polls
@@ -51,7 +55,7 @@ import machine  # type: ignore[import-not-found]  # the parts' model (emulator/p
 
 from emulator.parts import sched
 from emulator.parts import world as _world
-from emulator.parts.ina226 import Ina226
+from emulator.parts.wiring import wire
 from firmware import boards
 from firmware.hal.remote import Link
 from protocol.constants import RESET_BROWNOUT, RESET_POWER_ON, RESET_SOFT, RESET_WATCHDOG
@@ -71,23 +75,6 @@ class Unwind(BaseException):
     def __init__(self, req: "dict | None") -> None:  # type: ignore[type-arg]
         super().__init__()
         self.req = req
-
-
-def wire_ina226(bench: "Bench", w: "_world.World", board: dict) -> list:  # type: ignore[type-arg]
-    """One TI INA226 per channel on the revision's I2C bus, across its shunt."""
-    sense = board["sense"]
-    ohm = sense["shunt_uohm"] / 1e6
-    bus = w.bus(sense["i2c"]["id"])
-    chips = []
-    for ch, addr in enumerate(sense["addrs"]):
-        chip = Ina226(bench.source(ch, ohm), seed=ch + 1, now_us=w.now_us)
-        bus.attach(addr, chip)
-        chips.append(chip)
-    return chips
-
-
-# sense chip (a revision's sense["chip"]) -> wiring: the chip model of each channel
-WIRING = {"ina226": wire_ina226}
 
 
 sched.install(asyncio.core)  # type: ignore[attr-defined]  # its times: the World's clock
@@ -115,14 +102,12 @@ class Bench:
         w.lan_cable = True  # type: ignore[attr-defined]  # the host's loopback stands in
         w.lan_ip = "127.0.0.1"  # type: ignore[attr-defined]
         self.world = w
+        self.sensed = wire(w, self.board, self)  # per channel (part, input)
         for ch, pin in enumerate(self.board["en_pins"]):
-            w.wire_output(pin, self._enable(ch))
+            if pin not in w.outputs:  # a smart switch's IN is wired by its part (wiring.py)
+                w.wire_output(pin, self._enable(ch))
         for ch, pin in enumerate(self.board.get("status_pins") or ()):
             w.wire_input(pin, self._status(ch))
-        sense = self.board["sense"]["chip"]
-        if sense not in WIRING:
-            raise ValueError("no part model wiring for sense chip " + repr(sense))
-        self.chips = WIRING[sense](self, w, self.board)
         vin = self.board["vin"]
         w.wire_adc(vin["adc_pin"], lambda: self.mv / 1000 / vin["divider"])
         self.socks: list = []  # type: ignore[type-arg]  # every socket the firmware opened
@@ -150,10 +135,27 @@ class Bench:
             return self.ma[ch] / 1000 * ohm, bus_v
         return at
 
+    def load(self, ch: int) -> object:
+        """What a smart switch's output delivers to channel ``ch``'s load while on (amperes)."""
+        def at(t_us: int) -> float:
+            return self.ma[ch] / 1000 if self.closed[ch] else 0.0
+        return at
+
+    def drive(self, ch: int, level: int) -> None:
+        """The electronics after the switch of channel ``ch``: its output on or off."""
+        if bool(level) != self.closed[ch]:
+            self.closed = self.link.call(["set_switch", ch, bool(level)])  # type: ignore[assignment]
+
+    def follow(self) -> None:
+        """A smart switch that protected itself (latched off) opens the electronics' switch."""
+        for ch, (part, k) in enumerate(self.sensed):
+            on = getattr(part, "on", None)
+            if on is not None and self.closed[ch] and not on[k]:
+                self.drive(ch, 0)
+
     def _enable(self, ch: int) -> object:
         def drive(level: int) -> None:
-            if bool(level) != self.closed[ch]:
-                self.closed = self.link.call(["set_switch", ch, bool(level)])  # type: ignore[assignment]
+            self.drive(ch, level)
         return drive
 
     def _status(self, ch: int) -> object:
@@ -273,6 +275,7 @@ class Bench:
             head = q.peek()
             if head is None or time.ticks_diff(head.ph_key, now) > 0:  # type: ignore[attr-defined]
                 break
+        self.follow()
         head = q.peek()
         at = head.ph_key if head is not None else now + 10
         return {"at": max(at, req["t"] + 1), "feeds": 1 if w.last_feed_us != fed else 0,
@@ -287,16 +290,27 @@ class Bench:
             self.reset = False
             return rep
         if op == "part":
-            chip = self.chips[req["ch"]]
-            chip.inject(req["fault"], req["value"], self.world.now_us)
+            part, k = self.sensed[req["ch"]]
+            if hasattr(part, "regs"):  # a shunt monitor: its faults are the chip's
+                part.inject(req["fault"], req["value"], self.world.now_us)
+            else:  # a smart switch: its faults are its channel's
+                part.inject(req["fault"], k, req["value"])
+                self.follow()
             return {"ok": 1}
         if op == "part_clear":
-            self.chips[req["ch"]].clear()
+            part, k = self.sensed[req["ch"]]
+            if hasattr(part, "regs"):
+                part.clear()
+            else:  # this channel's faults only: the other half of the part keeps its own
+                for fault in ("short", "overtemp", "open_load"):
+                    part.inject(fault, k, False)
             return {"ok": 1}
         if op == "regs":  # the bench's logic analyser: what the chip holds now
-            chip = self.chips[req["ch"]]
-            chip.advance(self.world.now_us)
-            return {"regs": list(chip.regs)}
+            part = self.sensed[req["ch"]][0]
+            if not hasattr(part, "regs"):
+                return {"regs": []}  # a smart switch has no registers
+            part.advance(self.world.now_us)
+            return {"regs": list(part.regs)}
         if op == "mem":
             import gc
 

@@ -11,8 +11,11 @@ there). ``electrics`` is the simulated electronics around the parts:
   ``ohm``;
 - for the smart switches (``profet``): the switch is the part, so ``electrics.load(ch)``
   returns what channel ``ch``'s load draws while its output is on, ``fn(t_us) -> amps``, and the
-  enable pin (IN) drives the part's input and then ``electrics.drive(ch, level)`` (the
-  electronics that follow the switch); the part's ``on`` is its output. The IS pins join one
+  enable pin (IN) drives the part's input and then ``electrics.drive(ch, level)`` with the
+  part's output (``on``: low while the part holds the channel latched off), for the
+  electronics that follow the switch. Here, and only here, the smart switches' IN pins are
+  wired: whoever wires the other revisions' enable pins leaves a pin already in
+  ``w.outputs`` alone. The IS pins join one
   node, read by the revision's ADC pin through the lower leg of R_IS.
 """
 
@@ -63,8 +66,10 @@ def wire_profet(w: object, board: dict, electrics: object) -> list:  # type: ign
 
     def enable(ch: int) -> object:
         def drive(level: int) -> None:
-            parts[ch // 2].set_in(ch % 2, level)
-            electrics.drive(ch, level)  # type: ignore[attr-defined]
+            part = parts[ch // 2]
+            part.set_in(ch % 2, level)
+            # what follows the switch sees its output: off while the part holds it latched
+            electrics.drive(ch, 1 if part.on[ch % 2] else 0)  # type: ignore[attr-defined]
         return drive
 
     for ch, pin in enumerate(board["en_pins"]):

@@ -27,8 +27,9 @@ link-fault proxies), its serial front end (the pty's bytes relayed to it) and it
 ``--board-rev REV`` (with ``--runtime micropython``) boots instead the shipped
 ``firmware/boot.py`` and ``firmware/main.py``, unmodified, on register-level models of that
 revision's parts (``emulator.board_rt``): its own HAL reads the chips over the model of
-``machine.I2C``, fed by the same simulated electronics in lock-step; the part faults
-(``dxboard inject ... chip_nack`` and the other ``chip_*``) reach those chips. ``main.py``
+``machine.I2C`` (rev A, rev B) or the smart switches over ``machine.ADC`` (rev C), fed by the
+same simulated electronics in lock-step; the part faults (``dxboard inject ... chip_nack`` and
+the other ``chip_*``; ``switch_*`` on rev C) reach those parts. ``main.py``
 serves no CAN and (``TUG_PORT = 0``) no tug; its Modbus server listens on ``--modbus``
 directly. An unknown revision is refused with the known ones.
 ``--tug`` serves the original TEDUSAR board's format (``firmware/tug.py``), which has no

@@ -12,7 +12,6 @@ refuses an unknown revision with the known ones.
 
 from __future__ import annotations
 
-import json
 import subprocess
 from collections.abc import Iterator
 from pathlib import Path
@@ -20,51 +19,41 @@ from typing import Any
 
 import pytest
 
-from emulator import model
 from emulator.board_rt import BoardRuntime
 from emulator.faults import FaultError
 from emulator.parts.ina226 import CONFIG_POR
 from emulator.sim import Emulator
 from firmware.hal.ina226 import CONFIG_TICK, calibration
-from firmware.hal.storage import FileStorage
 from host.board import BoardClient
 from host.board.types import ChannelState
 from protocol.constants import F_SENSOR
 from tests.emulator.conftest import tedusar
-from tests.emulator.wire import DXBOARD, KEY, RUNTIMES, TEDUSAR, Emulate
+from tests.emulator.wire import (
+    DEVICES,
+    DXBOARD,
+    KEY,
+    RUNTIMES,
+    TEDUSAR,
+    Emulate,
+    board_bench,
+    devices_on,
+)
 from tests.wait import wait_until_async
 
 PC, HOKUYO, KINECT, ROUTER = 2, 3, 4, 5
-DEVICES = (0, 1, 3, 4, 5, 6, 7)
 
 
 @pytest.fixture(scope="module")
 def bench(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Emulator, BoardRuntime]]:
-    flash = tmp_path_factory.mktemp("flash")
-    rt = BoardRuntime("rev-a", flash)
-    try:
-        cfg = json.loads((TEDUSAR / "board.json").read_text())
-        emu = Emulator(model.load(TEDUSAR), storage=FileStorage(str(flash)), board_config=cfg,
-                       firmware_factory=rt.factory)
-        emu.parts = rt
-        emu.advance(500)
-        for ch in DEVICES:
-            assert emu.board.switch(ch, True)[0] == 0
-        emu.advance(2000)
-        yield emu, rt
-    finally:
-        rt.close()
+    with board_bench("rev-a", tmp_path_factory.mktemp("flash")) as got:
+        yield got
 
 
 @pytest.fixture
 def emu(bench: tuple[Emulator, BoardRuntime]) -> Iterator[Emulator]:
     """The board with every device on and no fault; faults cleared after the test."""
     e = bench[0]
-    for ch in DEVICES:
-        if not e.board.channel_status(ch)[0]:
-            e.board.clear(ch)
-            e.board.switch(ch, True)
-    e.advance(1500)
+    devices_on(e)
     try:
         yield e
     finally:

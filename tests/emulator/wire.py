@@ -3,19 +3,28 @@
 ``Emulate(*options)`` starts ``dxboard emulate models/tedusar`` with a key in the environment
 and parses the URLs it prints; ``Wire`` is a raw asyncio client on ``protocol.connection``
 (the host's own BoardClient is tested elsewhere; these tests look at the board's bytes).
+``board_bench(rev, flash)`` is an in-process emulator of a board revision on its part models
+(the shipped firmware in one ``micropython`` process) with the tedusar devices on, and
+``devices_on`` puts them back on between tests.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import os
 import signal
 import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from emulator import model
+from emulator.board_rt import BoardRuntime
+from emulator.sim import Emulator
+from firmware.hal.storage import FileStorage
 from protocol.connection import HOST, Connection
 from protocol.framing import BadFrame
 from protocol.messages import Hello, Message
@@ -33,12 +42,46 @@ DXBOARD = str(Path(sys.executable).parent / "dxboard")
 
 #: how a conformance test names the firmware it runs against -> the options that start it:
 #: the firmware's App in this interpreter or in micropython (on a remote HAL), or the shipped
-#: boot.py and main.py of a board revision on its part models (``--board-rev``)
+#: boot.py and main.py of each board revision on its part models (``--board-rev``: rev A's
+#: INA226, rev B's INA3221, rev C's PROFET smart switches)
 RUNTIMES: dict[str, tuple[str, ...]] = {
     "cpython": ("--runtime", "cpython"),
     "micropython": ("--runtime", "micropython"),
     "rev-a": ("--runtime", "micropython", "--board-rev", "rev-a"),
+    "rev-b": ("--runtime", "micropython", "--board-rev", "rev-b"),
+    "rev-c": ("--runtime", "micropython", "--board-rev", "rev-c"),
 }
+
+
+#: the tedusar channels with a device the board benches switch on (2, the computer, is on)
+DEVICES = (0, 1, 3, 4, 5, 6, 7)
+
+
+@contextlib.contextmanager
+def board_bench(rev: str, flash: Path) -> Iterator[tuple[Emulator, BoardRuntime]]:
+    """Revision ``rev`` booted on its part models, every device on; stopped on leaving."""
+    rt = BoardRuntime(rev, flash)
+    try:
+        cfg = json.loads((TEDUSAR / "board.json").read_text())
+        emu = Emulator(model.load(TEDUSAR), storage=FileStorage(str(flash)), board_config=cfg,
+                       firmware_factory=rt.factory)
+        emu.parts = rt
+        emu.advance(500)
+        for ch in DEVICES:
+            assert emu.board.switch(ch, True)[0] == 0
+        emu.advance(2000)
+        yield emu, rt
+    finally:
+        rt.close()
+
+
+def devices_on(e: Emulator) -> None:
+    """Every device on again (a test may have left one off or tripped)."""
+    for ch in DEVICES:
+        if not e.board.channel_status(ch)[0]:
+            e.board.clear(ch)
+            e.board.switch(ch, True)
+    e.advance(1500)
 
 
 class Emulate:
