@@ -91,7 +91,9 @@ def cardinality_search(
                 known += conflicts
                 listed = _singles(ctx, obs, act, out, quota, conflicts[0], known)
                 if listed and not out.bad_sets:  # no single one: bound the size from here
-                    bound = _disjoint_cores(ctx, obs, conflicts, plain=True)
+                    # (up to 1 only: is there a diagnosis at all? one call, not the bound's)
+                    bound = (_any(ctx, obs) if limit < 2
+                             else _disjoint_cores(ctx, obs, conflicts, plain=True))
                     if bound is None:
                         out.cut_by = Bound.TIME_BUDGET
                         return out
@@ -123,6 +125,13 @@ def cardinality_search(
         return out
     finally:
         ctx.end_run(act)
+
+
+def _any(ctx: SatContext, obs: list[int]) -> int | None:
+    """2 when some diagnosis exists (of 2 or more components, level 1 having found none),
+    -1 when none does, None when out of time: ``_disjoint_cores``' answers, in one call."""
+    r = ctx.solve_plain(obs)
+    return None if r is None else 2 if r else -1
 
 
 def _left(ctx: SatContext, obs: list[int], base: list[int], out: SearchOutcome,
