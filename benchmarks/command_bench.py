@@ -124,6 +124,15 @@ def _child_env(tmp: Path) -> dict[str, str]:
     return env
 
 
+def _warm_model(theory: Theory, model: Path, env: dict[str, str]) -> Path:
+    """``theory`` written as a tug model file, the command's cache filled with it (every run
+    of the command on it is then warm)."""
+    write_tug(theory, model)
+    subprocess.run([sys.executable, "-c", "import sys; from host.diagnosis.files import "
+                    "load_encoded; load_encoded(sys.argv[1])", str(model)], check=True, env=env)
+    return model
+
+
 def bench_startup(args: argparse.Namespace, lines: list[str], env: dict[str, str]) -> None:
     """``dxboard diagnose --help``: the interpreter, the imports, argparse; no model."""
     runs = 5 if args.quick else 20
@@ -202,11 +211,7 @@ def bench_command(args: argparse.Namespace, lines: list[str]) -> None:
             theory = circuit_theory(circuit)
             encoding = encode(theory, structure=True)  # as the cache holds it
             known = theory.observable_atoms()
-            model = Path(tmp) / f"{name}.yaml"
-            write_tug(theory, model)
-            subprocess.run([sys.executable, "-c", "import sys; from host.diagnosis.files import "
-                            "load_encoded; load_encoded(sys.argv[1])", str(model)],
-                           check=True, env=env)  # the command's cache filled: every run warm
+            model = _warm_model(theory, Path(tmp) / f"{name}.yaml", env)
             labels = ["engine", "given", "fresh", *commands]
             wall: dict[str, list[float]] = {label: [] for label in labels}
             cpu: dict[str, list[float]] = {label: [] for label in labels}
@@ -308,11 +313,7 @@ def bench_rc2_process(args: argparse.Namespace, lines: list[str]) -> None:
                 continue
             theory = circuit_theory(circuit)
             known = theory.observable_atoms()
-            model = Path(tmp) / f"{name}.yaml"
-            write_tug(theory, model)
-            subprocess.run([sys.executable, "-c", "import sys; from host.diagnosis.files import "
-                            "load_encoded; load_encoded(sys.argv[1])", str(model)],
-                           check=True, env=env)  # the command's cache filled: every run warm
+            model = _warm_model(theory, Path(tmp) / f"{name}.yaml", env)
             cpu: dict[str, float] = {"rc2": 0.0, "first": 0.0, "all": 0.0}
             loads = [os.getloadavg()[0]]
             for n, (_flips, obs) in enumerate(sample(circuit, rng, per)):
