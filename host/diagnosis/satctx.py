@@ -23,6 +23,7 @@ from contextlib import contextmanager
 from typing import Any
 
 from pysat.card import ITotalizer  # type: ignore[import-untyped]
+from pysat.formula import WCNF  # type: ignore[import-untyped]
 from pysat.solvers import Solver  # type: ignore[import-untyped]
 
 from host.diagnosis.encoding import Encoding, encode
@@ -129,6 +130,7 @@ class SatContext:
         self.solver.append_formula(encoding.clauses)
         self._tot: ITotalizer | None = None
         self._deadline: float | None = None
+        self._wcnf: WCNF | None = None  # ``health_wcnf``
         self._plain: Solver | None = None  # the theory's clauses only (``solve_plain``)
         self._last: Solver = self.solver  # the solver of the last call (its core, its model)
         self._watchdog = _Watchdog(self)
@@ -183,6 +185,17 @@ class SatContext:
             self._atom_of = {v: a for a, v in self.vars.items()}
         return self._atom_of.get(abs(lit))
 
+    def health_wcnf(self) -> WCNF:
+        """The theory as a MaxSAT formula (hard: its clauses; soft: each component healthy,
+        weight 1), built once; callers add the observations to their solver, not to it."""
+        if self._wcnf is None:
+            self._wcnf = WCNF()
+            for clause in self.encoding.clauses:
+                self._wcnf.append(clause)
+            for v in self.ab_vars:
+                self._wcnf.append([-v], weight=1)
+        return self._wcnf
+
     def structure(self) -> Structure | None:
         """The theory's circuit structure (``structure.infer_structure``), inferred once."""
         return self.encoding.structure()
@@ -204,6 +217,8 @@ class SatContext:
         if self._tot is None:
             self._tot = ITotalizer(lits=self.ab_vars, ubound=min(n, k + 2), top_id=self.top)
             self.solver.append_formula(self._tot.cnf.clauses)
+            if self._plain is None:  # the theory alone, for ``solve_plain``
+                self._plain = Solver(name=self._solver_name, bootstrap_with=self.encoding.clauses)
             self.top = max(self.top, self._tot.top_id)
         elif len(self._tot.rhs) <= k:
             self._tot.increase(ubound=min(n, 2 * k + 1), top_id=self.top)
@@ -268,16 +283,11 @@ class SatContext:
     def solve_plain(self, assumptions: list[int]) -> bool | None:
         """SAT of the theory alone (no run's clauses, no cardinality bound) under
         ``assumptions``, which name no run's variable: on the solver itself until it holds a
-        totalizer, then on a second solver holding the theory's clauses only, made on first
-        use. Every variable of the totalizer is a decision of every call (c880, the checks
-        of level 1 after a level-2 run: 0.66 ms a call against 0.02 ms without it)."""
-        solver = self.solver
-        if self._tot is not None:
-            if self._plain is None:
-                self._plain = Solver(name=self._solver_name)
-                self._plain.append_formula(self.encoding.clauses)
-            solver = self._plain
-        return self._solve_on(solver, assumptions)
+        totalizer, then on a second solver holding the theory's clauses only, made with the
+        totalizer (so that the run that needs a bound pays for it, not the next level 1's
+        few propagations). Every variable of the totalizer is a decision of every call
+        (c880, the checks of level 1 after a level-2 run: 0.66 ms a call against 0.02 ms)."""
+        return self._solve_on(self.solver if self._plain is None else self._plain, assumptions)
 
     def _solve_on(self, solver: Solver, assumptions: list[int]) -> bool | None:
         self.calls += 1

@@ -110,3 +110,20 @@ def test_the_watchdog_interrupts_a_run_armed_while_it_polls_and_after_it_rests()
         wait_until(lambda: target.interrupts == 3, what="the deadline armed at rest")
     finally:
         dog.close()
+
+
+def test_a_minimal_cardinality_request_past_an_empty_level_one() -> None:
+    # three broken chains: no single diagnosis, the minimum (3) from RC2, then that level
+    names = ("a", "b", "c")
+    theory = Theory(tuple(f"{x}{i}" for x in names for i in range(3)),
+                    tuple(cl for x in names for cl in _chain(3, x)))
+    with Diagnoser(theory) as d:
+        for x in names:
+            d.observe(f"~ok_{x}(3)")
+        smallest = d.diagnose(min_card_only=True)
+        capped = d.diagnose(min_card_only=True, max_card=2)
+        first = d.diagnose(min_card_only=True, max_count=1)
+    assert len(smallest.bad_sets()) == 27 and smallest.complete
+    assert all(len(b) == 3 for b in smallest.bad_sets())
+    assert capped.bad_sets() == [] and capped.cut_by is Bound.MAX_CARD and capped.explainable
+    assert len(first.bad_sets()) == 1 and first.bad_sets()[0] in smallest.bad_sets()
