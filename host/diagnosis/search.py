@@ -94,8 +94,9 @@ def cardinality_search(
                 listed = _singles(ctx, obs, act, out, quota, conflicts[0], known)
                 if listed and not out.bad_sets:  # no single one: bound the size from here
                     # (up to 1 only: is there a diagnosis at all? one call, not the bound's)
+                    seed: list[frozenset[int]] = []
                     bound = (_any(ctx, obs) if limit < 2
-                             else _min_card(ctx, obs) if min_card_only
+                             else _min_card(ctx, obs, seed) if min_card_only
                              else _disjoint_cores(ctx, obs, conflicts, plain=True))
                     if bound is None:
                         out.cut_by = Bound.TIME_BUDGET
@@ -105,6 +106,11 @@ def cardinality_search(
                         return out
                     k = max(bound, 2)
                     left = True  # the bound's last call was satisfiable, nothing blocked yet
+                    if seed and k <= limit:  # RC2's optimum: a diagnosis of that level
+                        out.bad_sets.append(seed[0])
+                        quota.add(seed[0])
+                        ctx.solver.add_clause([-ctx.ab_vars[i] for i in seed[0]] + [-act])
+                        left = None
                     continue
             else:
                 listed = ctx.list_diagnoses(base + ctx.at_most(k), act, out, quota, k, expand)
@@ -130,11 +136,13 @@ def cardinality_search(
         ctx.end_run(act)
 
 
-def _min_card(ctx: SatContext, obs: list[int]) -> int | None:
+def _min_card(ctx: SatContext, obs: list[int], seed: list[frozenset[int]]) -> int | None:
     """The minimum cardinality by core-guided MaxSAT (RC2 on the theory and the
     observations; -1: no diagnosis; None: out of time): for a minimal-cardinality request
     whose level 1 is empty, the levels below the minimum are skipped without the totalizer
-    bound's proofs that they are empty (c880, minimum 5: 180 ms against RC2's 4 ms)."""
+    bound's proofs that they are empty (c880, minimum 5: 180 ms against RC2's 4 ms). RC2's
+    optimum, a diagnosis of minimum cardinality, is appended to ``seed`` (a request for one
+    then needs no other call)."""
     if ctx.out_of_time():
         return None
     with RC2(ctx.health_wcnf(), solver="g3") as rc2, ctx.interrupting(rc2):
@@ -144,6 +152,9 @@ def _min_card(ctx: SatContext, obs: list[int]) -> int | None:
         found = rc2.compute_()
         if not found:
             return None if rc2.interrupted else -1
+        model = rc2.oracle.get_model()  # read off the oracle: ``compute`` rebuilds it all
+        seed.append(frozenset(i for i, v in enumerate(ctx.ab_vars)
+                              if model[rc2.vmap.e2i[v] - 1] > 0))
         return max(int(rc2.cost), 2)
 
 
