@@ -124,6 +124,15 @@ def _child_env(tmp: Path) -> dict[str, str]:
     return env
 
 
+def _warm_model(theory: Theory, model: Path, env: dict[str, str]) -> Path:
+    """``theory`` written as a tug model file, the command's cache filled with it (every run
+    of the command on it is then warm)."""
+    write_tug(theory, model)
+    subprocess.run([sys.executable, "-c", "import sys; from host.diagnosis.files import "
+                    "load_encoded; load_encoded(sys.argv[1])", str(model)], check=True, env=env)
+    return model
+
+
 def bench_startup(args: argparse.Namespace, lines: list[str], env: dict[str, str]) -> None:
     """``dxboard diagnose --help``: the interpreter, the imports, argparse; no model."""
     runs = 5 if args.quick else 20
@@ -202,11 +211,7 @@ def bench_command(args: argparse.Namespace, lines: list[str]) -> None:
             theory = circuit_theory(circuit)
             encoding = encode(theory, structure=True)  # as the cache holds it
             known = theory.observable_atoms()
-            model = Path(tmp) / f"{name}.yaml"
-            write_tug(theory, model)
-            subprocess.run([sys.executable, "-c", "import sys; from host.diagnosis.files import "
-                            "load_encoded; load_encoded(sys.argv[1])", str(model)],
-                           check=True, env=env)  # the command's cache filled: every run warm
+            model = _warm_model(theory, Path(tmp) / f"{name}.yaml", env)
             labels = ["engine", "given", "fresh", *commands]
             wall: dict[str, list[float]] = {label: [] for label in labels}
             cpu: dict[str, list[float]] = {label: [] for label in labels}
@@ -275,3 +280,70 @@ def _row(name: str, wall: dict[str, list[float]], cpu: dict[str, list[float]], b
             f"{c['command'] / c['fresh']:.2f}x | {w['cold'] / w['engine']:.2f}x | "
             f"{c['cold'] / c['engine']:.2f}x | {mean_worst(overhead)} | "
             f"{min(loads):.1f}-{max(loads):.1f} | {cut} |")
+
+
+def bench_rc2_process(args: argparse.Namespace, lines: list[str]) -> None:
+    """Issue 30 item 3: ``dxboard diagnose`` as a process against PySAT's RC2 run as a
+    process (``python -m pysat.examples.rc2 FILE.wcnf``, first optimum) on the same CNF
+    (hard: the circuit's clauses and the observations; soft: each gate healthy), c2670 and
+    c7552: the command's first minimum (``--min-card-only --max-count 1``) and its whole
+    minimal-cardinality list (``--min-card-only``, up to 1,000); CPU of the whole process
+    (user + system), the best of ``--repeat`` runs, the command's cache warm."""
+    from benchmarks.iscas import _wcnf
+
+    rng = random.Random(args.seed + 2)
+    per = 3 if args.quick else 5
+    command = _commands(args)["command"]
+    lines.append("### The whole command against RC2 as a process, same CNF\n")
+    lines.append(f"{per} instances per circuit (seed {args.seed + 2}), the best of "
+                 f"{args.repeat} runs each, CPU time (user + system) of the whole process, "
+                 "summed; the command's cache warm. *first*: `dxboard diagnose MODEL --obs "
+                 "FILE --json --min-card-only --max-count 1`; *all*: the same without "
+                 "`--max-count 1` (every minimal-cardinality diagnosis, up to 1,000); RC2: "
+                 "`python -m pysat.examples.rc2 FILE.wcnf` (its first optimum). Load average "
+                 f"{os.getloadavg()[0]:.1f} at the start.\n")
+    lines.append("| circuit | RC2 process | command, first | command, all | first / RC2 | "
+                 "all / RC2 | load |")
+    lines.append("|---|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory(prefix="dxboard-bench-") as tmp:
+        env = _child_env(Path(tmp))
+        for name in ("c2670", "c7552"):
+            circuit = parse_bench(ISCAS / f"{name}.bench")
+            if args.circuits and name not in args.circuits:
+                continue
+            theory = circuit_theory(circuit)
+            known = theory.observable_atoms()
+            model = _warm_model(theory, Path(tmp) / f"{name}.yaml", env)
+            cpu: dict[str, float] = {"rc2": 0.0, "first": 0.0, "all": 0.0}
+            loads = [os.getloadavg()[0]]
+            for n, (_flips, obs) in enumerate(sample(circuit, rng, per)):
+                obs = [o for o in obs if o.atom in known]
+                obs_file = Path(tmp) / f"{name}-{n}.obs"
+                obs_file.write_text("".join(f"{o}\n" for o in obs))
+                wcnf_file = Path(tmp) / f"{name}-{n}.wcnf"
+                _wcnf(theory, obs)[0].to_file(str(wcnf_file))
+                base = [*command, "diagnose", str(model), "--obs", str(obs_file), "--json",
+                        "--min-card-only", "--time-budget", str(args.budget)]
+                runs = {"rc2": [sys.executable, "-m", "pysat.examples.rc2", str(wcnf_file)],
+                        "first": [*base, "--max-count", "1"], "all": base}
+                costs: dict[str, int] = {}
+                for label, cmd in runs.items():
+                    best = float("inf")
+                    for _ in range(args.repeat):
+                        _t, c, proc = _run_child(cmd, env)
+                        best = min(best, c)
+                        if label == "rc2":
+                            costs[label] = int(next(line.split()[1] for line in
+                                                    proc.stdout.splitlines()
+                                                    if line.startswith("o ")))
+                        else:
+                            data = json.loads(proc.stdout)
+                            costs[label] = data["diagnoses"][0]["cardinality"]
+                    cpu[label] += best
+                assert len(set(costs.values())) == 1, costs  # the same minimum everywhere
+                loads.append(os.getloadavg()[0])
+            lines.append(f"| {name} | {fmt(cpu['rc2'])} | {fmt(cpu['first'])} | "
+                         f"{fmt(cpu['all'])} | {cpu['first'] / cpu['rc2']:.2f}x | "
+                         f"{cpu['all'] / cpu['rc2']:.2f}x | {min(loads):.1f}-{max(loads):.1f} |")
+            print(lines[-1], flush=True)
+    lines.append("")

@@ -28,7 +28,7 @@ form; with every observer reporting, one observation at a time flips and flips b
 re-diagnosis (observe -> diagnose) is timed, p50/p99.
 
     .venv/bin/python benchmarks/diagnosis.py [--quick] [--seed N] [--per-circuit N]
-        [--only iscas|command|robots] [--all-circuits A,B] [--base DIR] [--write]
+        [--only iscas|peers|command|rc2|robots] [--all-circuits A,B] [--base DIR] [--write]
 
 ``--write`` replaces the "## Diagnosis" section of benchmarks/RESULTS.md.
 """
@@ -55,6 +55,7 @@ sys.path.insert(0, str(ROOT))
 from benchmarks.command_bench import (  # noqa: E402
     MAX_COUNT,
     bench_command,
+    bench_rc2_process,
     cpu_timed,
     fmt,
     mean_worst,
@@ -78,6 +79,7 @@ from host.diagnosis import (  # noqa: E402
     generate,
     load_system,
 )
+from host.diagnosis.encoding import encode  # noqa: E402
 from host.diagnosis.satctx import SatContext  # noqa: E402
 from host.diagnosis.structure import infer_structure  # noqa: E402
 
@@ -123,6 +125,14 @@ def hs_tree(ctx: SatContext, obs: list[int], max_card: int, min_card_only: bool,
 
 
 # -- running ------------------------------------------------------------------------------------
+def thread_timed(fn, *args, **kw):  # type: ignore[no-untyped-def]
+    """This thread's CPU time and the result (the budgets' timers run in threads of their
+    own; every search here is single-threaded)."""
+    c = time.thread_time()
+    r = fn(*args, **kw)
+    return time.thread_time() - c, r
+
+
 def worst(xs: list[float]) -> str:
     return mean_worst(xs).split(" / ")[-1]
 
@@ -215,11 +225,14 @@ PEERS = ("HS-tree", "HS-DAG", "RC2 enum", "LBX")
 def bench_c432(args: argparse.Namespace, lines: list[str]) -> None:
     """All subset-minimal diagnoses up to k on the ISCAS-85 circuits ``--all-circuits``, dxboard
     against live peers in this run: a plain HS-tree and an HS-DAG over the same SAT solver,
-    RC2 enumeration and LBX (PySAT). Each peer's answer, when complete, must equal ours."""
+    RC2 enumeration and LBX (PySAT). Each peer's answer, when complete, must equal ours.
+    Each HS peer gets a fresh solver of its own for each run (none runs on a solver another
+    warmed with the same queries); times are this thread's CPU time."""
     rng = random.Random(args.seed)
-    lines.append("All subset-minimal diagnoses up to cardinality k (mean per instance, same "
-                 f"seed; load average {os.getloadavg()[0]:.1f} at the start). Live peers run "
-                 "here in the same process; PyMBD's c432 figures are published, not run:\n")
+    lines.append("All subset-minimal diagnoses up to cardinality k (mean CPU time per "
+                 f"instance, same seed; load average {os.getloadavg()[0]:.1f} at the start). "
+                 "Live peers run here in the same process, each HS peer on a fresh solver of "
+                 "its own; PyMBD's c432 figures are published, not run:\n")
     lines.append("| circuit | k | dxboard | " + " | ".join(PEERS)
                  + " | fastest peer / dxboard | PyMBD best (published, not run) |")
     lines.append("|---|---|---|" + "---|" * len(PEERS) + "---|---|")
@@ -227,6 +240,7 @@ def bench_c432(args: argparse.Namespace, lines: list[str]) -> None:
         circuit = parse_bench(ISCAS / f"{name}.bench")
         theory = circuit_theory(circuit)
         known = theory.observable_atoms()
+        enc = encode(theory)
         ours: dict[int, list[float]] = {1: [], 2: [], 3: []}
         peers: dict[tuple[str, int], list[float]] = {(p, k): [] for p in PEERS for k in (1, 2, 3)}
         cut: set[tuple[str, int]] = set()
@@ -235,28 +249,30 @@ def bench_c432(args: argparse.Namespace, lines: list[str]) -> None:
                 obs = [o for o in obs if o.atom in known]
                 for o in obs:
                     d.observe(o)
-                ctx = SatContext(theory)
-                lits = [ctx.lit(o) for o in obs]
                 for k in (1, 2, 3):
-                    t, r = timed(d.diagnose, max_card=k, max_count=100000,
-                                 time_budget_s=args.budget)
+                    t, r = thread_timed(d.diagnose, max_card=k, max_count=100000,
+                                        time_budget_s=args.budget)
                     ours[k].append(t)
                     got = {frozenset(theory.components.index(x) for x in b)
                            for b in r.bad_sets()}
+                    tree, dag = SatContext(theory, encoding=enc), SatContext(theory, encoding=enc)
                     runs: list[tuple[str, Any, tuple[Any, ...]]] = [
-                        ("HS-tree", hs_tree, (ctx, lits, k, False, args.base_budget, False)),
-                        ("HS-DAG", hs_tree, (ctx, lits, k, False, args.base_budget)),
+                        ("HS-tree", hs_tree, (tree, [tree.lit(o) for o in obs], k, False,
+                                              args.base_budget, False)),
+                        ("HS-DAG", hs_tree, (dag, [dag.lit(o) for o in obs], k, False,
+                                             args.base_budget)),
                         ("RC2 enum", rc2_all, (theory, obs, k, args.base_budget)),
-                        ("LBX", lbx_all, (theory, obs, k, args.base_budget)),
+                        ("LBX", lbx_all, (theory, obs, k, args.lbx_budget)),
                     ]
                     for peer, run, run_args in runs:
-                        t, (diags, complete) = timed(run, *run_args)
+                        t, (diags, complete) = thread_timed(run, *run_args)
                         peers[peer, k].append(t)
                         if complete:  # cross-check
                             assert set(diags) == got, (name, k, peer)
                         else:
                             cut.add((peer, k))
-                ctx.close()
+                    tree.close()
+                    dag.close()
         for k in (1, 2, 3):
             o = statistics.fmean(ours[k])
             cells = [fmt(statistics.fmean(peers[p, k])) + (" (cut)" if (p, k) in cut else "")
@@ -383,6 +399,9 @@ def main() -> None:
     parser.add_argument("--ref-budget", type=float, default=30.0, help="RC2's budget, s")
     parser.add_argument("--base-budget", type=float, default=5.0,
                         help="each live peer's budget per instance, s")
+    parser.add_argument("--lbx-budget", type=float, default=1.0,
+                        help="LBX's budget per instance, s (it lists every minimal diagnosis, "
+                        "in no order of size: cut everywhere at 5 s too)")
     parser.add_argument("--all-circuits", default="c432,c499,c880", metavar="A,B",
                         help="ISCAS-85 circuits of the all-diagnoses comparison with live "
                              "peers (default: c432,c499,c880)")
@@ -392,7 +411,10 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=2, metavar="N",
                         help="the whole command: runs of each kind per instance, the best "
                         "counted (default: 2)")
-    parser.add_argument("--only", choices=["iscas", "command", "robots"], default=None)
+    parser.add_argument("--only", choices=["iscas", "peers", "command", "rc2", "robots"],
+                        default=None,
+                        help="one part (peers: the all-diagnoses comparison alone; rc2: the "
+                        "command against RC2 as a process)")
     parser.add_argument("--circuits", nargs="+", choices=CIRCUITS, metavar="NAME",
                         help="measure these circuits only (the sample is drawn as for all; "
                         "the whole command too)")
@@ -408,9 +430,12 @@ def main() -> None:
              "3 for `maxsat`/`top-level`), default algorithm `auto`.", ""]
     if args.only in (None, "iscas"):
         bench_iscas(args, lines)
+    if args.only in (None, "iscas", "peers"):
         bench_c432(args, lines)
     if args.only in (None, "command"):
         bench_command(args, lines)
+    if args.only in (None, "command", "rc2"):
+        bench_rc2_process(args, lines)
     if args.only in (None, "robots"):
         bench_robots(args, lines)
     section = "\n".join(lines)

@@ -23,6 +23,7 @@ from contextlib import contextmanager
 from typing import Any
 
 from pysat.card import ITotalizer  # type: ignore[import-untyped]
+from pysat.formula import WCNF  # type: ignore[import-untyped]
 from pysat.solvers import Solver  # type: ignore[import-untyped]
 
 from host.diagnosis.encoding import Encoding, encode
@@ -37,11 +38,17 @@ class _Watchdog:
     (starting a thread per call would cost more than a small diagnosis). Arming and disarming
     wake the thread only when it must wait less than it does: a wake-up hands the GIL over and
     back, which cost a small diagnosis (c432, k = 1) a third of its time. A thread asleep until
-    an old deadline wakes then, finds the new one (or none) and sleeps again."""
+    an old deadline wakes then, finds the new one (or none) and sleeps again. Idle, the thread
+    wakes every ``IDLE_POLL_S`` for ``IDLE_FOR_S`` after a run (then sleeps until notified): a
+    run armed meanwhile with a budget longer than that needs no wake-up (diagnoses in a row,
+    as a daemon's burst or a benchmark makes them, 0.1-0.2 ms each on c432)."""
 
-    def __init__(self, solver: Solver) -> None:
-        self._solver = solver
-        self._target: Any = solver  # what gets interrupted: the solver, or a MaxSAT run
+    IDLE_POLL_S = 0.25
+    IDLE_FOR_S = 5.0
+
+    def __init__(self, solver: Any) -> None:
+        self._solver = solver  # anything with ``interrupt()``: the context's solvers
+        self._target: Any = solver  # what gets interrupted: the solvers, or a MaxSAT run
         self._cv = threading.Condition()
         self._deadline: float | None = None
         self._closed = False
@@ -75,12 +82,21 @@ class _Watchdog:
             self._thread.join()
 
     def _run(self) -> None:
+        idle_since = time.perf_counter()
         with self._cv:
             while not self._closed:
                 if self._deadline is None:
-                    self._sleeps_until = math.inf
-                    self._cv.wait()
+                    now = time.perf_counter()
+                    idle_since = min(idle_since, now)
+                    if now - idle_since >= self.IDLE_FOR_S:
+                        self._sleeps_until = math.inf
+                        self._cv.wait()
+                        idle_since = time.perf_counter()
+                    else:
+                        self._sleeps_until = now + self.IDLE_POLL_S
+                        self._cv.wait(self.IDLE_POLL_S)
                     continue
+                idle_since = math.inf  # armed: the idle time starts when it is disarmed
                 remaining = self._deadline - time.perf_counter()
                 if remaining <= 0:
                     self._target.interrupt()
@@ -114,7 +130,10 @@ class SatContext:
         self.solver.append_formula(encoding.clauses)
         self._tot: ITotalizer | None = None
         self._deadline: float | None = None
-        self._watchdog = _Watchdog(self.solver)
+        self._wcnf: WCNF | None = None  # ``health_wcnf``
+        self._plain: Solver | None = None  # the theory's clauses only (``solve_plain``)
+        self._last: Solver = self.solver  # the solver of the last call (its core, its model)
+        self._watchdog = _Watchdog(self)
         self.calls = 0
         self.runs = 0  # since the solver was made
         self.renewed = 0
@@ -137,7 +156,8 @@ class SatContext:
             self._tot.delete()
             self._tot = None
         self._watchdog.close()
-        self._watchdog = _Watchdog(self.solver)
+        self._watchdog = _Watchdog(self)
+        self._last = self.solver
         old.delete()
         self.runs = 0
         self.renewed += 1
@@ -165,6 +185,17 @@ class SatContext:
             self._atom_of = {v: a for a, v in self.vars.items()}
         return self._atom_of.get(abs(lit))
 
+    def health_wcnf(self) -> WCNF:
+        """The theory as a MaxSAT formula (hard: its clauses; soft: each component healthy,
+        weight 1), built once; callers add the observations to their solver, not to it."""
+        if self._wcnf is None:
+            self._wcnf = WCNF()
+            for clause in self.encoding.clauses:
+                self._wcnf.append(clause)
+            for v in self.ab_vars:
+                self._wcnf.append([-v], weight=1)
+        return self._wcnf
+
     def structure(self) -> Structure | None:
         """The theory's circuit structure (``structure.infer_structure``), inferred once."""
         return self.encoding.structure()
@@ -186,6 +217,8 @@ class SatContext:
         if self._tot is None:
             self._tot = ITotalizer(lits=self.ab_vars, ubound=min(n, k + 2), top_id=self.top)
             self.solver.append_formula(self._tot.cnf.clauses)
+            if self._plain is None:  # the theory alone, for ``solve_plain``
+                self._plain = Solver(name=self._solver_name, bootstrap_with=self.encoding.clauses)
             self.top = max(self.top, self._tot.top_id)
         elif len(self._tot.rhs) <= k:
             self._tot.increase(ubound=min(n, 2 * k + 1), top_id=self.top)
@@ -206,6 +239,8 @@ class SatContext:
         if self._deadline is not None and self._interruptible:
             self._watchdog.disarm()
             self.solver.clear_interrupt()
+            if self._plain is not None:
+                self._plain.clear_interrupt()
         self._deadline = None
 
     @contextmanager
@@ -243,15 +278,34 @@ class SatContext:
     # -- calls -----------------------------------------------------------------------------
     def solve(self, assumptions: list[int]) -> bool | None:
         """SAT under ``assumptions``; None when the time budget ran out."""
+        return self._solve_on(self.solver, assumptions)
+
+    def solve_plain(self, assumptions: list[int]) -> bool | None:
+        """SAT of the theory alone (no run's clauses, no cardinality bound) under
+        ``assumptions``, which name no run's variable: on the solver itself until it holds a
+        totalizer, then on a second solver holding the theory's clauses only, made with the
+        totalizer (so that the run that needs a bound pays for it, not the next level 1's
+        few propagations). Every variable of the totalizer is a decision of every call
+        (c880, the checks of level 1 after a level-2 run: 0.66 ms a call against 0.02 ms)."""
+        return self._solve_on(self.solver if self._plain is None else self._plain, assumptions)
+
+    def _solve_on(self, solver: Solver, assumptions: list[int]) -> bool | None:
         self.calls += 1
+        self._last = solver
         if self._deadline is None or not self._interruptible:
             if self.out_of_time():
                 return None
-            return bool(self.solver.solve(assumptions=assumptions))
+            return bool(solver.solve(assumptions=assumptions))
         if self.out_of_time():
             return None
-        result = self.solver.solve_limited(assumptions=assumptions, expect_interrupt=True)
+        result = solver.solve_limited(assumptions=assumptions, expect_interrupt=True)
         return None if result is None else bool(result)
+
+    def interrupt(self) -> None:
+        """Stop the running call (the budget's watchdog calls it from its thread)."""
+        self.solver.interrupt()
+        if self._plain is not None:
+            self._plain.interrupt()
 
     def more_than(self, assumptions: list[int], found: list[frozenset[int]]) -> bool | None:
         """Is there a diagnosis under ``assumptions`` other than ``found`` (and their
@@ -298,18 +352,20 @@ class SatContext:
 
     def model_bad(self) -> frozenset[int]:
         """Indexes (into ``theory.components``) of the components abnormal in the model."""
-        model = self.solver.get_model()
+        model = self._last.get_model()
         assert model is not None
         # the health variables are 1..n, allocated first (see __init__)
         return frozenset(i for i, x in enumerate(model[: len(self.ab_vars)]) if x > 0)
 
     def core(self) -> list[int]:
-        core = self.solver.get_core()
+        core = self._last.get_core()
         return [] if core is None else list(core)
 
     def close(self) -> None:
         self.stop_budget()
         self._watchdog.close()
         self.solver.delete()
+        if self._plain is not None:
+            self._plain.delete()
         if self._tot is not None:
             self._tot.delete()

@@ -7,7 +7,9 @@ algorithm takes a ``SatContext``, the observation assumptions, the bounds and a 
 bad sets as component indexes, the bound that cut the list, and whether any diagnosis exists
 at all). All find diagnoses by non-decreasing size; the diagnoser ranks them by probability.
 
-- ``cardinality``: for k = 0, 1, ... ask the solver for a model with at most k
+- ``cardinality``: level 1 as a hitting-set step on the first conflict (``_singles``), then
+  for k = 2, ... (from a lower bound: disjoint conflicts, or, for a minimal-cardinality
+  request, RC2's minimum) ask the solver for a model with at most k
   abnormal components (totalizer bound as an assumption) that is no superset of a diagnosis
   found before (blocking clauses under the run's activation literal). Every model found at
   level k is a subset-minimal diagnosis of size k, for general clauses too (no monotonicity
@@ -72,8 +74,14 @@ def cardinality_search(
     out = SearchOutcome([])
     try:
         limit = n if max_card is None else min(max_card, n)
-        conflicts: list[set[int]] = []
-        k = _disjoint_cores(ctx, base, conflicts)
+        conflicts: list[set[int]] = []  # pairwise disjoint (the lower bound's)
+        known: list[set[int]] = []  # every conflict found (``_left`` reads them)
+        left: bool | None = None  # a diagnosis no superset of one found is known to exist
+        # level 1 as a hitting-set step on the first conflict; the lower bound (more disjoint
+        # conflicts) only when it found no single diagnosis: a small first conflict answers
+        # k = 1 in a few propagations where the bound costs calls of its own
+        quick = expand is None and limit >= 1
+        k = _disjoint_cores(ctx, obs if quick else base, conflicts, quick, plain=quick)
         if k is None:
             out.cut_by = Bound.TIME_BUDGET
             return out
@@ -81,8 +89,29 @@ def cardinality_search(
             out.explainable = False
             return out
         while k <= limit:
-            if k == 1 and expand is None and len(conflicts) == 1:
-                listed = _singles(ctx, base, act, out, quota, conflicts[0])
+            if k == 1 and quick:
+                known += conflicts
+                listed = _singles(ctx, obs, act, out, quota, conflicts[0], known)
+                if listed and not out.bad_sets:  # no single one: bound the size from here
+                    # (up to 1 only: is there a diagnosis at all? one call, not the bound's)
+                    seed: list[frozenset[int]] = []
+                    bound = (_any(ctx, obs) if limit < 2
+                             else _min_card(ctx, obs, seed) if min_card_only
+                             else _disjoint_cores(ctx, obs, conflicts, plain=True))
+                    if bound is None:
+                        out.cut_by = Bound.TIME_BUDGET
+                        return out
+                    if bound < 0:
+                        out.explainable = False
+                        return out
+                    k = max(bound, 2)
+                    left = True  # the bound's last call was satisfiable, nothing blocked yet
+                    if seed and k <= limit:  # RC2's optimum: a diagnosis of that level
+                        out.bad_sets.append(seed[0])
+                        quota.add(seed[0])
+                        ctx.solver.add_clause([-ctx.ab_vars[i] for i in seed[0]] + [-act])
+                        left = None
+                    continue
             else:
                 listed = ctx.list_diagnoses(base + ctx.at_most(k), act, out, quota, k, expand)
             if not listed:
@@ -90,15 +119,16 @@ def cardinality_search(
             k += 1
             if min_card_only and out.bad_sets:
                 return out
+            left = None
             if k <= limit:  # anything left at all? (saves the levels above the last one)
-                r = ctx.solve(base)
+                r = _left(ctx, obs, base, out, quick, known)
                 if r is None:
                     out.cut_by = Bound.TIME_BUDGET
                     return out
                 if not r:
                     return out
         if limit < n:
-            r = ctx.solve(base)
+            r = left if left is not None else _left(ctx, obs, base, out, quick, known)
             if r is None or r:
                 out.cut_by = Bound.TIME_BUDGET if r is None else Bound.MAX_CARD
         return out
@@ -106,19 +136,68 @@ def cardinality_search(
         ctx.end_run(act)
 
 
-def _singles(ctx: SatContext, base: list[int], act: int, out: SearchOutcome, quota: Quota,
-             conflict: set[int]) -> bool:
-    """Level 1 as a hitting-set search does it: a one-component diagnosis lies in every
-    conflict, so only the first conflict's components are candidates, each checked with every
-    other component assumed healthy (unit propagation mostly; the totalizer bound's search is
-    far slower at this level: c880 5x). Found ones are blocked for the run as
-    ``list_diagnoses`` blocks them; False when a bound (count, time) cut the listing."""
+def _min_card(ctx: SatContext, obs: list[int], seed: list[frozenset[int]]) -> int | None:
+    """The minimum cardinality by core-guided MaxSAT (RC2 on the theory and the
+    observations; -1: no diagnosis; None: out of time): for a minimal-cardinality request
+    whose level 1 is empty, the levels below the minimum are skipped without the totalizer
+    bound's proofs that they are empty (c880, minimum 5: 180 ms against RC2's 4 ms). RC2's
+    optimum, a diagnosis of minimum cardinality, is appended to ``seed`` (a request for one
+    then needs no other call)."""
+    if ctx.out_of_time():
+        return None
+    with RC2(ctx.health_wcnf(), solver="g3") as rc2, ctx.interrupting(rc2):
+        for lit in obs:  # hard: the formula, kept by the context, is not copied per request
+            rc2.add_clause([lit])
+        ctx.calls += 1
+        found = rc2.compute_()
+        if not found:
+            return None if rc2.interrupted else -1
+        model = rc2.oracle.get_model()  # read off the oracle: ``compute`` rebuilds it all
+        seed.append(frozenset(i for i, v in enumerate(ctx.ab_vars)
+                              if model[rc2.vmap.e2i[v] - 1] > 0))
+        return max(int(rc2.cost), 2)
+
+
+def _any(ctx: SatContext, obs: list[int]) -> int | None:
+    """2 when some diagnosis exists (of 2 or more components, level 1 having found none),
+    -1 when none does, None when out of time: ``_disjoint_cores``' answers, in one call."""
+    r = ctx.solve_plain(obs)
+    return None if r is None else 2 if r else -1
+
+
+def _left(ctx: SatContext, obs: list[int], base: list[int], out: SearchOutcome,
+          plain: bool, known: list[set[int]]) -> bool | None:
+    """Is there a diagnosis that is no superset of one found (None: out of time)? While
+    every one found is of one component (level 1), no when a conflict found lies within them
+    (every diagnosis holds one of its components), else they are healthy assumptions on the
+    theory alone (``solve_plain``) instead of blocking clauses on the run's solver."""
+    if plain and all(len(b) == 1 for b in out.bad_sets):
+        singles = {i for b in out.bad_sets for i in b}
+        if any(c <= singles for c in known):
+            return False
+        return ctx.solve_plain(obs + [-ctx.ab_vars[i] for i in singles])
+    return ctx.solve(base)
+
+
+def _singles(ctx: SatContext, obs: list[int], act: int, out: SearchOutcome, quota: Quota,
+             conflict: set[int], known: list[set[int]]) -> bool:
+    """Level 1 as an HS-DAG does it: a one-component diagnosis lies in every conflict, so
+    only the first conflict's components are candidates, each checked with every other
+    component assumed healthy (unit propagation mostly; the totalizer bound's search is far
+    slower at this level: c880 5x); a check that fails gives a conflict (its core) without
+    the candidate, and a candidate outside a conflict found so is no diagnosis without a
+    call (Reiter's label reuse). Found ones are blocked for the run as ``list_diagnoses``
+    blocks them; the conflicts found are appended to ``known``. False when a bound (count,
+    time) cut the listing. The checks run on the theory alone (``solve_plain``: the blocking
+    clauses are satisfied by the assumptions)."""
     healthy = [-v for v in ctx.ab_vars]
     for i in sorted(conflict):
         if quota.reached(1):
             out.cut_by = Bound.MAX_COUNT
             return False
-        r = ctx.solve(base + healthy[:i] + healthy[i + 1 :])
+        if any(i not in c for c in known):
+            continue
+        r = ctx.solve_plain(obs + healthy[:i] + healthy[i + 1 :])
         if r is None:
             out.cut_by = Bound.TIME_BUDGET
             return False
@@ -127,31 +206,44 @@ def _singles(ctx: SatContext, base: list[int], act: int, out: SearchOutcome, quo
             out.bad_sets.append(bad)
             quota.add(bad)
             ctx.solver.add_clause([-ctx.ab_vars[i], -act])
+        else:
+            known.append(_conflict(ctx))
     return True
 
 
-def _disjoint_cores(ctx: SatContext, base: list[int],
-                    conflicts: list[set[int]] | None = None) -> int | None:
+def _conflict(ctx: SatContext) -> set[int]:
+    """The components of the last unsatisfiable call's core (the health assumptions in it;
+    the health variables are 1..n, ``SatContext``)."""
+    n = len(ctx.ab_vars)
+    return {-lit - 1 for lit in ctx.core() if 0 < -lit <= n}
+
+
+def _disjoint_cores(ctx: SatContext, base: list[int], conflicts: list[set[int]],
+                    first_only: bool = False, plain: bool = False) -> int | None:
     """A lower bound on the size of any diagnosis: the number of pairwise disjoint conflicts
     (each diagnosis holds a component of each), found from unsatisfiable cores with the
-    conflicts' components left free; they are appended to ``conflicts``. None when the time
-    budget ran out, -1 when the observations contradict the model whatever is broken (an
-    empty conflict: no diagnosis exists)."""
-    free: set[int] = set()
-    bound = 0
+    conflicts' components left free, going on from those in ``conflicts`` (pairwise disjoint;
+    the new ones are appended). ``first_only``: stop after one new conflict; ``plain``: on
+    the theory alone (``solve_plain``; ``base`` names no run's variable). None when the
+    time budget ran out, -1 when the observations contradict the model whatever is broken
+    (an empty conflict: no diagnosis exists)."""
+    free: set[int] = set().union(*conflicts)
+    bound = len(conflicts)
     while True:
-        r = ctx.solve(base + [-v for i, v in enumerate(ctx.ab_vars) if i not in free])
+        assumptions = base + [-v for i, v in enumerate(ctx.ab_vars) if i not in free]
+        r = ctx.solve_plain(assumptions) if plain else ctx.solve(assumptions)
         if r is None:
             return None
         if r:
             return bound
-        conflict = {ctx.index_of_ab[-lit] for lit in ctx.core() if -lit in ctx.index_of_ab}
+        conflict = _conflict(ctx)
         if not conflict:
             return -1
         free |= conflict
         bound += 1
-        if conflicts is not None:
-            conflicts.append(conflict)
+        conflicts.append(conflict)
+        if first_only:
+            return bound
 
 
 def maxsat_search(
