@@ -51,6 +51,7 @@ lint: $(STAMP)
 	$(BIN)/ruff check protocol firmware emulator host tests benchmarks scripts hardware ros
 	$(BIN)/mypy
 	$(BIN)/python scripts/layers.py
+	$(BIN)/python scripts/names.py --check
 
 pytest: $(STAMP) browser prometheus
 	$(BIN)/pytest -n $(PYTEST_WORKERS) --dist loadfile

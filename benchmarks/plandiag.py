@@ -55,7 +55,7 @@ from host.plandiag.interpret import (  # noqa: E402
     identify_symptoms,
     sensor_interpreter,
 )
-from host.plandiag.limits import Limits, Outcome  # noqa: E402
+from host.plandiag.limits import ExplainOutcome, Limits  # noqa: E402
 from host.plandiag.model import PlanModel  # noqa: E402
 from host.plandiag.region import Region, fault_region  # noqa: E402
 from tests.plandiag.synth import (  # noqa: E402
@@ -100,7 +100,7 @@ def find_case(modes: int, events: int, steps: int) -> Case:
 
 
 def timed(engine: str, ctx: Context, universe: frozenset[int] | None,
-          limits: Limits) -> tuple[Outcome, float]:
+          limits: Limits) -> tuple[ExplainOutcome, float]:
     start = time.perf_counter()
     out = ENGINES[engine](ctx.problem, universe, limits)
     return out, time.perf_counter() - start

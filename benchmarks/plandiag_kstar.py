@@ -23,7 +23,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from host.plandiag.problem import Problem, bits, effective_delete
+from host.plandiag.problem import HistoryProblem, bits, effective_delete
 from host.planning.task import GroundOp
 
 
@@ -43,7 +43,7 @@ def _action(name: str, here: str, there: str, pre: list[str], op: GroundOp | Non
             f"    :effect (and {' '.join(eff)}))\n")
 
 
-def encode(problem: Problem) -> tuple[str, str]:
+def encode(problem: HistoryProblem) -> tuple[str, str]:
     """The domain and problem text of ``problem`` as a planning task."""
     p = problem
     stages: list[str] = []
@@ -110,7 +110,7 @@ _SYMMETRIES = ("sym=structural_symmetries(time_bound=0,search_symmetries=oss,"
                "stabilize_initial_state=false,keep_operator_symmetries=true)")
 
 
-def minimum_diagnoses(problem: Problem, timeout_s: int) -> PlannerRun:
+def minimum_diagnoses(problem: HistoryProblem, timeout_s: int) -> PlannerRun:
     """Every least-cost alternative history by K*'s top-quality search (q=1, the search of
     ``kstar_planner.planners.plan_topq``), wall time of encoding, writing and the planner's
     subprocess. The translator's invariant synthesis is switched off: on these tasks of

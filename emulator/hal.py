@@ -15,7 +15,7 @@ from typing import Any, Protocol
 from emulator.electronics import Electronics
 
 
-class Board(Protocol):
+class HalBoard(Protocol):
     """What a boot's HAL needs of the emulated board (``emulator.sim.Emulator`` is one)."""
 
     now: int
@@ -27,7 +27,7 @@ class Board(Protocol):
 
 
 class SimHal:
-    def __init__(self, emu: Board, cause: int) -> None:
+    def __init__(self, emu: HalBoard, cause: int) -> None:
         self.emu = emu
         self.elec = emu.electronics
         self.n_channels = len(self.elec.loads)

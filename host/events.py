@@ -81,6 +81,8 @@ class ActionState(StrEnum):
     TIMEOUT = "timeout"
 
 
+# a change of the diagnoser's Observation (host/diagnosis/observations.py) on the event
+# stream (scripts/names.py)
 @dataclass(frozen=True)
 class Observation:
     """One observed literal changed: ``value`` True/False, None when unknown or expired."""
@@ -192,6 +194,7 @@ class ActionRecord:
                    str(data.get("plan_id", "")), str(data.get("detail", "")))
 
 
+# the board client's BoardEvent (host/board/types.py) on the event stream (scripts/names.py)
 @dataclass(frozen=True)
 class BoardEvent:
     """Something the board (or the link to it) did: ``event`` names it, e.g. ``trip``."""

@@ -6,8 +6,8 @@ and nested classes alike), with the places, most-defined first, then the count. 
 asks for one class name per concept and, where two layers need different values, names that say
 the layer (``BoardObservation``, ``MissionObservation``); the issue allows at most ``LIMIT``
 names defined twice, each with a comment on why. The script reports and does not fail by
-default (the names are being untangled); ``--check`` exits 1 when more than ``LIMIT`` names are
-defined twice, so that it can join ``make lint`` once they are. ``--root DIR`` reads another
+default; ``--check`` (run by ``make lint``) exits 1 when more than ``LIMIT`` names are defined
+twice. ``--root DIR`` reads another
 tree; a file that does not parse is one line and exit code 2.
 """
 

@@ -48,6 +48,7 @@ class TaskQueue:
             self.tasks.remove(task)
 
 
+# named as asyncio's Task, which it stands in for on the simulated clock (scripts/names.py)
 class Task:
     def __init__(self, coro: object, globals: object = None) -> None:
         self.coro = coro

@@ -22,7 +22,7 @@ or hung ignores commands silently (it is not listening). Power, boot and hang ar
 here (``emulator.robot.server`` reads them from the electronics); these classes only turn the
 clock and the commands into frames.
 
-All devices share one ``World``: the robot body's pose and velocity. The base drives it (its
+All devices share one ``RobotWorld``: the robot body's pose and velocity. The base drives it (its
 velocity follows the last command with a 0.2 s lag, and stops without a command for 0.5 s or
 while the base is not working); the base's odometry and the IMU both measure its yaw rate,
 each with its own noise, so their trends match (``related: [odom_yaw_rate, imu_yaw_rate]``).
@@ -62,7 +62,7 @@ def _clamp(x: float, limit: float) -> float:
     return max(-limit, min(limit, x))
 
 
-class World:
+class RobotWorld:
     """The robot body: pose and velocity, integrated on the emulator's clock."""
 
     def __init__(self) -> None:
@@ -93,10 +93,10 @@ class World:
             self.t_ms += step
 
 
-class Device:
+class SimDevice:
     """One device's frames and commands; ``rng`` gives its measurement noise."""
 
-    def __init__(self, spec: DeviceSpec, world: World, rng: random.Random) -> None:
+    def __init__(self, spec: DeviceSpec, world: RobotWorld, rng: random.Random) -> None:
         self.spec = spec
         self.world = world
         self.rng = rng
@@ -123,7 +123,7 @@ class Device:
         raise ValueError(f"a {self.spec.kind} accepts no commands")
 
 
-class Base(Device):
+class Base(SimDevice):
     def working(self, ok: bool, now_ms: int) -> None:
         self.world.advance(now_ms)
         self.world.drive_ok = ok
@@ -154,8 +154,8 @@ def _room_profile() -> list[int]:
     return out
 
 
-class Lidar(Device):
-    def __init__(self, spec: DeviceSpec, world: World, rng: random.Random) -> None:
+class Lidar(SimDevice):
+    def __init__(self, spec: DeviceSpec, world: RobotWorld, rng: random.Random) -> None:
         super().__init__(spec, world, rng)
         self.profile = _room_profile()
         self.noise = [round(rng.gauss(0, 10)) for _ in range(997)]  # prime: no visible pattern
@@ -172,8 +172,8 @@ class Lidar(Device):
                 "range_max_mm": LIDAR_RANGE_MAX_MM, "ranges_mm": ranges}
 
 
-class Servo(Device):
-    def __init__(self, spec: DeviceSpec, world: World, rng: random.Random) -> None:
+class Servo(SimDevice):
+    def __init__(self, spec: DeviceSpec, world: RobotWorld, rng: random.Random) -> None:
         super().__init__(spec, world, rng)
         self.angles = [0.0, 0.0]
         self.target = [0.0, 0.0]
@@ -206,7 +206,7 @@ class Servo(Device):
         self.cmd_ms = now_ms
 
 
-class Imu(Device):
+class Imu(SimDevice):
     def data(self, now_ms: int) -> dict[str, Any]:
         w, t = self.world, now_ms / 1000.0
         # rubble: the body rolls and pitches a little, more when it moves
@@ -222,7 +222,7 @@ class Imu(Device):
                         round(g * math.cos(roll) * math.cos(pitch), 3)]}
 
 
-class Joystick(Device):
+class Joystick(SimDevice):
     """An operator driving a slow slalom: forward and back, turning left and right."""
 
     def data(self, now_ms: int) -> dict[str, Any]:
@@ -232,7 +232,7 @@ class Joystick(Device):
         return {"axes": [round(turn, 3), round(forward, 3)], "buttons": [0, 0]}
 
 
-class Camera(Device):
+class Camera(SimDevice):
     """A thermal camera (FLIR PathFindIR class, 160x120): the image's temperature range; what
     it shows of the arena is the world's business (``emulator.robot.world``)."""
 
@@ -242,11 +242,11 @@ class Camera(Device):
                 "max_c": round(24.0 + self.rng.gauss(0, 0.3), 2)}
 
 
-CLASSES: dict[str, type[Device]] = {
+CLASSES: dict[str, type[SimDevice]] = {
     "base": Base, "lidar": Lidar, "servo": Servo, "imu": Imu, "joystick": Joystick,
     "camera": Camera,
 }
 
 
-def make(spec: DeviceSpec, world: World, rng: random.Random) -> Device:
+def make(spec: DeviceSpec, world: RobotWorld, rng: random.Random) -> SimDevice:
     return CLASSES[spec.kind](spec, world, rng)

@@ -76,7 +76,7 @@ def _exclusive(sock: Any, on: bool) -> None:
 
 
 class DeviceServer:
-    def __init__(self, device: D.Device, emu: Emulator, host: str) -> None:
+    def __init__(self, device: D.SimDevice, emu: Emulator, host: str) -> None:
         self.device = device
         self.emu = emu
         self.host = host
@@ -213,7 +213,7 @@ class Robot:
     def __init__(self, emu: Emulator, specs: list[DeviceSpec], host: str = "127.0.0.1",
                  arena: Arena | None = None) -> None:
         self.emu = emu
-        self.world = D.World()
+        self.world = D.RobotWorld()
         seed = emu.model.board.seed
         self.servers = [DeviceServer(D.make(s, self.world, random.Random(f"{seed}:{s.name}")),
                                      emu, host) for s in specs]

@@ -168,6 +168,8 @@ class Reading:
                 "currents_ma": list(self.currents_ma), "missed": self.missed}
 
 
+# what the board said, as the board client hands it up; host/events.py's BoardEvent is the
+# same thing on the daemon's event stream, which this layer may not import (scripts/names.py)
 @dataclass(frozen=True)
 class BoardEvent:
     host_time: float

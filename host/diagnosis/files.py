@@ -121,7 +121,7 @@ def read_text(file: Path, what: str) -> str:
 
 
 @dataclass(frozen=True)
-class _Line:
+class _FileLine:
     number: int
     atom: str
     value: bool | None  # None: unknown
@@ -142,7 +142,7 @@ def read_observations(path: str | Path, theory: Theory, time: float = 0.0) -> li
             hint = f"the model knows e.g. {', '.join(close)}" if close else "check the name"
             raise UserError(f"{file}:{x.number}: {x.atom} is mentioned by no clause of the model",
                             hint)
-    state: dict[str, _Line] = {}
+    state: dict[str, _FileLine] = {}
     for x in sorted(lines, key=lambda x: x.time):  # stable: file order within a time
         old = state.get(x.atom)
         if old is not None and old.time == x.time and old.value != x.value:
@@ -158,7 +158,7 @@ def read_observations(path: str | Path, theory: Theory, time: float = 0.0) -> li
 
 
 def _parse_line(file: Path, number: int, raw: str, theory: Theory,
-                default_time: float) -> _Line | None:
+                default_time: float) -> _FileLine | None:
     line = raw.split("#", 1)[0].strip()
     if not line:
         return None
@@ -179,8 +179,8 @@ def _parse_line(file: Path, number: int, raw: str, theory: Theory,
             lit = theory.parse(u.group("atom"))
             if not lit.positive:
                 raise ValueError(f"{line!r}: unknown takes an atom, not a negated literal")
-            return _Line(number, lit.atom, None, at)
+            return _FileLine(number, lit.atom, None, at)
         lit = theory.parse(line)
     except ValueError as exc:
         raise UserError(f"{file}:{number}: {exc}", fix) from exc
-    return _Line(number, lit.atom, lit.positive, at)
+    return _FileLine(number, lit.atom, lit.positive, at)

@@ -24,7 +24,7 @@ from itertools import combinations
 
 import host.atoms as A
 from host.diagnosis.logic import Clause, Literal, Theory, horn, nab
-from host.diagnosis.model import Kind, SystemModel
+from host.diagnosis.model import ComponentKind, SystemModel
 
 ORIGINS = {
     1: "1 switchable hardware must be powered",
@@ -47,22 +47,22 @@ def _pos(atom: A.Atom | str) -> Literal:
 def generate(model: SystemModel) -> Theory:
     """The system description of ``model`` (components in the file's order)."""
     out: list[Clause] = []
-    for h in model.by_kind(Kind.SH):
+    for h in model.by_kind(ComponentKind.SH):
         out.append(horn([nab(h.name)], [_pos(A.on(h.name))], ORIGINS[1]))
-    for rule, kind in ((2, Kind.SN), (3, Kind.HN), (4, Kind.N)):
+    for rule, kind in ((2, ComponentKind.SN), (3, ComponentKind.HN), (4, ComponentKind.N)):
         for n in model.by_kind(kind):
-            hw = [] if kind is Kind.N else [nab(h) for h in n.hardware]
+            hw = [] if kind is ComponentKind.N else [nab(h) for h in n.hardware]
             for topic, inputs in n.publishes.items():
                 body = [nab(n.name), *hw, *(_pos(A.ok(i)) for i in inputs)]
                 out.append(horn(body, [_pos(A.ok(topic))], ORIGINS[rule]))
-    for n in model.by_kind(Kind.N, Kind.HN, Kind.SN):
+    for n in model.by_kind(ComponentKind.N, ComponentKind.HN, ComponentKind.SN):
         out.append(horn([nab(n.name)], [_pos(A.running(n.name))], ORIGINS[5]))
     out.extend(_related(model))
-    for h in model.by_kind(Kind.SH):
+    for h in model.by_kind(ComponentKind.SH):
         if h.current is not None:
             body = [nab(h.name), _pos(A.on(h.name))]
             out.append(horn(body, [_pos(A.in_band(h.name))], ORIGINS[7]))
-    for h in model.by_kind(Kind.SH):
+    for h in model.by_kind(ComponentKind.SH):
         out.append(horn([nab(h.name), _pos(A.tripped(h.name))], [], ORIGINS[8]))
     values = dict.fromkeys(v for vs in model.values.values() for v in vs)
     for v in values:

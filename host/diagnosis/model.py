@@ -37,7 +37,7 @@ diagnosis names the link rather than the devices behind it.
 
 ``load_system(dir)`` returns the model or raises ``ModelError`` (a ``UserError``) listing every
 problem with file, line, offending value and fix; ``check_system(dir)`` returns the problems.
-The API (``SystemModel``, ``Component``, ``Kind``) is stable: the repair planner reads it.
+The API (``SystemModel``, ``Component``, ``ComponentKind``) is stable: the repair planner reads it.
 """
 
 from __future__ import annotations
@@ -55,7 +55,7 @@ SYSTEM_FILE = "system.yaml"
 DEFAULT_CHANNELS = 10
 
 
-class Kind(StrEnum):
+class ComponentKind(StrEnum):
     N = "N"  # ordinary software node
     HN = "HN"  # driver node of non-switchable hardware
     SN = "SN"  # driver node of switchable hardware
@@ -64,7 +64,7 @@ class Kind(StrEnum):
 
     @property
     def is_node(self) -> bool:
-        return self in (Kind.N, Kind.HN, Kind.SN)
+        return self in (ComponentKind.N, ComponentKind.HN, ComponentKind.SN)
 
 
 @dataclass(frozen=True)
@@ -73,7 +73,7 @@ class Component:
     it depends on; ``channel`` and ``current`` (amperes, low..high) are set for ``SH`` only."""
 
     name: str
-    kind: Kind
+    kind: ComponentKind
     line: int = 0
     channel: int | None = None
     current: tuple[float, float] | None = None
@@ -101,7 +101,7 @@ class SystemModel:
     protected: frozenset[int] = frozenset()
     board: str | None = None  # the board's component, when the model has a board section
 
-    def by_kind(self, *kinds: Kind) -> list[Component]:
+    def by_kind(self, *kinds: ComponentKind) -> list[Component]:
         return [c for c in self.components.values() if c.kind in kinds]
 
     def topics(self) -> list[str]:
@@ -154,11 +154,11 @@ _TOP_KEYS = {
 }
 _COMMON_KEYS = {"kind", "prior", "description"}
 _KIND_KEYS = {
-    Kind.N: {"publishes", "subscribes"},
-    Kind.HN: {"publishes", "subscribes", "hardware"},
-    Kind.SN: {"publishes", "subscribes", "hardware"},
-    Kind.SH: {"channel", "current"},
-    Kind.H: set(),
+    ComponentKind.N: {"publishes", "subscribes"},
+    ComponentKind.HN: {"publishes", "subscribes", "hardware"},
+    ComponentKind.SN: {"publishes", "subscribes", "hardware"},
+    ComponentKind.SH: {"channel", "current"},
+    ComponentKind.H: set(),
 }
 
 
@@ -169,7 +169,7 @@ def system_file(path: str | Path) -> Path:
 
 def read_section(
     path: str | Path, section: str, error: type[ModelError] = ModelError
-) -> tuple[Path, Any, yamlpos.Lines]:
+) -> tuple[Path, Any, yamlpos.SourceLines]:
     """``system.yaml`` of ``path`` (a robot directory or the file) as ``(file, the section's
     data or None, line lookup)``, for the loaders of its other sections (``observers:``,
     ``processes:``); an unreadable file or bad YAML raises ``error`` naming file and line."""
@@ -222,7 +222,7 @@ def _load(file: Path) -> tuple[SystemModel | None, list[Problem]]:
     return _Builder(file, lines).build(data)
 
 
-def build_system(data: Any, lines: yamlpos.Lines, file: Path) -> SystemModel:
+def build_system(data: Any, lines: yamlpos.SourceLines, file: Path) -> SystemModel:
     """The model of already parsed ``system.yaml`` data (see ``yamlpos.load``); raises
     ``ModelError``."""
     model, problems = _Builder(file, lines).build(data)
@@ -232,7 +232,7 @@ def build_system(data: Any, lines: yamlpos.Lines, file: Path) -> SystemModel:
 
 
 class _Builder:
-    def __init__(self, file: Path, lines: yamlpos.Lines) -> None:
+    def __init__(self, file: Path, lines: yamlpos.SourceLines) -> None:
         self.file = file
         self.lines = lines
         self.problems: list[Problem] = []
@@ -258,7 +258,7 @@ class _Builder:
                 self.err(("components", board), f"component {board!r} clashes with the board",
                          f"rename it, or name the board: board: {{name: {board}_board}}")
             else:
-                comps[board] = Component(board, Kind.H, self.lines("board"),
+                comps[board] = Component(board, ComponentKind.H, self.lines("board"),
                                          description="the power board and its link to the host")
         self._check_references(comps, channels, protected)
         values = self._values(data.get("values"), comps)
@@ -302,13 +302,13 @@ class _Builder:
         path = ("components", name)
         if not isinstance(spec, dict):
             self.err(path, f"component {name!r} is not a mapping", "write {kind: N, ...}")
-            return Component(name, Kind.N, self.lines(*path))
+            return Component(name, ComponentKind.N, self.lines(*path))
         try:
-            kind = Kind(str(spec.get("kind")))
+            kind = ComponentKind(str(spec.get("kind")))
         except ValueError:
             self.err((*path, "kind"), f"component {name!r} has kind {spec.get('kind')!r}",
                      "set kind to one of N, HN, SN, SH, H")
-            kind = Kind.N
+            kind = ComponentKind.N
         allowed = _COMMON_KEYS | _KIND_KEYS[kind]
         for key in spec:
             if key not in allowed:
@@ -363,8 +363,9 @@ class _Builder:
             out[str(topic)] = tuple(ins)
         return out
 
-    def _channel(self, path: tuple[object, ...], spec: dict[str, Any], kind: Kind) -> int | None:
-        if kind is not Kind.SH:
+    def _channel(self, path: tuple[object, ...], spec: dict[str, Any],
+                 kind: ComponentKind) -> int | None:
+        if kind is not ComponentKind.SH:
             return None
         ch = spec.get("channel")
         if not isinstance(ch, int) or isinstance(ch, bool):
@@ -404,12 +405,13 @@ class _Builder:
                              "give each switchable device its own channel")
                 else:
                     used[c.channel] = c.name
-            if c.kind is Kind.SN and not c.hardware:
+            if c.kind is ComponentKind.SN and not c.hardware:
                 self.err(path, f"driver node {c.name!r} (SN) has no hardware",
                          "list its switchable device under hardware:, or make it kind N")
             for h in c.hardware:
                 target = comps.get(h)
-                want = (Kind.SH,) if c.kind is Kind.SN else (Kind.H, Kind.SH)
+                want = ((ComponentKind.SH,) if c.kind is ComponentKind.SN
+                        else (ComponentKind.H, ComponentKind.SH))
                 if target is None:
                     self.err((*path, "hardware"), f"{c.name!r} needs unknown component {h!r}",
                              f"declare {h!r} under components or fix the name")

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 from host.diagnosis.logic import Literal, parse_literal
 
 
+# a literal in the diagnoser's observation set; host/events.py's Observation is the change of
+# one on the daemon's event stream, a layer above (scripts/names.py)
 @dataclass(frozen=True)
 class Observation:
     literal: Literal

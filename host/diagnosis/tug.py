@@ -79,7 +79,8 @@ def _entries(value: Any) -> list[tuple[object, Any]] | None:
     return None
 
 
-def parse_tug(data: Any, lines: yamlpos.Lines, file: Path, complement: str = "props") -> Theory:
+def parse_tug(data: Any, lines: yamlpos.SourceLines, file: Path,
+              complement: str = "props") -> Theory:
     """The theory of a parsed tug file. ``complement``: ``props`` (the original engine's
     reading, see the module docstring) or ``all`` (``not_a`` is ``~a`` for every atom)."""
     if complement not in ("props", "all"):

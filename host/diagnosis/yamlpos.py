@@ -2,7 +2,7 @@
 
 ``load(text)`` parses one YAML document once, with libyaml when PyYAML has it (``CSafeLoader``:
 about 30x faster than the pure-Python loader on a large model), and returns the plain Python
-value together with ``Lines``: a map from a path of keys and indexes (``("components",
+value together with ``SourceLines``: a map from a path of keys and indexes (``("components",
 "jaguar", "channel")``) to the 1-based line where that value starts. A missing path falls back
 to its nearest recorded ancestor. The line table is built only when a line is first asked for
 (an error, or a loader that records lines), from a second, node-only pass over the text: a
@@ -108,7 +108,7 @@ def check_bounds(text: str) -> None:
                 "write the values out, or alias fewer times")
 
 
-class Lines:
+class SourceLines:
     """Line numbers of the values of a YAML document, by path (computed on first use)."""
 
     def __init__(self, text: str = "", typed: bool = True) -> None:
@@ -145,7 +145,7 @@ def _syntax_error(exc: yaml.YAMLError) -> YamlSyntaxError:
     return YamlSyntaxError(f"YAML syntax error: {problem}", line)
 
 
-def load(text: str, typed: bool = True) -> tuple[Any, Lines]:
+def load(text: str, typed: bool = True) -> tuple[Any, SourceLines]:
     """Parse ``text``; return ``(value, lines)``. ``typed=False`` reads every scalar as a
     string (no implicit ints, floats or booleans: half the time on a large file of
     strings). Raises ``YamlSyntaxError`` (``YamlTooBig`` beyond the bounds)."""
@@ -155,7 +155,7 @@ def load(text: str, typed: bool = True) -> tuple[Any, Lines]:
         value = yaml.load(text, Loader=_Loader) if typed else _plain(text)
     except yaml.YAMLError as exc:
         raise _syntax_error(exc) from exc
-    return value, Lines(text, typed)
+    return value, SourceLines(text, typed)
 
 
 class _Unusual(Exception):

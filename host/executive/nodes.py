@@ -28,7 +28,7 @@ from py_trees.common import Status
 from host.errors import DxboardError
 from host.events import Event, LayerResult
 from host.layers import EXECUTIVE, SKILLS, Command, Result
-from host.skills import Layer0View, Skill, State
+from host.skills import AvailState, Layer0View, Skill
 
 log = logging.getLogger(__name__)
 
@@ -65,10 +65,10 @@ class Guard(py_trees.behaviour.Behaviour):
 
     def update(self) -> Status:
         avail = self.layer0.availability(self.needs)
-        if avail.state is State.OK:
+        if avail.state is AvailState.OK:
             self.feedback_message = ""
             return Status.SUCCESS
-        if avail.state is State.UNAVAILABLE:
+        if avail.state is AvailState.UNAVAILABLE:
             return self._fail(avail.why, avail.components)
         now = self.clock()
         if self.hold_since is None:

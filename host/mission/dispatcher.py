@@ -42,7 +42,7 @@ log = logging.getLogger(__name__)
 SENSE_S = 1.0
 
 
-class Outcome(StrEnum):
+class DispatchOutcome(StrEnum):
     DONE = "done"
     REFUSED = "refused"
     FAILED = "failed"
@@ -51,7 +51,7 @@ class Outcome(StrEnum):
 
 @dataclass(frozen=True)
 class Dispatched:
-    outcome: Outcome
+    outcome: DispatchOutcome
     result: Result
     dispatch_id: str
     alarm: tuple[Literal, ...] = ()  # what was observed that raised it (as sensed)
@@ -116,7 +116,7 @@ class Dispatcher:
             bad = [("" if c.expected else "not ") + c.atom for c in checks if not c.held]
             result = Result.fail(MISSION, f"{call} refused: {', '.join(bad)} does not hold "
                                  "(the world is not as the plan assumed)")
-            return self._end(Outcome.REFUSED, result, g, started, did)
+            return self._end(DispatchOutcome.REFUSED, result, g, started, did)
         self.kb.change(g.eff["start"], "effect", f"start of {call}", did)
         own = frozenset(a for lits in g.eff.values() for a, _ in lits)
         run = asyncio.ensure_future(self.executive.execute(
@@ -128,17 +128,18 @@ class Dispatcher:
             await self.sense(None, f"after {call}", did)
             lits = tuple((a, not pos) for a, pos in g.cond["over all"]
                          if spell(a) in {v.removeprefix("not ") for v in violated})
-            return self._end(Outcome.FAILED, result, g, started, did, lits, halted=True)
+            return self._end(DispatchOutcome.FAILED, result, g, started, did, lits, halted=True)
         result = run.result()
         if not result.success:
             await self.sense(result.data, f"after {call} failed", did)
-            return self._end(Outcome.FAILED, Result.fail(MISSION, f"{call} failed", below=result),
+            return self._end(DispatchOutcome.FAILED,
+                             Result.fail(MISSION, f"{call} failed", below=result),
                              g, started, did)
         unmet = [c for c in self.kb.check(g.cond["end"], "end") if not c.held]
         if unmet:
             await self.sense(result.data, f"after {call}", did)
             what = ", ".join(("" if c.expected else "not ") + c.atom for c in unmet)
-            return self._end(Outcome.FAILED, Result.fail(
+            return self._end(DispatchOutcome.FAILED, Result.fail(
                 MISSION, f"{call}: end condition {what} does not hold"), g, started, did)
         self.kb.change(g.eff["end"], "effect", f"end of {call}", did)
         overridden = await self.sense(result.data, f"after {call}", did)
@@ -146,10 +147,10 @@ class Dispatcher:
         missed = [(a, pos) for a, pos in overridden if (a, not pos) in expected]
         if missed:
             what = ", ".join(("" if pos else "not ") + spell(a) for a, pos in missed)
-            return self._end(Outcome.SURPRISE, Result.fail(
+            return self._end(DispatchOutcome.SURPRISE, Result.fail(
                 MISSION, f"{call} reported success but the world shows {what}",
                 data=result.data), g, started, did, tuple(missed))
-        return self._end(Outcome.DONE, Result.ok(result.data), g, started, did)
+        return self._end(DispatchOutcome.DONE, Result.ok(result.data), g, started, did)
 
     async def _monitor(self, run: asyncio.Future[Result], over_all: tuple[Literal, ...],
                        own: frozenset[Atom], call: str, did: str) -> list[str]:
@@ -173,7 +174,7 @@ class Dispatcher:
             raise
         return []
 
-    def _end(self, outcome: Outcome, result: Result, g: Any, started: float,
+    def _end(self, outcome: DispatchOutcome, result: Result, g: Any, started: float,
              did: str, alarm: tuple[Literal, ...] = (), halted: bool = False) -> Dispatched:
         self.emit(LayerResult(MISSION, g.name, g.args, result.success, result.explanation,
                               started, self.clock(), did, self.kb.snapshot(), result.data))

@@ -34,11 +34,11 @@ from typing import Protocol
 
 from host.events import Event, MissionState, MissionStep
 from host.layers import MISSION, Result
-from host.mission.dispatcher import Dispatched, Dispatcher, Outcome
+from host.mission.dispatcher import Dispatched, Dispatcher, DispatchOutcome
 from host.mission.kb import KnowledgeBase
 from host.planning.temporal_pddl import Atom, Literal, TemporalDomain, TemporalProblem, spell
 from host.planning.temporal_planner import Ground, ground, holds, plan
-from host.skills import Layer0View, State
+from host.skills import AvailState, Layer0View
 
 log = logging.getLogger(__name__)
 
@@ -117,8 +117,8 @@ class MissionRunner:
     def _allowed(self, g: Ground) -> bool:
         if (g.name, g.args, self.kb.state()) in self.failed:
             return False
-        return self.layer0 is None or \
-            self.layer0.availability(self.needs_of.get(g.name, ())).state is not State.UNAVAILABLE
+        return self.layer0 is None or self.layer0.availability(
+            self.needs_of.get(g.name, ())).state is not AvailState.UNAVAILABLE
 
     async def run(self) -> MissionOutcome:
         self.kb.change([(a, True) for a in self.problem.init], "init", "the mission's problem")
@@ -145,10 +145,10 @@ class MissionRunner:
                 actions += 1
                 if self.diagnoser is not None:
                     self.diagnoser.ended(done, self.dispatcher.clock())
-                if done.outcome is not Outcome.DONE:
+                if done.outcome is not DispatchOutcome.DONE:
                     why = f"{step.ground}: {done.outcome}: {done.result.describe()}"
                     self._diagnose(why, done.dispatch_id)
-                    if done.outcome is Outcome.FAILED and not done.result.components():
+                    if done.outcome is DispatchOutcome.FAILED and not done.result.components():
                         g = step.ground
                         self.failed[(g.name, g.args, before)] = done.result.describe()
                     break
@@ -189,7 +189,7 @@ class MissionRunner:
         if self.layer0 is not None:
             for name in sorted({g.name for g in grounds}):
                 avail = self.layer0.availability(self.needs_of.get(name, ()))
-                if avail.state is State.UNAVAILABLE:
+                if avail.state is AvailState.UNAVAILABLE:
                     blocked[name] = (avail.why, avail.components)
         unmet = ", ".join(spell(a) for a, pos in goal if (a in self.kb.atoms) != pos)
         here = [f"{g}: {why}" for g in grounds

@@ -51,7 +51,7 @@ from typing import Any, TypedDict
 import host.atoms as A
 from host.diagnosis import yamlpos
 from host.diagnosis.logic import Theory, parse_literal
-from host.diagnosis.model import Kind, Problem, SystemModel, read_section
+from host.diagnosis.model import ComponentKind, Problem, SystemModel, read_section
 from host.observers.base import DEFAULT_REFRESH, DEFAULT_VALIDITY, Observer
 from host.observers.hardware import (
     DEFAULT_LINK_ATOM,
@@ -118,7 +118,7 @@ def check_atoms(config: ObserversConfig, theory: Theory) -> list[str]:
 
 
 class _ConfigBuilder(SectionReader):
-    def __init__(self, file: Path, lines: yamlpos.Lines, model: SystemModel | None) -> None:
+    def __init__(self, file: Path, lines: yamlpos.SourceLines, model: SystemModel | None) -> None:
         super().__init__(file, lines, model)
         self.refresh = DEFAULT_REFRESH
         self.validity = DEFAULT_VALIDITY
@@ -222,7 +222,7 @@ class _ConfigBuilder(SectionReader):
                 self.err(p, "devices are given, but the model already lists them",
                          "remove devices: the switchable components are watched")
             return {c.name: Device(c.name, c.channel, c.current)
-                    for c in self.model.by_kind(Kind.SH) if c.channel is not None}
+                    for c in self.model.by_kind(ComponentKind.SH) if c.channel is not None}
         spec = self.mapping(p, value, set(value) if isinstance(value, dict) else set(),
                             "devices: {hokuyo: {channel: 3, current: [0.2, 1.2]}}")
         if not spec:

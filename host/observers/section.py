@@ -55,7 +55,7 @@ class SourceSpec:
 class SectionReader:
     """The file, its lines and the problems found, for the section's validation."""
 
-    def __init__(self, file: Path, lines: yamlpos.Lines, model: SystemModel | None) -> None:
+    def __init__(self, file: Path, lines: yamlpos.SourceLines, model: SystemModel | None) -> None:
         self.file = file
         self.lines = lines
         self.model = model

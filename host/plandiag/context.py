@@ -4,7 +4,7 @@
 and the exogenous events that may happen in each gap (through ``host.planning.grounding``, with
 the static facts of the initial knowledge base), checks the history against the domain (every
 action, object, type and atom is known; ``HistoryError`` names the place otherwise), and returns
-the ``Problem`` the engines search together with the knowledge base the dispatcher held at
+the ``HistoryProblem`` the engines search together with the knowledge base the dispatcher held at
 every point: ROSPlan-like, it applies a step's effects after a reported success only, and an
 observation overrides what it says. Fault modes whose components layer 0 shows working are left
 out (``Suspicion``); those of a broken component get ``BROKEN_PRIOR``. A mode with extra
@@ -22,9 +22,8 @@ from host.atoms import Atom
 from host.plandiag.errors import HistoryError
 from host.plandiag.history import History, StepResult, Where
 from host.plandiag.model import FaultKind, FaultSchema, PlanModel
-from host.plandiag.problem import Fault, Problem, StepSpec
-from host.planning.domain import ROOT_TYPE
-from host.planning.domain import Atom as PAtom
+from host.plandiag.problem import Fault, HistoryProblem, StepSpec
+from host.planning.domain import ROOT_TYPE, PddlAtom
 from host.planning.errors import DomainError
 from host.planning.grounding import Grounder
 from host.planning.task import GroundOp, Task
@@ -53,9 +52,10 @@ class Suspicion:
 
 @dataclass
 class Context:
-    """The compiled history: the ``Problem`` and the dispatcher's knowledge base per point."""
+    """The compiled history: the ``HistoryProblem`` and the dispatcher's knowledge base per
+    point."""
 
-    problem: Problem
+    problem: HistoryProblem
     kb: list[int]  # point -> the KB before that point's observations
     kb_after: list[int]  # point -> the KB after them
     observed: dict[int, list[tuple[int, bool, str]]]  # point -> (atom, value, where)
@@ -65,7 +65,7 @@ class Context:
 def interpret_context(model: PlanModel, history: History, suspicion: Suspicion) -> Context:
     domain = model.domain
     _check_objects(model, history)
-    statics = [PAtom(a.predicate, a.args) for a in history.init
+    statics = [PddlAtom(a.predicate, a.args) for a in history.init
                if a.predicate in domain.statics]
     try:
         grounder = Grounder(domain, history.objects, statics)
@@ -112,7 +112,7 @@ def interpret_context(model: PlanModel, history: History, suspicion: Suspicion) 
             obs[point] = (t | (1 << a), f) if o.value else (t, f | (1 << a))
     gaps = _ground_events(grounder, model, len(steps), faults)
     last = 2 * len(steps) - (0 if not steps or steps[-1].executed else 1)
-    problem = Problem(task, init, steps, gaps, faults, obs, max(last, 0))
+    problem = HistoryProblem(task, init, steps, gaps, faults, obs, max(last, 0))
     kb, kb_after = _dispatcher_kb(problem, history)
     log.debug("context: %d steps, %d atoms, %d faults", len(steps), len(task.atoms), len(faults))
     return Context(problem, kb, kb_after, observed, grounder)
@@ -154,7 +154,7 @@ def _ground_events(grounder: Grounder, model: PlanModel, n_steps: int,
     return gaps
 
 
-def _dispatcher_kb(problem: Problem, history: History) -> tuple[list[int], list[int]]:
+def _dispatcher_kb(problem: HistoryProblem, history: History) -> tuple[list[int], list[int]]:
     """What the dispatcher believed at every point: effects applied after a reported
     success, observations overriding (sensing)."""
     kb = [problem.init]
@@ -174,7 +174,7 @@ def _dispatcher_kb(problem: Problem, history: History) -> tuple[list[int], list[
     return kb, after
 
 
-def _override(problem: Problem, point: int, state: int) -> int:
+def _override(problem: HistoryProblem, point: int, state: int) -> int:
     t, f = problem.obs.get(point, (0, 0))
     return (state & ~f) | t
 

@@ -1,8 +1,8 @@
 """The inference engines behind one name -> callable registry, and naive enumeration.
 
-Every engine takes the ``Problem``, the universe of faults it may use (the fault region's
-suspects, or None for all) and the ``Limits``, and returns an ``Outcome`` with the same minimal
-diagnoses (``tests/plandiag`` cross-checks them on random histories):
+Every engine takes the ``HistoryProblem``, the universe of faults it may use (the fault
+region's suspects, or None for all) and the ``Limits``, and returns an ``ExplainOutcome`` with
+the same minimal diagnoses (``tests/plandiag`` cross-checks them on random histories):
 
 - ``tree``: the context tree of paper 004 (``tree.py``), the explainable reference;
 - ``sat``: the SAT encoding (``sat.py``), for long histories;
@@ -25,16 +25,17 @@ from collections.abc import Callable
 from dataclasses import replace
 
 from host.diagnosis.result import Bound
-from host.plandiag.limits import Deadline, Limits, Order, Outcome
-from host.plandiag.problem import Problem, simulate
+from host.plandiag.limits import Deadline, ExplainOutcome, Limits, Order
+from host.plandiag.problem import HistoryProblem, simulate
 from host.plandiag.sat import any_beyond, sat_engine
 from host.plandiag.tree import context_tree
 
-Engine = Callable[[Problem, frozenset[int] | None, Limits], Outcome]
+Engine = Callable[[HistoryProblem, frozenset[int] | None, Limits], ExplainOutcome]
 
 
-def naive(problem: Problem, universe: frozenset[int] | None, limits: Limits) -> Outcome:
-    out = Outcome()
+def naive(problem: HistoryProblem, universe: frozenset[int] | None,
+          limits: Limits) -> ExplainOutcome:
+    out = ExplainOutcome()
     if problem.impossible_step(universe) is not None:
         return out  # complete and empty: proven unexplainable
     ids = [f.id for f in problem.faults if universe is None or f.id in universe]
@@ -66,7 +67,8 @@ def most_probable(engine: Engine) -> Engine:
     ``order=probability`` (it lists them by size): it lists every one up to ``max_card`` and
     keeps the best. The SAT engine needs no wrapper: RC2 finds them in that order."""
 
-    def run(problem: Problem, universe: frozenset[int] | None, limits: Limits) -> Outcome:
+    def run(problem: HistoryProblem, universe: frozenset[int] | None,
+            limits: Limits) -> ExplainOutcome:
         n = limits.max_count
         if limits.order is not Order.PROBABILITY or n is None:
             return engine(problem, universe, limits)
@@ -80,7 +82,7 @@ def most_probable(engine: Engine) -> Engine:
     return run
 
 
-def cost(problem: Problem, diagnosis: frozenset[int]) -> float:
+def cost(problem: HistoryProblem, diagnosis: frozenset[int]) -> float:
     """``-log`` of the diagnosis's prior (the product of its faults' priors): lower is more
     probable. ``result.rank`` orders the histories by it too."""
     return math.fsum(-math.log(problem.faults[f].prior) for f in diagnosis)

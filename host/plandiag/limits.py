@@ -4,7 +4,7 @@
 alternative history), ``max_count`` (the most diagnoses to list), ``time_budget_s`` (seconds,
 measured with ``time.perf_counter``, the only clock this package reads and only to bound
 computation) and ``order`` (``cardinality``: fewest faults first; ``probability``: most
-probable first, which matters when a bound cuts the list). ``Outcome`` holds the minimal
+probable first, which matters when a bound cuts the list). ``ExplainOutcome`` holds the minimal
 diagnoses found (sets of fault ids) and the bound that cut the list (``host.diagnosis.result.
 Bound``), set only when a diagnosis was really left out (or time ran out), so ``complete``
 means the list is every minimal diagnosis. ``explainable`` follows from the two, the same for
@@ -36,7 +36,7 @@ class Limits:
 
 
 @dataclass
-class Outcome:
+class ExplainOutcome:
     diagnoses: list[frozenset[int]] = field(default_factory=list)
     cut_by: Bound | None = None
     nodes: int = 0  # context-tree nodes expanded, histories simulated, or solver calls

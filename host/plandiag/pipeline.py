@@ -35,7 +35,7 @@ from host.plandiag.interpret import (
     identify_symptoms,
     sensor_interpreter,
 )
-from host.plandiag.limits import Limits, Outcome
+from host.plandiag.limits import ExplainOutcome, Limits
 from host.plandiag.model import PlanModel
 from host.plandiag.planerror import PlanError, analyse_plan_error
 from host.plandiag.region import Region, fault_region
@@ -59,7 +59,7 @@ class Explanation:
     region: Region | None
     widened: bool
     engine: str
-    outcome: Outcome
+    outcome: ExplainOutcome
     histories: list[AlternativeHistory]
     kb: KbCorrection | None
     plan_error: PlanError | None
@@ -128,9 +128,10 @@ def explain_history(model: PlanModel, history: History, engine: str = DEFAULT_EN
                        plan_error, ctx, suspicion, time.perf_counter() - start)
 
 
-def _timed(run: Any, ctx: Context, universe: frozenset[int] | None, limits: Limits) -> Outcome:
+def _timed(run: Any, ctx: Context, universe: frozenset[int] | None,
+           limits: Limits) -> ExplainOutcome:
     t0 = time.perf_counter()
-    out: Outcome = run(ctx.problem, universe, limits)
+    out: ExplainOutcome = run(ctx.problem, universe, limits)
     out.elapsed_s = time.perf_counter() - t0
     return out
 

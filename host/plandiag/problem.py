@@ -1,6 +1,6 @@
 """The inference problem both engines solve: a history compiled to bit masks, and its semantics.
 
-A ``Problem`` is what the context & plan interpreter (``context.py``) makes of a history: the
+A ``HistoryProblem`` is what the context & plan interpreter (``context.py``) makes of a history: the
 initial state (an ``int`` whose bit ``a`` is atom ``a``, as in ``host.planning.task``), one
 ``StepSpec`` per step (the nominal ground action, or None when it cannot have run as intended,
 and the fault modes that may replace it), the candidate exogenous events of every gap, every
@@ -68,7 +68,7 @@ class StepSpec:
 
 
 @dataclass
-class Problem:
+class HistoryProblem:
     task: Task
     init: int
     steps: list[StepSpec]
@@ -146,7 +146,7 @@ def conflict(a: GroundOp, b: GroundOp) -> bool:
     return bool((a.add & effective_delete(b)) or (b.add & effective_delete(a)))
 
 
-def live_atoms(problem: Problem, allowed: Callable[[int], bool]) -> list[int]:
+def live_atoms(problem: HistoryProblem, allowed: Callable[[int], bool]) -> list[int]:
     """``live[p]``: the atoms whose value at point ``p`` may still matter — read later by an
     observation or by the precondition of a variant or event that may run (the faults
     ``allowed``), before every variant that may run overwrites it alike. An event that writes
@@ -191,7 +191,7 @@ def live_atoms(problem: Problem, allowed: Callable[[int], bool]) -> list[int]:
 
 
 @dataclass
-class Run:
+class SimulatedRun:
     """A simulated history: the state at every point reached, and where it failed (if so)."""
 
     states: list[int]
@@ -204,8 +204,8 @@ class Run:
         return self.stop is None
 
 
-def simulate(problem: Problem, faults: Iterable[int], start: int = 1,
-             rejoin: Sequence[int] | None = None, rejoin_at: int = 0) -> Run:
+def simulate(problem: HistoryProblem, faults: Iterable[int], start: int = 1,
+             rejoin: Sequence[int] | None = None, rejoin_at: int = 0) -> SimulatedRun:
     """Run the history with the fault set ``faults``.
 
     ``rejoin`` (the states of a consistent run, point by point) lets a caller check a fault
@@ -219,13 +219,13 @@ def simulate(problem: Problem, faults: Iterable[int], start: int = 1,
         f = problem.faults[fid]
         if f.kind is FaultKind.MODE:
             if f.at in modes:
-                return Run([problem.init], Stop.NO_VARIANT, 2 * f.at,
+                return SimulatedRun([problem.init], Stop.NO_VARIANT, 2 * f.at,
                            f"two modes at step {f.at}")
             modes[f.at] = f
         else:
             events.setdefault(f.at, []).append(f.op)
     state = problem.init if rejoin is None else rejoin[2 * start - 2]
-    run = Run([state])
+    run = SimulatedRun([state])
     if start == 1 and not problem.obs_ok(0, state):
         return _fail(run, problem, 0, Stop.OBSERVATION)
     for spec in problem.steps[start - 1 :]:
@@ -258,7 +258,8 @@ def simulate(problem: Problem, faults: Iterable[int], start: int = 1,
     return run
 
 
-def _fail(run: Run, problem: Problem, point: int, stop: Stop, detail: str = "") -> Run:
+def _fail(run: SimulatedRun, problem: HistoryProblem, point: int, stop: Stop,
+          detail: str = "") -> SimulatedRun:
     run.stop, run.stop_point = stop, point
     if stop is Stop.OBSERVATION:
         t, f = problem.obs[point]

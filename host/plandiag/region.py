@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 from host.plandiag.context import Context
 from host.plandiag.interpret import Symptom
-from host.plandiag.problem import Problem, bits, effective_delete, writes
+from host.plandiag.problem import HistoryProblem, bits, effective_delete, writes
 from host.planning.task import GroundOp
 
 
@@ -35,7 +35,7 @@ class Region:
     expanded: tuple[int, ...]  # those of them with a suspect fault mode
     atoms: frozenset[int]  # the atoms followed back
 
-    def describe(self, problem: Problem) -> str:
+    def describe(self, problem: HistoryProblem) -> str:
         first_gap, last_gap = self.first_point // 2 + 1, (self.last_point + 1) // 2
         if not self.steps:
             span = f"the gaps before steps {first_gap}..{last_gap}"

@@ -25,7 +25,7 @@ from typing import Any
 
 from host.plandiag.limits import Order
 from host.plandiag.model import FaultKind
-from host.plandiag.problem import Fault, Problem, simulate
+from host.plandiag.problem import Fault, HistoryProblem, simulate
 
 
 class FaultClass(StrEnum):
@@ -92,7 +92,7 @@ def classify(fault: Fault, confirmed: Mapping[str, tuple[str, ...]]) -> Classifi
     return ClassifiedFault(fault, FaultClass.COMPONENT if broken else FaultClass.ACTION, broken)
 
 
-def rank(problem: Problem, diagnoses: Iterable[frozenset[int]], order: Order,
+def rank(problem: HistoryProblem, diagnoses: Iterable[frozenset[int]], order: Order,
          confirmed: Mapping[str, tuple[str, ...]]) -> list[AlternativeHistory]:
     scored = []
     for d in diagnoses:
@@ -129,12 +129,12 @@ class KbCorrection:
                 "certain": list(self.certain)}
 
 
-def _literals(problem: Problem, state: int, mask: int) -> tuple[str, ...]:
+def _literals(problem: HistoryProblem, state: int, mask: int) -> tuple[str, ...]:
     return tuple(("" if (state >> a) & 1 else "~") + problem.atom_name(a)
                  for a in range(len(problem.task.atoms)) if (mask >> a) & 1)
 
 
-def correct_kb(problem: Problem, before: int, after: int,
+def correct_kb(problem: HistoryProblem, before: int, after: int,
                histories: list[AlternativeHistory]) -> KbCorrection | None:
     """The KB the best history implies at the last point, against the dispatcher's KB there
     ``before`` and ``after`` the last observations overrode it."""

@@ -36,10 +36,10 @@ from host.diagnosis.quota import Quota
 from host.diagnosis.result import Bound
 from host.diagnosis.satctx import SatContext
 from host.diagnosis.search import cardinality_search
-from host.plandiag.limits import Deadline, Limits, Order, Outcome
+from host.plandiag.limits import Deadline, ExplainOutcome, Limits, Order
 from host.plandiag.model import FaultKind
 from host.plandiag.problem import (
-    Problem,
+    HistoryProblem,
     apply_events,
     bits,
     conflict,
@@ -55,10 +55,10 @@ from host.planning.task import GroundOp
 WEIGHT_SCALE = 1_000_000
 
 
-class Encoding:
+class HistoryEncoding:
     """The clauses of one history over one universe of faults, in one ``SatContext``."""
 
-    def __init__(self, problem: Problem, universe: frozenset[int] | None) -> None:
+    def __init__(self, problem: HistoryProblem, universe: frozenset[int] | None) -> None:
         self.p = problem
         allowed = (lambda f: True) if universe is None else universe.__contains__
         live = live_atoms(problem, allowed)
@@ -196,7 +196,7 @@ class Encoding:
         self._transition(variants)
 
     # -- searches -------------------------------------------------------------------------
-    def diagnoses(self, limits: Limits) -> Outcome:
+    def diagnoses(self, limits: Limits) -> ExplainOutcome:
         start = time.perf_counter()
         if limits.order is Order.PROBABILITY:
             out = self._by_probability(limits)
@@ -216,7 +216,7 @@ class Encoding:
             cut_by = found.cut_by
             if n is not None and len(bad_sets) > n:
                 bad_sets, cut_by = bad_sets[:n], Bound.MAX_COUNT
-            out = Outcome([frozenset(self.fault_ids[i] for i in bad) for bad in bad_sets],
+            out = ExplainOutcome([frozenset(self.fault_ids[i] for i in bad) for bad in bad_sets],
                           cut_by, self.ctx.calls - calls)
         out.elapsed_s = time.perf_counter() - start
         return out
@@ -271,8 +271,8 @@ class Encoding:
                     out.append(frozenset(self.index[f] for f in moved))
         return out
 
-    def _by_probability(self, limits: Limits) -> Outcome:
-        out = Outcome()
+    def _by_probability(self, limits: Limits) -> ExplainOutcome:
+        out = ExplainOutcome()
         wcnf = WCNF()
         for cl in self.hard:
             wcnf.append(cl)
@@ -312,13 +312,13 @@ class Encoding:
         self.ctx.close()
 
 
-def any_beyond(problem: Problem, universe: frozenset[int] | None,
+def any_beyond(problem: HistoryProblem, universe: frozenset[int] | None,
                found: list[frozenset[int]], budget_s: float | None) -> bool | None:
     """Is there a minimal diagnosis besides ``found``, of any size? One solver call: a
     consistent history that is no superset of one found holds such a diagnosis. The tree and
     naive ask it once they have listed every diagnosis up to ``max_card``, to know whether the
     bound left one out. None when ``budget_s`` ran out first."""
-    enc = Encoding(problem, universe)
+    enc = HistoryEncoding(problem, universe)
     try:
         for d in found:
             if all(f in enc.fvar for f in d):  # else not minimal here: blocks nothing more
@@ -332,8 +332,9 @@ def any_beyond(problem: Problem, universe: frozenset[int] | None,
         enc.close()
 
 
-def sat_engine(problem: Problem, universe: frozenset[int] | None, limits: Limits) -> Outcome:
-    enc = Encoding(problem, universe)
+def sat_engine(problem: HistoryProblem, universe: frozenset[int] | None,
+               limits: Limits) -> ExplainOutcome:
+    enc = HistoryEncoding(problem, universe)
     try:
         return enc.diagnoses(limits)
     finally:

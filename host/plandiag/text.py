@@ -17,7 +17,7 @@ from collections.abc import Iterable
 from host.plandiag.history import Where
 from host.plandiag.model import FaultKind
 from host.plandiag.pipeline import Explanation
-from host.plandiag.problem import Fault, Problem, Stop, simulate
+from host.plandiag.problem import Fault, HistoryProblem, Stop, simulate
 from host.plandiag.result import AlternativeHistory
 
 MAX_LISTED = 10
@@ -112,14 +112,14 @@ def listing(histories: list[AlternativeHistory]) -> list[str]:
     return lines
 
 
-def _changes(p: Problem, before: int, after: int) -> str:
+def _changes(p: HistoryProblem, before: int, after: int) -> str:
     diff = before ^ after
     lits = [("" if (after >> a) & 1 else "~") + p.atom_name(a)
             for a in range(len(p.task.atoms)) if (diff >> a) & 1]
     return ", ".join(lits) if lits else "no change"
 
 
-def _checks(p: Problem, points: Iterable[int]) -> str:
+def _checks(p: HistoryProblem, points: Iterable[int]) -> str:
     lits = []
     for q in points:
         t, f = p.obs.get(q, (0, 0))
@@ -185,7 +185,7 @@ def winning_path(e: Explanation, best: AlternativeHistory) -> list[str]:
     return lines
 
 
-def _why(p: Problem, faults: frozenset[int]) -> str:
+def _why(p: HistoryProblem, faults: frozenset[int]) -> str:
     run = simulate(p, faults)
     if run.consistent:  # pragma: no cover - a minimal diagnosis needs each of its faults
         return "the history would be consistent too"

@@ -27,8 +27,8 @@ from contextlib import contextmanager
 from enum import Enum
 
 from host.diagnosis.result import Bound
-from host.plandiag.limits import Deadline, Limits, Outcome
-from host.plandiag.problem import Problem, apply_events
+from host.plandiag.limits import Deadline, ExplainOutcome, Limits
+from host.plandiag.problem import HistoryProblem, apply_events
 from host.plandiag.sat import any_beyond
 from host.planning.task import GroundOp
 
@@ -47,7 +47,7 @@ class _Mode(Enum):
 
 
 class ContextTree:
-    def __init__(self, problem: Problem, universe: frozenset[int] | None, limits: Limits):
+    def __init__(self, problem: HistoryProblem, universe: frozenset[int] | None, limits: Limits):
         self.p = problem
         self.limits = limits
         self.universe = universe
@@ -63,10 +63,10 @@ class ContextTree:
         self.found: list[frozenset[int]] = []
         self.nodes = 0
         self.deadline = Deadline(limits.time_budget_s)
-        self.out = Outcome()
+        self.out = ExplainOutcome()
 
     # -- the search -----------------------------------------------------------------------
-    def run(self) -> Outcome:
+    def run(self) -> ExplainOutcome:
         out = self.out
         p = self.p
         total = sum(len(m) > 0 for m in self.modes.values()) + sum(map(len, self.events))
@@ -88,7 +88,7 @@ class ContextTree:
                 pass
         return self._done()
 
-    def _done(self) -> Outcome:
+    def _done(self) -> ExplainOutcome:
         self.out.diagnoses = list(self.found)
         self.out.nodes = self.nodes
         return self.out
@@ -230,7 +230,8 @@ class ContextTree:
         return ok
 
 
-def context_tree(problem: Problem, universe: frozenset[int] | None, limits: Limits) -> Outcome:
+def context_tree(problem: HistoryProblem, universe: frozenset[int] | None,
+                 limits: Limits) -> ExplainOutcome:
     return ContextTree(problem, universe, limits).run()
 
 

@@ -43,7 +43,7 @@ SUPPORTED_REQUIREMENTS = frozenset(
 )
 
 
-class Atom(NamedTuple):
+class PddlAtom(NamedTuple):
     """``pred(args)``; an argument starting with ``?`` is a variable. (A tuple: thousands
     are built and hashed per diagnosis.)"""
 
@@ -56,7 +56,7 @@ class Atom(NamedTuple):
 
 @dataclass(frozen=True)
 class CAtom:
-    atom: Atom
+    atom: PddlAtom
 
 
 @dataclass(frozen=True)
@@ -85,7 +85,7 @@ Cond = CAtom | CNot | CAnd | COr | CForall
 
 @dataclass(frozen=True)
 class ELit:
-    atom: Atom
+    atom: PddlAtom
     positive: bool
 
 
@@ -251,12 +251,12 @@ def _one_type(term: Any, where: str) -> str:
     return tags[0] if tags else ROOT_TYPE
 
 
-def _atom(pred: Any) -> Atom:
+def _atom(pred: Any) -> PddlAtom:
     args = []
     for t in pred.terms:
         name = str(t.name)
         args.append(f"?{name}" if type(t).__name__ == "Variable" else name)
-    return Atom(str(pred.name), tuple(args))
+    return PddlAtom(str(pred.name), tuple(args))
 
 
 def _vars(variables: Any, where: str) -> tuple[tuple[str, str], ...]:
@@ -269,7 +269,7 @@ def _cond(f: Any, where: str) -> Cond:
     if isinstance(f, predicates.Predicate):
         return CAtom(_atom(f))
     if isinstance(f, predicates.EqualTo):
-        return CAtom(Atom("=", (_term(f.left), _term(f.right))))
+        return CAtom(PddlAtom("=", (_term(f.left), _term(f.right))))
     if isinstance(f, base.Not):
         return CNot(_cond(f.argument, where))
     if isinstance(f, base.And):

@@ -20,7 +20,6 @@ from dataclasses import dataclass
 
 from host.planning.domain import (
     ROOT_TYPE,
-    Atom,
     CAnd,
     CAtom,
     CForall,
@@ -33,6 +32,7 @@ from host.planning.domain import (
     EForall,
     ELit,
     EWhen,
+    PddlAtom,
     Schema,
 )
 from host.planning.errors import DomainError
@@ -55,7 +55,7 @@ class _Statics:
     by_pred: dict[str, list[tuple[str, ...]]]
 
     @staticmethod
-    def build(facts: Iterable[Atom]) -> _Statics:
+    def build(facts: Iterable[PddlAtom]) -> _Statics:
         s = _Statics(set(), {}, {})
         for f in facts:
             key = (f.pred, f.args)
@@ -71,7 +71,7 @@ class _Statics:
 class Grounder:
     """Grounds one domain over one object set; ``ground()`` returns the ``Task``."""
 
-    def __init__(self, domain: Domain, objects: Mapping[str, str], static: Iterable[Atom]):
+    def __init__(self, domain: Domain, objects: Mapping[str, str], static: Iterable[PddlAtom]):
         self.domain = domain
         self.objects = dict(objects)
         self.statics = _Statics.build(static)
@@ -118,7 +118,7 @@ class Grounder:
 
     # -- conditions -------------------------------------------------------------------------
     @staticmethod
-    def _subst(atom: Atom, b: Binding) -> tuple[str, ...]:
+    def _subst(atom: PddlAtom, b: Binding) -> tuple[str, ...]:
         return tuple([b.get(a, a) for a in atom.args])  # only variables are keys of b
 
     def cond(self, c: Cond, b: Binding, neg: bool) -> list[int] | None:
@@ -181,7 +181,7 @@ class Grounder:
         return self._expand(c.variables, c.body, b)
 
     def _from_guard(
-        self, guard: Atom, variables: tuple[tuple[str, str], ...], b: Binding
+        self, guard: PddlAtom, variables: tuple[tuple[str, str], ...], b: Binding
     ) -> list[Binding] | None:
         if guard.pred not in self.static_preds:
             return None
@@ -261,7 +261,7 @@ def _dedup(xs: list[int]) -> list[int]:
     return list(dict.fromkeys(xs))
 
 
-def ground(domain: Domain, objects: Mapping[str, str], static: Iterable[Atom]) -> Task:
+def ground(domain: Domain, objects: Mapping[str, str], static: Iterable[PddlAtom]) -> Task:
     """Ground ``domain`` over ``objects`` (name -> type) and the true ``static`` facts."""
     unknown = sorted({t for t in objects.values()} - set(domain.types) - {ROOT_TYPE})
     if unknown:

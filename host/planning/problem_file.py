@@ -22,7 +22,7 @@ import logging
 from pathlib import Path
 from typing import Any
 
-from host.planning.domain import ROOT_TYPE, Atom, Domain
+from host.planning.domain import ROOT_TYPE, Domain, PddlAtom
 from host.planning.errors import NoPlanError, ProblemError
 from host.planning.grounding import ground
 from host.planning.plan import Plan, deorder
@@ -45,8 +45,8 @@ def _terms(pred: Any) -> tuple[str, ...]:
     return tuple(str(t.name) for t in pred.terms)
 
 
-def read_problem(domain: Domain, path: Path) -> tuple[dict[str, str], list[Atom],
-                                                      list[tuple[Atom, bool]], list[str]]:
+def read_problem(domain: Domain, path: Path) -> tuple[dict[str, str], list[PddlAtom],
+                                                      list[tuple[PddlAtom, bool]], list[str]]:
     """``(objects, init, goal literals, notes)`` of a problem file for ``domain``."""
     from pddl.logic import base, predicates
     from pddl.parser.problem import ProblemParser
@@ -78,10 +78,10 @@ def read_problem(domain: Domain, path: Path) -> tuple[dict[str, str], list[Atom]
         objects[str(obj.name)] = tags[0] if tags else ROOT_TYPE
     known = set(domain.predicates)
     left_out: dict[str, None] = {}
-    init: list[Atom] = []
+    init: list[PddlAtom] = []
 
-    def atom(pred: Any, where: str) -> Atom:
-        a = Atom(str(pred.name), _terms(pred))
+    def atom(pred: Any, where: str) -> PddlAtom:
+        a = PddlAtom(str(pred.name), _terms(pred))
         missing = [x for x in a.args if x not in objects]
         if missing:
             raise ProblemError(f"{path}: {where} ({a.pred} {' '.join(a.args)}) names "
@@ -99,7 +99,7 @@ def read_problem(domain: Domain, path: Path) -> tuple[dict[str, str], list[Atom]
             left_out.setdefault(str(fact.name))
             continue
         init.append(atom(fact, "the initial fact"))
-    goal: list[tuple[Atom, bool]] = []
+    goal: list[tuple[PddlAtom, bool]] = []
     parts = parsed.goal.operands if isinstance(parsed.goal, base.And) else (parsed.goal,)
     for g in parts:
         positive = not isinstance(g, base.Not)

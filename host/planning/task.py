@@ -119,6 +119,8 @@ class GroundOp:
         return f"{self.name}({', '.join(self.args)})"
 
 
+# a planning task in Fast Downward's sense (domain + objects, grounded); emulator/parts/sched.py
+# has asyncio's Task, which it must be named as (scripts/names.py)
 @dataclass
 class Task:
     """Fluent atoms, their numbers, and the ground operators of one domain + object set.

@@ -120,7 +120,7 @@ def load_external(path: str | Path, model: SystemModel | None = None,
 
 
 def _node(name: str, spec: Any, model: SystemModel | None, processes: Mapping[str, object],
-          lines: yamlpos.Lines, err: Any) -> ExternalNode | None:
+          lines: yamlpos.SourceLines, err: Any) -> ExternalNode | None:
     p: tuple[object, ...] = (name,)
     if model is not None:
         c = model.components.get(name)

@@ -21,7 +21,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from host.planning.domain import DOMAIN_FILE, ROOT_TYPE, Atom, Domain, load_domain
+from host.planning.domain import DOMAIN_FILE, ROOT_TYPE, Domain, PddlAtom, load_domain
 from host.planning.errors import DomainError, NoPlanError, ProblemError
 from host.planning.grounding import ground
 from host.planning.plan import Plan, deorder, stops_first
@@ -66,7 +66,7 @@ class RepairPlanner:
         self.objects = {name: domain_type(t, declared) for name, t in model.types.items()}
         self._full: Task | None = None
         self._task: Task | None = None
-        self._goal: tuple[tuple[Atom, ...], tuple[int, ...]] | None = None
+        self._goal: tuple[tuple[PddlAtom, ...], tuple[int, ...]] | None = None
 
     @classmethod
     def for_system(cls, system_dir: str | Path, domain_path: str | Path | None = None,

@@ -26,7 +26,7 @@ from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from host.planning.domain import ROOT_TYPE, Atom
+from host.planning.domain import ROOT_TYPE, PddlAtom
 from host.planning.errors import ProblemError
 from host.planning.vocabulary import (
     ABNORMAL,
@@ -85,12 +85,12 @@ class RepairModel:
     def objects(self) -> dict[str, str]:
         return dict(self.types)
 
-    def static_facts(self) -> list[Atom]:
-        out = [Atom(NEEDS, (n, c)) for n, cs in self.needs.items() for c in cs]
-        out += [Atom(PROTECTED, (c,)) for c in sorted(self.protected)]
-        out += [Atom(MANAGED, (n,)) for n in sorted(self.managed)]
-        out += [Atom(EXTERNAL, (n,)) for n in sorted(self.external)]
-        out += [Atom(RESTARTABLE, (n,)) for n in sorted(self.restartable)]
+    def static_facts(self) -> list[PddlAtom]:
+        out = [PddlAtom(NEEDS, (n, c)) for n, cs in self.needs.items() for c in cs]
+        out += [PddlAtom(PROTECTED, (c,)) for c in sorted(self.protected)]
+        out += [PddlAtom(MANAGED, (n,)) for n in sorted(self.managed)]
+        out += [PddlAtom(EXTERNAL, (n,)) for n in sorted(self.external)]
+        out += [PddlAtom(RESTARTABLE, (n,)) for n in sorted(self.restartable)]
         return out
 
     def is_node(self, name: str) -> bool:
@@ -176,8 +176,8 @@ class RepairProblem:
 
     model: RepairModel
     bad: frozenset[str]
-    init: frozenset[Atom]
-    goal: tuple[Atom, ...]  # each must hold (goal_holds) or be false: (good c) / (not (ab c))
+    init: frozenset[PddlAtom]
+    goal: tuple[PddlAtom, ...]  # each must hold (goal_holds) or be false: (good c) / (not (ab c))
     assumed: tuple[str, ...] = ()
     ignored: tuple[str, ...] = ()
     goal_holds: bool = False
@@ -211,11 +211,11 @@ def build_problem(
             )
         else:
             ignored.append(str(o))
-    init: set[Atom] = set()
+    init: set[PddlAtom] = set()
     assumed: list[str] = []
     for name, typ in model.types.items():
         is_bad = name in bad_set
-        init.update(Atom(p, (o,)) for p, o in words.facts(ABNORMAL, name, is_bad))
+        init.update(PddlAtom(p, (o,)) for p, o in words.facts(ABNORMAL, name, is_bad))
         role = POWERED if typ == SWITCHABLE else RUNNING if typ in NODE_TYPES else None
         if role is None:
             continue
@@ -227,9 +227,9 @@ def build_problem(
             if is_bad:
                 word = "on" if role == POWERED else "running"
                 assumed.append(f"{'' if value else '~'}{word}({name})")
-        init.update(Atom(p, (o,)) for p, o in words.facts(role, name, value))
+        init.update(PddlAtom(p, (o,)) for p, o in words.facts(role, name, value))
     pred, holds = words.goal()
-    goal = tuple(Atom(pred, (name,)) for name in model.types)
+    goal = tuple(PddlAtom(pred, (name,)) for name in model.types)
     if ignored:
         log.debug("observations not in the repair domain, ignored: %s", ignored)
     return RepairProblem(model, bad_set, frozenset(init), goal, tuple(assumed), tuple(ignored),

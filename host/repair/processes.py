@@ -104,7 +104,7 @@ def load_processes(path: str | Path, model: SystemModel | None = None) -> dict[s
 
 
 class _ProcessBuilder:
-    def __init__(self, file: Path, lines: yamlpos.Lines, model: SystemModel | None,
+    def __init__(self, file: Path, lines: yamlpos.SourceLines, model: SystemModel | None,
                  root: Path) -> None:
         self.file = file
         self.lines = lines

@@ -29,7 +29,7 @@ log = logging.getLogger(__name__)
 
 def model_groups(system_dir: str | Path) -> tuple[str, dict[str, Group]]:
     """The robot's name and its components (in the model's order) with their row groups."""
-    from host.diagnosis.model import Kind as CKind
+    from host.diagnosis.model import ComponentKind as CKind
     from host.diagnosis.model import load_system
 
     model = load_system(system_dir)

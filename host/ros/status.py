@@ -64,6 +64,8 @@ PREFIX = "dxboard"  # the root of every status name: one tree in the aggregator
 BAD_ACTION_STATES = ("failed", "timeout")
 
 
+# a REP-107 DiagnosticStatus; host/web/status.py's Status is the page's: two projections of
+# the event stream, each folded by its StatusFold until one fold serves both (issue 26 item 3)
 @dataclass(frozen=True)
 class Status:
     level: int
@@ -80,6 +82,7 @@ class _Component:
     held: bool = False
 
 
+# /diagnostics' fold of the event stream; host/web/fold.py has the page's (scripts/names.py)
 @dataclass
 class StatusFold:
     components: Sequence[str]

@@ -8,8 +8,15 @@ timeout, resources) and diagnoser (a failure explained by layer 0's diagnosis or
 """
 
 from host.skills.client import GoalHandle, WorldClient
-from host.skills.layer0 import Availability, Layer0View, State
+from host.skills.layer0 import Availability, AvailState, Layer0View
 from host.skills.skill import Skill, SkillSpec
 
-__all__ = ["Availability", "GoalHandle", "Layer0View", "Skill", "SkillSpec", "State",
-           "WorldClient"]
+__all__ = [
+           "AvailState",
+           "Availability",
+           "GoalHandle",
+           "Layer0View",
+           "Skill",
+           "SkillSpec",
+           "WorldClient",
+]

@@ -42,7 +42,7 @@ from host.events import (
 log = logging.getLogger(__name__)
 
 
-class State(StrEnum):
+class AvailState(StrEnum):
     OK = "ok"
     HOLD = "hold"
     UNAVAILABLE = "unavailable"
@@ -50,13 +50,13 @@ class State(StrEnum):
 
 @dataclass(frozen=True)
 class Availability:
-    state: State
+    state: AvailState
     components: tuple[str, ...] = ()
     why: str = ""
 
     @property
     def ok(self) -> bool:
-        return self.state is State.OK
+        return self.state is AvailState.OK
 
 
 class Layer0View:
@@ -117,25 +117,25 @@ class Layer0View:
         topics = [n for n in needs if n.startswith("/")]
         out = sorted(c for c in comps if c in self.quarantined)
         if out:
-            return Availability(State.UNAVAILABLE, tuple(out), "; ".join(
+            return Availability(AvailState.UNAVAILABLE, tuple(out), "; ".join(
                 f"{c} is quarantined ({self.quarantined[c]})" for c in out))
         held = sorted(c for c in comps if c in self.held)
         if held:
-            return Availability(State.UNAVAILABLE, tuple(held), "; ".join(
+            return Availability(AvailState.UNAVAILABLE, tuple(held), "; ".join(
                 f"{c} is held ({self.held[c]})" for c in held))
         sick = sorted(c for c in comps if c in self.suspects or c in self.repairing)
         down = sorted(t for t in topics if t in self.bad_topics)
         if sick:
             doing = "repairing" if self._repair_active() else "diagnosed abnormal"
-            return Availability(State.HOLD, tuple(sick),
+            return Availability(AvailState.HOLD, tuple(sick),
                                 f"layer 0: {', '.join(sick)} {doing}"
                                 + (f" ({', '.join(down)} down)" if down else ""))
         if down:
             blame = sorted(self.suspects)
-            return Availability(State.HOLD, tuple(blame),
+            return Availability(AvailState.HOLD, tuple(blame),
                                 f"layer 0: {', '.join(down)} down"
                                 + (f", diagnosed {', '.join(blame)}" if blame else ""))
-        return Availability(State.OK)
+        return Availability(AvailState.OK)
 
     def explain(self, needs: Iterable[str]) -> tuple[str, ...]:
         """The needed components layer 0 blames now (diagnosed, quarantined or held)."""

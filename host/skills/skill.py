@@ -33,7 +33,7 @@ from typing import Any
 
 from host.layers import SKILLS, Command, LayerObservation, Result
 from host.skills.client import WorldClient
-from host.skills.layer0 import Layer0View, State
+from host.skills.layer0 import AvailState, Layer0View
 
 log = logging.getLogger(__name__)
 
@@ -66,7 +66,7 @@ class Skill:
     async def execute(self, command: Command) -> Result:
         spec = self.spec
         avail = self.layer0.availability(spec.needs)
-        if avail.state is State.UNAVAILABLE:
+        if avail.state is AvailState.UNAVAILABLE:
             return Result.fail(SKILLS, f"{spec.name} is unavailable: {avail.why}",
                                avail.components)
         handle = await self.world.goal(spec.name, dict(command.params))
@@ -87,7 +87,7 @@ class Skill:
                         "state": msg.get("state", {})}, source=spec.name))
                 elif msg is not None and msg.get("event") == "result":
                     return self._result(msg, waiting)
-                if not self.flat and self.layer0.availability(spec.needs).state is State.HOLD:
+                if not self.flat and self.layer0.availability(spec.needs).state is AvailState.HOLD:
                     last_t = now  # layer 0 is on it: not a stall of this skill
                 waiting_since = (None if not waiting else
                                  now if waiting_since is None else waiting_since)

@@ -53,6 +53,7 @@ HISTORY = 120  # sparkline points per channel
 RECENT_ACTIONS = 30
 
 
+# the page's fold of the event stream; host/ros/status.py has /diagnostics' (scripts/names.py)
 class StatusFold:
     def __init__(self, source: MemoryStatusSource) -> None:
         self.source = source

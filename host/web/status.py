@@ -87,6 +87,7 @@ class OutOfRepair:
         return dataclasses.asdict(self)
 
 
+# the page's status; host/ros/status.py has /diagnostics' (scripts/names.py)
 @dataclass(frozen=True)
 class Status:
     """One snapshot; ``version`` grows with every change (the source sets it)."""

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from host.diagnosis import Kind, ModelError, check_system, generate, load_system
+from host.diagnosis import ComponentKind, ModelError, check_system, generate, load_system
 from tests.diagnosis.conftest import TEDUSAR
 
 GOOD = """\
@@ -32,16 +32,16 @@ def write(tmp_path: Path, text: str) -> Path:
 
 def test_tedusar_model_matches_the_paper() -> None:
     m = load_system(TEDUSAR)
-    kinds = {k: {c.name for c in m.by_kind(k)} for k in Kind}
-    assert kinds[Kind.HN] == {"imu_node", "joy_node"}
+    kinds = {k: {c.name for c in m.by_kind(k)} for k in ComponentKind}
+    assert kinds[ComponentKind.HN] == {"imu_node", "joy_node"}
     # the paper's, and beyond it the missions' thermal camera with its driver
-    assert kinds[Kind.SH] == {"jaguar", "hokuyo", "laser_alignment", "thermal_camera"}
-    assert kinds[Kind.H] == {"joystick", "imu", "board"}  # the board from its section
-    assert kinds[Kind.SN] == {"jaguar_node", "hokuyo_node", "laser_alignment_node",
+    assert kinds[ComponentKind.SH] == {"jaguar", "hokuyo", "laser_alignment", "thermal_camera"}
+    assert kinds[ComponentKind.H] == {"joystick", "imu", "board"}  # the board from its section
+    assert kinds[ComponentKind.SN] == {"jaguar_node", "hokuyo_node", "laser_alignment_node",
                               "thermal_camera_node"}
-    assert kinds[Kind.N] == {"jaguar_teleop_node", "hector_mapping", "rviz",
+    assert kinds[ComponentKind.N] == {"jaguar_teleop_node", "hector_mapping", "rviz",
                              "laser_alignment_control"}
-    channels = {c.name: c.channel for c in m.by_kind(Kind.SH)}
+    channels = {c.name: c.channel for c in m.by_kind(ComponentKind.SH)}
     assert channels == {"jaguar": 7, "hokuyo": 3, "laser_alignment": 1, "thermal_camera": 6}
     assert m.components["jaguar_node"].hardware == ("jaguar",)
     assert {"/odom", "/scan", "/map", "/imu_data", "/cmd_vel"} <= set(m.topics())

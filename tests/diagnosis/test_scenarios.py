@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from host.diagnosis import ALGORITHMS, Kind, Theory, load_system
+from host.diagnosis import ALGORITHMS, ComponentKind, Theory, load_system
 from tests.diagnosis.conftest import TEDUSAR, diagnoser_for
 
 # paper 000 §VI-A: Δbad = {j, h, la, lan, lac, hm, jn, hn, in, jtn, jyn}
@@ -24,8 +24,9 @@ def test_power_up_every_device_and_node_abnormal(tedusar: Theory, algorithm: str
     assert result.complete and result.explainable
     assert result.bad_sets() == [frozenset(PAPER_POWER_UP_BAD)]
     model = load_system(TEDUSAR)
-    observed_nodes = {c.name for c in model.by_kind(Kind.N, Kind.HN, Kind.SN)} - {"rviz"}
-    switchable = {c.name for c in model.by_kind(Kind.SH)}
+    observed_nodes = {c.name for c in model.by_kind(
+        ComponentKind.N, ComponentKind.HN, ComponentKind.SN)} - {"rviz"}
+    switchable = {c.name for c in model.by_kind(ComponentKind.SH)}
     assert observed_nodes | switchable == PAPER_POWER_UP_BAD | BEYOND_PAPER
     assert result.diagnoses[0].good == {"imu", "joystick", "rviz", "board"} | BEYOND_PAPER
 

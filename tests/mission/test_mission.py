@@ -9,7 +9,7 @@ import asyncio
 
 from host.events import Dispatch, KbChange, LayerResult, MissionState, TreeChange
 from host.layers import EXECUTIVE, MISSION
-from host.mission.dispatcher import Outcome
+from host.mission.dispatcher import DispatchOutcome
 from host.planning.temporal_planner import Scheduled, ground
 from tests.mission.harness import Harness, until
 
@@ -26,7 +26,7 @@ async def test_dispatch_with_a_failed_precondition_is_refused_and_nothing_runs(
     runner.kb.change([(a, True) for a in h.files.problem.init], "init")
     done = await runner.dispatcher.dispatch(step(h, "navigate", "corridor", "office",
                                                  "door_office"), 0)
-    assert done.outcome is Outcome.REFUSED and not done.result.success
+    assert done.outcome is DispatchOutcome.REFUSED and not done.result.success
     d, = h.of(Dispatch)
     assert not d.ok and "(at entrance)" in d.kb
     assert [(c.atom, c.when) for c in d.failed_checks] == [("(at corridor)", "start"),

@@ -7,7 +7,7 @@ import asyncio
 
 from host.events import ActionRecord, ActionState, DiagnosisRecord, PlanRecord, PlanStep
 from host.layers import SKILLS, Command
-from host.skills import Skill, SkillSpec, State
+from host.skills import AvailState, Skill, SkillSpec
 from tests.mission.harness import Harness, until
 
 NAV = SkillSpec("navigate", ("jaguar", "jaguar_node", "hokuyo", "hokuyo_node", "/scan"),
@@ -67,18 +67,18 @@ def test_layer_0_holds_a_skill_only_while_what_it_needs_is_abnormal_or_worked_on
     h = Harness()  # no world needed: layer 0 as the daemon's events say it
     needs = NAV.needs
     h.say(DiagnosisRecord((("hokuyo",),)))
-    assert h.layer0.availability(needs).state is State.HOLD
+    assert h.layer0.availability(needs).state is AvailState.HOLD
     h.say(PlanRecord("p1", (PlanStep("power_cycle", ("hokuyo",)),
                             PlanStep("restart_node", ("imu_node",))), ("hokuyo", "imu_node")))
     h.say(ActionRecord("a1", "power_cycle", ("hokuyo",), ActionState.STARTED, 1.0))
     h.say(DiagnosisRecord(((),)))  # the observers see it working again, the action still runs
     hold = h.layer0.availability(needs)
-    assert hold.state is State.HOLD and hold.components == ("hokuyo",)
+    assert hold.state is AvailState.HOLD and hold.components == ("hokuyo",)
     assert hold.why == "layer 0: hokuyo repairing"
     h.say(ActionRecord("a1", "power_cycle", ("hokuyo",), ActionState.SUCCEEDED, 1.0, 2.0))
     h.say(ActionRecord("a2", "restart_node", ("imu_node",), ActionState.STARTED, 2.0))
     assert h.layer0.availability(needs).ok  # the repair goes on, but not on what it needs
-    assert h.layer0.availability(("imu_node",)).state is State.HOLD
+    assert h.layer0.availability(("imu_node",)).state is AvailState.HOLD
     h.quarantine("hokuyo")
     gone = h.layer0.availability(needs)
-    assert gone.state is State.UNAVAILABLE and gone.components == ("hokuyo",)
+    assert gone.state is AvailState.UNAVAILABLE and gone.components == ("hokuyo",)

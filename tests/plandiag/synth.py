@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from host.atoms import Atom
 from host.plandiag.history import Alarm, History, HistoryStep, MissionObservation, StepResult, Where
 from host.plandiag.model import PlanModel, build_model
-from host.planning.domain import Atom as PAtom
+from host.planning.domain import PddlAtom as PAtom
 from host.planning.grounding import Grounder
 from host.planning.task import GroundOp
 

@@ -20,8 +20,8 @@ import host.cli
 from host.commands import explain
 from host.diagnosis.result import Bound
 from host.plandiag.engines import ENGINES
-from host.plandiag.limits import Limits, Order, Outcome
-from host.plandiag.problem import Problem
+from host.plandiag.limits import ExplainOutcome, Limits, Order
+from host.plandiag.problem import HistoryProblem
 from tests.plandiag.conftest import ARENA
 from tests.plandiag.test_engines import CASES, _case, _compile
 
@@ -37,12 +37,12 @@ MODES = [
 TOL = 1e-6  # -log prior: equal priors summed in another order are a tie
 
 
-def _cost(problem: Problem, d: frozenset[int]) -> float:
+def _cost(problem: HistoryProblem, d: frozenset[int]) -> float:
     return sum(-math.log(problem.faults[f].prior) for f in d)
 
 
-def _check(problem: Problem, every: set[frozenset[int]], limits: Limits, name: str,
-           out: Outcome, where: str) -> None:
+def _check(problem: HistoryProblem, every: set[frozenset[int]], limits: Limits, name: str,
+           out: ExplainOutcome, where: str) -> None:
     assert limits.max_card is not None
     kept = set(out.diagnoses)
     assert len(kept) == len(out.diagnoses), f"{where}: {name} repeats one"

@@ -11,7 +11,7 @@ from pathlib import Path
 from host.atoms import Atom
 from host.events import ConditionCheck, Dispatch, KbChange
 from host.layers import MISSION, Result
-from host.mission.dispatcher import Dispatched, Outcome
+from host.mission.dispatcher import Dispatched, DispatchOutcome
 from host.mission.files import load_mission
 from host.plandiag.history import Alarm, HistoryStep, MissionObservation, StepResult, Where
 from host.plandiag.live import MissionDiagnoser, corrections
@@ -51,10 +51,10 @@ def test_observations_go_where_the_diagnosis_can_use_them() -> None:
     d.on_event(dispatch(1, "search_room", ("office",)))
     d.sensed([(("victim-in", "victim_1", "office"), True), (("open", "door_office"), False),
               (("at", "office"), True)], "m1.1")
-    d.ended(Dispatched(Outcome.DONE, Result.ok(), "m1.1"), 1.5)
+    d.ended(Dispatched(DispatchOutcome.DONE, Result.ok(), "m1.1"), 1.5)
     check = ConditionCheck("(open door_office)", "over all", True, False)
     d.on_event(dispatch(2, "navigate", ("office", "corridor", "door_office"), False, (check,)))
-    d.ended(Dispatched(Outcome.REFUSED, Result.fail(MISSION, "refused"), "m1.2"), 2.0)
+    d.ended(Dispatched(DispatchOutcome.REFUSED, Result.fail(MISSION, "refused"), "m1.2"), 2.0)
     h = d.history({"office": "room", "corridor": "room", "door_office": "door",
                    "victim_1": "victim"}, "refused")
     assert "victim-in(victim_1,office)" in {str(a) for a in h.init}  # static: held all along

@@ -8,8 +8,8 @@ import pytest
 from pddl.parser.problem import ProblemParser
 
 from host.diagnosis.logic import parse_literal
-from host.diagnosis.model import Component, Kind, SystemModel
-from host.planning.domain import Atom, load_domain
+from host.diagnosis.model import Component, ComponentKind, SystemModel
+from host.planning.domain import PddlAtom, load_domain
 from host.planning.errors import ProblemError
 from host.repair.planner import RepairPlanner
 from host.repair.problem import build_problem, repair_model, to_pddl
@@ -19,12 +19,12 @@ from .conftest import TEDUSAR
 
 def test_initial_state_and_goal_of_a_diagnosis(tedusar: RepairPlanner) -> None:
     p = build_problem(tedusar.model, {"jaguar"}, [parse_literal("~running(rviz)")])
-    assert Atom("ab", ("jaguar",)) in p.init
-    assert [a for a in p.init if a.pred == "ab"] == [Atom("ab", ("jaguar",))]
-    assert Atom("on", ("hokuyo",)) in p.init  # healthy device: on (clause 1)
-    assert Atom("on", ("jaguar",)) not in p.init  # bad device, unobserved: assumed off
-    assert Atom("running", ("jaguar_node",)) in p.init  # healthy node runs (clause 5)
-    assert Atom("running", ("rviz",)) not in p.init  # observed
+    assert PddlAtom("ab", ("jaguar",)) in p.init
+    assert [a for a in p.init if a.pred == "ab"] == [PddlAtom("ab", ("jaguar",))]
+    assert PddlAtom("on", ("hokuyo",)) in p.init  # healthy device: on (clause 1)
+    assert PddlAtom("on", ("jaguar",)) not in p.init  # bad device, unobserved: assumed off
+    assert PddlAtom("running", ("jaguar_node",)) in p.init  # healthy node runs (clause 5)
+    assert PddlAtom("running", ("rviz",)) not in p.init  # observed
     assert p.assumed == ("~on(jaguar)",)
     assert {a.args[0] for a in p.goal} == set(tedusar.model.types)
 
@@ -34,7 +34,7 @@ def test_observations_override_defaults_and_unrelated_ones_are_ignored(
 ) -> None:
     obs = [parse_literal("on(jaguar)"), parse_literal("ok(/odom)")]
     p = build_problem(tedusar.model, {"jaguar"}, obs)
-    assert Atom("on", ("jaguar",)) in p.init
+    assert PddlAtom("on", ("jaguar",)) in p.init
     assert p.assumed == ()
     assert p.ignored == ("ok(/odom)",)
 
@@ -63,9 +63,9 @@ def test_adapter_types_needs_and_protected_channel(tedusar: RepairPlanner) -> No
 
 def test_dependency_cycles_are_dropped_so_nodes_can_start() -> None:
     comps = {
-        "a": Component("a", Kind.N, subscribes=("/b",), publishes={"/a": ("/b",)}),
-        "b": Component("b", Kind.N, subscribes=("/a",), publishes={"/b": ("/a",)}),
-        "c": Component("c", Kind.N, subscribes=("/a",), publishes={"/c": ("/a",)}),
+        "a": Component("a", ComponentKind.N, subscribes=("/b",), publishes={"/a": ("/b",)}),
+        "b": Component("b", ComponentKind.N, subscribes=("/a",), publishes={"/b": ("/a",)}),
+        "c": Component("c", ComponentKind.N, subscribes=("/a",), publishes={"/c": ("/a",)}),
     }
     m = repair_model(SystemModel("cyc", Path("."), comps))
     assert m.needs == {"a": (), "b": (), "c": ("a",)}

@@ -52,7 +52,7 @@ def test_node_spec_from_system_yaml(tmp_path: Path) -> None:
 
 
 def test_base_stops_without_power_or_commands() -> None:
-    world = D.World()
+    world = D.RobotWorld()
     base = D.Base(DeviceSpec("jaguar", "base", 20, 7), world, random.Random(1))
     base.command({"cmd": "velocity", "linear": 0.5, "angular": 1.0}, 0)
     assert abs(base.frame(1000)["yaw_rate"]) < 0.05  # not working: the motors are off
@@ -66,7 +66,7 @@ def test_base_stops_without_power_or_commands() -> None:
 
 
 def test_mapping_tracks_the_turn_and_stops_without_scans() -> None:
-    world = D.World()
+    world = D.RobotWorld()
     world.drive_ok = True
     lidar = D.Lidar(DeviceSpec("hokuyo", "lidar", 40, 3), world, random.Random(2))
     out: list[tuple[str, dict[str, Any]]] = []

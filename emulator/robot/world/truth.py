@@ -38,7 +38,7 @@ class Truth(Protocol):
 class Served(Protocol):
     """What ``BoardTruth`` reads of a device server (``emulator.robot.server.DeviceServer``)."""
 
-    device: D.Device
+    device: D.SimDevice
     state: str
 
     @property
@@ -75,7 +75,7 @@ class BoardTruth:
         return None
 
     @staticmethod
-    def _last_command(device: D.Device) -> int:
+    def _last_command(device: D.SimDevice) -> int:
         if isinstance(device, D.Base):
             return device.world.cmd_ms
         if isinstance(device, D.Servo):
