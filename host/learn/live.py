@@ -1,0 +1,114 @@
+"""Watching a running ROS 2 robot: every topic's arrivals and the graph, into a ``Recording``.
+
+``RosWatcher(rec)`` is an rclpy node (``dxboard_learn``, in a context of its own, spun by an
+executor in a thread) that, every ``GRAPH_PERIOD_S``, reads the ROS 2 graph (the nodes, what
+each publishes and subscribes, and whether it offers ``change_state``, the lifecycle service
+that makes it a managed node) and subscribes to every topic it has not yet (raw: nothing is
+deserialised; the sensor-data QoS, best effort, matches reliable and best-effort publishers).
+Each message's arrival is noted on the monotonic clock, under a lock (``probe`` reads the
+counts while a channel is off). ``close()`` stops the thread and the context; it is idempotent.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+import time
+from typing import Any
+
+from host.learn.infer import IGNORED
+from host.learn.recording import NodeSeen, Recording
+
+NODE_NAME = "dxboard_learn"
+GRAPH_PERIOD_S = 1.0
+LIFECYCLE_SERVICE = "lifecycle_msgs/srv/ChangeState"
+
+
+class RosWatcher:
+    def __init__(self, rec: Recording, domain: int | None = None) -> None:
+        import rclpy
+        from rclpy.context import Context
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.node import Node
+        from rclpy.signals import SignalHandlerOptions
+
+        self.rec = rec
+        self.lock = threading.Lock()
+        self.context = Context()
+        kw: dict[str, Any] = {} if domain is None else {"domain_id": domain}
+        rclpy.init(context=self.context, signal_handler_options=SignalHandlerOptions.NO, **kw)
+        self.node = Node(NODE_NAME, context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self._subs: dict[str, Any] = {}
+        self._closed = False
+        self.node.create_timer(GRAPH_PERIOD_S, self.read_graph)
+        self.thread = threading.Thread(target=self._spin, name="learn-ros2", daemon=True)
+        self.thread.start()
+
+    def _spin(self) -> None:
+        from rclpy.executors import ExternalShutdownException
+
+        with contextlib.suppress(ExternalShutdownException):
+            self.executor.spin()
+
+    def read_graph(self) -> None:
+        """Note every node and its topics; subscribe to every new topic."""
+        from rclpy.qos import qos_profile_sensor_data
+
+        from host.observers.sources.ros2_convert import message_type
+
+        node = self.node
+        for name, ns in node.get_node_names_and_namespaces():
+            if name == NODE_NAME or name.startswith("_"):
+                continue
+            try:
+                pubs = node.get_publisher_names_and_types_by_node(name, ns)
+                subs = node.get_subscriber_names_and_types_by_node(name, ns)
+                srvs = node.get_service_names_and_types_by_node(name, ns)
+            except Exception:  # the node left between the two calls
+                continue
+            managed = any(LIFECYCLE_SERVICE in types for _, types in srvs)
+            with self.lock:
+                old = self.rec.nodes.get(name, NodeSeen(name))
+                self.rec.nodes[name] = NodeSeen(
+                    name, tuple(dict.fromkeys((*old.publishes, *(t for t, _ in pubs)))),
+                    tuple(dict.fromkeys((*old.subscribes, *(t for t, _ in subs)))),
+                    old.managed or managed)
+        for topic, types in node.get_topic_names_and_types():
+            if topic in self._subs or IGNORED.search(topic) or not types:
+                continue
+            try:
+                cls = message_type(types[0])
+            except Exception:  # a type this machine cannot import
+                self._subs[topic] = None
+                continue
+            with self.lock:
+                self.rec.types[topic] = types[0]
+            self._subs[topic] = node.create_subscription(
+                cls, topic, self._on(topic), qos_profile_sensor_data, raw=True)
+
+    def _on(self, topic: str) -> Any:
+        def on(_msg: Any) -> None:
+            now = time.monotonic()
+            with self.lock:
+                self.rec.add(topic, now)
+        return on
+
+    def count(self, topic: str, since: float) -> int:
+        """Messages of ``topic`` that arrived at ``since`` or later."""
+        with self.lock:
+            return sum(1 for t in self.rec.arrivals.get(topic, ()) if t >= since)
+
+    def present(self) -> set[str]:
+        """The nodes in the graph now."""
+        return {n for n, _ in self.node.get_node_names_and_namespaces()}
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        self.executor.shutdown(timeout_sec=2.0)
+        self.node.destroy_node()
+        self.context.try_shutdown()
+        self.thread.join(timeout=5.0)
