@@ -151,8 +151,9 @@ def _learn(args: argparse.Namespace) -> int:
                             "leave out --board and --probe with --bag")
         from host.learn.bagsource import read_bag
 
-        _say(f"reading the bag {args.bag}")
         rec = read_bag(Path(args.bag))
+        _say(f"read the bag {args.bag}: {sum(map(len, rec.arrivals.values()))} messages "
+             f"of {len(rec.arrivals)} topics over {rec.end - rec.start:.1f} s")
     else:
         from host.board.keys import load_key
         from host.learn.session import learn_live
