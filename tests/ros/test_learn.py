@@ -28,6 +28,7 @@ from host.observers.config import load_observers
 from host.observers.payload import Message, encode
 from host.observers.sources.ros2_graph import GRAPH
 from host.observers.sources.ros2_message import RosMessage
+from host.observers.topics import FrequencyObserver
 from host.ros import graphlog
 from host.ros.bag import BagWriter
 from tests.ros.conftest import Peer
@@ -75,7 +76,7 @@ def test_learn_the_second_robot(tmp_path: Path, env: dict[str, str], second_robo
     assert "camera: {lifecycle: true}" not in text
     assert "# sensor_msgs/msg/Image; n=" in text
     topics = {o.topics[0]: o for o in load_observers(out, model).observers
-              if type(o).__name__ == "FrequencyObserver"}
+              if isinstance(o, FrequencyObserver)}
     camera = topics["/camera/image"]
     assert abs(camera.rate - RATE) < 0.1 * RATE  # the publisher's truth, a timer on a busy box
     assert camera.tolerance < camera.rate
