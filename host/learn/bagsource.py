@@ -29,7 +29,8 @@ def read_bag(path: Path) -> Recording:
                 for name in nodes if isinstance(nodes, list) else []:
                     rec.nodes.setdefault(str(name), NodeSeen(str(name)))
                 continue
-            rec.add(msg.topic, msg.time, msg.type_name)
+            stamp = msg.stamp
+            rec.add(msg.topic, msg.time, msg.type_name, stamp=stamp or None)
         rec.end = max([rec.end, *(ts[-1] for ts in rec.arrivals.values() if ts)])
         return rec
     finally:

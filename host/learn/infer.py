@@ -141,7 +141,7 @@ def infer(rec: Recording, robot: str, ros2: bool = True) -> LearnedModel:
             publishers[t] = (name,)
     learned = []
     for t in topics:
-        ev = learn_rate(rec.watched(t))
+        ev = learn_rate(rec.watched(t), rec.watched_stamps(t))
         learned.append(LearnedTopic(t, rec.types.get(t, ""), publishers[t], ev,
                                     propose(ev) if ev else None))
     rates = {lt.name: lt.evidence.rate for lt in learned if lt.evidence}

@@ -1,12 +1,14 @@
 """Watching a running ROS 2 robot: every topic's arrivals and the graph, into a ``Recording``.
 
 ``RosWatcher(rec)`` is an rclpy node (``dxboard_learn``, in a context of its own, spun by an
-executor in a thread) that, every ``GRAPH_PERIOD_S``, reads the ROS 2 graph (the nodes, what
-each publishes and subscribes, and whether it offers ``change_state``, the lifecycle service
-that makes it a managed node) and subscribes to every topic it has not yet (raw: nothing is
-deserialised; the sensor-data QoS, best effort, matches reliable and best-effort publishers).
-Each message's arrival is noted on the monotonic clock, under a lock (``probe`` reads the
-counts while a channel is off). ``close()`` stops the thread and the context; it is idempotent.
+executor in a thread) that, every ``GRAPH_PERIOD_S``, reads the ROS 2 graph (the nodes, what each
+publishes and subscribes, and whether it offers ``change_state``, the lifecycle service that makes
+it a managed node) and subscribes to every topic it has not yet (raw: nothing is deserialised; the
+sensor-data QoS, best effort, matches reliable and best-effort publishers). Each message's arrival
+is noted on the monotonic clock, with its header's stamp when its type has one (read from the
+bytes: the publisher's clock, free of this process's scheduling), under a lock (``probe`` reads the
+counts while a channel is off: ``count`` counts by the stamps where there are some). ``close()``
+stops the thread and the context; it is idempotent.
 """
 
 from __future__ import annotations
@@ -18,10 +20,12 @@ from typing import Any
 
 from host.learn.infer import IGNORED
 from host.learn.recording import NodeSeen, Recording
+from host.observers.sources.ros2_message import RosMessage
 
 NODE_NAME = "dxboard_learn"
 GRAPH_PERIOD_S = 1.0
 LIFECYCLE_SERVICE = "lifecycle_msgs/srv/ChangeState"
+RECENT = 200  # messages that set the stamp clock's offset
 
 
 class RosWatcher:
@@ -86,18 +90,25 @@ class RosWatcher:
             with self.lock:
                 self.rec.types[topic] = types[0]
             self._subs[topic] = node.create_subscription(
-                cls, topic, self._on(topic), qos_profile_sensor_data, raw=True)
+                cls, topic, self._on(topic, types[0]), qos_profile_sensor_data, raw=True)
 
-    def _on(self, topic: str) -> Any:
-        def on(_msg: Any) -> None:
+    def _on(self, topic: str, type_name: str) -> Any:
+        def on(raw: bytes) -> None:
             now = time.monotonic()
+            stamp = RosMessage(now, topic, raw, type_name).stamp  # read from the CDR bytes
             with self.lock:
-                self.rec.add(topic, now)
+                self.rec.add(topic, now, stamp=stamp or None)
         return on
 
     def count(self, topic: str, since: float) -> int:
-        """Messages of ``topic`` that arrived at ``since`` or later."""
+        """Messages of ``topic`` *sent* at ``since`` or later: for a stamped type, those whose
+        stamp, moved onto this clock by the fastest delivery seen lately, is that late (a busy
+        receiver still delivers messages sent before a channel went off); else the arrivals."""
         with self.lock:
+            pairs = self.rec.stamps.get(topic)
+            if pairs:
+                shift = min(a - s for a, s in pairs[-RECENT:])
+                return sum(1 for _, s in pairs if s + shift >= since)
             return sum(1 for t in self.rec.arrivals.get(topic, ()) if t >= since)
 
     def present(self) -> set[str]:
@@ -108,7 +119,7 @@ class RosWatcher:
         if self._closed:
             return
         self._closed = True
-        self.executor.shutdown(timeout_sec=2.0)
+        self.executor.shutdown(timeout_sec=5.0)
+        self.thread.join(timeout=10.0)  # the spin has stopped before the node goes
         self.node.destroy_node()
         self.context.try_shutdown()
-        self.thread.join(timeout=5.0)

@@ -28,9 +28,9 @@ def _num(x: float) -> str:
 def rate_evidence(ev: RateEvidence) -> str:
     """One line of a topic's rate evidence."""
     kind = "periodic" if ev.periodic else "reactive"
-    return (f"n={ev.n} over {ev.span:.1f} s: {ev.rate:.3g} Hz, spread {ev.spread:.2g} Hz "
-            f"over {ev.windows} windows, period cv {ev.cv:.2f}, largest gap "
-            f"{ev.max_period * ev.rate:.1f} periods: {kind}")
+    return (f"n={ev.n} over {ev.span:.1f} s: {ev.rate:.3g} Hz ({ev.clock} clock), spread "
+            f"{ev.spread:.2g} Hz over {ev.windows} windows, cv {ev.cv:.2f}, "
+            f"largest gap {ev.max_period * ev.rate:.1f} periods: {kind}")
 
 
 def _device(d: LearnedDevice, drivers: list[str]) -> list[str]:
@@ -45,7 +45,8 @@ def _device(d: LearnedDevice, drivers: list[str]) -> list[str]:
         lines.append(f"    # probe: channel {p.channel} off {p.on - p.off:.1f} s stopped "
                      f"{_flow(p.stopped) if p.stopped else 'no topic'}"
                      + (f", nodes gone {_flow(p.gone)}" if p.gone else "")
-                     + f"; drivers: {_flow(drivers) if drivers else 'none found'}")
+                     + f"; drivers: {_flow(drivers) if drivers else 'none found'}"
+                     + (f"; {_flow(p.lost)} did not come back" if p.lost else ""))
     return lines
 
 

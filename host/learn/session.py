@@ -68,7 +68,7 @@ async def _learn(opts: LearnOptions, say: Callable[[str], None]) -> Recording:
         else:
             from host.board.client import BoardClient
 
-            async with BoardClient(opts.board, opts.key, reconnect=False) as client:
+            async with BoardClient(opts.board, opts.key) as client:
                 await watch_board(client, rec, until)
                 if opts.probe:
                     say("probing: each unprotected channel off in turn, at most 2 s each")

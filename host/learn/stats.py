@@ -5,9 +5,10 @@ seconds and gives, per window, the ``message_period`` statistics that ROS 2 topi
 publish (``rclcpp::topic_statistics``: the periods between consecutive arrivals that end in the
 window, their mean, standard deviation and maximum, and how many there were). ``learn_rate``
 folds them into a ``RateEvidence``: the mean rate over the whole recording, the spread of the
-per-window rates, the largest gap, and whether the topic is *periodic* (the periods' coefficient
-of variation below ``PERIODIC_CV``: a timer or a device's frame clock) or *reactive* (irregular
-arrivals: published in answer to events, which a frequency observer would misjudge). For a
+per-window rates, the largest gap, and whether the topic is *periodic* (its rate over long
+windows varies by less than ``PERIODIC_CV``: a timer or a device's frame clock) or *reactive*
+(published in answer to events, which a frequency observer would misjudge). Where the
+messages carry the publisher's header stamps, the rate and the gaps are measured on them. For a
 periodic topic ``propose`` gives the general observer's ``rate``, ``tolerance``, ``window`` and
 ``silence`` (``host.observers.config``) that the evidence supports: a window holding about
 ``MESSAGES_PER_WINDOW`` messages, a tolerance wide enough for the measured spread and for the
@@ -23,12 +24,16 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-PERIODIC_CV = 0.5  # periods' stddev / mean below this: periodic
+PERIODIC_CV = 0.3  # the long windows' rate: stddev / mean below this: periodic
+STEADY_MESSAGES = 20  # a long window holds this many messages (at least 2 s)
+DROP_FACTOR = 1.5  # a sender's period this many times the median: a message was lost
+POISSON_SHARE = 0.5  # arrivals: steady when the counts vary less than this share of Poisson
+MAX_SILENCE = 10.0  # periods: a longer silence would only slow the detection down
 MIN_SAMPLES = 5  # fewer arrivals than this back no rate at all
 MESSAGES_PER_WINDOW = 10  # the proposed window holds about this many messages
 MIN_WINDOW_S = 0.5
 SPREAD_FACTOR = 4.0  # tolerance >= this many standard deviations of the per-window rate
-MAX_TOLERANCE = 0.75  # tolerance < this share of the rate: a silent topic is never ok
+MAX_TOLERANCE = 0.5  # tolerance <= this share of the rate: a silent topic is never ok
 MIN_SILENCE = 4.0  # periods (the observers' default)
 GAP_MARGIN = 1.5  # silence >= this times the largest gap seen (in periods)
 
@@ -46,9 +51,12 @@ class PeriodWindow:
 
 @dataclass(frozen=True)
 class RateEvidence:
-    """What a topic's arrivals say: ``n`` messages over ``span`` s, mean ``rate`` (Hz), the
-    per-window rates' spread (Hz, stddev), the periods' coefficient of variation and largest
-    period (s), and how many windows back it."""
+    """What a topic's arrivals say: ``n`` messages over ``span`` s, the ``rate`` (Hz), the
+    per-window rates' spread (Hz, stddev, over ``windows`` windows), ``cv`` (how unsteady: on
+    the sender's clock the periods' stddev / mean; on arrivals the long windows' counts'
+    variation scaled so that ``PERIODIC_CV`` is ``POISSON_SHARE`` of random events'), the
+    largest period (s), and whose ``clock`` measured the periods (``sender``: header stamps;
+    ``arrival``)."""
 
     n: int
     span: float
@@ -57,6 +65,7 @@ class RateEvidence:
     cv: float
     max_period: float
     windows: int
+    clock: str = "arrival"
 
     @property
     def periodic(self) -> bool:
@@ -98,21 +107,61 @@ def period_windows(times: Sequence[float], window: float) -> list[PeriodWindow]:
     return out
 
 
-def learn_rate(times: Sequence[float], window: float | None = None) -> RateEvidence | None:
-    """The rate evidence of these arrival times (None: fewer than ``MIN_SAMPLES``). The
-    per-window spread is measured in the window ``propose`` would pick unless one is given."""
+def window_counts(times: Sequence[float], window: float) -> list[int]:
+    """Messages per whole window of ``window`` s from the first (empty windows count)."""
+    ts = sorted(times)
+    if not ts or window <= 0:
+        return []
+    n = int((ts[-1] - ts[0]) / window)
+    counts = [0] * n
+    for t in ts:
+        i = int((t - ts[0]) / window)
+        if i < n:
+            counts[i] += 1
+    return counts
+
+
+def learn_rate(times: Sequence[float], stamps: Sequence[float] = ()) -> RateEvidence | None:
+    """The rate evidence of these arrival times (None: fewer than ``MIN_SAMPLES``).
+
+    ``stamps`` (the publisher's header stamps of the same messages, when its type has one)
+    are the sender's clock: free of the receiver's scheduling (a busy machine delivers in
+    bursts), so the rate is one over their median period (robust to lost messages too), the
+    gaps are theirs and periodic means steady periods. On arrivals alone, periodic means a
+    count over long windows (``STEADY_MESSAGES`` messages each) far steadier than random
+    events': a burst moves a message from one window to the next only. The spread is the per-window
+    rate's standard deviation in the window ``propose`` picks, on the arrivals (what the
+    daemon's observer counts)."""
     ts = sorted(times)
     if len(ts) < MIN_SAMPLES or ts[-1] <= ts[0]:
         return None
     span = ts[-1] - ts[0]
-    rate = (len(ts) - 1) / span
-    periods = [b - a for a, b in itertools.pairwise(ts)]
-    mean_p, std_p = _mean_std(periods)
-    w = window if window is not None else choose_window(rate)
-    rates = [c.count / w for c in period_windows(ts, w)[:-1]] or [rate]  # the last is partial
+    sent = sorted(stamps)
+    sender = len(sent) >= MIN_SAMPLES and sent[-1] > sent[0]
+    clock = sent if sender else ts
+    periods = [b - a for a, b in itertools.pairwise(clock)]
+    positive = sorted(p for p in periods if p > 0)
+    rate = 1.0 / positive[len(positive) // 2] if sender and positive else (len(ts) - 1) / span
+    if sender and positive:
+        # the sender's periods, a lost message's double period aside: steady or not
+        kept = [p for p in positive if p < DROP_FACTOR * positive[len(positive) // 2]]
+        mean_p, std_p = _mean_std(kept)
+        steadiness = std_p / mean_p
+    else:
+        # arrivals: a busy receiver bunches them, so count over long windows and compare
+        # with events at random (a Poisson count varies by 1/sqrt(n)): steady counts vary
+        # far less
+        long_w = max(2.0, STEADY_MESSAGES / rate)
+        counts = window_counts(ts, long_w)
+        per = [c / long_w for c in counts]
+        poisson = 1.0 / math.sqrt(rate * long_w)
+        steadiness = (_mean_std(per)[1] / rate / poisson * PERIODIC_CV / POISSON_SHARE
+                      if len(per) >= 2 else 0.0)
+    w = choose_window(rate)
+    rates = [c / w for c in window_counts(ts, w)] or [rate]
     _, spread = _mean_std(rates)
-    return RateEvidence(len(ts), span, rate, spread, std_p / mean_p if mean_p > 0 else 0.0,
-                        max(periods), len(rates))
+    return RateEvidence(len(ts), span, rate, spread, steadiness, max(periods), len(rates),
+                        "sender" if sender else "arrival")
 
 
 def choose_window(rate: float) -> float:
@@ -136,7 +185,7 @@ def propose(ev: RateEvidence) -> RateProposal | None:
     tolerance = max(SPREAD_FACTOR * ev.spread, quantum, 0.25 * ev.rate)
     tolerance = min(tolerance, MAX_TOLERANCE * ev.rate)
     gap = ev.max_period * ev.rate  # the largest gap in periods
-    silence = max(MIN_SILENCE, math.ceil(GAP_MARGIN * gap))
+    silence = min(MAX_SILENCE, max(MIN_SILENCE, math.ceil(GAP_MARGIN * gap)))
     rate = _round(ev.rate)
     window = max(window, _round(2.0 / rate + 0.005))  # the loader wants >= 2 messages a window
     return RateProposal(rate, _round(tolerance), window, float(silence))

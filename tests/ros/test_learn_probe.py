@@ -123,3 +123,37 @@ def test_learn_with_the_probe_finds_the_hokuyo_and_its_driver(
     assert model.protected == frozenset({PROTECTED})
     assert all(c.channel != PROTECTED for c in model.components.values())
     assert robot.channel("hokuyo")["commanded"]
+
+
+class NeverBack:
+    """Topic /a is published until the first channel's probe switches it off and never again
+    (a driver that does not reconnect); /b goes on throughout."""
+
+    def __init__(self, noting: Noting) -> None:
+        self.noting = noting
+
+    def count(self, topic: str, since: float) -> int:
+        offs = [t for _, on, t in self.noting.switches if not on]
+        return 1 if topic == "/b" or not offs else int(since < offs[0])
+
+    def present(self) -> set[str]:
+        return set()
+
+
+def test_a_topic_that_never_comes_back_is_no_later_probes_evidence(robot: Robot) -> None:
+    async def run() -> Recording:
+        async with BoardClient(robot.urls["board"], bytes.fromhex(KEY_HEX)) as client:
+            for ch in (0, 1, 3):
+                await client.switch(ch, True)
+            rec = Recording(time.monotonic(), 0.0)
+            rec.add("/a", time.monotonic())
+            rec.add("/b", time.monotonic())
+            await watch_board(client, rec, time.monotonic() + 0.5)
+            noting = Noting(client)
+            await probe(noting, rec, NeverBack(noting), lambda line: None)
+            return rec
+
+    rec = asyncio.run(run())
+    first, *later = rec.probes
+    assert (first.stopped, first.kept, first.lost) == (("/a",), ("/b",), ("/a",))
+    assert later and all(p.stopped == () and p.kept == ("/b",) for p in later)

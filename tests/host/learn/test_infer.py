@@ -4,6 +4,7 @@ probes, current bands, and a written model that loads as ``dxboard run`` loads i
 
 from __future__ import annotations
 
+import math
 import random
 from pathlib import Path
 
@@ -138,3 +139,25 @@ def test_a_topic_without_a_known_publisher_is_named_for_review(tmp_path: Path) -
     assert "publisher_of_chatter" in text and "rename" in text
     (tmp_path / "system.yaml").write_text(text)
     assert check_written(tmp_path) == []
+
+
+def test_a_busy_receiver_bunching_a_periodic_topic_does_not_make_it_reactive() -> None:
+    sent = ticks(40, 60, jitter=0.0005)
+    bunched = [math.ceil(t / 0.4) * 0.4 + 0.001 * (i % 7) for i, t in enumerate(sent)]
+    lost = [t for i, t in enumerate(sent) if i % 9 != 4]  # and one message in 9 lost
+    by_stamps = learn_rate(bunched[:len(lost)], lost)
+    assert by_stamps is not None and by_stamps.clock == "sender" and by_stamps.periodic
+    assert by_stamps.rate == pytest.approx(40, rel=0.02)  # the sender's rate, losses aside
+    by_arrivals = learn_rate(bunched)
+    assert by_arrivals is not None and by_arrivals.clock == "arrival" and by_arrivals.periodic
+    assert by_arrivals.rate == pytest.approx(40, rel=0.02)
+
+
+def test_random_events_on_the_senders_clock_are_reactive() -> None:
+    rng = random.Random(5)
+    t, times = 0.0, []
+    while t < 60:
+        times.append(t)
+        t += rng.expovariate(5.0)
+    ev = learn_rate([x + 0.01 for x in times], times)
+    assert ev is not None and ev.clock == "sender" and not ev.periodic
