@@ -11,8 +11,10 @@ hand-written one (issue 28, item 3).
    its model (components, topics, dependencies, rates, tolerances, channels, bands); only the
    deployment differs, because the campaign's daemon starts the nodes itself on Zenoh: the
    written model's ``processes:`` section is appended, ``source: {kind: ros2}`` and
-   ``external:`` are left out and each node's ``graph: true`` becomes ``supervised: true``
-   (``deploy``). ``dxboard model diff`` of written against learned is printed.
+   ``external:`` are left out, each node's ``graph: true`` becomes ``supervised: true`` and
+   the nodes read their behaviour from the written model, as the virtual robot's nodes
+   always do (``DXBOARD_ROBOT``; ``deploy``). ``dxboard model diff`` of written against
+   learned is printed.
 2. *Campaign*: ``benchmarks/campaign.py``'s ``Campaign`` runs the same seeded fault set (its
    ``plan_trials``) and a fault-free run of ``--quiet-s`` seconds on each model in turn. A
    trial's *first diagnosis* is the basis of its first repair plan (``Trial.first_plan_basis``);
@@ -124,7 +126,10 @@ def deploy(learned: Path, dest: Path) -> Path:
         if m and m.group(1) not in started:
             continue
         lines.append(line.replace("{graph: true}", "{supervised: true}"))
-    text = "\n".join(lines) + "\n\nprocesses:\n" + written.split("\nprocesses:\n", 1)[1]
+    # the nodes are the virtual robot's: they read their behaviour from the written model
+    procs = re.sub(r"^(  \w+: \{)", rf'\1env: {{DXBOARD_ROBOT: "{TEDUSAR}"}}, ',
+                   written.split("\nprocesses:\n", 1)[1], flags=re.M)
+    text = "\n".join(lines) + "\n\nprocesses:\n" + procs
     (d / "system.yaml").write_text(text)
     return d
 

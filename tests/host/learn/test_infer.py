@@ -46,13 +46,18 @@ def test_a_periodic_topic_gets_an_observer_that_its_own_jitter_keeps_ok(rate: fl
         assert abs(w.count / p.window - p.rate) < p.tolerance
 
 
-def test_a_reactive_topic_gets_no_rate_observer() -> None:
-    rng = random.Random(3)
+def events(rate: float, span: float, seed: int) -> list[float]:
+    """Random events (a Poisson process) at ``rate`` for ``span`` s."""
+    rng = random.Random(seed)
     t, times = 0.0, []
-    while t < 60:
+    while t < span:
         times.append(t)
-        t += rng.expovariate(2.0)
-    ev = learn_rate(times)
+        t += rng.expovariate(rate)
+    return times
+
+
+def test_a_reactive_topic_gets_no_rate_observer() -> None:
+    ev = learn_rate(events(2.0, 60, 3))
     assert ev is not None and not ev.periodic and propose(ev) is None
 
 
@@ -154,10 +159,6 @@ def test_a_busy_receiver_bunching_a_periodic_topic_does_not_make_it_reactive() -
 
 
 def test_random_events_on_the_senders_clock_are_reactive() -> None:
-    rng = random.Random(5)
-    t, times = 0.0, []
-    while t < 60:
-        times.append(t)
-        t += rng.expovariate(5.0)
+    times = events(5.0, 60, 5)
     ev = learn_rate([x + 0.01 for x in times], times)
     assert ev is not None and ev.clock == "sender" and not ev.periodic
