@@ -104,11 +104,30 @@ def learn(out: Path, duration: float, env: dict[str, str]) -> float:
 
 
 def _graph_has(names: list[str], env: dict[str, str]) -> bool:
-    p = subprocess.run([sys.executable, "-c", "import rclpy,time;from rclpy.node import Node;"
-                        "rclpy.init();n=Node('bench_probe');time.sleep(2);"
-                        "print(' '.join(x for x,_ in n.get_node_names_and_namespaces()))"],
-                       env=env, capture_output=True, text=True, timeout=120)
-    return set(names) - {"rviz"} <= set(p.stdout.split())
+    """Every node (rviz aside) in the graph, and /scan and /odom publishing."""
+    p = subprocess.run([sys.executable, "-c", GRAPH_CHECK], env=env, capture_output=True,
+                       text=True, timeout=300)
+    seen = p.stdout.split()
+    return set(names) - {"rviz"} <= set(seen) and {"/scan", "/odom"} <= set(seen)
+
+
+GRAPH_CHECK = """
+import rclpy, time
+from rclpy.node import Node
+from rclpy.qos import qos_profile_sensor_data
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import LaserScan
+rclpy.init()
+n = Node("bench_graph_check")
+got = set()
+for topic, kind in (("/scan", LaserScan), ("/odom", Odometry)):
+    n.create_subscription(kind, topic, lambda m, t=topic: got.add(t), qos_profile_sensor_data,
+                          raw=True)
+end = time.monotonic() + 5
+while time.monotonic() < end:
+    rclpy.spin_once(n, timeout_sec=0.1)
+print(" ".join([x for x, _ in n.get_node_names_and_namespaces()] + sorted(got)))
+"""
 
 
 def deploy(learned: Path, dest: Path) -> Path:

@@ -21,6 +21,7 @@ from host.errors import UserError
 from host.learn.recording import Recording
 
 PROGRESS_S = 10.0
+CONNECT_S = 30.0  # the board's HELLO: generous, a robot's computer may be busy
 
 
 @dataclass(frozen=True)
@@ -68,7 +69,7 @@ async def _learn(opts: LearnOptions, say: Callable[[str], None]) -> Recording:
         else:
             from host.board.client import BoardClient
 
-            async with BoardClient(opts.board, opts.key) as client:
+            async with BoardClient(opts.board, opts.key, connect_timeout_s=CONNECT_S) as client:
                 await watch_board(client, rec, until)
                 if opts.probe:
                     say("probing: each unprotected channel off in turn, at most 2 s each")
