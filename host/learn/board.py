@@ -76,11 +76,13 @@ async def probe(client: Any, rec: Recording, seen: Seen,
     probed."""
     state = await _retry(client.state)
     done: list[int] = []
-    since = time.monotonic() - ACTIVE_S
+    since = time.monotonic() - ACTIVE_S  # the watch's last seconds
     for ch in state.channels:
         c = rec.channels.get(ch.channel)
         if c is None or c.protected or not ch.commanded:
             continue
+        # evidence of what is live: ACTIVE_S of messages, all after the last probe
+        await asyncio.sleep(max(0.0, since + ACTIVE_S - time.monotonic()))
         live = [t for t in rec.arrivals if seen.count(t, since) > 0]
         before = seen.present()
         progress(f"probe: channel {ch.channel} ({c.name}) off for {OFF_S:g} s")

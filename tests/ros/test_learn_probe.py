@@ -125,16 +125,21 @@ def test_learn_with_the_probe_finds_the_hokuyo_and_its_driver(
     assert robot.channel("hokuyo")["commanded"]
 
 
+PERIOD = 0.1
+
+
 class NeverBack:
-    """Topic /a is published until the first channel's probe switches it off and never again
-    (a driver that does not reconnect); /b goes on throughout."""
+    """Topic /a is published every ``PERIOD`` until the first channel's probe switches it off
+    and never again (a driver that does not reconnect); /b goes on throughout."""
 
     def __init__(self, noting: Noting) -> None:
         self.noting = noting
 
     def count(self, topic: str, since: float) -> int:
+        """Messages sent at ``since`` or later, one every ``PERIOD`` s."""
         offs = [t for _, on, t in self.noting.switches if not on]
-        return 1 if topic == "/b" or not offs else int(since < offs[0])
+        until = time.monotonic() if topic == "/b" or not offs else offs[0]
+        return max(0, int((until - since) / PERIOD))
 
     def present(self) -> set[str]:
         return set()
