@@ -31,9 +31,9 @@ OFF_S = 1.5  # each channel off this long (the round trips keep it under 2 s)
 SETTLE_S = 0.5  # messages already under way when the channel went off
 ACTIVE_S = 2.0  # a topic with a message in the last this many seconds is live before a probe
 RECOVER_S = 5.0  # after a channel is on again, its topics get this long to come back
-RESTORE_TRIES = 5
-RETRY_S = 0.5  # between tries of a request whose link was down (the client reconnects)
-TRIES = 5
+RESTORE_TRIES = 10
+RETRY_S = 1.0  # between tries of a request whose link was down (the client reconnects)
+TRIES = 10
 
 
 class Seen(Protocol):
@@ -74,6 +74,22 @@ async def probe(client: Any, rec: Recording, seen: Seen,
                 progress: Callable[[str], None]) -> list[int]:
     """Switch each unprotected channel that is on off in turn (see the module); the channels
     probed."""
+    keep = asyncio.create_task(_keep_link(client))
+    try:
+        return await _probe(client, rec, seen, progress)
+    finally:
+        keep.cancel()
+        await asyncio.gather(keep, return_exceptions=True)
+
+
+async def _keep_link(client: Any) -> None:
+    """Readings, discarded: the link's watchdog calls a board that sends nothing lost."""
+    async for _ in client.subscribe(5):
+        pass
+
+
+async def _probe(client: Any, rec: Recording, seen: Seen,
+                 progress: Callable[[str], None]) -> list[int]:
     state = await _retry(client.state)
     done: list[int] = []
     since = time.monotonic() - ACTIVE_S  # the watch's last seconds
