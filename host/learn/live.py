@@ -3,8 +3,8 @@
 ``RosWatcher(rec)`` is an rclpy node (``dxboard_learn``, in a context of its own, spun by an
 executor in a thread) that, every ``GRAPH_PERIOD_S``, reads the ROS 2 graph (the nodes, what each
 publishes and subscribes, and whether it offers ``change_state``, the lifecycle service that makes
-it a managed node) and subscribes to every topic it has not yet (raw: nothing is deserialised; the
-sensor-data QoS, best effort, matches reliable and best-effort publishers). Each message's arrival
+it a managed node) and subscribes to every topic it has not yet (raw: nothing is deserialised;
+reliable where every publisher is, else best effort, which matches both). Each message's arrival
 is noted on the monotonic clock, with its header's stamp when its type has one (read from the
 bytes: the publisher's clock, free of this process's scheduling), under a lock (``probe`` reads the
 counts while a channel is off: ``count`` counts by the stamps where there are some). ``close()``
@@ -58,8 +58,6 @@ class RosWatcher:
 
     def read_graph(self) -> None:
         """Note every node and its topics; subscribe to every new topic."""
-        from rclpy.qos import qos_profile_sensor_data
-
         from host.observers.sources.ros2_convert import message_type
 
         node = self.node
@@ -90,7 +88,18 @@ class RosWatcher:
             with self.lock:
                 self.rec.types[topic] = types[0]
             self._subs[topic] = node.create_subscription(
-                cls, topic, self._on(topic, types[0]), qos_profile_sensor_data, raw=True)
+                cls, topic, self._on(topic, types[0]), self._qos(topic), raw=True)
+
+    def _qos(self, topic: str) -> Any:
+        """Reliable when every publisher is (a large message, a map, loses a fragment best
+        effort on a busy machine, and then all of it); else best effort, which matches
+        both kinds."""
+        from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+
+        pubs = self.node.get_publishers_info_by_topic(topic)
+        if pubs and all(p.qos_profile.reliability == ReliabilityPolicy.RELIABLE for p in pubs):
+            return QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+        return qos_profile_sensor_data
 
     def _on(self, topic: str, type_name: str) -> Any:
         def on(raw: bytes) -> None:
