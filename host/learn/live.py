@@ -13,7 +13,6 @@ stops the thread and the context; it is idempotent.
 
 from __future__ import annotations
 
-import contextlib
 import threading
 import time
 from typing import Any
@@ -53,8 +52,13 @@ class RosWatcher:
     def _spin(self) -> None:
         from rclpy.executors import ExternalShutdownException
 
-        with contextlib.suppress(ExternalShutdownException):
+        try:
             self.executor.spin()
+        except ExternalShutdownException:
+            pass
+        except Exception:  # rclpy's executor racing its own shutdown: only then is it fine
+            if not self._closed:
+                raise
 
     def read_graph(self) -> None:
         """Note every node and its topics; subscribe to every new topic."""
