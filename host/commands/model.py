@@ -46,7 +46,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p.add_argument("out_dir", metavar="OUT_DIR", help="directory to write system.yaml into "
                    "(created; must not hold a system.yaml)")
     p.add_argument("--middleware", choices=["ros2", "zenoh"], default="ros2",
-                   help="how to watch the robot (default ros2)")
+                   help="how to watch the robot (default ros2; zenoh: not yet, refused)")
     p.add_argument("--duration", type=float, default=60.0, metavar="S",
                    help="seconds to watch (default 60)")
     p.add_argument("--board", metavar="HOST:PORT", help="also read this board's currents")
