@@ -47,6 +47,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("host.mission", "host.plandiag"),  # layer 3 and plan-execution diagnosis, side by side
     ("host.operator",),  # the operator socket
     ("host.ros", "host.web", "host.report", "host.deploy"),  # views of the stream, outputs
+    ("host.learn",),  # the model learned from a running robot (reads host.ros's bags)
     ("host.fleet",),  # the Prometheus metrics (read the page's status) and the fleet view
     ("host.daemon",),  # wires layer 0 and its outputs
     ("host.launch",),  # starts robot and daemon; wires the mission layers to the daemon
