@@ -22,7 +22,7 @@ import time
 from collections.abc import Awaitable, Callable
 from typing import Any, Protocol, TypeVar
 
-from host.learn.recording import ChannelSeen, Probe, Recording
+from host.learn.recording import ChannelProbe, ChannelSeen, Recording
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
@@ -117,7 +117,7 @@ async def _probe(client: Any, rec: Recording, seen: Seen,
         if lost:
             progress(f"probe: {', '.join(lost)} did not come back within {RECOVER_S:g} s of "
                      f"channel {ch.channel} on again (a driver that does not reconnect)")
-        rec.probes.append(Probe(ch.channel, off, on, stopped, kept, gone, lost))
+        rec.probes.append(ChannelProbe(ch.channel, off, on, stopped, kept, gone, lost))
         done.append(ch.channel)
         since = on  # a topic silent since (its driver did not come back) is not live
     return done

@@ -29,7 +29,7 @@ import math
 import re
 from dataclasses import dataclass, field
 
-from host.learn.recording import Probe, Recording
+from host.learn.recording import ChannelProbe, Recording
 from host.learn.stats import RateEvidence, RateProposal, learn_rate, propose
 
 IGNORED = re.compile(r"^/(rosout|parameter_events)$|/transition_event$|^/dxboard(/|$)")
@@ -81,7 +81,7 @@ class LearnedDevice:
     n: int  # readings behind the band
     low: float
     high: float
-    probe: Probe | None
+    probe: ChannelProbe | None
 
 
 @dataclass
@@ -224,7 +224,7 @@ def _devices(rec: Recording, nodes: dict[str, LearnedNode]) -> list[LearnedDevic
     return out
 
 
-def _drivers(p: Probe, nodes: dict[str, LearnedNode]) -> list[str]:
+def _drivers(p: ChannelProbe, nodes: dict[str, LearnedNode]) -> list[str]:
     """The nodes a probe shows to drive its channel's device: gone from the graph, or
     publishing a topic that stopped while none of their inputs did."""
     stopped = set(p.stopped)

@@ -4,7 +4,7 @@ A ``Recording`` holds, over ``start``..``end`` (seconds on the source's clock: t
 live robot, the bag's own clock for a bag), each topic's message type, arrival times and (stamped
 types) header stamps, each node seen in the graph with the topics it publishes and subscribes and
 whether it is a managed (lifecycle) node, each board channel's current readings (amperes) with its
-name and whether it is protected, and what each probe saw (``Probe``: a channel switched off for a
+name and whether it is protected, and what each probe saw (``ChannelProbe``: a channel switched off for a
 while, and the topics that stopped and the nodes that left the graph meanwhile). Nothing here does
 I/O; ``host.learn.infer`` turns a recording into a model.
 """
@@ -35,7 +35,7 @@ class ChannelSeen:
 
 
 @dataclass(frozen=True)
-class Probe:
+class ChannelProbe:
     """Channel ``channel`` switched off from ``off`` to ``on`` (s): what stopped meanwhile."""
 
     channel: int
@@ -57,7 +57,7 @@ class Recording:
     stamps: dict[str, list[tuple[float, float]]] = field(default_factory=dict)  # (arrival, stamp)
     nodes: dict[str, NodeSeen] = field(default_factory=dict)
     channels: dict[int, ChannelSeen] = field(default_factory=dict)
-    probes: list[Probe] = field(default_factory=list)
+    probes: list[ChannelProbe] = field(default_factory=list)
 
     def add(self, topic: str, time: float, type_name: str = "",
             stamp: float | None = None) -> None:

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from host.learn.infer import infer, lag
-from host.learn.recording import ChannelSeen, NodeSeen, Probe, Recording
+from host.learn.recording import ChannelProbe, ChannelSeen, NodeSeen, Recording
 from host.learn.render import render
 from host.learn.session import check_written
 from host.learn.stats import learn_rate, period_windows, propose
@@ -94,8 +94,8 @@ def robot(probe: bool = True) -> Recording:
                     2: ChannelSeen(2, "spare"),
                     3: ChannelSeen(3, "wheels", currents=(1.0, 3.0))}
     if probe:
-        rec.probes = [Probe(0, 30.0, 31.6, ("/scan", "/cloud", "/map"), ("/odom",), ()),
-                      Probe(3, 31.6, 33.0, ("/odom",), ("/scan", "/cloud", "/map"), ("base",))]
+        rec.probes = [ChannelProbe(0, 30.0, 31.6, ("/scan", "/cloud", "/map"), ("/odom",), ()),
+                      ChannelProbe(3, 31.6, 33.0, ("/odom",), ("/scan", "/cloud", "/map"), ("base",))]
     return rec
 
 
