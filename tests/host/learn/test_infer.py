@@ -95,7 +95,8 @@ def robot(probe: bool = True) -> Recording:
                     3: ChannelSeen(3, "wheels", currents=(1.0, 3.0))}
     if probe:
         rec.probes = [ChannelProbe(0, 30.0, 31.6, ("/scan", "/cloud", "/map"), ("/odom",), ()),
-                      ChannelProbe(3, 31.6, 33.0, ("/odom",), ("/scan", "/cloud", "/map"), ("base",))]
+                      ChannelProbe(3, 31.6, 33.0, ("/odom",), ("/scan", "/cloud", "/map"),
+                                   ("base",))]
     return rec
 
 
