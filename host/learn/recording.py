@@ -5,8 +5,8 @@ live robot, the bag's own clock for a bag), each topic's message type, arrival t
 types) header stamps, each node seen in the graph with the topics it publishes and subscribes and
 whether it is a managed (lifecycle) node, each board channel's current readings (amperes) with its
 name and whether it is protected, and what each probe saw (``ChannelProbe``: a channel switched
-off for a while, and the topics that stopped and the nodes that left the graph meanwhile). Nothing here does
-I/O; ``host.learn.infer`` turns a recording into a model.
+off for a while, and the topics that stopped and the nodes that left the graph meanwhile).
+Nothing here does I/O; ``host.learn.infer`` turns a recording into a model.
 """
 
 from __future__ import annotations
