@@ -378,4 +378,14 @@ def section(peak_memory):
 
 
 if __name__ == "__main__":
-    measure(sys.argv[1] if len(sys.argv) > 1 else "rev-a")
+    if sys.implementation.name == "micropython":  # the child: one revision's figures
+        measure(sys.argv[1] if len(sys.argv) > 1 else "rev-a")
+    else:  # run by hand under CPython: each revision through its MicroPython child
+        import argparse
+
+        argparse.ArgumentParser(
+            description="The board firmware's tick on the part models, per revision, each in "
+            "a MicroPython child; the section of RESULTS.md comes from "
+            "python -m benchmarks.board_firmware --parts [--write].").parse_args()
+        for rev, got in results(revisions()):
+            print(rev, got)
