@@ -213,7 +213,8 @@ class Daemon:
             device_boot_s=opts.device_boot_s, on_start=self._started, dry_run=opts.dry_run,
             clock=clock, max_parallel=opts.max_parallel_steps,
             debounce_s=opts.repair_debounce_s, board=self.model.board or "board",
-            confirmed=self.hub.confirmed)
+            confirmed=self.hub.confirmed,
+            judge_s={a: t for o in self.hub.observers for a, t in o.judge_s().items()})
         self.journal: Journal | None = None
         self.run_id = ""  # set by start()
         self.web: WebServer | None = None

@@ -147,6 +147,11 @@ class Observer(ABC, Generic[In]):
     def atoms(self) -> list[str]:
         """Every atom this observer can emit (to check against the diagnosis model)."""
 
+    def judge_s(self) -> dict[str, float]:
+        """How long after its cause is there this observer needs to say each atom it judges
+        slowly (a repair step waits that much longer for it). The default: none."""
+        return {}
+
     def confirmed(self, atom: str) -> bool:
         """Is what this observer asserts of ``atom`` now an abnormal finding it confirmed
         before saying it (a silence in the publisher's own time, a trip the board's readings

@@ -24,13 +24,15 @@ sum of every step's settle time. Each step:
    in one made since the step began that still stands once the step has settled (a process
    that dies at once, a device that trips while it boots do not pass: observers report such
    a change at once); what the step only keeps (``kept``: a reconfigured node's process) in
-   any observation that still stands. The deadline is settle + ``verify_s``, both times
-   ``stretch()`` (at least 1: the daemon passes ``load_stretch``, so a step started while the
-   machine is busy gets the time a busy machine needs to start a process)
-   (``Beliefs.wait_for``), the settle counted again from the moment the steps it waits for
-   were verified if that was later (a node whose input came late gets its own time after
-   it) — after it ``failed`` with what was seen instead, and at once when the board trips
-   the channel the step switched on; then ``succeeded``.
+   any observation that still stands. The deadline is settle + ``verify_s`` + the longest
+   time an observer of the expected atoms needs to judge one (``judge_s``: two periods of a
+   slow topic, whose rate is judged from two messages), all times ``stretch()`` (at least 1:
+   the daemon passes ``load_stretch``, so a step started while the machine is busy gets the
+   time a busy machine needs to start a process) (``Beliefs.wait_for``), the settle counted
+   again from the moment the steps it waits for were verified if that was later (a node whose
+   input came late gets its own time after it) — after it ``failed`` with what was seen
+   instead, and at once when the board trips the channel the step switched on; then
+   ``succeeded``.
 
 On the first failed step nothing new starts; steps already running finish, and ``execute``
 returns ``ExecutionResult(outcome=FAILED, failed=step, reason=...)`` so the caller
@@ -198,7 +200,8 @@ class Executor:
                  verify_s: float = DEFAULT_VERIFY_S, observable: Collection[str] | None = None,
                  clock: Callable[[], float] = time.monotonic,
                  max_parallel: int | None = None,
-                 stretch: Callable[[], float] = lambda: 1.0) -> None:
+                 stretch: Callable[[], float] = lambda: 1.0,
+                 judge_s: Mapping[str, float] | None = None) -> None:
         self.actuators = actuators
         self.model = actuators.model
         self.beliefs = beliefs
@@ -213,6 +216,10 @@ class Executor:
         self.clock = clock
         self.max_parallel = max_parallel  # steps running at once; None: as the order allows
         self.stretch = stretch  # how many times its settle and verify a step gets (>= 1)
+        # atom -> how long its observer needs to judge it once its cause is there (a slow
+        # topic's rate needs two of its messages): added to the verify time of a step
+        # expecting it
+        self.judge_s = dict(judge_s or {})
         self.held: dict[str, str] = {}  # component -> why a person holds it (left alone)
         self._busy: set[str] = set()
         self._unsafe: set[str] = set()  # devices whose last step was unsafe to repeat
@@ -430,7 +437,8 @@ class Executor:
             # began (the process observer may see it before the actuator returns) that still
             # stands: observers report a change at once, so no refresh is waited for.
             fresh = t0
-            deadline = settled + self.verify_s * k
+            deadline = settled + (self.verify_s + max(
+                (self.judge_s.get(a, 0.0) for a in expected), default=0.0)) * k
             abort = contradictions(step, self.observable)
             if not early and step.action not in IMMEDIATE:
                 if abort:

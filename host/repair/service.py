@@ -407,7 +407,8 @@ def build(planner: RepairPlanner, model: SystemModel, procs: Mapping[str, Proces
           device_boot_s: Mapping[str, float], on_start: Callable[[str, int], None] | None = None,
           dry_run: bool = False, clock: Callable[[], float] | None = None,
           max_parallel: int | None = None, debounce_s: float = 0.5,
-          board: str = "board", confirmed: Confirmed | None = None) -> RepairService:
+          board: str = "board", confirmed: Confirmed | None = None,
+          judge_s: Mapping[str, float] | None = None) -> RepairService:
     """A repair service for a robot: its planner, model and ``processes:`` (see the module
     docstring)."""
     supervisor = ProcessSupervisor(procs, logs_dir, on_start=on_start, env=dict(env))
@@ -419,6 +420,6 @@ def build(planner: RepairPlanner, model: SystemModel, procs: Mapping[str, Proces
         actuators, ObservedBeliefs(observations),
         settle=settle_times(model, procs, devices=device_boot_s),
         limiter=AttemptLimiter(3, 600.0), dry_run=dry_run, observable=observable,
-        max_parallel=max_parallel, **kw)
+        max_parallel=max_parallel, judge_s=judge_s, **kw)
     return RepairService(planner, executor, diagnose=diagnose, observations=observations,
                          emit=emit, board=board, debounce_s=debounce_s, confirmed=confirmed)

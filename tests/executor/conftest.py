@@ -93,11 +93,13 @@ class Rig:
     def __init__(self, robot: Path, devices: Sequence[str], nodes: Sequence[str],
                  topics: Sequence[str] = (), endpoint: str | None = None,
                  max_attempts: int = 3, dry_run: bool = False, verify_s: float = VERIFY_S,
-                 refresh: float = REFRESH, stretch: float = 1.0) -> None:
+                 refresh: float = REFRESH, stretch: float = 1.0,
+                 judge_s: dict[str, float] | None = None) -> None:
         """``refresh``: how often observers repeat an unchanged literal (validity 3.5x);
         ``stretch``: the executor's stretch of each step's time (the daemon's follows the
         machine's load)."""
         self.stretch = stretch
+        self.judge_s = judge_s
         self.robot = robot
         self.verify_s = verify_s
         self.model: SystemModel = load_system(robot)
@@ -155,7 +157,7 @@ class Rig:
                                 devices=dict.fromkeys(self.model.components, 0.3)),
             limiter=AttemptLimiter(self.max_attempts, 600.0), report=self.events.append,
             dry_run=self.dry_run, verify_s=self.verify_s, observable=self.observable,
-            stretch=lambda: self.stretch)
+            stretch=lambda: self.stretch, judge_s=self.judge_s)
         return self
 
     async def __aexit__(self, *exc: object) -> None:

@@ -370,3 +370,35 @@ def test_the_stretch_follows_the_load_per_core_within_bounds() -> None:
         raise OSError("no load average")
 
     assert load_stretch(none, cores=2) == 1.0
+
+
+async def test_a_slow_topic_gets_the_time_its_observer_needs_to_judge_it(
+        tmp_path: Path, endpoint: str) -> None:
+    """Found in the suite's power-up (sequential): hector_mapping's start failed at settle +
+    verify (3 + 5 s) while /map, at 0.5 Hz, had not yet come twice, which its observer needs
+    to judge a rate; the mapper was stopped and started again. A step waits ``judge_s`` more
+    for what it expects (the daemon's: two periods of each frequency observer's rate)."""
+    (tmp_path / "jaguar_node.py").write_text(LATE_ODOM_NODE)
+    robot = robot_dir(tmp_path, f"""\
+jaguar_node:
+  command: [python, {tmp_path / 'jaguar_node.py'}]
+  env: {{ENDPOINT: "{endpoint}", PYTHONPATH: "{TEDUSAR.parents[1]}"}}
+  settle_s: 0.5
+  stop_timeout_s: 2
+""")
+    async with Rig(robot, ["jaguar"], ["jaguar_node"], ["/odom"], endpoint,
+                   verify_s=EXPECTED_FAILURE_VERIFY_S, judge_s={"ok(/odom)": 30.0}) as rig:
+        await rig.client.switch(JAGUAR, True)
+        await rig.until({"on(jaguar)": True, "running(jaguar_node)": False})
+        plan = Plan((Step(0, "start_node", ("jaguar_node",)),), (frozenset(),))
+        async with asyncio.timeout(120):  # a deadline for a broken executor, not a measure
+            res = await rig.executor.execute(plan)
+        assert res.outcome is Outcome.DONE, res.reason
+
+
+def test_a_frequency_observer_judges_a_rate_from_two_messages() -> None:
+    from host.observers import FrequencyObserver
+
+    assert FrequencyObserver("/map", rate=0.5, tolerance=0.3, window=6.0).judge_s() == {
+        "ok(/map)": 4.0}
+    assert FrequencyObserver("/scan", rate=40, tolerance=10).judge_s() == {"ok(/scan)": 0.05}
