@@ -61,7 +61,14 @@ from host.errors import RemoteError
 from host.events import Event, HoldChange, Note, PlanRecord, QuarantineChange, RepairEnded
 from host.repair.actuators import Actuators
 from host.repair.beliefs import ObservedBeliefs
-from host.repair.booting import MAX_WAIT_FACTOR, booting, came_back, describe
+from host.repair.booting import (
+    MAX_WAIT_FACTOR,
+    booting,
+    came_back,
+    describe,
+    up_atom,
+    up_since,
+)
 from host.repair.effects import settle_times
 from host.repair.executor import Event as ExecutorEvent
 from host.repair.executor import Executor, StepReport, load_stretch
@@ -107,6 +114,10 @@ class RepairService:
         self.confirmed = confirmed
         self.confirmed_debounce_s = confirmed_debounce_s
         self._seen: frozenset[Literal] = frozenset()  # the literals at the last diagnosis
+        # device -> when it came back on, for the restored devices spared once already: if
+        # restarting their drivers did not do it, the device is blamed again (a lidar that
+        # hangs just after a brown-out is the lidar's fault)
+        self._spared: dict[str, float | None] = {}
         self._fresh = diagnose
         self._emit = emit
         executor.report = self._report
@@ -270,12 +281,18 @@ class RepairService:
                          [(c.name, c.channel) for c in ex.model.components.values()
                           if c.channel is not None and not c.is_node],
                          ex.actuators.commands, ex.clock())
+        back = {d for d in back  # spared once since it came back on: not again
+                if d not in self._spared
+                or self._spared[d] != up_since(self.observations, up_atom(d, False))}
         keep = [c for c in cands if not c.bad & back]
         if not keep or len(keep) == len(cands):
             return cands
         spared = sorted(back & set().union(*(c.bad for c in cands)))
+        for d in spared:
+            self._spared[d] = up_since(self.observations, up_atom(d, False))
         self._emit(Note(f"{', '.join(spared)}: came on without a repair and booted; not blamed "
-                        "while another diagnosis explains what is seen"))
+                        "while another diagnosis explains what is seen (once: if that repair "
+                        "does not do it, it is)"))
         return keep
 
     # --- reporting ----------------------------------------------------------------------

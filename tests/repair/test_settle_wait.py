@@ -93,3 +93,25 @@ def test_a_brownout_spends_no_repair_attempt(tmp_path: Path) -> None:
         await svc.close()
 
     asyncio.run(main())
+
+
+def test_a_restored_device_is_spared_once_then_blamed_again(tmp_path: Path) -> None:
+    """Found in the suite (test_repairs, permanent hang, right after the board's reset test):
+    the lidar hung seconds after the board had restored it; it was spared, its driver
+    restarted twice, and the driver quarantined while the lidar stayed hung. Spared once: if
+    restarting the driver did not do it, the device is blamed again."""
+    async def main() -> None:
+        svc, _ = make(tmp_path)
+        svc.observations.add(Observation.parse("on(jaguar)", time.monotonic() - 1.0))
+        first, _ = await svc._diagnose()
+        assert [set(c.bad) for c in first] == [{"jaguar_node"}]  # its driver first
+        again, _ = await svc._diagnose()  # the driver's restart did not do it
+        assert [set(c.bad) for c in again] == [{"jaguar"}, {"jaguar_node"}]
+        svc.observations.add(Observation.parse("on(jaguar)", time.monotonic() - 0.5))
+        svc.observations.add(Observation.parse("~on(jaguar)", time.monotonic() - 0.4))
+        svc.observations.add(Observation.parse("on(jaguar)", time.monotonic() - 0.3))
+        fresh, _ = await svc._diagnose()  # restored once more by the board: spared once more
+        assert [set(c.bad) for c in fresh] == [{"jaguar_node"}]
+        await svc.close()
+
+    asyncio.run(main())
