@@ -33,7 +33,7 @@ def journaled(journal: Path) -> list[Any]:
 
 def test_m2_a_door_closed_behind_the_robot(tmp_path: Path) -> None:
     run = experiment("door-closed", tmp_path / "m2.sqlite")
-    assert run["completed"] and run["fault_s"] is not None
+    assert run["completed"] and run["fault_s"] is not None, run  # (what happened, if not)
     d, = run["diagnoses"]
     assert d["classes"] == ["exogenous event"]
     assert d["symptoms"][0].startswith("propagated: ~open(door_office) observed pre step")
@@ -50,7 +50,7 @@ def test_m2_a_door_closed_behind_the_robot(tmp_path: Path) -> None:
 
 def test_m3_a_marker_reported_placed_is_missing(tmp_path: Path) -> None:
     run = experiment("marker-missing", tmp_path / "m3.sqlite")
-    assert run["completed"]
+    assert run["completed"], run
     d, = run["diagnoses"]
     assert d["classes"] == ["action fault"]
     assert d["symptoms"][0].startswith("local: ~marked(")
