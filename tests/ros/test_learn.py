@@ -25,7 +25,7 @@ from std_msgs.msg import String
 from host.diagnosis.model import load_system
 from host.learn.session import check_written
 from host.observers.config import load_observers
-from host.observers.payload import Message, encode
+from host.observers.payload import TopicMessage, encode
 from host.observers.sources.ros2_graph import GRAPH
 from host.observers.sources.ros2_message import RosMessage
 from host.observers.topics import FrequencyObserver
@@ -91,7 +91,7 @@ def test_learn_from_a_bag_on_its_clock(tmp_path: Path) -> None:
         msg = String(data=str(i))
         w.write(RosMessage(t0 + i * 0.1, "/chatter", bytes(serialize_message(msg)),
                            "std_msgs/msg/String"))
-    w.write(graphlog.to_bag(Message(t0 + 5, GRAPH, encode({"nodes": ["talker"]}))))
+    w.write(graphlog.to_bag(TopicMessage(t0 + 5, GRAPH, encode({"nodes": ["talker"]}))))
     w.close(t0, t0 + 10)
     out = tmp_path / "learned"
     p = dxboard("model", "learn", str(out), "--bag", str(bag))

@@ -20,7 +20,7 @@ from typing import Any
 import pytest
 
 from host.board.client import BoardClient
-from host.diagnosis.model import Kind, load_system
+from host.diagnosis.model import ComponentKind, load_system
 from host.learn.board import OFF_S, probe, watch_board
 from host.learn.recording import Recording
 from host.learn.session import check_written
@@ -116,10 +116,10 @@ def test_learn_with_the_probe_finds_the_hokuyo_and_its_driver(
     assert check_written(out) == []
     model = load_system(out)
     hokuyo = model.components["hokuyo"]
-    assert (hokuyo.kind, hokuyo.channel) == (Kind.SH, 3)
+    assert (hokuyo.kind, hokuyo.channel) == (ComponentKind.SH, 3)
     assert hokuyo.current is not None and hokuyo.current[0] > 0
     driver = model.components["hokuyo_node"]
-    assert (driver.kind, driver.hardware) == (Kind.SN, ("hokuyo",))
+    assert (driver.kind, driver.hardware) == (ComponentKind.SN, ("hokuyo",))
     assert model.protected == frozenset({PROTECTED})
     assert all(c.channel != PROTECTED for c in model.components.values())
     assert robot.channel("hokuyo")["commanded"]
