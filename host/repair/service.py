@@ -118,6 +118,7 @@ class RepairService:
         # restarting their drivers did not do it, the device is blamed again (a lidar that
         # hangs just after a brown-out is the lidar's fault)
         self._spared: dict[str, float | None] = {}
+        self._healthy_at: float | None = None  # the latest all-healthy diagnosis
         self._fresh = diagnose
         self._emit = emit
         executor.report = self._report
@@ -151,6 +152,8 @@ class RepairService:
         if self._pending is not None:
             self._pending.cancel()
             self._pending = None
+        if is_healthy(result):
+            self._healthy_at = self.executor.clock()
         if is_healthy(result) or self.busy:
             return  # nothing to do, or the running loop re-diagnoses by itself
         wait = self.debounce_s
@@ -281,9 +284,13 @@ class RepairService:
                          [(c.name, c.channel) for c in ex.model.components.values()
                           if c.channel is not None and not c.is_node],
                          ex.actuators.commands, ex.clock())
-        back = {d for d in back  # spared once since it came back on: not again
-                if d not in self._spared
-                or self._spared[d] != up_since(self.observations, up_atom(d, False))}
+        healthy = self._healthy_at
+        back = {d for d in back  # spared once since it came back on: not again; nor once the
+                # robot was whole after it came back (what broke since is a new fault)
+                if (d not in self._spared
+                    or self._spared[d] != up_since(self.observations, up_atom(d, False)))
+                and (healthy is None
+                     or healthy <= (up_since(self.observations, up_atom(d, False)) or 0.0))}
         keep = [c for c in cands if not c.bad & back]
         if not keep or len(keep) == len(cands):
             return cands

@@ -115,3 +115,18 @@ def test_a_restored_device_is_spared_once_then_blamed_again(tmp_path: Path) -> N
         await svc.close()
 
     asyncio.run(main())
+
+
+def test_a_device_restored_before_the_robot_was_whole_again_is_not_spared(
+        tmp_path: Path) -> None:
+    """The same suite run: the board restored the lidar, the robot was all healthy, then the
+    lidar hung. What broke after the robot was whole is a new fault: no sparing."""
+    async def main() -> None:
+        svc, _ = make(tmp_path)
+        svc.observations.add(Observation.parse("on(jaguar)", time.monotonic() - 1.0))
+        svc.diagnosed(DiagnosisResult((Diagnosis(frozenset(), probability=1.0),), True))
+        cands, _ = await svc._diagnose()
+        assert [set(c.bad) for c in cands] == [{"jaguar"}, {"jaguar_node"}]
+        await svc.close()
+
+    asyncio.run(main())
