@@ -278,7 +278,9 @@ class RepairService:
     def _spare_restored(self, cands: list[Candidate]) -> list[Candidate]:
         """Leave out the candidates that blame a device the board has just restored by itself
         (``host.repair.booting.came_back``) when others explain the fault without it: its
-        driver, which lost the device, is restarted instead of the device power-cycled again."""
+        driver, which lost the device, is restarted instead of the device power-cycled again.
+        Once per return of the device, and not once the robot was all healthy after it came
+        back: then what is broken is a new fault, and the device may be to blame."""
         ex = self.executor
         back = came_back(self.observations, ex.settle,
                          [(c.name, c.channel) for c in ex.model.components.values()
