@@ -21,7 +21,7 @@ cause with that mark is a soft reset: a reboot the host asked for never counts t
 import os
 import time
 
-import machine  # type: ignore[import-not-found]
+import machine  # type: ignore[import-not-found]  # MicroPython only: no stubs
 
 from firmware import boards
 from firmware.hal.ina226 import Ina226Bank
