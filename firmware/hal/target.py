@@ -35,6 +35,7 @@ from protocol.constants import (
 )
 
 if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from collections.abc import Sequence
     from typing import Any, Protocol
 
     from firmware.hal import Storage
@@ -59,8 +60,8 @@ REBOOT_MARK = "reboot"  # a reboot this firmware asked for (storage file)
 
 
 class TargetHal:
-    def __init__(self, en_pins: "list[int]", status_pins: "list[int] | None" = None,
-                 adc_pins: "list[int] | None" = None, ma_per_count_x1000: int = 1000,
+    def __init__(self, en_pins: "Sequence[int]", status_pins: "Sequence[int] | None" = None,
+                 adc_pins: "Sequence[int] | None" = None, ma_per_count_x1000: int = 1000,
                  i2c: "Any" = None, ina226_addrs: "tuple[int, ...] | None" = None,
                  shunt_uohm: int = 10000, vin_adc_pin: "int | None" = None,
                  mv_per_count_x1000: int = 1000, wdt_timeout_ms: int = 2000,
@@ -83,7 +84,8 @@ class TargetHal:
         self.mv_k = mv_per_count_x1000
         self._t0 = time.ticks_ms()  # type: ignore[attr-defined]  # MicroPython's time
         self._ms = 0
-        self.storage = storage
+        # None only for a HAL no Board runs on (the part tests); build() always gives one
+        self.storage: "Storage" = storage  # type: ignore[assignment]  # (see above)
         self._cause = self._read_cause()
         self.wdt = machine.WDT(timeout=wdt_timeout_ms)
 
