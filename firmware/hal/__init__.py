@@ -41,7 +41,7 @@ A storage object holds a few small files by name (no directories):
 is a ``typing.Protocol``, so that every HAL (``TargetHal``, ``RemoteHal``, the emulator's
 ``SimHal``) is checked against it without inheriting, and so is ``Storage``, the storage
 interface, which exists for the type checker only. On the board both cost nothing: MicroPython
-has no ``typing`` and compiles an ``if False:`` block away, so ``Hal`` is the plain class it was.
+has no ``typing`` and compiles an ``if False:`` block away, so there ``Hal`` is a plain class.
 """
 
 if False:  # typing only; MicroPython never imports typing (the block is compiled away)
