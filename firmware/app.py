@@ -12,11 +12,15 @@ from firmware.board import Board
 from firmware.supervisor import Supervisor
 from protocol.compat import const
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from firmware.config import Config
+    from firmware.hal import Hal
+
 PROTECT_SILENCE_MS = const(500)
 
 
 class App:
-    def __init__(self, hal: object, factory: "dict | None" = None) -> None:  # type: ignore[type-arg]
+    def __init__(self, hal: "Hal", factory: "Config | None" = None) -> None:
         self.hal = hal
         self.board = Board(hal, factory)
         self.supervisor = Supervisor(hal)
@@ -24,14 +28,14 @@ class App:
         self.next_ms = 0
 
     def start(self) -> None:
-        now = self.hal.ticks_ms()  # type: ignore[attr-defined]
+        now = self.hal.ticks_ms()
         self.board.boot(now)
         self.protect_task = self.supervisor.register("protection", PROTECT_SILENCE_MS, now)
         self.supervisor.check(now)
         self.next_ms = now
 
     def step(self) -> int:
-        now = self.hal.ticks_ms()  # type: ignore[attr-defined]
+        now = self.hal.ticks_ms()
         self.board.tick(now)
         self.supervisor.beat(self.protect_task, now)
         self.supervisor.check(now)

@@ -65,6 +65,16 @@ from protocol.constants import (
 )
 from protocol.settings import BOARD_WIRE_KEYS, merge
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from typing import Any
+
+    from firmware.config import Config
+    from firmware.hal import Hal
+
+    Reply = tuple[int, int, bool]  # a channel command's (error, state, physical)
+    BoardRow = tuple[int, int, int, int, int, int]  # board_status(), indices S_*
+    ChannelRow = tuple[bool, bool, int, int, int, int, int, int]  # channel_status(), C_*
+
 TOTAL_SAMPLES = const(2)
 UV_SAMPLES = const(3)
 UV_RECOVER_MS = const(1000)
@@ -89,15 +99,15 @@ C_RETRIES = const(7)
 
 
 class Board:
-    def __init__(self, hal: object, factory: "dict | None" = None,  # type: ignore[type-arg]
+    def __init__(self, hal: "Hal", factory: "Config | None" = None,
                  log_size: int = 64) -> None:
         self.hal = hal
-        self.n = hal.n_channels  # type: ignore[attr-defined]
+        self.n = hal.n_channels
         self.factory = factory
         self.events = EventLog(log_size)
         self.samples = [0] * self.n
         self.channels: "list[Channel]" = []
-        self.cfg: dict = {}  # type: ignore[type-arg]
+        self.cfg: "Config" = {}
         self.cfg_status = 0
         self.reset_cause = 0
         self.flags = 0
@@ -107,7 +117,7 @@ class Board:
         self.input_mv = 0
         self.total_ma = 0
         self.wdt_resets = 0
-        self.queue: list = []  # type: ignore[type-arg]
+        self.queue: "list[int]" = []
         self.queue_at = 0
         self.total_n = 0
         self.uv_level = 0
@@ -123,14 +133,14 @@ class Board:
     def boot(self, now: int) -> None:
         hal = self.hal
         self.boot_ms = self.now = self.last = self.host_ms = now
-        cfg, status = config.load(hal.storage, self.n)  # type: ignore[attr-defined]
+        cfg, status = config.load(hal.storage, self.n)
         if cfg is None:
             cfg = self.factory_config()
         self.cfg = cfg
         self.cfg_status = status
-        self.reset_cause = hal.reset_cause()  # type: ignore[attr-defined]
-        self.boot_id = int.from_bytes(hal.random_bytes(4), "big")  # type: ignore[attr-defined]
-        self.wdt_resets = bootlog.on_boot(hal.storage, self.reset_cause)  # type: ignore[attr-defined]
+        self.reset_cause = hal.reset_cause()
+        self.boot_id = int.from_bytes(hal.random_bytes(4), "big")
+        self.wdt_resets = bootlog.on_boot(hal.storage, self.reset_cause)
         safe = self.wdt_resets >= bootlog.SAFE_AFTER
         if safe:
             self.flags |= B_SAFE_MODE
@@ -139,7 +149,7 @@ class Board:
         for i in range(self.n):
             ch = Channel(i, hal, self.events, cfg["channels"][i])
             ch.boot_ms = now
-            hal.set_switch(i, False)  # type: ignore[attr-defined]
+            hal.set_switch(i, False)
             self.channels.append(ch)
         self.events.put(EV_REBOOT, BOARD_CHANNEL, self.reset_cause, self.cfg_status,
                         self.flags, 0, 0)
@@ -149,12 +159,12 @@ class Board:
                 self._enqueue(ch.index)
         self.queue_at = now
 
-    def factory_config(self) -> dict:  # type: ignore[type-arg]
+    def factory_config(self) -> "Config":
         """The configuration built into the firmware (``factory``: the one the board was
         flashed with, its key and its protected boot channel included), used when no good copy
         is stored; without one (or a bad one), the defaults of ``protocol.settings``."""
         if self.factory is not None:
-            cfg: "dict | None" = merge(self.factory, self.n, config.VERSION)[0]  # type: ignore[type-arg]
+            cfg: "Config | None" = merge(self.factory, self.n, config.VERSION)[0]
             if cfg is not None:
                 return cfg
         return config.defaults(self.n)
@@ -173,16 +183,16 @@ class Board:
             return
         if self.reboot_pending:
             self.halted = True
-            self.hal.reboot()  # type: ignore[attr-defined]
+            self.hal.reboot()
             return
         hal = self.hal
         dt = now - self.last
         self.last = self.now = now
         samples = self.samples
-        hal.read_currents_ma(samples)  # type: ignore[attr-defined]
+        hal.read_currents_ma(samples)
         total = 0
         live = 0  # the current of channels still switched on after this step
-        read_switch = hal.read_switch  # type: ignore[attr-defined] # (hot loop: one lookup)
+        read_switch = hal.read_switch  # (hot loop: one lookup)
         for ch in self.channels:
             i = ch.index
             ma = samples[i]  # < 0: a code (no reading, tripped, low: firmware.hal)
@@ -193,7 +203,7 @@ class Board:
                 if st == ST_ON or st == ST_INRUSH:  # noqa: SIM109 (no tuple on the hot path)
                     live += ma
         self.total_ma = total
-        self.input_mv = hal.read_input_mv()  # type: ignore[attr-defined]
+        self.input_mv = hal.read_input_mv()
         if self.queue and now >= self.queue_at:
             self._run_queue(now)
         b = self.cfg["board"]
@@ -206,7 +216,7 @@ class Board:
             self._deadman(now, b["deadman_on_mask"])
         if self.wdt_resets and now - self.boot_ms >= bootlog.STABLE_MS:
             self.wdt_resets = 0
-            bootlog.mark_stable(hal.storage)  # type: ignore[attr-defined]
+            bootlog.mark_stable(hal.storage)
 
     def _run_queue(self, now: int) -> None:
         while self.queue:
@@ -243,7 +253,7 @@ class Board:
         if victim is not None:
             self._shed(victim, now, F_SHED_TOTAL)
 
-    def _uv_rule(self, now: int, mv: int, b: dict) -> None:  # type: ignore[type-arg]
+    def _uv_rule(self, now: int, mv: int, b: "Config") -> None:
         thr = (b["uv_warn_mv"], b["uv_shed_mv"], b["uv_off_mv"])
         bad = 0
         for i in range(3):
@@ -318,10 +328,10 @@ class Board:
             return self.channels[ch]
         return None
 
-    def _reply(self, err: int, c: "Channel | None") -> tuple:  # type: ignore[type-arg]
+    def _reply(self, err: int, c: "Channel | None") -> "Reply":
         if c is None:
             return err, 0, False
-        return err, c.state, self.hal.read_switch(c.index)  # type: ignore[attr-defined]
+        return err, c.state, self.hal.read_switch(c.index)
 
     def check_switch(self, ch: int, on: bool, force: bool = False) -> int:
         """The error ``switch`` would answer now (0: it would act); changes nothing, so that a
@@ -337,7 +347,7 @@ class Board:
             return E_PROTECTED
         return c.refuses(X_OFF)
 
-    def switch(self, ch: int, on: bool, force: bool = False) -> tuple:  # type: ignore[type-arg]
+    def switch(self, ch: int, on: bool, force: bool = False) -> "Reply":
         """Switch a channel on or off: ``(error, state, physical)``."""
         err = self.check_switch(ch, on, force)
         c = self._ch(ch)
@@ -357,7 +367,7 @@ class Board:
             self.queue.remove(ch)
         return self._reply(0, c)
 
-    def power_cycle(self, ch: int, off_ms: int, force: bool = False) -> tuple:  # type: ignore[type-arg]
+    def power_cycle(self, ch: int, off_ms: int, force: bool = False) -> "Reply":
         """Switch off now and on again ``off_ms`` later: ``(error, state, physical)``."""
         c = self._ch(ch)
         if c is None:
@@ -378,7 +388,7 @@ class Board:
             c.cycle_at = self.now + off_ms
         return self._reply(err, c)
 
-    def clear(self, ch: int) -> tuple:  # type: ignore[type-arg]
+    def clear(self, ch: int) -> "Reply":
         """Clear a channel's sticky faults and retry counters; unlatch it: ``(error, ...)``."""
         if ch == BOARD_CHANNEL:
             for each in self.channels:
@@ -391,14 +401,14 @@ class Board:
             c.commanded = False
         return self._reply(c.clear(self.now), c)
 
-    def get_channel_config(self, ch: int) -> tuple:  # type: ignore[type-arg]
+    def get_channel_config(self, ch: int) -> "tuple[int, Any]":  # (error, None) or (0, Config)
         """``(error, fields)``: a copy of the channel's configuration."""
         c = self._ch(ch)
         if c is None:
             return E_BAD_CHANNEL, None
         return 0, dict(c.cfg)
 
-    def set_channel_config(self, ch: int, fields: dict) -> int:  # type: ignore[type-arg]
+    def set_channel_config(self, ch: int, fields: "Config") -> int:
         """Change some fields of a channel's configuration (in RAM; ``save_config`` persists)."""
         c = self._ch(ch)
         if c is None:
@@ -411,7 +421,7 @@ class Board:
         c.apply(new)
         return 0
 
-    def get_board_config(self) -> dict:  # type: ignore[type-arg]
+    def get_board_config(self) -> "Config":
         """A copy of the board configuration as BOARD_CONFIG carries it: never the key (which
         never leaves the board) nor the listen address."""
         b = self.cfg["board"]
@@ -421,7 +431,7 @@ class Board:
         out["modbus_allow"] = list(out["modbus_allow"])
         return out
 
-    def set_board_config(self, fields: dict) -> int:  # type: ignore[type-arg]
+    def set_board_config(self, fields: "Config") -> int:
         if config.check_board(fields) is not None:
             return E_BAD_VALUE
         self.cfg["board"].update(fields)
@@ -429,7 +439,7 @@ class Board:
 
     def save_config(self) -> int:
         try:
-            config.save(self.hal.storage, self.cfg)  # type: ignore[attr-defined]
+            config.save(self.hal.storage, self.cfg)
         except OSError:
             return E_STORAGE
         return 0
@@ -441,15 +451,15 @@ class Board:
 
     # --- status ------------------------------------------------------------------------
 
-    def board_status(self) -> tuple:  # type: ignore[type-arg]
+    def board_status(self) -> "BoardRow":
         return (self.input_mv, self.total_ma, self.now - self.boot_ms, self.reset_cause,
                 self.cfg_status, self.flags)
 
-    def channel_status(self, ch: int) -> tuple:  # type: ignore[type-arg]
+    def channel_status(self, ch: int) -> "ChannelRow":
         c = self.channels[ch]
         return (c.commanded, c.physical, c.state, c.current_ma, c.live, c.sticky, c.trips,
                 c.retries + c.short_used)
 
-    def status(self) -> tuple:  # type: ignore[type-arg]
+    def status(self) -> "tuple[BoardRow, list[ChannelRow]]":
         return self.board_status(), [self.channel_status(i) for i in range(self.n)]
 

@@ -13,17 +13,20 @@ import json
 from protocol.compat import const
 from protocol.constants import RESET_WATCHDOG
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from firmware.hal import Storage
+
 FILE = "boot.json"
 STABLE_MS = const(60000)
 SAFE_AFTER = const(3)
 
 
-def on_boot(storage: object, cause: int) -> int:
+def on_boot(storage: "Storage", cause: int) -> int:
     """Record this boot; returns the number of watchdog resets in a row (0 if none)."""
     n = 0
     if cause == RESET_WATCHDOG:
         try:
-            data = storage.read(FILE)  # type: ignore[attr-defined]
+            data = storage.read(FILE)
             rec = json.loads(data) if data else {}
             n = rec.get("wdt", 0) if isinstance(rec, dict) else 0
             if not isinstance(n, int):
@@ -35,12 +38,12 @@ def on_boot(storage: object, cause: int) -> int:
     return n
 
 
-def mark_stable(storage: object) -> None:
+def mark_stable(storage: "Storage") -> None:
     _write(storage, 0)
 
 
-def _write(storage: object, n: int) -> None:
+def _write(storage: "Storage", n: int) -> None:
     try:  # noqa: SIM105 (MicroPython has no contextlib)
-        storage.write(FILE, json.dumps({"wdt": n}).encode())  # type: ignore[attr-defined]
+        storage.write(FILE, json.dumps({"wdt": n}).encode())
     except OSError:
         pass  # a board that cannot write still boots; it just cannot count resets

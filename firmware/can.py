@@ -55,14 +55,21 @@ from protocol.constants import (
     E_REPLAYED,
 )
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from collections.abc import Callable
+
+    from firmware.board import Board, Reply
+
+    Frame = tuple[int, bytes]  # (11-bit CAN id, data)
+
 
 class CanNode:
-    def __init__(self, board: object, key: "bytes | None", random_bytes: object, node: int = 0,
-                 rate_hz: int = 10) -> None:
+    def __init__(self, board: "Board", key: "bytes | None",
+                 random_bytes: "Callable[[int], bytes]", node: int = 0, rate_hz: int = 10) -> None:
         self.board = board
         self.key = key
         self.node = node
-        self.nonce = random_bytes(8)  # type: ignore[operator]
+        self.nonce = random_bytes(8)
         self.period = 1000 // rate_hz if rate_hz else 0
         self.counter = 0
         self.pending: "bytes | None" = None
@@ -70,18 +77,18 @@ class CanNode:
         self.tag_a: "bytes | None" = None
         self.slow_at = 0
         self.fast_at = 0
-        self.last: list = []  # type: ignore[type-arg]
-        self.readback: "tuple | None" = None  # type: ignore[type-arg]
+        self.last: "list[tuple[bool, bool, int]]" = []  # (commanded, physical, state) each
+        self.readback: "Reply | None" = None
 
     # --- broadcasts ---------------------------------------------------------------------
 
-    def poll(self, now: int) -> list:  # type: ignore[type-arg]
+    def poll(self, now: int) -> "list[Frame]":
         out = []
         n = self.node
         if self.pending is not None and now - self.pending_at > TAG_WINDOW_MS:
             out.append(self._result(self.pending, E_AUTH_REQUIRED))
             self.pending = None
-        bstat, chans = self.board.status()  # type: ignore[attr-defined]
+        bstat, chans = self.board.status()
         chans = chans[:MAX_CHANNELS]
         slow = now >= self.slow_at
         if slow:
@@ -104,7 +111,7 @@ class CanNode:
 
     # --- commands -----------------------------------------------------------------------
 
-    def receive(self, can_id: int, data: bytes, now: int) -> list:  # type: ignore[type-arg]
+    def receive(self, can_id: int, data: bytes, now: int) -> "list[Frame]":
         n = self.node
         out = []
         cmd_ids = can_id == ID_CMD + n
@@ -152,23 +159,23 @@ class CanNode:
         if counter <= self.counter:
             return E_REPLAYED
         self.counter = counter
-        self.board.host_seen(self.board.now)  # type: ignore[attr-defined]
+        self.board.host_seen(self.board.now)
         b = self.board
         if op == OP_ON:
-            res = b.switch(ch, True)  # type: ignore[attr-defined]
+            res = b.switch(ch, True)
         elif op == OP_OFF:
-            res = b.switch(ch, False, force)  # type: ignore[attr-defined]
+            res = b.switch(ch, False, force)
         elif op == OP_CYCLE:
-            res = b.power_cycle(ch, off * 100, force)  # type: ignore[attr-defined]
+            res = b.power_cycle(ch, off * 100, force)
         elif op == OP_CLEAR:
-            res = b.clear(ch)  # type: ignore[attr-defined]
+            res = b.clear(ch)
         else:
             return E_BAD_VALUE
         self.readback = res  # (error, state, physical read back from the switch)
         err: int = res[0]
         return err
 
-    def _result(self, cmd: bytes, err: int) -> tuple:  # type: ignore[type-arg]
+    def _result(self, cmd: bytes, err: int) -> "Frame":
         op = cmd[0]
         ch = cmd[1]
         b = self.board
@@ -176,13 +183,13 @@ class CanNode:
         physical = False
         rb = self.readback
         self.readback = None
-        if 0 <= ch < b.n:  # type: ignore[attr-defined]
+        if 0 <= ch < b.n:
             if rb is not None:
                 state = rb[1]
                 physical = rb[2]
             else:
-                state = b.channels[ch].state  # type: ignore[attr-defined]
-                physical = b.hal.read_switch(ch)  # type: ignore[attr-defined]
+                state = b.channels[ch].state
+                physical = b.hal.read_switch(ch)
         elif not err and op != OP_CLEAR:
             err = E_BAD_CHANNEL
         return (ID_RESULT + self.node, result_frame(op, ch, err, state, physical))

@@ -27,6 +27,13 @@ from protocol import settings
 from protocol.compat import crc32
 from protocol.constants import CFG_CORRUPT, CFG_FALLBACK, CFG_MISSING, CFG_OK, CFG_VERSION
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from typing import Any
+
+    from firmware.hal import Storage
+
+    Config = dict[str, Any]  # a configuration (``protocol.settings``): JSON-shaped
+
 VERSION = 1
 SLOTS = ("config.a.json", "config.b.json")
 LEGACY = "config.json"  # the single file of earlier firmware: read, never written
@@ -48,7 +55,7 @@ def canonical(obj: object) -> str:
     return json.dumps(obj)
 
 
-def dumps(cfg: dict, seq: int = 0) -> bytes:  # type: ignore[type-arg]
+def dumps(cfg: "Config", seq: int = 0) -> bytes:
     """The file text of ``cfg`` as save number ``seq``: one line per channel, with its CRC."""
     body = {"version": cfg["version"], "seq": seq, "board": cfg["board"],
             "channels": cfg["channels"]}
@@ -62,7 +69,7 @@ def dumps(cfg: dict, seq: int = 0) -> bytes:  # type: ignore[type-arg]
     return ("\n".join(lines) + "\n").encode()
 
 
-def parse_seq(data: bytes, n: int) -> tuple:  # type: ignore[type-arg]
+def parse_seq(data: bytes, n: int) -> "tuple[Config | None, int, int]":
     """``(config, status, seq)`` from file bytes: a full config with defaults filled in, or
     None with the reason (``seq`` -1 then)."""
     try:
@@ -87,20 +94,20 @@ def parse_seq(data: bytes, n: int) -> tuple:  # type: ignore[type-arg]
     return cfg, CFG_OK, seq
 
 
-def parse(data: bytes, n: int) -> tuple:  # type: ignore[type-arg]
+def parse(data: bytes, n: int) -> "tuple[Config | None, int]":
     """``(config, status)`` from the bytes of one file (see ``parse_seq``)."""
     cfg, status, _ = parse_seq(data, n)
     return cfg, status
 
 
-def _read(storage: object, name: str) -> "bytes | None":
+def _read(storage: "Storage", name: str) -> "bytes | None":
     try:
-        return storage.read(name)  # type: ignore[attr-defined, no-any-return]
+        return storage.read(name)
     except OSError:
         return None
 
 
-def _copies(storage: object, n: int) -> list:  # type: ignore[type-arg]
+def _copies(storage: "Storage", n: int) -> "list[tuple[str, Config | None, int, int]]":
     """``(name, config or None, status, seq)`` of every copy that exists."""
     out = []
     for name in SLOTS + (LEGACY,):
@@ -111,12 +118,12 @@ def _copies(storage: object, n: int) -> list:  # type: ignore[type-arg]
     return out
 
 
-def exists(storage: object) -> bool:
+def exists(storage: "Storage") -> bool:
     """Whether the storage holds any copy of a configuration (good or not)."""
     return any(_read(storage, name) is not None for name in SLOTS + (LEGACY,))
 
 
-def load(storage: object, n: int) -> tuple:  # type: ignore[type-arg]
+def load(storage: "Storage", n: int) -> "tuple[Config | None, int]":
     """``(config, status)``: the newest good copy, or ``(None, why)`` when there is none."""
     best = None
     damaged = 0
@@ -130,7 +137,7 @@ def load(storage: object, n: int) -> tuple:  # type: ignore[type-arg]
     return None, damaged or CFG_MISSING
 
 
-def save(storage: object, cfg: dict) -> None:  # type: ignore[type-arg]
+def save(storage: "Storage", cfg: "Config") -> None:
     """Write ``cfg`` to the slot without the newest good copy, then read it back. Raises
     OSError when the storage fails or the copy does not read back the same."""
     n = len(cfg["channels"])
@@ -144,8 +151,8 @@ def save(storage: object, cfg: dict) -> None:  # type: ignore[type-arg]
     if seqs.get(SLOTS[0], -1) > seqs.get(SLOTS[1], -1):
         target = SLOTS[1]
     data = dumps(cfg, top + 1)
-    storage.write(target, data)  # type: ignore[attr-defined]
+    storage.write(target, data)
     if _read(storage, target) != data:
         raise OSError("the configuration did not read back as written")
     if LEGACY in seqs or _read(storage, LEGACY) is not None:
-        storage.remove(LEGACY)  # type: ignore[attr-defined]
+        storage.remove(LEGACY)

@@ -17,10 +17,17 @@ them, so several front ends drain the same log independently and each can report
 """
 
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from typing import Any
+
+    # (seq, kind, channel, old, new, faults, value, uptime), as ``put`` logs it
+    EventRow = tuple[int, int, int, int, int, int, int, int]
+
+
 class EventLog:
     def __init__(self, size: int = 64) -> None:
         self.size = size
-        self.ring: list = [None] * size  # type: ignore[type-arg]
+        self.ring: "list[Any]" = [None] * size  # an EventRow, or None where none was put yet
         self.seq = 0  # seq of the newest event
 
     def put(self, kind: int, ch: int, old: int, new: int, faults: int, value: int,
@@ -28,7 +35,7 @@ class EventLog:
         self.seq += 1
         self.ring[self.seq % self.size] = (self.seq, kind, ch, old, new, faults, value, uptime)
 
-    def read(self, cursor: int, max_n: int = 16) -> tuple:  # type: ignore[type-arg]
+    def read(self, cursor: int, max_n: int = 16) -> "tuple[list[EventRow], int, int]":
         """``(events, next_cursor, lost)`` for a reader that has seen up to ``cursor``."""
         oldest = self.seq - self.size + 1
         lost = 0
@@ -37,7 +44,7 @@ class EventLog:
             cursor = oldest - 1
         if cursor > self.seq:  # a cursor from an earlier boot: start over
             cursor = 0 if self.seq < self.size else oldest - 1
-        out: list = []  # type: ignore[type-arg]
+        out: "list[EventRow]" = []
         s = cursor + 1
         while s <= self.seq and len(out) < max_n:
             out.append(self.ring[s % self.size])

@@ -68,6 +68,13 @@ from protocol.modbus_map import (
     is_assigned,
 )
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from firmware.board import Board
+    from firmware.config import Config
+    from firmware.net import Net
+
+    Regs = dict[int, int]  # a register image: address -> 16-bit value
+
 
 def _u16(v: int) -> int:
     v = int(v)
@@ -154,9 +161,9 @@ def peer_ip(peer: object) -> str:
 # --- register images ---------------------------------------------------------------------
 
 
-def _input_regs(board: object) -> list:  # type: ignore[type-arg]
+def _input_regs(board: "Board") -> "list[int]":
     regs = [0] * INPUT_SPAN
-    (mv, total, uptime, cause, cfg_status, flags), chans = board.status()  # type: ignore[attr-defined]
+    (mv, total, uptime, cause, cfg_status, flags), chans = board.status()
     for k in range(min(len(chans), MAX_CHANNELS)):
         c = chans[k]
         regs[CURRENT + k] = _u16(c[3])
@@ -170,12 +177,12 @@ def _input_regs(board: object) -> list:  # type: ignore[type-arg]
     regs[BOARD_FLAGS] = flags & 0xFFFF
     regs[RESET_CAUSE] = cause
     regs[CONFIG_STATUS] = cfg_status
-    regs[CHANNEL_COUNT] = board.n  # type: ignore[attr-defined]
+    regs[CHANNEL_COUNT] = board.n
     regs[VERSION] = PROTOCOL_VERSION
     return regs
 
 
-def _put(regs: "dict | list", addr: int, words: int, value: int) -> None:  # type: ignore[type-arg]
+def _put(regs: "Regs | list[int]", addr: int, words: int, value: int) -> None:
     if words == 2:
         v = _u32(value)
         regs[addr] = v >> 16
@@ -184,13 +191,13 @@ def _put(regs: "dict | list", addr: int, words: int, value: int) -> None:  # typ
         regs[addr] = _u16(value)
 
 
-def _get(regs: dict, addr: int, words: int) -> int:  # type: ignore[type-arg]
+def _get(regs: "Regs", addr: int, words: int) -> int:
     if words == 2:
-        return (regs[addr] << 16) | regs[addr + 1]  # type: ignore[no-any-return]
-    return regs[addr]  # type: ignore[no-any-return]
+        return (regs[addr] << 16) | regs[addr + 1]
+    return regs[addr]
 
 
-def _channel_regs(cfg: dict, base: int, regs: dict) -> None:  # type: ignore[type-arg]
+def _channel_regs(cfg: "Config", base: int, regs: "Regs") -> None:
     for name, off, words in CH_REGS:
         _put(regs, base + off, words, cfg[name])
     retry = cfg["retry_ms"]
@@ -198,35 +205,35 @@ def _channel_regs(cfg: dict, base: int, regs: dict) -> None:  # type: ignore[typ
         regs[base + RETRY_OFF + i] = _u16(retry[i]) if i < len(retry) else 0
 
 
-def _board_regs(cfg: dict, regs: dict) -> None:  # type: ignore[type-arg]
+def _board_regs(cfg: "Config", regs: "Regs") -> None:
     for name, addr, words in BOARD_REGS:
         _put(regs, addr, words, cfg[name])
     regs[CMD_REG] = 0
 
 
-def _holding(board: object, lo: int, hi: int) -> dict:  # type: ignore[type-arg]
+def _holding(board: "Board", lo: int, hi: int) -> "Regs":
     """Register image of the holding table for ``lo <= addr < hi`` (at least)."""
-    regs: dict = {}  # type: ignore[type-arg]
+    regs: "Regs" = {}
     if lo < CH_BASE:
-        _board_regs(board.cfg["board"], regs)  # type: ignore[attr-defined]
-    n = board.n  # type: ignore[attr-defined]
+        _board_regs(board.cfg["board"], regs)
+    n = board.n
     for k in range(MAX_CHANNELS):
         base = CH_BASE + CH_STRIDE * k
         if base + CH_STRIDE <= lo or base >= hi or k >= n:
             continue
-        _channel_regs(board.cfg["channels"][k], base, regs)  # type: ignore[attr-defined]
+        _channel_regs(board.cfg["channels"][k], base, regs)
     return regs
 
 
 # --- requests ----------------------------------------------------------------------------
 
 
-def _allowed(board: object, client_ip: str) -> bool:
-    b = board.cfg["board"]  # type: ignore[attr-defined]
+def _allowed(board: "Board", client_ip: str) -> bool:
+    b = board.cfg["board"]
     return bool(b.get("modbus_write")) and client_ip in b.get("modbus_allow", [])
 
 
-def _bits(values: list) -> bytes:  # type: ignore[type-arg]
+def _bits(values: "list[int]") -> bytes:
     out = bytearray((len(values) + 7) // 8)
     for i in range(len(values)):
         if values[i]:
@@ -234,18 +241,18 @@ def _bits(values: list) -> bytes:  # type: ignore[type-arg]
     return bytes([len(out)]) + bytes(out)
 
 
-def _words(values: list) -> bytes:  # type: ignore[type-arg]
+def _words(values: "list[int]") -> bytes:
     return bytes([2 * len(values)]) + struct.pack(">%dH" % len(values), *values)
 
 
-def _read(board: object, fc: int, addr: int, count: int) -> "bytes | int":
+def _read(board: "Board", fc: int, addr: int, count: int) -> "bytes | int":
     if fc == 1 or fc == 2:
         if not 1 <= count <= 2000:
             return X_VALUE
         span = COIL_SPAN if fc == 1 else DISCRETE_SPAN
         if addr + count > span:
             return X_ADDRESS
-        chans = board.channels  # type: ignore[attr-defined]
+        chans = board.channels
         n = len(chans)
         vals = []
         for a in range(addr, addr + count):
@@ -271,28 +278,28 @@ def _read(board: object, fc: int, addr: int, count: int) -> "bytes | int":
     return _words([regs.get(a, 0) for a in range(addr, addr + count)])
 
 
-def _write_coils(board: object, addr: int, values: list) -> int:  # type: ignore[type-arg]
+def _write_coils(board: "Board", addr: int, values: "list[int]") -> int:
     """Every coil is checked before any switch moves: a refusal changes nothing (FC15 too)."""
-    n = board.n  # type: ignore[attr-defined]
+    n = board.n
     if addr + len(values) > COIL_SPAN or addr + len(values) > n:
         return X_ADDRESS
     for i in range(len(values)):
-        err = board.check_switch(addr + i, bool(values[i]), False)  # type: ignore[attr-defined]
+        err = board.check_switch(addr + i, bool(values[i]), False)
         if err == E_BAD_CHANNEL:
             return X_ADDRESS
         if err:
             return X_DEVICE
     for i in range(len(values)):
-        if board.switch(addr + i, bool(values[i]), False)[0]:  # type: ignore[attr-defined]
+        if board.switch(addr + i, bool(values[i]), False)[0]:
             return X_DEVICE
     return 0
 
 
-def _write_regs(board: object, addr: int, values: list) -> int:  # type: ignore[type-arg]
+def _write_regs(board: "Board", addr: int, values: "list[int]") -> int:
     end = addr + len(values)
     if addr < HOLD_LO or end > HOLD_HI:
         return X_ADDRESS
-    n = board.n  # type: ignore[attr-defined]
+    n = board.n
     regs = _holding(board, addr, end)
     for i in range(len(values)):
         a = addr + i
@@ -317,7 +324,7 @@ def _write_regs(board: object, addr: int, values: list) -> int:  # type: ignore[
         base = CH_BASE + CH_STRIDE * k
         if base + CH_STRIDE <= addr or base >= end:
             continue
-        fields: dict = {}  # type: ignore[type-arg]
+        fields: "Config" = {}
         for name, off, words in CH_REGS:
             v = _get(regs, base + off, words)
             if name == "powerup" or name == "protected":
@@ -334,17 +341,17 @@ def _write_regs(board: object, addr: int, values: list) -> int:  # type: ignore[
         if settings.check_channel(fields) is not None:
             return X_VALUE
         updates.append((k, fields))
-    if board_fields is not None and board.set_board_config(board_fields):  # type: ignore[attr-defined]
+    if board_fields is not None and board.set_board_config(board_fields):
         return X_VALUE
     for k, fields in updates:
-        if board.set_channel_config(k, fields):  # type: ignore[attr-defined]
+        if board.set_channel_config(k, fields):
             return X_VALUE
-    if save and board.save_config():  # type: ignore[attr-defined]
+    if save and board.save_config():
         return X_DEVICE
     return 0
 
 
-def handle_pdu(board: object, pdu: bytes, client_ip: str) -> bytes:
+def handle_pdu(board: "Board", pdu: bytes, client_ip: str) -> bytes:
     """The response PDU to one request PDU (function code first)."""
     fc = pdu[0]
     body = pdu[1:]
@@ -390,7 +397,7 @@ def handle_pdu(board: object, pdu: bytes, client_ip: str) -> bytes:
     return bytes([fc]) + struct.pack(">HH", addr, count)
 
 
-def handle(board: object, adu: bytes, client_ip: str) -> bytes:
+def handle(board: "Board", adu: bytes, client_ip: str) -> bytes:
     """The response ADU to one request ADU (as cut by ``Framer``)."""
     tid, _, _, unit = struct.unpack_from(">HHHB", adu)
     try:
@@ -398,35 +405,35 @@ def handle(board: object, adu: bytes, client_ip: str) -> bytes:
     except (ValueError, TypeError, KeyError, IndexError):
         pdu = bytes([adu[7] | 0x80, X_DEVICE])
     if pdu and pdu[0] & 0x80 == 0 and pdu[0] in (5, 6, 15, 16):
-        board.host_seen(board.now)  # type: ignore[attr-defined]
+        board.host_seen(board.now)
     return struct.pack(">HHHB", tid, 0, len(pdu) + 1, unit) + pdu
 
 
 # --- asyncio wrapper ---------------------------------------------------------------------
 
 
-async def serve(net: object, host: str = "0.0.0.0", port: int = 502,
-                proxied: bool = False) -> object:
+async def serve(net: "Net", host: str = "0.0.0.0", port: int = 502,
+                proxied: bool = False) -> "asyncio.Server":
     """Serve Modbus TCP for ``net.app.board`` (a ``firmware.net.Net``); ``proxied``: every
     connection starts with a PROXY line naming the client (see ``Framer``)."""
 
-    async def client(reader: object, writer: object) -> None:
-        if net.halted:  # type: ignore[attr-defined]  # held in reset: nobody is served
+    async def client(reader: "asyncio.StreamReader", writer: "asyncio.StreamWriter") -> None:
+        if net.halted:  # held in reset: nobody is served
             await _close(writer)
             return
-        links = net.links  # type: ignore[attr-defined]  # closed by a reset (Net.close_all)
+        links = net.links  # closed by a reset (Net.close_all)
         link = (writer, asyncio.current_task())
         links.append(link)
         framer = Framer(proxied)
-        ip = peer_ip(writer.get_extra_info("peername"))  # type: ignore[attr-defined]
-        timeout = net.read_timeout_ms / 1000  # type: ignore[attr-defined]
+        ip = peer_ip(writer.get_extra_info("peername"))
+        timeout = net.read_timeout_ms / 1000
         try:
-            while not net.halted:  # type: ignore[attr-defined]
+            while not net.halted:
                 try:
-                    data = await asyncio.wait_for(reader.read(512), timeout)  # type: ignore[attr-defined]
+                    data = await asyncio.wait_for(reader.read(512), timeout)
                 except asyncio.TimeoutError:  # noqa: UP041 (MicroPython has no builtin TimeoutError)
                     break
-                if not data or net.halted:  # type: ignore[attr-defined]
+                if not data or net.halted:
                     break
                 framer.feed(data)
                 while True:
@@ -434,8 +441,8 @@ async def serve(net: object, host: str = "0.0.0.0", port: int = 502,
                     if adu is None:
                         break
                     who = framer.client_ip if proxied else ip
-                    writer.write(handle(net.app.board, adu, who or ""))  # type: ignore[attr-defined]
-                    await writer.drain()  # type: ignore[attr-defined]
+                    writer.write(handle(net.app.board, adu, who or ""))
+                    await writer.drain()
                 if framer.bad:
                     break
                 await asyncio.sleep(0)
@@ -449,10 +456,10 @@ async def serve(net: object, host: str = "0.0.0.0", port: int = 502,
     return await asyncio.start_server(client, host, port)
 
 
-async def _close(writer: object) -> None:
+async def _close(writer: "asyncio.StreamWriter") -> None:
     try:
-        writer.close()  # type: ignore[attr-defined]
-        await writer.wait_closed()  # type: ignore[attr-defined]
+        writer.close()
+        await writer.wait_closed()
     except OSError:
         pass
 

@@ -31,6 +31,33 @@ import asyncio
 from firmware.session import FRAME_GAP_MS, Session, board_key
 from protocol.compat import const
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from typing import Any, Protocol
+
+    from firmware.app import App
+    from firmware.hal import Hal
+    from firmware.tug import TugSession
+
+    class ByteReader(Protocol):
+        """The reading half of a byte stream (``asyncio.StreamReader``, a UART's stream)."""
+
+        async def read(self, n: int) -> bytes: ...
+
+    class ByteWriter(Protocol):
+        """The writing half of a byte stream (``asyncio.StreamWriter``, a UART's stream, the
+        emulator's pty writer)."""
+
+        def write(self, data: bytes) -> None: ...
+
+        async def drain(self) -> None: ...
+
+    class ClosingWriter(ByteWriter, Protocol):
+        """A byte stream's writing half that closes (``asyncio.StreamWriter``: TCP)."""
+
+        def close(self) -> None: ...
+
+        async def wait_closed(self) -> None: ...
+
 READ_SIZE = const(512)
 SOFT_CAP = const(2048)
 HARD_CAP = const(32768)
@@ -52,16 +79,16 @@ async def sleep_ms(ms: int) -> None:
 class Client:
     """One stream's session and its bounded output queue."""
 
-    def __init__(self, session: Session, writer: object, name: str) -> None:
+    def __init__(self, session: "Session | TugSession", writer: "ByteWriter", name: str) -> None:
         self.session = session
         self.writer = writer
         self.name = name
-        self.out: list = []  # type: ignore[type-arg]
+        self.out: "list[bytes]" = []
         self.n = 0
         self.wake = asyncio.Event()
         self.closed = False
         self.skipped = 0  # measurements skipped for this client
-        self.task: object = None  # the task reading this stream
+        self.task: "asyncio.Task[Any] | None" = None  # the task reading this stream
         self.reading = False
         self.kicked = False
         self.limited = False  # counted against max_clients (a TCP connection)
@@ -83,7 +110,7 @@ class Client:
         self.wake.set()
         if self.reading and self.task is not None and not self.kicked:
             self.kicked = True
-            self.task.cancel()  # type: ignore[attr-defined]
+            self.task.cancel()
 
     async def write_loop(self) -> None:
         w = self.writer
@@ -94,8 +121,8 @@ class Client:
                 while self.out and not self.closed:
                     data = b"".join(self.out)
                     self.out = []
-                    w.write(data)  # type: ignore[attr-defined]
-                    await w.drain()  # type: ignore[attr-defined]
+                    w.write(data)
+                    await w.drain()
                     self.n -= len(data)
                     if self.n < 0:
                         self.n = 0
@@ -105,7 +132,7 @@ class Client:
 
 
 class Net:
-    def __init__(self, app: object, firmware_version: str, capabilities: int,
+    def __init__(self, app: "App", firmware_version: str, capabilities: int,
                  read_timeout_ms: int = READ_TIMEOUT_MS, max_clients: int = MAX_CLIENTS,
                  reserved: int = RESERVED) -> None:
         self.firmware_version = firmware_version
@@ -113,21 +140,22 @@ class Net:
         self.read_timeout_ms = read_timeout_ms
         self.max_clients = max_clients
         self.reserved = reserved
-        self.clients: list = []  # type: ignore[type-arg]
-        self.links: list = []  # type: ignore[type-arg]  # other streams (Modbus): (writer, task)
+        self.clients: "list[Client]" = []
+        # other streams (Modbus): (writer, its task, never None inside the stream's coroutine)
+        self.links: "list[tuple[ClosingWriter, Any]]" = []
         self.halted = False
         self.app = app
-        self.hal = app.hal  # type: ignore[attr-defined]
+        self.hal: "Hal" = app.hal
         self.task = -1
         self.attach(app)
 
-    def attach(self, app: object) -> None:
+    def attach(self, app: "App") -> None:
         """Serve ``app`` (a new boot): every client of the old one is closed."""
         self.app = app
-        self.hal = app.hal  # type: ignore[attr-defined]
+        self.hal = app.hal
         self.halted = False
         self.close_all()
-        sup = app.supervisor  # type: ignore[attr-defined]
+        sup = app.supervisor
         self.task = sup.register("net", NET_SILENCE_MS, self.hal.ticks_ms())
 
     def close_all(self) -> None:
@@ -147,10 +175,10 @@ class Net:
         self.close_all()
 
     def now(self) -> int:
-        return self.hal.ticks_ms()  # type: ignore[no-any-return]
+        return self.hal.ticks_ms()
 
     def _session(self, frame_gap_ms: int = 0) -> Session:
-        board = self.app.board  # type: ignore[attr-defined]
+        board = self.app.board
         return Session(board, board_key(board), self.hal.random_bytes, self.firmware_version,
                        self.capabilities, self.now(), frame_gap_ms)
 
@@ -170,7 +198,7 @@ class Net:
         """The protection loop of the real board: one step per tick, then the pushes."""
         app = self.app
         while True:
-            due = app.step()  # type: ignore[attr-defined]
+            due = app.step()
             now = self.now()
             self.pump(now)
             wait = due - now
@@ -178,15 +206,15 @@ class Net:
 
     async def housekeeping(self) -> None:
         while True:
-            self.app.supervisor.beat(self.task, self.now())  # type: ignore[attr-defined]
+            self.app.supervisor.beat(self.task, self.now())
             await sleep_ms(1000)
 
     # --- streams ----------------------------------------------------------------------
 
-    async def serve_tcp(self, host: str = "0.0.0.0", port: int = 7000) -> object:
+    async def serve_tcp(self, host: str = "0.0.0.0", port: int = 7000) -> "asyncio.Server":
         return await asyncio.start_server(self._tcp_client, host, port)
 
-    async def _tcp_client(self, reader: object, writer: object) -> None:
+    async def _tcp_client(self, reader: "ByteReader", writer: "ClosingWriter") -> None:
         if self.halted or not self._make_room():
             await _close(writer)
             return
@@ -197,7 +225,8 @@ class Net:
         board is full or strangers hold every unreserved slot. False only when every slot is
         the authenticated host's (which a newcomer never displaces)."""
         live = [c for c in self.clients if not c.closed and c.limited]  # TCP, not serial
-        strangers = [c for c in live if not c.session.authenticated]
+        # a limited client is a TCP one, whose session is a native Session, never a TugSession
+        strangers = [c for c in live if not c.session.authenticated]  # type: ignore[union-attr]
         if len(live) < self.max_clients and len(strangers) < self.max_clients - self.reserved:
             return True
         if not strangers:
@@ -205,25 +234,26 @@ class Net:
         now = self.now()
         victim = strangers[0]
         for c in strangers:
-            if c.session.idle_ms(now) > victim.session.idle_ms(now):
+            if c.session.idle_ms(now) > victim.session.idle_ms(now):  # type: ignore[union-attr]
                 victim = c
         victim.close()
         return True
 
-    async def serve_serial(self, reader: object, writer: object) -> None:
+    async def serve_serial(self, reader: "ByteReader", writer: "ByteWriter") -> None:
         """Serve a serial line until its stream ends (a UART's never does)."""
         while True:
             if self.halted:  # bytes sent to a board held in reset are lost
-                if not await reader.read(READ_SIZE):  # type: ignore[attr-defined]
+                if not await reader.read(READ_SIZE):
                     return
                 continue
             if await self.serve_stream(reader, writer, close=False, frame_gap_ms=FRAME_GAP_MS):
                 return
             await sleep_ms(10)  # the board closed the session (a reset): serve a new one
 
-    async def serve_stream(self, reader: object, writer: object, timeout_ms: int = 0,
+    async def serve_stream(self, reader: "ByteReader", writer: "ByteWriter", timeout_ms: int = 0,
                            name: str = "", close: bool = True,
-                           session: "Session | None" = None, frame_gap_ms: int = 0) -> bool:
+                           session: "Session | TugSession | None" = None,
+                           frame_gap_ms: int = 0) -> bool:
         """Serve one byte stream until it ends (``timeout_ms`` 0: never time out); a serial
         port passes ``close=False`` so that the next session can use it, and
         ``frame_gap_ms=FRAME_GAP_MS``: an incomplete frame followed by that much silence is
@@ -243,13 +273,14 @@ class Net:
                 c.reading = True
                 try:
                     if timeout_ms:
-                        left = timeout_ms - s.idle_ms(self.now())
+                        # (a stream with a timeout is a native Session's: TCP)
+                        left = timeout_ms - s.idle_ms(self.now())  # type: ignore[union-attr]
                         if left <= 0:  # idle for too long (see Session.idle_ms)
                             break
-                        data = await asyncio.wait_for(reader.read(READ_SIZE),  # type: ignore[attr-defined]
+                        data = await asyncio.wait_for(reader.read(READ_SIZE),
                                                       left / 1000)
                     else:
-                        data = await reader.read(READ_SIZE)  # type: ignore[attr-defined]
+                        data = await reader.read(READ_SIZE)
                 except asyncio.TimeoutError:  # noqa: UP041 (MicroPython has no builtin TimeoutError)
                     continue  # the loop checks how idle the session is now
                 except asyncio.CancelledError:
@@ -274,14 +305,14 @@ class Net:
             if c in self.clients:
                 self.clients.remove(c)
             wt.cancel()
-            if close:
-                await _close(writer)
+            if close:  # a TCP stream (a serial one is served with close=False)
+                await _close(writer)  # type: ignore[arg-type]
         return ended
 
 
-async def _close(writer: object) -> None:
+async def _close(writer: "ClosingWriter") -> None:
     try:
-        writer.close()  # type: ignore[attr-defined]
-        await writer.wait_closed()  # type: ignore[attr-defined]
+        writer.close()
+        await writer.wait_closed()
     except (OSError, asyncio.CancelledError):
         pass

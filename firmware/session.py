@@ -87,6 +87,13 @@ from protocol.messages import (
 )
 from protocol.settings import int_to_ip, ip_to_int
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from collections.abc import Callable
+    from typing import Any
+
+    from firmware.board import Board, Reply
+    from protocol.message import Message
+
 FIRMWARE_VERSION = "0.1.0"
 FRAME_GAP_MS = 250  # serial lines: an incomplete frame is dropped after this much silence
 MAX_RATE_HZ = 100
@@ -94,9 +101,9 @@ EVENTS_PER_POLL = 16
 IDLE_DUE_MS = 1000  # next_due when nothing is scheduled
 
 
-def board_key(board: object) -> "bytes | None":
+def board_key(board: "Board") -> "bytes | None":
     """The actuation key from the board configuration (hex), or None when none is set."""
-    text = board.cfg["board"].get("key", "")  # type: ignore[attr-defined]
+    text = board.cfg["board"].get("key", "")
     if not text:
         return None
     try:
@@ -110,7 +117,8 @@ def _u16(v: int) -> int:
 
 
 class Session:
-    def __init__(self, board: object, key: "bytes | None", random_bytes: object,
+    def __init__(self, board: "Board", key: "bytes | None",
+                 random_bytes: "Callable[[int], bytes]",
                  firmware_version: str, capabilities: int, now_ms: int,
                  frame_gap_ms: int = 0) -> None:
         self.board = board
@@ -122,14 +130,14 @@ class Session:
         self.last_rx = now_ms
         self.last_active = now_ms  # the last request that counts against the idle timeout
         self.authenticated = False  # a request of this session passed the HMAC check
-        self.cursor = board.events.seq  # type: ignore[attr-defined]
+        self.cursor = board.events.seq
         self.lost = 0
         self.rate_hz = 0
         self.period = 0
         self.meas_at = 0
         self.meas_seq = 0
         self.per_frame = 1  # readings a frame (SUBSCRIBE's per_frame)
-        self.held: list = []  # type: ignore[type-arg]  # readings not yet sent, oldest first
+        self.held: "list[Measurement]" = []  # readings not yet sent, oldest first
         self.batch_left = 0  # due readings until the held ones go out
         self.closed = False
 
@@ -144,13 +152,13 @@ class Session:
         self.meas_seq = 0
         self.per_frame = 1
         self.held = []
-        self.cursor = b.events.seq  # type: ignore[attr-defined]
+        self.cursor = b.events.seq
         self.lost = 0
-        nonce = self.random_bytes(NONCE_LEN)  # type: ignore[operator]
+        nonce = self.random_bytes(NONCE_LEN)
         return self.conn.send(Hello(
-            PROTOCOL_VERSION, b.cfg["board"]["board_id"], self.firmware_version,  # type: ignore[attr-defined]
-            b.n, self.capabilities, getattr(b, "boot_id", 0), nonce,  # type: ignore[attr-defined]
-            b.reset_cause, b.cfg_status, req_id))  # type: ignore[attr-defined]
+            PROTOCOL_VERSION, b.cfg["board"]["board_id"], self.firmware_version,
+            b.n, self.capabilities, getattr(b, "boot_id", 0), nonce,
+            b.reset_cause, b.cfg_status, req_id))
 
     def start(self, now_ms: int) -> bytes:
         self.last_rx = self.last_active = now_ms
@@ -170,7 +178,7 @@ class Session:
 
     def receive(self, data: bytes, now_ms: int) -> bytes:
         conn = self.conn
-        out: list = []  # type: ignore[type-arg]
+        out: "list[bytes]" = []
         if data:
             if self.frame_gap_ms and conn.pending and now_ms - self.last_rx >= self.frame_gap_ms:
                 conn.truncate()  # the frame in progress stopped arriving: drop it (E_TRUNCATED)
@@ -182,7 +190,7 @@ class Session:
         self._drain(now_ms, out)
         return b"".join(out)
 
-    def _drain(self, now_ms: int, out: list) -> None:  # type: ignore[type-arg]
+    def _drain(self, now_ms: int, out: "list[bytes]") -> None:
         conn = self.conn
         while True:
             ev = conn.next_event()
@@ -196,29 +204,29 @@ class Session:
                 if ev.AUTH:  # its tag checked out: this is the host that holds the key
                     self.authenticated = True
                 if ev.AUTH or (self.authenticated and isinstance(ev, Ping)):
-                    self.board.host_seen(now_ms)  # type: ignore[attr-defined]
+                    self.board.host_seen(now_ms)
                 if self.authenticated or not isinstance(ev, Ping):
                     self.last_active = now_ms
                 reply = self._answer(ev, now_ms)
             if reply:
                 out.append(reply)
 
-    def _error(self, code: int, msg: object) -> bytes:
-        return self.conn.send(Error(code, msg.TYPE, ERROR_TEXT.get(code, ""),  # type: ignore[attr-defined]
-                                    req_id=msg.req_id))  # type: ignore[attr-defined]
+    def _error(self, code: int, msg: "Message") -> bytes:
+        return self.conn.send(Error(code, msg.TYPE, ERROR_TEXT.get(code, ""),
+                                    req_id=msg.req_id))
 
-    def _switched(self, msg: object, result: tuple) -> bytes:  # type: ignore[type-arg]
+    def _switched(self, msg: "Switch | PowerCycle | Clear", result: "Reply") -> bytes:
         err, state, physical = result
         if err:
             return self._error(err, msg)
-        ch = msg.channel  # type: ignore[attr-defined]
-        commanded = self.board.channels[ch].commanded  # type: ignore[attr-defined]
-        return self.conn.send(Switched(ch, commanded, physical, state, msg.req_id))  # type: ignore[attr-defined]
+        ch = msg.channel
+        commanded = self.board.channels[ch].commanded
+        return self.conn.send(Switched(ch, commanded, physical, state, msg.req_id))
 
-    def _answer(self, msg: object, now_ms: int) -> "bytes | None":
+    def _answer(self, msg: "Message", now_ms: int) -> "bytes | None":
         b = self.board
         send = self.conn.send
-        rid = msg.req_id  # type: ignore[attr-defined]
+        rid = msg.req_id
         if isinstance(msg, GetState):
             return send(self.state_message(rid))
         if isinstance(msg, (Ping, AuthPing)):
@@ -236,11 +244,11 @@ class Session:
         if isinstance(msg, HelloRequest):
             return self._hello(rid)
         if isinstance(msg, Switch):
-            return self._switched(msg, b.switch(msg.channel, msg.on, msg.force))  # type: ignore[attr-defined]
+            return self._switched(msg, b.switch(msg.channel, msg.on, msg.force))
         if isinstance(msg, PowerCycle):
-            return self._switched(msg, b.power_cycle(msg.channel, msg.off_ms, msg.force))  # type: ignore[attr-defined]
+            return self._switched(msg, b.power_cycle(msg.channel, msg.off_ms, msg.force))
         if isinstance(msg, Clear):
-            result = b.clear(msg.channel)  # type: ignore[attr-defined]
+            result = b.clear(msg.channel)
             if msg.channel == BOARD_CHANNEL and not result[0]:
                 return send(Ack(Clear.TYPE, rid))
             return self._switched(msg, result)
@@ -253,7 +261,7 @@ class Session:
             for name, _ in SetChannelConfig.FIELDS:
                 if name != "channel":
                     fields[name] = getattr(msg, name)
-            err = b.set_channel_config(msg.channel, fields)  # type: ignore[attr-defined]
+            err = b.set_channel_config(msg.channel, fields)
             if err:
                 return self._error(err, msg)
             return self._channel_config(msg, msg.channel, rid)
@@ -265,20 +273,20 @@ class Session:
                 fields["modbus_allow"] = [int_to_ip(n) for n in msg.modbus_allow]
             except (TypeError, ValueError):
                 return self._error(E_BAD_VALUE, msg)
-            err = b.set_board_config(fields)  # type: ignore[attr-defined]
+            err = b.set_board_config(fields)
             if err:
                 return self._error(err, msg)
             return send(self.board_config_message(rid))
         if isinstance(msg, SaveConfig):
-            err = b.save_config()  # type: ignore[attr-defined]
+            err = b.save_config()
             return self._error(err, msg) if err else send(Ack(SaveConfig.TYPE, rid))
         if isinstance(msg, Reboot):
-            b.request_reboot()  # type: ignore[attr-defined]
+            b.request_reboot()
             return send(Ack(Reboot.TYPE, rid))
         return None  # HELLO from the host cannot happen: the codec refuses board messages
 
-    def _channel_config(self, msg: object, ch: int, rid: int) -> bytes:
-        err, cfg = self.board.get_channel_config(ch)  # type: ignore[attr-defined]
+    def _channel_config(self, msg: "Message", ch: int, rid: int) -> bytes:
+        err, cfg = self.board.get_channel_config(ch)
         if err:
             return self._error(err, msg)
         cfg["channel"] = ch
@@ -287,10 +295,10 @@ class Session:
     # --- messages built from the board ----------------------------------------------------
 
     def state_message(self, req_id: int = 0) -> State:
-        (mv, total, uptime, cause, cfg_status, flags), chans = self.board.status()  # type: ignore[attr-defined]
+        (mv, total, uptime, cause, cfg_status, flags), chans = self.board.status()
         out = []
         for i in range(len(chans)):
-            c = chans[i]
+            c: "tuple[Any, ...]" = chans[i]  # a ChannelRow, read by C_* (mypy cannot follow)
             out.append(ChannelStatus(
                 channel=i, commanded=c[C_COMMANDED], physical=c[C_PHYSICAL], state=c[C_STATE],
                 current_ma=c[C_CURRENT_MA], live_faults=c[C_LIVE], sticky_faults=c[C_STICKY],
@@ -298,7 +306,7 @@ class Session:
         return State(uptime, _u16(mv), total, cause, cfg_status, flags, out, req_id)
 
     def board_config_message(self, req_id: int = 0) -> BoardConfig:
-        cfg = self.board.get_board_config()  # type: ignore[attr-defined]
+        cfg = self.board.get_board_config()
         cfg["modbus_allow"] = [ip_to_int(text) for text in cfg["modbus_allow"]]
         return BoardConfig(req_id=req_id, **cfg)
 
@@ -307,7 +315,7 @@ class Session:
     def poll(self, now_ms: int, send_measurement: bool = True) -> bytes:
         b = self.board
         out = []
-        log = b.events  # type: ignore[attr-defined]
+        log = b.events
         if log.seq > self.cursor:
             if self.held:
                 out.append(self._flush())
@@ -348,7 +356,7 @@ class Session:
         on = 0
         faults = 0
         currents = []
-        chans = b.channels  # type: ignore[attr-defined]
+        chans = b.channels
         for i in range(len(chans)):
             c = chans[i]
             if c.physical:
@@ -356,17 +364,17 @@ class Session:
             if c.live:
                 faults |= 1 << i
             currents.append(c.current_ma)
-        return Measurement(self.meas_seq, _uptime(b), _u16(b.input_mv), on, faults,  # type: ignore[attr-defined]
+        return Measurement(self.meas_seq, _uptime(b), _u16(b.input_mv), on, faults,
                            currents)
 
     def next_due(self, now_ms: int) -> int:
-        if self.board.events.seq > self.cursor:  # type: ignore[attr-defined]
+        if self.board.events.seq > self.cursor:
             return now_ms
         if self.rate_hz:
             return self.meas_at if self.meas_at > now_ms else now_ms
         return now_ms + IDLE_DUE_MS
 
 
-def _uptime(board: object) -> int:
-    up: int = board.now - board.boot_ms  # type: ignore[attr-defined]
+def _uptime(board: "Board") -> int:
+    up = board.now - board.boot_ms
     return up & 0xFFFFFFFF

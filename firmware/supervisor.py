@@ -9,12 +9,16 @@ their accept/read loops with a timeout), so silence means hung, not idle.
 """
 
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from firmware.hal import Hal
+
+
 class Supervisor:
-    def __init__(self, hal: object) -> None:
+    def __init__(self, hal: "Hal") -> None:
         self.hal = hal
-        self.names: list = []  # type: ignore[type-arg]
-        self.limits: list = []  # type: ignore[type-arg]
-        self.last: list = []  # type: ignore[type-arg]
+        self.names: "list[str]" = []
+        self.limits: "list[int]" = []
+        self.last: "list[int]" = []
         self.stale = ""
 
     def register(self, name: str, max_silence_ms: int, now: int) -> int:
@@ -35,5 +39,5 @@ class Supervisor:
                 if not self.stale:
                     self.stale = self.names[i]
                 return False
-        self.hal.wdt_feed()  # type: ignore[attr-defined]
+        self.hal.wdt_feed()
         return True

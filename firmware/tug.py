@@ -36,16 +36,20 @@ from protocol.compat import const
 
 MAX_LINKS = const(2)
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from firmware.board import Board
+    from firmware.net import ByteReader, ClosingWriter, Net
+
 
 class TugSession:
-    def __init__(self, board: object, switching: bool, now: int) -> None:
+    def __init__(self, board: "Board", switching: bool, now: int) -> None:
         self.board = board
         self.switching = switching
         self.decoder = tw.TugDecoder(tw.FROM_HOST)
         self.rate_hz = 0  # 1 while broadcasting (``Net.pump`` counts skips by it)
         self.due = now
         self.bad = 0  # malformed input, in events (``protocol.tug.Bad``)
-        n = board.n  # type: ignore[attr-defined]
+        n = board.n
         self.n = n if n < tw.MAX_CHANNELS else tw.MAX_CHANNELS
 
     def start(self, now: int) -> bytes:
@@ -53,14 +57,14 @@ class TugSession:
 
     def specs(self) -> bytes:
         b = self.board
-        volts = b.input_mv / 1000  # type: ignore[attr-defined]
-        chans = b.channels  # type: ignore[attr-defined]
+        volts = b.input_mv / 1000
+        chans = b.channels
         return tw.specs([(chans[i].cfg["rated_ma"] / 1000, volts) for i in range(self.n)])
 
     def measurements(self) -> bytes:
         b = self.board
-        volts = b.input_mv / 1000  # type: ignore[attr-defined]
-        chans = b.channels  # type: ignore[attr-defined]
+        volts = b.input_mv / 1000
+        chans = b.channels
         out = []
         for i in range(self.n):
             c = chans[i]
@@ -101,7 +105,7 @@ class TugSession:
             return tw.ACK_BAD_CHANNEL
         if state > 1:
             return tw.ACK_BAD_STATE
-        err = self.board.switch(ch, state == 1)[0]  # type: ignore[attr-defined]
+        err = self.board.switch(ch, state == 1)[0]
         return tw.ack_code(err)
 
     def poll(self, now: int, room: bool = True) -> bytes:
@@ -114,21 +118,21 @@ class TugSession:
         return self.measurements() if room else b""
 
 
-async def serve(net: object, host: str = "127.0.0.1", port: int = 5000,
-                switching: bool = False) -> object:
+async def serve(net: "Net", host: str = "127.0.0.1", port: int = 5000,
+                switching: bool = False) -> "asyncio.Server":
     """Serve the tug format on ``host:port`` through ``net`` (a ``firmware.net.Net``)."""
 
-    async def client(reader: object, writer: object) -> None:
-        if net.halted:  # type: ignore[attr-defined] # a board held in reset serves nothing
-            writer.close()  # type: ignore[attr-defined]
+    async def client(reader: "ByteReader", writer: "ClosingWriter") -> None:
+        if net.halted:  # a board held in reset serves nothing
+            writer.close()
             return
         links = []
-        for c in net.clients:  # type: ignore[attr-defined]
+        for c in net.clients:
             if not c.closed and isinstance(c.session, TugSession):
                 links.append(c)
         while len(links) >= MAX_LINKS:
             links.pop(0).close()
-        session = TugSession(net.app.board, switching, net.now())  # type: ignore[attr-defined]
-        await net.serve_stream(reader, writer, 0, "tug", True, session)  # type: ignore[attr-defined]
+        session = TugSession(net.app.board, switching, net.now())
+        await net.serve_stream(reader, writer, 0, "tug", True, session)
 
     return await asyncio.start_server(client, host, port)

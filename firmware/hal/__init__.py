@@ -37,24 +37,47 @@ A storage object holds a few small files by name (no directories):
 ``rename(old, new)``           replace ``new`` by ``old`` atomically (how config is committed)
 ``remove(name)``               delete it if it exists
 
-``Hal`` below documents the interface as a base class (optional to inherit from).
+``Hal`` below documents the interface as a base class (optional to inherit from); for mypy it
+is a ``typing.Protocol``, so that every HAL (``TargetHal``, ``RemoteHal``, the emulator's
+``SimHal``) is checked against it without inheriting, and so is ``Storage``, the storage
+interface, which exists for the type checker only. On the board both cost nothing: MicroPython
+has no ``typing`` and compiles an ``if False:`` block away, so there ``Hal`` is a plain class.
 """
+
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from typing import Protocol
+
+    class Storage(Protocol):
+        """A few small files by name (``FileStorage``, ``MemStorage``, ``RemoteStorage``)."""
+
+        def read(self, name: str) -> "bytes | None": ...
+
+        def write(self, name: str, data: bytes) -> None: ...
+
+        def rename(self, old: str, new: str) -> None: ...
+
+        def remove(self, name: str) -> None: ...
+else:
+    Protocol = object  # type: ignore[assignment]  # the board's Hal: a plain class
 
 NO_READING = -1  # the sensor gave no reading (read_currents_ma)
 TRIPPED = -2  # the sensing part's own fast trip input fired
 LOW = -3  # below the sensing part's accurate range: low, not measured
 
 
-class Hal:
-    """The interface every HAL provides; each method documents the contract."""
+class Hal(Protocol):
+    """The interface every HAL provides; each method documents the contract.
 
-    n_channels = 0
-    storage: object = None
+    ``set_trip_ma(ch, ma)`` is optional (``Channel`` looks it up with ``getattr``), so it is no
+    member here: a HAL without a fast trip input (the emulator's) need not define it."""
+
+    n_channels: int = 0
+    storage: "Storage"
 
     def ticks_ms(self) -> int:
         raise NotImplementedError
 
-    def read_currents_ma(self, out: list) -> None:  # type: ignore[type-arg]
+    def read_currents_ma(self, out: "list[int]") -> None:
         for ch in range(self.n_channels):
             out[ch] = self.read_current_ma(ch)
 
@@ -63,9 +86,6 @@ class Hal:
 
     def set_switch(self, ch: int, on: bool) -> None:
         raise NotImplementedError
-
-    def set_trip_ma(self, ch: int, ma: int) -> None:
-        pass
 
     def read_switch(self, ch: int) -> bool:
         raise NotImplementedError

@@ -43,18 +43,27 @@ from firmware.can import CanNode
 from firmware.net import Net
 from firmware.session import FIRMWARE_VERSION, board_key
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from typing import Any
+
+    from firmware.can import Frame
+    from firmware.hal import Storage
+    from firmware.net import ByteReader, ClosingWriter
+
+    Request = dict[str, Any]  # a JSON request of link A, or its reply
+
 
 class Link:
     """Link B: blocking JSON-line requests to the emulator."""
 
-    def __init__(self, sock: object) -> None:
+    def __init__(self, sock: object) -> None:  # a socket (emulator/parts/bench.py: its own)
         self.sock = sock
         self.buf = b""
 
-    def call(self, req: list) -> object:  # type: ignore[type-arg]
-        self.sock.sendall(json.dumps(req).encode() + b"\n")  # type: ignore[attr-defined]
+    def call(self, req: "list[Any]") -> object:
+        self.sock.sendall(json.dumps(req).encode() + b"\n")  # type: ignore[attr-defined]  # socket
         while b"\n" not in self.buf:
-            chunk = self.sock.recv(4096)  # type: ignore[attr-defined]
+            chunk = self.sock.recv(4096)  # type: ignore[attr-defined]  # a socket
             if not chunk:
                 raise OSError("emulator link closed")
             self.buf += chunk
@@ -70,7 +79,7 @@ class RemoteStorage:
 
     def read(self, name: str) -> "bytes | None":
         got = self.link.call(["read", name])
-        return None if got is None else binascii.unhexlify(got)  # type: ignore[arg-type]
+        return None if got is None else binascii.unhexlify(got)  # type: ignore[arg-type]  # hex
 
     def write(self, name: str, data: bytes) -> None:
         self.link.call(["write", name, binascii.hexlify(data).decode()])
@@ -86,7 +95,7 @@ class RemoteHal:
     def __init__(self, link: Link, n: int, cause: int, seed: int) -> None:
         self.link = link
         self.n_channels = n
-        self.storage = RemoteStorage(link)
+        self.storage: "Storage" = RemoteStorage(link)
         self.cause = cause
         self.now = 0
         self.ma = [0] * n
@@ -99,7 +108,7 @@ class RemoteHal:
     def ticks_ms(self) -> int:
         return self.now
 
-    def read_currents_ma(self, out: list) -> None:  # type: ignore[type-arg]
+    def read_currents_ma(self, out: "list[int]") -> None:
         ma = self.ma
         for ch in range(self.n_channels):
             out[ch] = ma[ch]
@@ -108,7 +117,7 @@ class RemoteHal:
         return self.ma[ch]
 
     def set_switch(self, ch: int, on: bool) -> None:
-        self.sw = self.link.call(["set_switch", ch, on])  # type: ignore[assignment]
+        self.sw = self.link.call(["set_switch", ch, on])  # type: ignore[assignment]  # JSON list
 
     def read_switch(self, ch: int) -> bool:
         return self.sw[ch]
@@ -132,16 +141,16 @@ class RemoteHal:
 class Runner:
     def __init__(self, link: Link) -> None:
         gc.collect()
-        self.base = gc.mem_alloc()  # type: ignore[attr-defined]
+        self.base = gc.mem_alloc()  # type: ignore[attr-defined]  # MicroPython's gc
         self.link = link
-        self.app: "App | None" = None
-        self.hal: "RemoteHal | None" = None
+        self.app: "App" = None  # type: ignore[assignment]  # until boot, the first request
+        self.hal: "RemoteHal" = None  # type: ignore[assignment]  # (the same)
         self.net: "Net | None" = None
-        self.tasks: list = []  # type: ignore[type-arg]
-        self.can_cfg: "dict | None" = None  # type: ignore[type-arg]
+        self.tasks: "list[asyncio.Task[None]]" = []
+        self.can_cfg: "Request | None" = None
         self.can: "CanNode | None" = None
 
-    async def boot(self, req: dict) -> dict:  # type: ignore[type-arg]
+    async def boot(self, req: "Request") -> "Request":
         hal = RemoteHal(self.link, req["n"], req["cause"], req["seed"])
         app = App(hal, req.get("factory"))
         self.hal = hal
@@ -166,37 +175,37 @@ class Runner:
                                cfg["rate"])
         return {"ok": 1}
 
-    async def _serial(self, reader: object, writer: object) -> None:
-        await self.net.serve_serial(reader, writer)  # type: ignore[union-attr]
-        writer.close()  # type: ignore[attr-defined]
+    async def _serial(self, reader: "ByteReader", writer: "ClosingWriter") -> None:
+        await self.net.serve_serial(reader, writer)  # type: ignore[union-attr]  # booted: set
+        writer.close()
 
-    def can_frames(self, frames: list) -> list:  # type: ignore[type-arg]
+    def can_frames(self, frames: "list[Frame]") -> "list[list[Any]]":
         return [[can_id, binascii.hexlify(data).decode()] for can_id, data in frames]
 
-    def can_rx(self, req: dict) -> dict:  # type: ignore[type-arg]
+    def can_rx(self, req: "Request") -> "Request":
         if self.can is None:
             return {"frames": []}
         data = binascii.unhexlify(req["data"])
         return {"frames": self.can_frames(self.can.receive(req["id"], data,
-                                                           self.hal.now))}  # type: ignore[union-attr]
+                                                           self.hal.now))}
 
-    def step(self, req: dict) -> dict:  # type: ignore[type-arg]
+    def step(self, req: "Request") -> "Request":
         hal = self.hal
         app = self.app
-        hal.now = req["t"]  # type: ignore[union-attr]
-        hal.ma = req["ma"]  # type: ignore[union-attr]
-        hal.sw = req["sw"]  # type: ignore[union-attr]
-        hal.mv = req["mv"]  # type: ignore[union-attr]
-        hal.feeds = 0  # type: ignore[union-attr]
-        due = app.step()  # type: ignore[union-attr]
-        self.net.pump(hal.now)  # type: ignore[union-attr]
-        rep = {"due": due, "feeds": hal.feeds, "reboot": hal.rebooted}  # type: ignore[union-attr]
+        hal.now = req["t"]
+        hal.ma = req["ma"]
+        hal.sw = req["sw"]
+        hal.mv = req["mv"]
+        hal.feeds = 0
+        due = app.step()
+        self.net.pump(hal.now)  # type: ignore[union-attr]  # booted: net is set
+        rep: "Request" = {"due": due, "feeds": hal.feeds, "reboot": hal.rebooted}
         if self.can is not None:
-            rep["can"] = self.can_frames(self.can.poll(hal.now))  # type: ignore[union-attr]
+            rep["can"] = self.can_frames(self.can.poll(hal.now))
         return rep
 
-    def call(self, req: dict) -> dict:  # type: ignore[type-arg]
-        board = self.app.board  # type: ignore[union-attr]
+    def call(self, req: "Request") -> "Request":
+        board = self.app.board
         return {"r": getattr(board, req["m"])(*req["a"])}
 
     async def serve(self, host: str, port: int) -> None:
@@ -216,13 +225,13 @@ class Runner:
             elif op == "can":
                 rep = self.can_rx(req)
             elif op == "halt":
-                self.net.halt()  # type: ignore[union-attr]
+                self.net.halt()  # type: ignore[union-attr]  # booted: net is set
                 self.can = None
                 rep = {"ok": 1}
             elif op == "mem":
                 gc.collect()
-                rep = {"alloc": gc.mem_alloc() - self.base,  # type: ignore[attr-defined]
-                       "free": gc.mem_free()}  # type: ignore[attr-defined]
+                rep = {"alloc": gc.mem_alloc() - self.base,  # type: ignore[attr-defined]  # (MicroPython)
+                       "free": gc.mem_free()}  # type: ignore[attr-defined]  # MicroPython's gc
             else:
                 rep = self.call(req)
             writer.write(json.dumps(rep).encode() + b"\n")

@@ -44,7 +44,7 @@ class FileStorage:
 
 class MemStorage:
     def __init__(self) -> None:
-        self.files: dict = {}  # type: ignore[type-arg]
+        self.files: "dict[str, bytes]" = {}
         self.writes = 0
 
     def read(self, name: str) -> "bytes | None":

@@ -21,7 +21,7 @@ cause with that mark is a soft reset: a reboot the host asked for never counts t
 import os
 import time
 
-import machine  # type: ignore[import-not-found]
+import machine  # type: ignore[import-not-found]  # MicroPython only: no stubs
 
 from firmware import boards
 from firmware.hal.ina226 import Ina226Bank
@@ -34,17 +34,43 @@ from protocol.constants import (
     RESET_WATCHDOG,
 )
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from collections.abc import Sequence
+    from typing import Any, Protocol
+
+    from firmware.hal import Storage
+
+    class SenseBank(Protocol):
+        """A driver of the sensing parts: ``Ina226Bank``, ``Ina3221Bank``, ``ProfetBank``."""
+
+        def setup(self) -> None: ...
+
+        def report(self) -> "list[str]": ...
+
+        def read_one(self, ch: int) -> int: ...
+
+        def read(self, out: "list[int]") -> None: ...
+
+    class Adc(Protocol):
+        """A ``machine.ADC``."""
+
+        def read_u16(self) -> int: ...
+
 REBOOT_MARK = "reboot"  # a reboot this firmware asked for (storage file)
 
 
 class TargetHal:
-    def __init__(self, en_pins, status_pins=None, adc_pins=None, ma_per_count_x1000=1000,
-                 i2c=None, ina226_addrs=None, shunt_uohm=10000, vin_adc_pin=None,
-                 mv_per_count_x1000=1000, wdt_timeout_ms=2000, storage=None, bank=None):
+    def __init__(self, en_pins: "Sequence[int]", status_pins: "Sequence[int] | None" = None,
+                 adc_pins: "Sequence[int] | None" = None, ma_per_count_x1000: int = 1000,
+                 i2c: "Any" = None, ina226_addrs: "tuple[int, ...] | None" = None,
+                 shunt_uohm: int = 10000, vin_adc_pin: "int | None" = None,
+                 mv_per_count_x1000: int = 1000, wdt_timeout_ms: int = 2000,
+                 storage: "Storage | None" = None, bank: "SenseBank | None" = None) -> None:
         self.n_channels = len(en_pins)
         self.en = [machine.Pin(p, machine.Pin.OUT, value=0) for p in en_pins]
         self.status = [machine.Pin(p, machine.Pin.IN) for p in status_pins] if status_pins else None
-        self.adc = [machine.ADC(machine.Pin(p)) for p in adc_pins] if adc_pins else None
+        self.adc: "list[Adc] | None" = \
+            [machine.ADC(machine.Pin(p)) for p in adc_pins] if adc_pins else None
         self.ma_k = ma_per_count_x1000
         if bank is None and ina226_addrs:
             bank = Ina226Bank(i2c, ina226_addrs, shunt_uohm)
@@ -53,15 +79,17 @@ class TargetHal:
             bank.switches = self.en  # a smart switch's driver reads its inputs' state
         if self.ina is not None:
             self.ina.setup()
-        self.vin = machine.ADC(machine.Pin(vin_adc_pin)) if vin_adc_pin is not None else None
+        self.vin: "Adc | None" = \
+            machine.ADC(machine.Pin(vin_adc_pin)) if vin_adc_pin is not None else None
         self.mv_k = mv_per_count_x1000
-        self._t0 = time.ticks_ms()
+        self._t0 = time.ticks_ms()  # type: ignore[attr-defined]  # MicroPython's time
         self._ms = 0
-        self.storage = storage
+        # None only for a HAL no Board runs on (the part tests); build() always gives one
+        self.storage: "Storage" = storage  # type: ignore[assignment]  # (see above)
         self._cause = self._read_cause()
         self.wdt = machine.WDT(timeout=wdt_timeout_ms)
 
-    def _read_cause(self):
+    def _read_cause(self) -> int:
         c = machine.reset_cause()
         asked = False  # rp2: machine.reset() reboots by the watchdog; reboot() left a mark
         st = self.storage
@@ -78,76 +106,76 @@ class TargetHal:
             return RESET_BROWNOUT
         return RESET_UNKNOWN
 
-    def report(self):
+    def report(self) -> "list[str]":
         """What the board prints at boot about its current sensors, one line each."""
         return self.ina.report() if self.ina is not None else []
 
-    def ticks_ms(self):
-        t = time.ticks_ms()
-        self._ms += time.ticks_diff(t, self._t0)
+    def ticks_ms(self) -> int:
+        t = time.ticks_ms()  # type: ignore[attr-defined]  # MicroPython's time
+        self._ms += time.ticks_diff(t, self._t0)  # type: ignore[attr-defined]  # (the same)
         self._t0 = t
         return self._ms
 
-    def read_current_ma(self, ch):
+    def read_current_ma(self, ch: int) -> int:
         if self.ina is not None:
             return self.ina.read_one(ch)
         if self.adc is not None:
             return self.adc[ch].read_u16() * self.ma_k // 1000
         return 0
 
-    def read_currents_ma(self, out):
+    def read_currents_ma(self, out: "list[int]") -> None:
         if self.ina is not None:
             self.ina.read(out)
             return
         for ch in range(self.n_channels):
             out[ch] = self.read_current_ma(ch)
 
-    def set_trip_ma(self, ch, ma):
+    def set_trip_ma(self, ch: int, ma: int) -> None:
         setter = getattr(self.ina, "set_trip_ma", None)
         if setter is not None:
             setter(ch, ma)
 
-    def set_switch(self, ch, on):
+    def set_switch(self, ch: int, on: bool) -> None:
         self.en[ch].value(1 if on else 0)
 
-    def read_switch(self, ch):
+    def read_switch(self, ch: int) -> bool:
         if self.status is not None:
             return bool(self.status[ch].value())
         return bool(self.en[ch].value())
 
-    def read_input_mv(self):
+    def read_input_mv(self) -> int:
         return self.vin.read_u16() * self.mv_k // 1000 if self.vin is not None else 0
 
-    def wdt_feed(self):
+    def wdt_feed(self) -> None:
         self.wdt.feed()
 
-    def reset_cause(self):
+    def reset_cause(self) -> int:
         return self._cause
 
-    def random_bytes(self, n):
+    def random_bytes(self, n: int) -> bytes:
         return os.urandom(n)
 
-    def reboot(self):
+    def reboot(self) -> None:
         if self.storage is not None:  # read back at the next boot: RESET_SOFT, not watchdog
             self.storage.write(REBOOT_MARK, b"1")
         machine.reset()
 
 
-def _i2c(sense):
+def _i2c(sense: "dict[str, Any]") -> "Any":  # a machine.I2C
     bus = sense["i2c"]
     return machine.I2C(bus["id"], scl=machine.Pin(bus["scl"]), sda=machine.Pin(bus["sda"]),
                        freq=bus["freq"], timeout=bus["timeout_us"])
 
 
-def _ina226(sense):
+def _ina226(sense: "dict[str, Any]") -> "SenseBank":
     return Ina226Bank(_i2c(sense), sense["addrs"], sense["shunt_uohm"])
 
 
-def _ina3221(sense):
+def _ina3221(sense: "dict[str, Any]") -> "SenseBank":
     return Ina3221Bank(_i2c(sense), sense["addrs"], sense["inputs"], sense["shunt_uohm"])
 
 
-def _profet(sense):
+def _profet(sense: "dict[str, Any]") -> "SenseBank":
     from firmware.hal.profet import ProfetBank
 
     return ProfetBank(sense, machine)
@@ -156,7 +184,7 @@ def _profet(sense):
 SENSORS = {"ina226": _ina226, "ina3221": _ina3221, "profet": _profet}
 
 
-def build(board, storage):
+def build(board: "dict[str, Any]", storage: "Storage") -> TargetHal:
     """The HAL of a board revision's description (``firmware.boards``): its sensing chips (by
     ``sense["chip"]``, one of ``SENSORS``), its pins and its input divider, as
     ``firmware/main.py`` boots it."""
