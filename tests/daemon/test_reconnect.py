@@ -15,6 +15,7 @@ import asyncio
 import contextlib
 import itertools
 import random
+from pathlib import Path
 
 import pytest
 
@@ -29,7 +30,8 @@ pytestmark = pytest.mark.looptime
 ATTEMPTS = 10  # enough to reach the cap (0.2 · 2⁵ > 5)
 
 
-async def test_the_daemons_reconnect_waits_come_from_the_shared_jittered_policy() -> None:
+async def test_the_daemons_reconnect_waits_come_from_the_shared_jittered_policy(
+        tmp_path: Path) -> None:
     loop = asyncio.get_running_loop()
     name = "daemon-reconnect"
     tried: list[float] = []
@@ -38,8 +40,8 @@ async def test_the_daemons_reconnect_waits_come_from_the_shared_jittered_policy(
         tried.append(loop.time())
         end.close()
 
-    daemon = Daemon(DaemonOptions(system_dir=TEDUSAR, board_url=f"memory://{name}"),
-                    clock=loop.time)
+    daemon = Daemon(DaemonOptions(system_dir=TEDUSAR, board_url=f"memory://{name}",
+                                  journal=tmp_path / "journal.sqlite"), clock=loop.time)
     assert isinstance(daemon.reconnect, Backoff)
     assert (daemon.reconnect.first_s, daemon.reconnect.cap_s) == (RECONNECT_FIRST_S,
                                                                  RECONNECT_CAP_S)
