@@ -11,22 +11,17 @@ new session.
 The link is *lost* when
 
 - the transport says so (the stream ended, a write failed: the reader gets ``BoardUnreachable``);
-- nothing arrives for ``silence_limit`` seconds while subscribed (a frozen link, a board held in
-  reset or hung): ``silence_s`` if given, else ``SILENCE_PERIODS`` periods of the subscription
-  (plus the k - 1 periods a board batching k readings a frame waits between frames), at least
-  ``SILENCE_MIN_S`` and at most one keepalive period plus the request timeout (the
-  keepalive would tell by then anyway);
+- nothing new arrives for ``silence_limit`` seconds while subscribed (a frozen link, a board
+  held in reset or hung): the silence rule of ``host.board.silence``, judged only after the
+  host has read what already arrived;
 - a keepalive PING (every ``keepalive_s`` while up, PROTOCOL.md §3) gets no answer within the
   request timeout: the only judge while nothing is subscribed.
 
-Silence is judged only after the host has read what already arrived: a host that stalled (a busy
-machine) is not a silent board. Only news counts: a measurement whose uptime repeats the one
-before (a board whose clock stands still: held in reset, its main loop hung, while something
-still answers) is no sign of life. A lost link fails the pending requests (``LinkLost``), tells
-every subscriber (``LinkDown``) and, with ``reconnect``, reopens the transport after the waits
-of the one reconnect policy (``host.board.backoff.Backoff``: jittered, doubling, capped; a new
-one for every loss). While it is down, requests fail at once: nothing is sent to a board that
-is not heard.
+A lost link fails the pending requests (``LinkLost``), tells every subscriber (``LinkDown``)
+and, with ``reconnect``, reopens the transport after the waits of the one reconnect policy
+(``host.board.backoff.Backoff``: jittered, doubling, capped; a new one for every loss, so a
+good connection resets it). While it is down, requests fail at once: nothing is sent to a
+board that is not heard.
 
 A new session (after a reconnect, or an unexpected HELLO: the board rebooted under a link that
 stayed open) is finished beside the reader: the subscription is restored and the session waits
@@ -49,6 +44,7 @@ from typing import Any
 from host.board.backoff import Backoff
 from host.board.fanout import Fanout
 from host.board.requests import Requests
+from host.board.silence import Silence
 from host.board.types import BoardEvent, BoardInfo, LinkDown, LinkUp, Rebooted
 from host.errors import RemoteError
 from host.transports.base import Transport
@@ -87,10 +83,7 @@ log = logging.getLogger(__name__)
 
 AUTH_CODES = (E_AUTH_REQUIRED, E_BAD_TAG, E_REPLAYED, E_NO_SESSION)
 KEEPALIVE_S = 10.0  # PING period while connected (the board closes silent sessions at 30 s)
-SILENCE_PERIODS = 10  # subscription periods without a message that make a link lost...
-SILENCE_MIN_S = 0.5  # ...but never less than this
 UPTIME_SLACK_MS = 500  # uptime may lag the host's clock by this much (+5 %) without a reboot
-SILENCE_TOLERANCE_S = 0.001  # a silence this close to its limit has reached it (float residue)
 DEFAULT_HOLD_MS = 30  # by default a reading waits on the board at most this long for its frame
 MAX_PER_FRAME = 10  # SUBSCRIBE's per_frame 1-10 (PROTOCOL.md §4.2)
 
@@ -117,7 +110,6 @@ class BoardLink:
         self.reconnect = reconnect
         self.backoff_s = backoff_s
         self.max_backoff_s = max_backoff_s
-        self.silence_s = silence_s  # None: derived from the subscription rate
         self.keepalive_s = keepalive_s
         self.clock = clock
         self.wall = wall
@@ -133,16 +125,12 @@ class BoardLink:
         self._tasks: set[asyncio.Task[None]] = set()
         self._up = asyncio.Event()
         self._closing = False
-        self._rate = 0  # the subscribed rate (0: nothing subscribed)
-        self._per_frame = 1  # readings a frame the board was asked for
         self._seen_uptime = (0, 0.0)  # (uptime ms, host monotonic s) last seen
         self._session = 0  # counts sessions (HELLOs accepted)
         self._losing = False  # the reader is handling a lost link
-        self._last_rx = 0.0  # host monotonic time of the last news from the board
-        self._last_uptime: int | None = None  # of this session's last measurement
         self._seen_before = (0, 0.0)  # the (uptime, time) last seen before this session
-        self._heard = asyncio.Event()  # this session's board was heard running
-        self._rearm = asyncio.Event()  # the silence rule changed (a session, a subscription)
+        self.silence = Silence(clock, silence_s, keepalive_s, timeout_s,
+                               lambda: self.transport.MAX_PUSH_HZ)
         self._down_since = 0.0
 
     # --- connection -----------------------------------------------------------------------
@@ -267,9 +255,9 @@ class BoardLink:
         mono = self.clock()
         last = batch[-1].uptime_ms
         if len(batch) > 1:
-            self._news(batch[0].uptime_ms, mono)
-        self._news(last, mono)
-        self.fanout.readings(batch, now, mono, boot, self._rate)
+            self.silence.news(batch[0].uptime_ms, mono)
+        self.silence.news(last, mono)
+        self.fanout.readings(batch, now, mono, boot, self.silence.rate)
         self._seen_uptime = (last, mono)
 
     def note_uptime(self, uptime_ms: int) -> None:
@@ -320,25 +308,22 @@ class BoardLink:
     @property
     def rate_hz(self) -> int:
         """The subscribed rate (0: nothing subscribed)."""
-        return self._rate
+        return self.silence.rate
 
     @property
     def per_frame(self) -> int:
         """Readings a frame the board was asked for (1 when not batching)."""
-        return self._per_frame
+        return self.silence.per_frame
 
     def subscribed(self, rate_hz: int, per_frame: int = 1) -> None:
         """The subscription's rate changed: the silence rule starts from now."""
-        self._rate = rate_hz
-        self._per_frame = per_frame
-        self._last_rx = self.clock()
-        self._rearm.set()
+        self.silence.subscribed(rate_hz, per_frame)
 
     async def _resubscribe(self) -> None:
-        ask = self.subscription(self._rate)
+        ask = self.subscription(self.silence.rate)
         try:
             await self._request_now(ask)
-            self._per_frame = ask.per_frame
+            self.silence.per_frame = ask.per_frame
         except (BoardUnreachable, BoardRefused) as exc:
             log.warning("%s: resubscribing failed: %s", self.url, exc)
 
@@ -346,37 +331,16 @@ class BoardLink:
 
     @property
     def silence_limit(self) -> float | None:
-        """Seconds without news from the board (a measurement with a new uptime) after which a
-        subscribed link is lost; None while nothing is subscribed (the keepalive watches)."""
-        if not self._rate:
-            return None
-        if self.silence_s is not None:
-            return self.silence_s
-        most = self.transport.MAX_PUSH_HZ
-        rate = min(self._rate, most) if most else self._rate
-        # a board sending k readings a frame is silent k - 1 periods between frames
-        derived = max(SILENCE_MIN_S, (SILENCE_PERIODS + self._per_frame - 1) / rate)
-        return min(derived, self.keepalive_s + self.timeout_s)
+        """Seconds without news after which a subscribed link is lost (``host.board.silence``);
+        None while nothing is subscribed (the keepalive watches)."""
+        return self.silence.limit()
 
     def _new_session(self) -> None:
         """A HELLO was accepted: a new session starts, heard from just now."""
         self._session += 1
         self._losing = False
-        self._last_rx = self.clock()
-        self._last_uptime = None
         self._seen_before = self._seen_uptime
-        self._heard.set()  # wakes the last session's waiter: it sees that it is over
-        self._heard = asyncio.Event()
-        self._rearm.set()
-
-    def _news(self, uptime_ms: int, now: float) -> None:
-        """A measurement arrived at ``now`` (the host's clock): news if the board's clock moved
-        since the last one."""
-        last, self._last_uptime = self._last_uptime, uptime_ms
-        if last is None or uptime_ms != last:
-            self._last_rx = now
-        if last is not None and uptime_ms != last and not self._heard.is_set():
-            self._heard.set()
+        self.silence.new_session()
 
     async def _keepalive(self) -> None:
         """PING every ``keepalive_s`` while up: a board closes a session that sent it nothing for
@@ -395,23 +359,12 @@ class BoardLink:
                 log.debug("%s: keepalive: %s", self.url, exc)  # the reader handles the link
 
     async def _watch_silence(self) -> None:
-        """Declare the link lost when no news arrived for ``silence_limit`` while subscribed."""
-        while not self._closing:
-            limit = self.silence_limit
-            self._rearm.clear()
+        """The silence rule's watch: judging while the reader runs and no loss is handled."""
+        def judging() -> bool:
             reader = self._reader
-            if limit is None or self._losing or reader is None or reader.done():
-                await self._rearm.wait()
-                continue
-            wait = self._last_rx + limit - self.clock()
-            if wait > SILENCE_TOLERANCE_S:
-                with contextlib.suppress(TimeoutError):
-                    await asyncio.wait_for(self._rearm.wait(), wait)
-                continue
-            await asyncio.sleep(0)  # read what arrived first: a stalled host is no silent board
-            limit = self.silence_limit
-            if limit is not None and self._last_rx + limit - self.clock() <= SILENCE_TOLERANCE_S:
-                self._declare_lost(f"nothing from the board for {limit:g} s")
+            return not self._losing and reader is not None and not reader.done()
+
+        await self.silence.watch(judging, self._declare_lost, lambda: self._closing)
 
     def _declare_lost(self, reason: str) -> None:
         """The link is lost though the transport did not say so: replace the reader by one that
@@ -483,7 +436,7 @@ class BoardLink:
     async def _finish_session(self, old: BoardInfo | None, hello: Hello, down_s: float) -> None:
         """The rest of a new session (beside the reader): resubscribe, hear the board running,
         tell a reboot, then up."""
-        session, heard = self._session, self._heard
+        session, heard = self._session, self.silence.heard
         if self.silence_limit is not None:
             await self._resubscribe()
             await heard.wait()  # a silent session is ended by the silence rule, which wakes us
@@ -513,7 +466,7 @@ class BoardLink:
         seen_ms, seen_at = self._seen_before
         if not seen_at:
             return None
-        if self._last_uptime is None:  # not subscribed: ask
+        if self.silence.last_uptime is None:  # not subscribed: ask
             try:
                 state = await self._request_now(GetState())
             except (BoardUnreachable, BoardRefused):
