@@ -56,15 +56,7 @@ from host.transports.errors import (
     RequestTimeout,
     VersionMismatch,
 )
-from protocol.constants import (
-    BOARD_CHANNEL,
-    CAP_BATCH,
-    E_AUTH_REQUIRED,
-    E_BAD_TAG,
-    E_NO_SESSION,
-    E_REPLAYED,
-    PROTOCOL_VERSION,
-)
+from protocol.constants import BOARD_CHANNEL, CAP_BATCH, PROTOCOL_VERSION
 from protocol.framing import BadFrame
 from protocol.messages import (
     Event,
@@ -81,7 +73,6 @@ from protocol.messages import (
 
 log = logging.getLogger(__name__)
 
-AUTH_CODES = (E_AUTH_REQUIRED, E_BAD_TAG, E_REPLAYED, E_NO_SESSION)
 KEEPALIVE_S = 10.0  # PING period while connected (the board closes silent sessions at 30 s)
 UPTIME_SLACK_MS = 500  # uptime may lag the host's clock by this much (+5 %) without a reboot
 DEFAULT_HOLD_MS = 30  # by default a reading waits on the board at most this long for its frame
