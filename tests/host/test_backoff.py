@@ -13,6 +13,7 @@ from __future__ import annotations
 import asyncio
 import itertools
 import random
+from collections.abc import Callable
 
 import pytest
 
@@ -96,6 +97,13 @@ async def test_the_link_reopens_after_the_policys_waits_and_starts_afresh_after_
             assert loop.time() < end, items[-3:]
             await asyncio.sleep(0.01)
 
+    async def until_true(what: Callable[[], bool]) -> None:
+        end = loop.time() + 60.0
+        while not what():
+            assert loop.time() < end, opened
+            await asyncio.sleep(0.01)
+
+    task: asyncio.Future[None] | None = None
     mb = MemoryBoard(tedusar(), "backoff")
     await mb.__aenter__()
     try:
@@ -105,8 +113,7 @@ async def test_the_link_reopens_after_the_policys_waits_and_starts_afresh_after_
         await mb.__aexit__()  # the board goes away: nothing listens
         await until(LinkDown, 1)
         lost_at = next(t for t, x in items if isinstance(x, LinkDown))
-        while len(opened) < 8:  # 1 connect + 7 failed attempts
-            await asyncio.sleep(0.05)
+        await until_true(lambda: len(opened) >= 8)  # 1 connect + 7 failed attempts
         policy = Backoff(0.05, 0.4, rng=random.Random(seed))
         waits = [policy.next() for _ in range(7)]
         gaps = [b - a for a, b in itertools.pairwise([lost_at, *opened[1:8]])]
@@ -118,12 +125,12 @@ async def test_the_link_reopens_after_the_policys_waits_and_starts_afresh_after_
         attempts = len(opened)
         mb.drop_links()  # lost again after a good link
         await until(LinkDown, 2)
-        while len(opened) == attempts:
-            await asyncio.sleep(0.01)
+        await until_true(lambda: len(opened) > attempts)
         second_lost = [t for t, x in items if isinstance(x, LinkDown)][1]
         assert opened[attempts] - second_lost <= 0.05 + 1e-3  # from backoff_s, not the cap
-        task.cancel()
-        await asyncio.wait([task])
     finally:
+        if task is not None:
+            task.cancel()
+            await asyncio.wait([task])
         await c.close()
         await mb.__aexit__()
