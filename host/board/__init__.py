@@ -1,10 +1,13 @@
 """The host's view of one board: ``BoardClient`` and the values it hands out.
 
-``host.board.client`` is the async client (connect, state, subscribe, switch, power-cycle,
-clear, configure), whose link is judged in ``host.board.link`` (silence, keepalive, reconnect,
-reboot detection); ``host.board.types`` the typed values
-(``BoardInfo``, ``BoardState``, ``Reading``, ``BoardEvent``, link notices); ``host.board.keys``
-where the key comes from. Errors are those of ``host.transports.errors``.
+``host.board.client`` is the async client, composed of the parts it holds: its link
+(``host.board.link``: connection, greeting, request/reply, keepalive, silence, reconnect,
+reboot detection; ``requests`` and ``fanout`` its halves), its channel names
+(``host.board.channels``), its actuator (``host.board.actuate``: switch, power-cycle, clear) and
+its configurator (``host.board.configure``). ``host.board.backoff`` is the one reconnect policy
+(the link's and the daemon's); ``host.board.types`` the typed values (``BoardInfo``,
+``BoardState``, ``Reading``, ``BoardEvent``, link notices); ``host.board.keys`` where the key
+comes from. Errors are those of ``host.transports.errors``.
 """
 
 from typing import TYPE_CHECKING, Any

@@ -1,8 +1,9 @@
 """Configuration through the board client: get, set with the read-back checked, save.
 
-``ConfigMixin`` is the configuration half of ``BoardClient`` (kept apart so each module stays
-one concept). Setting reads the current configuration, changes only the fields given, sends the
-whole record (the protocol replaces a channel's or the board's configuration at once) and
+``BoardConfigurator`` is the board client's configurator (``client.configurator``): it holds the
+client's link (``host.board.link``) and channel names (``host.board.channels``) and uses only
+their public methods. Setting reads the current configuration, changes only the fields given,
+sends the whole record (the protocol replaces a channel's or the board's configuration at once) and
 compares the board's answer with what was asked: ``ReadbackMismatch`` names the fields that
 differ. An unknown field name is refused before anything is sent, with the list of valid ones.
 Nothing is persisted until ``save_config``. Values are checked against the protocol's own
@@ -17,8 +18,10 @@ import logging
 from typing import Any
 
 from host.board.actuate import need_key
-from host.transports.base import CONFIG, SAVE, Transport
-from host.transports.errors import BadSetting, ReadbackMismatch
+from host.board.channels import ChannelNames
+from host.board.link import BoardLink
+from host.transports.base import CONFIG, SAVE
+from host.transports.errors import BadSetting, NotSupported, ReadbackMismatch
 from protocol import settings
 from protocol.constants import BOARD_CHANNEL
 from protocol.messages import (
@@ -28,7 +31,6 @@ from protocol.messages import (
     BoardConfig,
     ChannelConfig,
     GetConfig,
-    Message,
     SaveConfig,
     SetBoardConfig,
     SetChannelConfig,
@@ -37,53 +39,51 @@ from protocol.messages import (
 log = logging.getLogger(__name__)
 
 
-class ConfigMixin:
-    """Needs ``url``, ``key``, ``transport``, ``_names``, ``channel``, ``_expect``, ``_need``."""
+class BoardConfigurator:
+    """Read, change and save the configuration of the board behind ``link``."""
 
-    url: str
-    key: bytes | None
-    transport: Transport
-    _names: list[str] | None
-
-    async def channel(self, ch: int | str) -> int:
-        raise NotImplementedError
-
-    async def _expect(self, msg: Message, kind: type[Any]) -> Any:
-        raise NotImplementedError
+    def __init__(self, link: BoardLink, channels: ChannelNames) -> None:
+        self.link = link
+        self.channels = channels
 
     def _need(self, cap: str, what: str) -> None:
-        raise NotImplementedError
+        """``NotSupported`` before anything is sent when the transport lacks ``cap``."""
+        transport = self.link.transport
+        if cap not in transport.CAPS:
+            raise NotSupported(f"{self.link.url}: {what} is not possible over "
+                               f"{transport.SCHEME}",
+                               "use the board's native transport (tcp:// or serial://)")
 
     async def get_channel_config(self, ch: int | str) -> dict[str, Any]:
         self._need(CONFIG, "reading configuration")
-        n = await self.channel(ch)
-        cfg: ChannelConfig = await self._expect(GetConfig(n), ChannelConfig)
+        n = await self.channels.number(ch)
+        cfg: ChannelConfig = await self.link.expect(GetConfig(n), ChannelConfig)
         return {k: getattr(cfg, k) for k in CHANNEL_CONFIG_KEYS}
 
     async def set_channel_config(self, ch: int | str, **fields: Any) -> dict[str, Any]:
         """Change some fields of a channel's configuration; the read-back must match."""
         self._need(CONFIG, "changing configuration")
-        need_key(self.url, self.transport, self.key, "changing configuration")
+        need_key(self.link, "changing configuration")
         if isinstance(fields.get("retry_ms"), int):  # one retry, as `retry_ms=1000` reads
             fields = {**fields, "retry_ms": [fields["retry_ms"]]}
         _check(fields, settings.CHANNEL, settings.check_channel, "channel")
         current = await self.get_channel_config(ch)
         current.update(fields)
-        reply: ChannelConfig = await self._expect(SetChannelConfig(**current), ChannelConfig)
+        reply: ChannelConfig = await self.link.expect(SetChannelConfig(**current), ChannelConfig)
         got = {k: getattr(reply, k) for k in CHANNEL_CONFIG_KEYS}
         self._check_readback(current, got)
         if "name" in fields:
-            self._names = None
+            self.channels.forget()
         return got
 
     async def get_board_config(self) -> dict[str, Any]:
         self._need(CONFIG, "reading configuration")
-        cfg: BoardConfig = await self._expect(GetConfig(BOARD_CHANNEL), BoardConfig)
+        cfg: BoardConfig = await self.link.expect(GetConfig(BOARD_CHANNEL), BoardConfig)
         return _board_dict(cfg)
 
     async def set_board_config(self, **fields: Any) -> dict[str, Any]:
         self._need(CONFIG, "changing configuration")
-        need_key(self.url, self.transport, self.key, "changing configuration")
+        need_key(self.link, "changing configuration")
         if "modbus_allow" in fields:
             fields = {**fields, "modbus_allow": allow_list(fields["modbus_allow"])}
         wire = [r for r in settings.BOARD if r[1] is not None]
@@ -92,7 +92,7 @@ class ConfigMixin:
         current.update(fields)
         msg = SetBoardConfig(**{**current, "modbus_allow": [settings.ip_to_int(a) for a in
                                                             current["modbus_allow"]]})
-        reply: BoardConfig = await self._expect(msg, BoardConfig)
+        reply: BoardConfig = await self.link.expect(msg, BoardConfig)
         got = _board_dict(reply)
         self._check_readback(current, got)
         return got
@@ -100,14 +100,14 @@ class ConfigMixin:
     def _check_readback(self, want: dict[str, Any], got: dict[str, Any]) -> None:
         bad = [k for k in want if k in got and got[k] != want[k]]
         if bad:
-            raise ReadbackMismatch(f"{self.url}: the board's configuration reads back "
+            raise ReadbackMismatch(f"{self.link.url}: the board's configuration reads back "
                                    f"differently for {', '.join(bad)}",
                                    "read it with `config get` and try again")
 
     async def save_config(self) -> None:
         self._need(SAVE, "saving configuration")
-        need_key(self.url, self.transport, self.key, "saving the configuration")
-        await self._expect(SaveConfig(), Ack)
+        need_key(self.link, "saving the configuration")
+        await self.link.expect(SaveConfig(), Ack)
 
 
 def allow_list(value: Any) -> list[str]:

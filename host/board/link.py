@@ -1,24 +1,27 @@
-"""Keeping the board link honest: keepalive, silence, loss, reconnection and reboots.
+"""The board link: connection, greeting, request and reply, and keeping the link honest.
 
-Theory of operation. ``LinkMixin`` is the half of ``BoardClient`` that judges whether the link
-to the board is alive and brings it back. The link is *lost* when
+Theory of operation. ``BoardLink(url, key)`` opens the transport, checks the HELLO (protocol
+version, board id, boot id) and starts one reader task that owns every byte from the board (it
+pumps the transport, which hands it messages in batches): a reply completes its request
+(``host.board.requests``); a MEASUREMENT (or each reading of a MEASUREMENT_BATCH) and an EVENT
+go to the ``Fanout`` (``host.board.fanout``), which hands them to every subscriber, unless the
+channel count disagrees with the HELLO (dropped with a warning); an unexpected HELLO starts a
+new session.
+
+The link is *lost* when
 
 - the transport says so (the stream ended, a write failed: the reader gets ``BoardUnreachable``);
-- nothing arrives for ``silence_limit`` seconds while subscribed (a frozen link, a board held in
-  reset or hung): ``silence_s`` if given, else ``SILENCE_PERIODS`` periods of the subscription
-  (plus the k - 1 periods a board batching k readings a frame waits between frames), at least
-  ``SILENCE_MIN_S`` and at most one keepalive period plus the request timeout (the
-  keepalive would tell by then anyway);
+- nothing new arrives for ``silence_limit`` seconds while subscribed (a frozen link, a board
+  held in reset or hung): the silence rule of ``host.board.silence``, judged only after the
+  host has read what already arrived;
 - a keepalive PING (every ``keepalive_s`` while up, PROTOCOL.md §3) gets no answer within the
   request timeout: the only judge while nothing is subscribed.
 
-Silence is judged only after the host has read what already arrived: a host that stalled (a busy
-machine) is not a silent board. Only news counts: a measurement whose uptime repeats the one
-before (a board whose clock stands still: held in reset, its main loop hung, while something
-still answers) is no sign of life. A lost link fails the pending requests (``LinkLost``), tells
-every subscriber (``LinkDown``) and, with ``reconnect``, reopens the transport with exponential
-backoff and jitter (``backoff_s`` doubling up to ``max_backoff_s``, each wait drawn from [½, 1]
-of it). While it is down, requests fail at once: nothing is sent to a board that is not heard.
+A lost link fails the pending requests (``LinkLost``), tells every subscriber (``LinkDown``)
+and, with ``reconnect``, reopens the transport after the waits of the one reconnect policy
+(``host.board.backoff.Backoff``: jittered, doubling, capped; a new one for every loss, so a
+good connection resets it). While it is down, requests fail at once: nothing is sent to a
+board that is not heard.
 
 A new session (after a reconnect, or an unexpected HELLO: the board rebooted under a link that
 stayed open) is finished beside the reader: the subscription is restored and the session waits
@@ -26,6 +29,7 @@ until the board is heard running (two measurements with different uptimes; the s
 ends a session that never gets there). Then a new boot id, or an uptime lower than the one seen
 before plus the time away, is a reboot (``Rebooted``, published first), and the link is up:
 ``LinkUp``, requests allowed. Unsubscribed, the uptime comes from a STATE instead.
+``clock`` must be the event loop's clock (its timeouts and backoff sleeps use it).
 """
 
 from __future__ import annotations
@@ -37,7 +41,11 @@ import random
 from collections.abc import Callable, Coroutine
 from typing import Any
 
-from host.board.types import BoardInfo, LinkDown, LinkUp, Rebooted, StreamItem
+from host.board.backoff import Backoff
+from host.board.fanout import Fanout
+from host.board.requests import Requests
+from host.board.silence import Silence
+from host.board.types import BoardEvent, BoardInfo, LinkDown, LinkUp, Rebooted
 from host.errors import RemoteError
 from host.transports.base import Transport
 from host.transports.errors import (
@@ -48,97 +56,282 @@ from host.transports.errors import (
     RequestTimeout,
     VersionMismatch,
 )
-from protocol.messages import GetState, Hello, Message, State, Subscribe
+from protocol.constants import BOARD_CHANNEL, CAP_BATCH, PROTOCOL_VERSION
+from protocol.framing import BadFrame
+from protocol.messages import (
+    Event,
+    GetState,
+    Hello,
+    Measurement,
+    MeasurementBatch,
+    Message,
+    Ping,
+    Pong,
+    State,
+    Subscribe,
+)
 
 log = logging.getLogger(__name__)
 
 KEEPALIVE_S = 10.0  # PING period while connected (the board closes silent sessions at 30 s)
-SILENCE_PERIODS = 10  # subscription periods without a message that make a link lost...
-SILENCE_MIN_S = 0.5  # ...but never less than this
 UPTIME_SLACK_MS = 500  # uptime may lag the host's clock by this much (+5 %) without a reboot
-SILENCE_TOLERANCE_S = 0.001  # a silence this close to its limit has reached it (float residue)
+DEFAULT_HOLD_MS = 30  # by default a reading waits on the board at most this long for its frame
+MAX_PER_FRAME = 10  # SUBSCRIBE's per_frame 1-10 (PROTOCOL.md §4.2)
 
 
-class LinkMixin:
-    """Needs the client's connection attributes (below) and ``_request_now``, ``ping``,
-    ``_publish``, ``_fail_pending``, ``_accept_hello``, ``_read_loop`` and ``_spawn``."""
+def default_per_frame(rate_hz: int) -> int:
+    """Readings a frame asked by default at ``rate_hz``: as many as are sampled within
+    ``DEFAULT_HOLD_MS`` (the first of a frame waits for the other k - 1), at least 1."""
+    return max(1, min(MAX_PER_FRAME, 1 + rate_hz * DEFAULT_HOLD_MS // 1000))
 
-    url: str
-    key: bytes | None
-    timeout_s: float
-    connect_timeout_s: float
-    reconnect: bool
-    backoff_s: float
-    max_backoff_s: float
-    keepalive_s: float
-    silence_s: float | None
-    clock: Callable[[], float]
-    wall: Callable[[], float]
-    transport: Transport
-    info: BoardInfo | None
-    reboots: int
-    _factory: Callable[[str, bytes | None], Transport]
-    _rng: random.Random
-    _rate: int
-    _reader: asyncio.Task[None] | None
-    _up: asyncio.Event
-    _closing: bool
-    _seen_uptime: tuple[int, float]
 
-    def _link_init(self) -> None:
+class BoardLink:
+    """See the module docstring. The board client (``host.board.client``) holds one."""
+
+    def __init__(self, url: str, key: bytes | None, *, timeout_s: float,
+                 connect_timeout_s: float, reconnect: bool, backoff_s: float,
+                 max_backoff_s: float, silence_s: float | None, keepalive_s: float,
+                 transport_factory: Callable[[str, bytes | None], Transport],
+                 rng: random.Random | None, clock: Callable[[], float],
+                 wall: Callable[[], float]) -> None:
+        self.url = url
+        self.key = key
+        self.timeout_s = timeout_s
+        self.connect_timeout_s = connect_timeout_s
+        self.reconnect = reconnect
+        self.backoff_s = backoff_s
+        self.max_backoff_s = max_backoff_s
+        self.keepalive_s = keepalive_s
+        self.clock = clock
+        self.wall = wall
+        self._factory = transport_factory
+        self._rng = rng or random.Random()
+        self.transport: Transport = transport_factory(url, key)  # BadUrl at once
+        self.fanout = Fanout(url)
+        self.info: BoardInfo | None = None
+        self.reboots = 0
+        self.down_reason = ""  # why the link is down ("" while up)
+        self.requests = Requests(url, timeout_s)
+        self._reader: asyncio.Task[None] | None = None
+        self._tasks: set[asyncio.Task[None]] = set()
+        self._up = asyncio.Event()
+        self._closing = False
+        self._seen_uptime = (0, 0.0)  # (uptime ms, host monotonic s) last seen
         self._session = 0  # counts sessions (HELLOs accepted)
         self._losing = False  # the reader is handling a lost link
-        self._last_rx = 0.0  # host monotonic time of the last news from the board
-        self._last_uptime: int | None = None  # of this session's last measurement
         self._seen_before = (0, 0.0)  # the (uptime, time) last seen before this session
-        self._heard = asyncio.Event()  # this session's board was heard running
-        self._rearm = asyncio.Event()  # the silence rule changed (a session, a subscription)
+        self.silence = Silence(clock, silence_s, keepalive_s, timeout_s,
+                               lambda: self.transport.MAX_PUSH_HZ)
         self._down_since = 0.0
-        self._per_frame = 1  # readings a frame the board was asked for
-        self.down_reason = ""  # why the link is down ("" while up)
+
+    # --- connection -----------------------------------------------------------------------
+
+    @property
+    def connected(self) -> bool:
+        return self._up.is_set()
+
+    async def open(self) -> BoardInfo:
+        """Open the link and check the HELLO; ``BoardUnreachable`` or ``VersionMismatch``."""
+        self._closing = False
+        hello = await self.transport.open(self.connect_timeout_s)
+        info = self._accept_hello(hello)
+        self._reader = asyncio.create_task(self._read_loop(), name=f"board-reader {self.url}")
+        self._up.set()
+        self.down_reason = ""
+        for guard, name in ((self._keepalive, "keepalive"), (self._watch_silence, "silence")):
+            if not any(t.get_name() == name for t in self._tasks):
+                self._spawn(guard(), name=name)
+        return info
+
+    async def close(self) -> None:
+        """Stop the reader and the guards, close the transport, fail what is pending."""
+        self._closing = True
+        self._up.clear()
+        reader, self._reader = self._reader, None
+        if reader is not None:
+            reader.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await reader
+        for task in list(self._tasks):
+            task.cancel()
+        await self.transport.close()
+        self.requests.fail_all(LinkLost(f"{self.url}: client closed", ""))
+
+    def _accept_hello(self, hello: Hello) -> BoardInfo:
+        if hello.version != PROTOCOL_VERSION:
+            raise VersionMismatch(
+                f"{self.url}: board speaks protocol version {hello.version}, "
+                f"this host version {PROTOCOL_VERSION}",
+                "flash matching firmware (dxboard flash) or use a matching dxboard")
+        old = self.info
+        self.info = BoardInfo(
+            url=self.url, scheme=self.transport.SCHEME, version=hello.version,
+            board_id=hello.board_id, firmware=hello.firmware, channels=hello.channels,
+            capabilities=hello.capabilities, boot_id=hello.boot_id,
+            reset_cause=hello.reset_cause, config_status=hello.config_status,
+            transport_caps=self.transport.CAPS)
+        self.fanout.new_session()
+        self._new_session()
+        if old is not None and old.board_id != hello.board_id:
+            log.warning("%s: now board %r (was %r)", self.url, hello.board_id, old.board_id)
+        return self.info
+
+    def _spawn(self, coro: Coroutine[Any, Any, None], name: str | None = None) -> None:
+        task = asyncio.get_running_loop().create_task(coro, name=name)
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    # --- reading --------------------------------------------------------------------------
+
+    async def _read_loop(self, lost: str | None = None,
+                         after: asyncio.Task[None] | None = None) -> None:
+        """Read and dispatch until closed; a lost link (``lost``, or the transport's word) is
+        handled first. ``after``: the reader this one replaces (it is let finish first)."""
+        if after is not None:
+            await asyncio.wait([after])
+        while True:
+            if lost is not None:
+                if not await self._link_lost(lost):
+                    return
+                lost = None
+            try:
+                await self.transport.pump(self._dispatch_all)
+            except RemoteError as exc:  # any failure of the link is a lost link
+                if self._closing:
+                    return
+                lost = str(exc)
+
+    def _dispatch_all(self, batch: list[Message | BadFrame]) -> None:
+        for msg in batch:
+            self._dispatch(msg)
+
+    def _dispatch(self, msg: Message | BadFrame) -> None:
+        if isinstance(msg, BadFrame):
+            log.warning("%s: bad frame from the board: %s", self.url, msg.text)
+            return
+        if self.requests.deliver(msg):
+            return
+        now = self.wall()
+        info = self.info
+        boot = info.boot_id if info else 0
+        channels = info.channels if info else 0
+        if isinstance(msg, Measurement):
+            self._readings([msg], now, boot, channels)
+        elif isinstance(msg, MeasurementBatch):
+            self._readings(msg.readings, now, boot, channels)
+        elif isinstance(msg, Event):
+            if msg.channel >= channels and msg.channel != BOARD_CHANNEL:
+                log.warning("%s: an event for channel %d of a board of %d: dropped", self.url,
+                            msg.channel, channels)
+                return
+            self.fanout.publish(BoardEvent(now, boot, msg.seq, msg.uptime_ms, msg.kind,
+                                           msg.channel, msg.old_state, msg.new_state,
+                                           msg.faults, msg.value_ma, msg.dropped))
+        elif isinstance(msg, Hello):
+            if msg.req_id and self.info is not None and msg.boot_id == self.info.boot_id:
+                # the answer to the transport's HELLO_REQUEST, after the board's own greeting:
+                # the same session with a fresh nonce (the transport's codec signs with it)
+                log.debug("%s: a second HELLO of this session: fresh nonce", self.url)
+                return
+            self._new_hello(msg)
+        else:
+            log.debug("%s: unsolicited %r dropped", self.url, msg)
+
+    def _readings(self, batch: list[Measurement], now: float, boot: int, channels: int) -> None:
+        """Readings that arrived together: news for the silence rule, then to the fan-out."""
+        if len(batch[0].currents_ma) != channels:
+            log.warning("%s: a measurement of %d channels from a board of %d: dropped",
+                        self.url, len(batch[0].currents_ma), channels)
+            return
+        mono = self.clock()
+        last = batch[-1].uptime_ms
+        if len(batch) > 1:
+            self.silence.news(batch[0].uptime_ms, mono)
+        self.silence.news(last, mono)
+        self.fanout.readings(batch, now, mono, boot, self.silence.rate)
+        self._seen_uptime = (last, mono)
+
+    def note_uptime(self, uptime_ms: int) -> None:
+        """The board's uptime as a reply (PONG, STATE) told it, seen now."""
+        self._seen_uptime = (uptime_ms, self.clock())
+
+    # --- requests -------------------------------------------------------------------------
+
+    async def _request_now(self, msg: Message) -> Message:
+        """Send ``msg`` on the current link and wait for its reply (no waiting for a link)."""
+        return await self.requests.send(self.transport, msg)
+
+    async def request(self, msg: Message) -> Message:
+        """Send a host message and return the board's reply; at once ``BoardUnreachable`` while
+        the link is down."""
+        if not self._up.is_set():
+            if self._closing or self._reader is None:
+                raise LinkLost(f"{self.url}: not connected", "connect first")
+            raise BoardUnreachable(
+                f"{self.url}: the link to the board is down ({self.down_reason}); "
+                f"{type(msg).__name__} was not sent",
+                "it reconnects by itself; check the board's power and the link")
+        return await self._request_now(msg)
+
+    async def expect(self, msg: Message, kind: type[Any]) -> Any:
+        """``request`` whose reply must be a ``kind`` (else ``BoardRefused``)."""
+        reply = await self.request(msg)
+        if not isinstance(reply, kind):
+            raise BoardRefused(f"{self.url}: expected {kind.__name__}, got {type(reply).__name__}",
+                               "the board's firmware may not match this host")
+        return reply
+
+    async def ping(self, token: int = 0) -> int:
+        """The board's uptime in ms (a round trip; also feeds the board's dead-man)."""
+        pong: Pong = await self.expect(Ping(token), Pong)
+        self.note_uptime(pong.uptime_ms)
+        return pong.uptime_ms
+
+    # --- the subscription -----------------------------------------------------------------
+
+    def subscription(self, rate_hz: int) -> Subscribe:
+        """The SUBSCRIBE for ``rate_hz``: with ``per_frame`` where the board can batch."""
+        info = self.info
+        if not rate_hz or info is None or not info.capabilities & CAP_BATCH:
+            return Subscribe(rate_hz)
+        return Subscribe(rate_hz, self.transport.per_frame or default_per_frame(rate_hz))
+
+    @property
+    def rate_hz(self) -> int:
+        """The subscribed rate (0: nothing subscribed)."""
+        return self.silence.rate
+
+    @property
+    def per_frame(self) -> int:
+        """Readings a frame the board was asked for (1 when not batching)."""
+        return self.silence.per_frame
+
+    def subscribed(self, rate_hz: int, per_frame: int = 1) -> None:
+        """The subscription's rate changed: the silence rule starts from now."""
+        self.silence.subscribed(rate_hz, per_frame)
+
+    async def _resubscribe(self) -> None:
+        ask = self.subscription(self.silence.rate)
+        try:
+            await self._request_now(ask)
+            self.silence.per_frame = ask.per_frame
+        except (BoardUnreachable, BoardRefused) as exc:
+            log.warning("%s: resubscribing failed: %s", self.url, exc)
 
     # --- the rules ----------------------------------------------------------------------
 
     @property
     def silence_limit(self) -> float | None:
-        """Seconds without news from the board (a measurement with a new uptime) after which a
-        subscribed link is lost; None while nothing is subscribed (the keepalive watches)."""
-        if not self._rate:
-            return None
-        if self.silence_s is not None:
-            return self.silence_s
-        most = self.transport.MAX_PUSH_HZ
-        rate = min(self._rate, most) if most else self._rate
-        # a board sending k readings a frame is silent k - 1 periods between frames
-        derived = max(SILENCE_MIN_S, (SILENCE_PERIODS + self._per_frame - 1) / rate)
-        return min(derived, self.keepalive_s + self.timeout_s)
+        """Seconds without news after which a subscribed link is lost (``host.board.silence``);
+        None while nothing is subscribed (the keepalive watches)."""
+        return self.silence.limit()
 
     def _new_session(self) -> None:
         """A HELLO was accepted: a new session starts, heard from just now."""
         self._session += 1
         self._losing = False
-        self._last_rx = self.clock()
-        self._last_uptime = None
         self._seen_before = self._seen_uptime
-        self._heard.set()  # wakes the last session's waiter: it sees that it is over
-        self._heard = asyncio.Event()
-        self._rearm.set()
-
-    def _news(self, uptime_ms: int, now: float) -> None:
-        """A measurement arrived at ``now`` (the host's clock): news if the board's clock moved
-        since the last one."""
-        last, self._last_uptime = self._last_uptime, uptime_ms
-        if last is None or uptime_ms != last:
-            self._last_rx = now
-        if last is not None and uptime_ms != last and not self._heard.is_set():
-            self._heard.set()
-
-    def _subscribed(self, rate_hz: int, per_frame: int = 1) -> None:
-        """The subscription's rate changed: the silence rule starts from now."""
-        self._rate = rate_hz
-        self._per_frame = per_frame
-        self._last_rx = self.clock()
-        self._rearm.set()
+        self.silence.new_session()
 
     async def _keepalive(self) -> None:
         """PING every ``keepalive_s`` while up: a board closes a session that sent it nothing for
@@ -157,23 +350,12 @@ class LinkMixin:
                 log.debug("%s: keepalive: %s", self.url, exc)  # the reader handles the link
 
     async def _watch_silence(self) -> None:
-        """Declare the link lost when no news arrived for ``silence_limit`` while subscribed."""
-        while not self._closing:
-            limit = self.silence_limit
-            self._rearm.clear()
+        """The silence rule's watch: judging while the reader runs and no loss is handled."""
+        def judging() -> bool:
             reader = self._reader
-            if limit is None or self._losing or reader is None or reader.done():
-                await self._rearm.wait()
-                continue
-            wait = self._last_rx + limit - self.clock()
-            if wait > SILENCE_TOLERANCE_S:
-                with contextlib.suppress(TimeoutError):
-                    await asyncio.wait_for(self._rearm.wait(), wait)
-                continue
-            await asyncio.sleep(0)  # read what arrived first: a stalled host is no silent board
-            limit = self.silence_limit
-            if limit is not None and self._last_rx + limit - self.clock() <= SILENCE_TOLERANCE_S:
-                self._declare_lost(f"nothing from the board for {limit:g} s")
+            return not self._losing and reader is not None and not reader.done()
+
+        await self.silence.watch(judging, self._declare_lost, lambda: self._closing)
 
     def _declare_lost(self, reason: str) -> None:
         """The link is lost though the transport did not say so: replace the reader by one that
@@ -196,23 +378,22 @@ class LinkMixin:
         self._down_since = self.clock()
         self.down_reason = reason
         log.warning("%s: link lost: %s", self.url, reason)
-        self._fail_pending(LinkLost(f"{self.url}: link lost: {reason}",
+        self.requests.fail_all(LinkLost(f"{self.url}: link lost: {reason}",
                                     "the board may have rebooted or been unplugged"))
-        self._publish(LinkDown(self.wall(), reason))
+        self.fanout.publish(LinkDown(self.wall(), reason))
         await self.transport.close()
         if not self.reconnect:
             return False
-        delay = self.backoff_s
+        backoff = Backoff(self.backoff_s, self.max_backoff_s, rng=self._rng)
         while not self._closing:
-            await asyncio.sleep(delay * (0.5 + 0.5 * self._rng.random()))
-            delay = min(delay * 2, self.max_backoff_s)
+            await asyncio.sleep(backoff.next())
             self.transport = self._factory(self.url, self.key)
             try:
                 hello = await self.transport.open(self.connect_timeout_s)
                 old = self._accept_new_hello(hello)
             except VersionMismatch as exc:
                 log.error("%s", exc)
-                self._publish(LinkDown(self.wall(), str(exc)))
+                self.fanout.publish(LinkDown(self.wall(), str(exc)))
                 await self.transport.close()
                 return False
             except RemoteError as exc:
@@ -228,7 +409,7 @@ class LinkMixin:
         Requests in flight belong to the old one and get no answer: they fail now."""
         self._up.clear()
         self.down_reason = "the board started a new session"
-        self._fail_pending(LinkLost(f"{self.url}: the board started a new session",
+        self.requests.fail_all(LinkLost(f"{self.url}: the board started a new session",
                                     "the board may have rebooted; try again"))
         try:
             old = self._accept_new_hello(hello)
@@ -246,7 +427,7 @@ class LinkMixin:
     async def _finish_session(self, old: BoardInfo | None, hello: Hello, down_s: float) -> None:
         """The rest of a new session (beside the reader): resubscribe, hear the board running,
         tell a reboot, then up."""
-        session, heard = self._session, self._heard
+        session, heard = self._session, self.silence.heard
         if self.silence_limit is not None:
             await self._resubscribe()
             await heard.wait()  # a silent session is ended by the silence rule, which wakes us
@@ -264,11 +445,11 @@ class LinkMixin:
             self.reboots += 1
             log.warning("%s: board rebooted (%s changed, reset cause %s)", self.url,
                         rebooted.how, rebooted.reset_cause_name)
-            self._publish(rebooted)
+            self.fanout.publish(rebooted)
         self._up.set()
         self.down_reason = ""
         if self.info is not None:
-            self._publish(LinkUp(self.wall(), down_s, self.info))
+            self.fanout.publish(LinkUp(self.wall(), down_s, self.info))
 
     async def _check_uptime(self, old: BoardInfo, hello: Hello) -> Rebooted | None:
         """A reboot the boot id does not show (boards that report none): the uptime now is
@@ -276,7 +457,7 @@ class LinkMixin:
         seen_ms, seen_at = self._seen_before
         if not seen_at:
             return None
-        if self._last_uptime is None:  # not subscribed: ask
+        if self.silence.last_uptime is None:  # not subscribed: ask
             try:
                 state = await self._request_now(GetState())
             except (BoardUnreachable, BoardRefused):
@@ -289,38 +470,3 @@ class LinkMixin:
         if now_ms + UPTIME_SLACK_MS + away_ms * 0.05 < seen_ms + away_ms:
             return Rebooted(self.wall(), old.boot_id, hello.boot_id, hello.reset_cause, "uptime")
         return None
-
-    async def _resubscribe(self) -> None:
-        ask = self._subscription(self._rate)
-        try:
-            await self._request_now(ask)
-            self._per_frame = ask.per_frame
-        except (BoardUnreachable, BoardRefused) as exc:
-            log.warning("%s: resubscribing failed: %s", self.url, exc)
-
-    # --- what the client provides -------------------------------------------------------
-
-    async def _request_now(self, msg: Message) -> Message:
-        raise NotImplementedError
-
-    async def ping(self, token: int = 0) -> int:
-        raise NotImplementedError
-
-    def _subscription(self, rate_hz: int) -> Subscribe:
-        raise NotImplementedError
-
-    def _publish(self, item: StreamItem) -> None:
-        raise NotImplementedError
-
-    def _fail_pending(self, exc: Exception) -> None:
-        raise NotImplementedError
-
-    def _accept_hello(self, hello: Hello) -> BoardInfo:
-        raise NotImplementedError
-
-    async def _read_loop(self, lost: str | None = None,
-                         after: asyncio.Task[None] | None = None) -> None:
-        raise NotImplementedError
-
-    def _spawn(self, coro: Coroutine[Any, Any, None], name: str | None = None) -> None:
-        raise NotImplementedError

@@ -200,16 +200,16 @@ async def _act(client: Any, args: argparse.Namespace) -> int:
 async def _config(client: Any, args: argparse.Namespace) -> int:
     board = args.target == "board"
     if args.op == "save":
-        await client.save_config()
+        await client.configurator.save_config()
         print(json.dumps({"ok": True, "saved": True}) if args.json else "configuration saved")
         return 0
     if args.op == "get":
-        cfg = await (client.get_board_config() if board
-                     else client.get_channel_config(args.target))
+        cfg = await (client.configurator.get_board_config() if board
+                     else client.configurator.get_channel_config(args.target))
     else:
         fields = _assignments(args.values)
-        cfg = await (client.set_board_config(**fields) if board
-                     else client.set_channel_config(args.target, **fields))
+        cfg = await (client.configurator.set_board_config(**fields) if board
+                     else client.configurator.set_channel_config(args.target, **fields))
     if args.json:
         print(json.dumps(cfg))
     else:

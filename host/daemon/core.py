@@ -13,9 +13,10 @@ Theory of operation. ``Daemon`` builds the pieces from the robot directory and o
   event (``host.events``), and the journal, the web page's status (``host.web.fold``), the
   terminal's lines (``host.commands.terminal``) and any other reader are projections of it.
 
-Tasks on one asyncio loop: the board task keeps a ``BoardClient`` subscribed (reconnecting with
-backoff) and feeds every reading, event and link notice to the hub and the ``BoardView``; the
-diagnosis runner's task; the sample task that emits the channels a few times a second; the
+Tasks on one asyncio loop: the board task keeps a ``BoardClient`` subscribed (a new client
+after a failed one, waiting as the one reconnect policy, ``host.board.backoff``, says) and
+feeds every reading, event and link notice to the hub and the ``BoardView``; the diagnosis
+runner's task; the sample task that emits the channels a few times a second; the
 lag probe of the metrics (``host.fleet.metrics.LagProbe``: how late the loop runs) and its
 watch (``lagwatch``: a ``LoopLag`` event when the daemon falls behind or catches up). Nothing
 below the daemon reads the clock: the daemon owns one monotonic clock (``clock``) for
@@ -36,6 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from host.board import BoardClient
+from host.board.backoff import Backoff
 from host.board.types import (
     BoardEvent,
     BoardState,
@@ -84,6 +86,8 @@ log = logging.getLogger(__name__)
 SAMPLE_S = 0.2  # the page's sparklines: a sample of every channel this often
 STOP_BUDGET_S = 6.5  # close(): all its stages (host.daemon.stages), below the signals' 9 s
 JOURNAL_S = 1.5  # of which the journal's last commit may take this much
+RECONNECT_FIRST_S = 0.2  # the board task's first wait for a new client after a failed one...
+RECONNECT_CAP_S = 5.0  # ...doubling up to this (host.board.backoff, jittered)
 
 
 @dataclass
@@ -221,6 +225,7 @@ class Daemon:
         self.web_port: int | None = None
         self.operator: OperatorServer | None = None
         self.client: BoardClient | None = None
+        self.reconnect = Backoff(RECONNECT_FIRST_S, RECONNECT_CAP_S)  # between two clients
         self.link_up = False
         self._stop = asyncio.Event()
         self._tasks: list[asyncio.Task[Any]] = []
@@ -422,27 +427,28 @@ class Daemon:
     # --- the board ----------------------------------------------------------------------
 
     async def _board_task(self) -> None:
-        backoff = 0.2
+        """Keep a client subscribed; between two clients wait as the one reconnect policy
+        says (``self.reconnect``: jittered, doubling, capped; reset by a good connection)."""
+        backoff = self.reconnect
         while True:
             try:
                 async with BoardClient(self.opts.board_url, self.opts.key, clock=self.clock,
                                        wall=self.stream.wall) as client:
                     self.client = client
-                    backoff = 0.2
+                    backoff.reset()
                     await self._board_state(await client.state(), "connected")
                     async for item in client.subscribe(self.opts.rate_hz):
                         self._feed_board(item)
                         self.view.apply(item)
                         await self._board_item(client, item)
             except RemoteError as exc:  # unreachable, lost, refused: keep trying, say so once
-                if self.link_up or backoff == 0.2:
+                if self.link_up or not backoff.attempts:
                     self.emit(Note(f"board: {exc}", "error"))
                     log.warning("board: %s", exc)
                 self._set_link(False, str(exc))
             finally:
                 self.client = None
-            await asyncio.sleep(backoff)
-            backoff = min(backoff * 2, 5.0)
+            await asyncio.sleep(backoff.next())
 
     async def _board_state(self, state: BoardState, why: str) -> None:
         self._feed_board(state)

@@ -46,7 +46,7 @@ async def watch_board(client: Any, rec: Recording, until: float) -> None:
     """Channel names, protection and current readings until ``until`` (monotonic)."""
     names = await client.channel_names()
     for i, name in enumerate(names):
-        cfg = await client.get_channel_config(i)
+        cfg = await client.configurator.get_channel_config(i)
         rec.channels[i] = ChannelSeen(i, name, bool(cfg.get("protected", False)))
     readings: dict[int, list[float]] = {i: [] for i in range(len(names))}
 

@@ -12,19 +12,19 @@ async def test_saved_config_survives_a_restart(tmp_path: Path) -> None:
     flash = tmp_path / "flash"
     with Emulate("--flash", str(flash)) as emu:
         async with BoardClient(emu.urls["board"], KEY) as board:
-            assert (await board.get_channel_config("hokuyo"))["rated_ma"] == 1000
-            await board.set_channel_config("hokuyo", rated_ma=1234)
-            await board.save_config()
+            assert (await board.configurator.get_channel_config("hokuyo"))["rated_ma"] == 1000
+            await board.configurator.set_channel_config("hokuyo", rated_ma=1234)
+            await board.configurator.save_config()
         assert emu.stop() == 0
     assert any(flash.iterdir())
     with Emulate("--flash", str(flash)) as emu:
         async with BoardClient(emu.urls["board"], KEY) as board:
-            assert (await board.get_channel_config("hokuyo"))["rated_ma"] == 1234
+            assert (await board.configurator.get_channel_config("hokuyo"))["rated_ma"] == 1234
             state = await board.state()
             assert state.config_status == 0  # CFG_OK
     with Emulate() as emu:  # without --flash: memory, a fresh board.json each run
         async with BoardClient(emu.urls["board"], KEY) as board:
-            assert (await board.get_channel_config("hokuyo"))["rated_ma"] == 1000
+            assert (await board.configurator.get_channel_config("hokuyo"))["rated_ma"] == 1000
 
 
 def test_unusable_flash_dir_is_one_line(tmp_path: Path) -> None:
@@ -46,9 +46,9 @@ async def test_losing_the_saved_config_keeps_the_pc_on(tmp_path: Path) -> None:
     flash = tmp_path / "flash"
     with Emulate("--flash", str(flash)) as emu:
         async with BoardClient(emu.urls["board"], KEY) as board:
-            await board.set_channel_config("hokuyo", rated_ma=1234)
-            await board.save_config()
-            await board.save_config()
+            await board.configurator.set_channel_config("hokuyo", rated_ma=1234)
+            await board.configurator.save_config()
+            await board.configurator.save_config()
     copies = sorted(flash.glob("config.*.json"))
     assert len(copies) == 2
     for path in copies:
@@ -60,6 +60,6 @@ async def test_losing_the_saved_config_keeps_the_pc_on(tmp_path: Path) -> None:
             state = await board.state()
             assert state.config_status == 2  # CFG_CORRUPT: said, and survived
             assert state.channels[2].name == "pc" and state.channels[2].commanded
-            assert (await board.get_channel_config("pc"))["protected"] is True
-            assert (await board.get_channel_config("hokuyo"))["rated_ma"] == 1000
+            assert (await board.configurator.get_channel_config("pc"))["protected"] is True
+            assert (await board.configurator.get_channel_config("hokuyo"))["rated_ma"] == 1000
             assert (await board.switch("kinect", True)).physical  # the key still works

@@ -17,7 +17,7 @@ import itertools
 import pytest
 
 from host.board import BoardClient
-from host.board.client import _Subscriber, default_per_frame
+from host.board.link import default_per_frame
 from host.board.types import BoardInfo, LinkDown, Reading
 from host.transports import open_transport
 from host.transports.errors import BadUrl
@@ -133,21 +133,20 @@ def test_stamps_follow_the_uptimes_and_never_go_back() -> None:
     span at the subscribed rate."""
     now = [500.0]
     c = BoardClient("memory://stamps", KEY, clock=lambda: now[0], wall=lambda: now[0] + 1e9)
-    c.info = BoardInfo("memory://stamps", "memory", 1, "b", "f", 2, BATCH_CAPS, 7, 0, 0,
+    c.link.info = BoardInfo("memory://stamps", "memory", 1, "b", "f", 2, BATCH_CAPS, 7, 0, 0,
                        frozenset())
-    c._subscribed(100, 4)
-    sub = _Subscriber(c.url)
-    c._subs.append(sub)
+    c.link.subscribed(100, 4)
+    sub = c.link.fanout.add()
 
     def batch(first_seq: int, first_up: int, step: int = 10) -> MeasurementBatch:
         return MeasurementBatch([Measurement(first_seq + i, first_up + step * i, 24000, 0, 0,
                                              [1, 2]) for i in range(4)])
 
-    c._dispatch_all([batch(1, 1000)])
+    c.link._dispatch_all([batch(1, 1000)])
     now[0] += 0.1  # the next two batches arrive together, late
-    c._dispatch_all([batch(5, 1040), batch(9, 1080)])
+    c.link._dispatch_all([batch(5, 1040), batch(9, 1080)])
     now[0] += 0.04
-    c._dispatch_all([batch(13, 1120, step=100_000)])  # an uptime that lies
+    c.link._dispatch_all([batch(13, 1120, step=100_000)])  # an uptime that lies
     got = [x for x in sub.items if isinstance(x, Reading)]
     assert [r.seq for r in got] == list(range(1, 17))
     monos = [r.host_mono for r in got]

@@ -124,15 +124,15 @@ async def test_subscription_numbers_readings_without_gaps() -> None:
 
 async def test_config_set_is_read_back_and_bad_values_refused() -> None:
     async with MemoryBoard(tedusar()) as mb, client(mb.url, KEY) as c:
-        got = await c.set_channel_config("kinect", rated_ma=1200, name="kinect2")
+        got = await c.configurator.set_channel_config("kinect", rated_ma=1200, name="kinect2")
         assert got["rated_ma"] == 1200 and mb.emu.board.channels[4].cfg["rated_ma"] == 1200
         assert await c.channel("kinect2") == 4
         with pytest.raises(BadSetting, match="rated_ma=0 is out of range"):
-            await c.set_channel_config(4, rated_ma=0)
+            await c.configurator.set_channel_config(4, rated_ma=0)
         assert mb.emu.board.channels[4].cfg["rated_ma"] == 1200
-        b = await c.set_board_config(powerup_spacing_ms=300)
+        b = await c.configurator.set_board_config(powerup_spacing_ms=300)
         assert b["powerup_spacing_ms"] == 300
-        await c.save_config()
+        await c.configurator.save_config()
         assert b'"powerup_spacing_ms":300' in config_text(mb.emu.storage)
 
 
@@ -241,8 +241,8 @@ async def test_withheld_measurements_show_as_missed() -> None:
 
 async def test_a_subscriber_that_falls_behind_loses_the_oldest_and_is_told(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    import host.board.client as client_module
-    monkeypatch.setattr(client_module, "QUEUE_LIMIT", 8)
+    import host.board.fanout as fanout_module
+    monkeypatch.setattr(fanout_module, "QUEUE_LIMIT", 8)
     async with MemoryBoard(tedusar()) as mb, client(mb.url, KEY) as c:
         got: list[Reading] = []
         async for item in c.subscribe(50):

@@ -85,7 +85,7 @@ async def test_modbus_reads_the_same_board(emu: Emulate) -> None:
         with pytest.raises(BoardRefused, match="Modbus writes are not enabled"):
             await mb.switch(5, False)
         assert (await native.state()).channels[5].commanded
-        await native.set_board_config(modbus_write=True, modbus_allow=[0x7F000001])
+        await native.configurator.set_board_config(modbus_write=True, modbus_allow=[0x7F000001])
         res = await mb.switch(5, False)
         assert not res.physical and res.state == ST_OFF
         assert not (await native.state()).channels[5].commanded
@@ -93,8 +93,8 @@ async def test_modbus_reads_the_same_board(emu: Emulate) -> None:
         assert not cyc.physical
         await wait_until_async(lambda: physical(native, 5), what="router on again")
         with pytest.raises(NotSupported, match="not possible over modbus"):
-            await mb.get_board_config()
-        await native.set_board_config(modbus_write=False, modbus_allow=[])
+            await mb.configurator.get_board_config()
+        await native.configurator.set_board_config(modbus_write=False, modbus_allow=[])
 
 
 def test_modbus_map_file(tmp_path: Path) -> None:

@@ -84,7 +84,7 @@ async def test_client_against_our_board(emu: Emulate) -> None:
             await tug.switch(2, False)
         assert (await native.state()).channels[2].physical
         with pytest.raises(NotSupported):
-            await tug.get_channel_config(6)
+            await tug.configurator.get_channel_config(6)
 
 
 def test_read_only_unless_switching_is_asked_for() -> None:

@@ -33,7 +33,7 @@ async def modbus_from(board: Emulate, source: str) -> AsyncModbusTcpClient:
 
 async def test_allow_list_checks_the_client_not_the_proxy(board: Emulate) -> None:
     async with BoardClient(board.urls["board"], KEY) as native:
-        await native.set_board_config(modbus_write=True, modbus_allow=["127.0.0.1"])
+        await native.configurator.set_board_config(modbus_write=True, modbus_allow=["127.0.0.1"])
         try:
             other = await modbus_from(board, "127.0.0.2")
             try:
@@ -56,4 +56,4 @@ async def test_allow_list_checks_the_client_not_the_proxy(board: Emulate) -> Non
             finally:
                 local.close()
         finally:
-            await native.set_board_config(modbus_write=False, modbus_allow=[])
+            await native.configurator.set_board_config(modbus_write=False, modbus_allow=[])
