@@ -5,8 +5,8 @@ The campaign's ``sensor_noise`` at 2.4 A on the lidar (rated 1 A, drawing 0.42 A
 integrated the square of every sample, and zero-mean noise adds its variance to I² (E[(I+n)²] =
 I² + σ²: 2.4 A of noise looked like 2.4 A more current), two samples in a row above 3 A made an
 instant trip, and the channel tripped and latched. The readings here are the emulator's: the
-load plus Gaussian noise, never below 0. Checked on the old ``firmware/channel.py``: the noisy
-lidar tripped (the first test failed), and so did the 0.8 A-noise one.
+load plus Gaussian noise, never below 0. On the old ``firmware/channel.py`` 6 of these
+tests failed: the noisy lidar tripped, and no F_SENSOR was said.
 """
 
 import unittest
