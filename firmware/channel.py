@@ -62,6 +62,27 @@ Protection, per tick, from the integer current ``ma`` (no floating point on the 
   or latch that the lying sensor caused is retried (``X_DOUBT``: LATCHED goes back to TRIPPED
   when the channel is wanted on). Reported currents stay the raw readings. ``clear`` forgets
   the offset. Other channels keep the stuck-on rule: off is their safe state.
+- A noisy sensor (every channel): a load's current does not jump up and down by half its
+  rating from one 10 ms sample to the next many times in a row; a sensor's noise does
+  (``sensor_noise`` in the emulator, a bad shunt contact). Each channel keeps its latest
+  ``WINDOW`` samples and counts the *jumps* among them (two successive samples more than
+  ``jump_ma`` = max(rated/2, 200 mA) apart; switching on starts the window anew, so the
+  step of a switch-on is none). From ``SUSPECT_JUMPS`` jumps on, protection uses
+  the window's median instead of the sample (the mean would not do: noise adds its variance
+  to I², and a sensor that reads at least 0 biases the mean upwards; the median of symmetric
+  noise is the true current) and the sample-by-sample instant trip rests (a spike is not a
+  short; a real short still trips on the median's I²t: 10x in about 30 ms after the median
+  rose, 16 samples; and the part's fast trip input, ``TRIPPED``, still trips at once). At
+  ``NOISY_JUMPS`` jumps the sensor is doubtful: ``F_SENSOR`` live and sticky, an EV_FAULT;
+  after ``CALM_MS`` with at most one jump in the window, an EV_FAULT with 0 flags and the
+  live flag cleared. While the window jumps the stuck-on rule rests too (noise around 0 A
+  would read as current through an open switch). A real overload or short is one jump (its
+  onset): it is judged on the samples exactly as before, as fast as before. The one case a
+  board cannot tell in two samples: when noise starts, its first two samples may both read
+  above the instant trip and agree, as a short's do (2 of 300 onsets at 2.4 A on a 1 A
+  channel); the channel trips once, and its retry comes with the noise known. Noise of up to
+  3x the rating (standard deviation) neither trips nor latches a channel (the median's own
+  spread still heats the I²t model at more); a real 2x overload under it trips in 0.8-2 s.
 
 ``live`` faults are conditions present now; ``sticky`` faults accumulate until ``clear``.
 """
@@ -107,6 +128,11 @@ X_STUCK_OFF = const(9)
 X_DOUBT = const(10)  # protected channel: the sensor reads current with the switch open
 
 STUCK_OFF_SAMPLES = const(2)
+WINDOW = const(32)  # the latest samples each channel keeps (a power of two): 320 ms at 10 ms
+WINDOW_MASK = const(31)
+SUSPECT_JUMPS = const(2)  # jumps in the window from which protection takes the median
+NOISY_JUMPS = const(12)  # jumps in the window that make the sensor doubtful (F_SENSOR)
+CALM_MS = const(1000)  # at most one jump in the window this long: the noise is over
 RATIO_CAP = const(1000)  # r = 100·I/Ir is capped at 10x to keep r² a small int
 TRIP_LIVE = F_SHORT | F_OVERLOAD | F_INRUSH | F_SHED_TOTAL | F_SHED_UV | F_DEADMAN
 
@@ -181,6 +207,13 @@ class Channel:
         self.open_sum = 0  # readings with the switch open during the stuck-on window
         self.open_n = 0
         self.unread = False  # the sensor gives no readings (the HAL reads -1)
+        self.win = [0] * WINDOW  # the latest samples (a ring; ``at`` is the next slot)
+        self.jumped = bytearray(WINDOW)  # 1 where a sample jumped from the one before
+        self.at = 0
+        self.jumps = 0  # the 1s in ``jumped``
+        self.fresh = True  # the next sample starts the window anew (no jump from before)
+        self.noisy = False  # the sensor's samples jump: doubtful (F_SENSOR)
+        self.calm_since = -1
         self.cfg = cfg
         self.apply(cfg)
 
@@ -189,6 +222,7 @@ class Channel:
         self.cfg = cfg
         rated = cfg["rated_ma"]
         self.rated = rated
+        self.jump_ma = max(rated // 2, 200)
         self.inrush_ms = cfg["inrush_ms"]
         self.inrush_lim = rated * cfg["inrush_factor_x10"] // 10
         self.trip_lim = rated * cfg["trip_factor_x10"] // 10
@@ -236,6 +270,7 @@ class Channel:
             self.over_n = 0
             self.mismatch_n = 0
             self.cycle_at = -1
+            self._fresh_window()
             self.hal.set_switch(self.index, True)  # type: ignore[attr-defined]
             self._limit(self.inrush_lim)
         elif st != ST_ON:
@@ -295,6 +330,8 @@ class Channel:
             self.heat = 0
             self.offset_ma = 0
             self.unread = False  # still no readings: the next step tells it again
+            self.noisy = False  # still noisy: the next jumps tell it again
+            self.calm_since = -1
             self.live &= ~F_SENSOR
         return err
 
@@ -326,11 +363,63 @@ class Channel:
             self.sticky |= F_SENSOR
             flags = F_SENSOR
         else:
-            if not self.offset_ma:  # a known offset keeps the doubt until clear
+            if not self.offset_ma and not self.noisy:  # a known offset keeps the doubt
                 self.live &= ~F_SENSOR
             flags = 0
         self.log.put(EV_FAULT, self.index, self.state, self.state,  # type: ignore[attr-defined]
                      flags, 0, now - self.boot_ms)
+
+    def _noisy(self, now: int, noisy: bool) -> None:
+        """The sensor's samples jump (``noisy``) or have calmed down: tell the host once each
+        way (EV_FAULT with ``F_SENSOR``, then with 0 flags)."""
+        self.noisy = noisy
+        self.calm_since = -1
+        if noisy:
+            self.live |= F_SENSOR
+            self.sticky |= F_SENSOR
+            flags = F_SENSOR
+        else:
+            if not self.offset_ma and not self.unread:
+                self.live &= ~F_SENSOR
+            flags = 0
+        self.log.put(EV_FAULT, self.index, self.state, self.state,  # type: ignore[attr-defined]
+                     flags, self.current_ma, now - self.boot_ms)
+
+    def _sample(self, now: int, ma: int) -> bool:
+        """Keep sample ``ma`` in the window and judge the sensor's noise; True when the window
+        jumps (protection then uses its median)."""
+        at = self.at
+        d = ma - self.win[(at - 1) & WINDOW_MASK]
+        j = 1 if (d > self.jump_ma or -d > self.jump_ma) and not self.fresh else 0
+        self.fresh = False
+        self.jumps += j - self.jumped[at]
+        self.jumped[at] = j
+        self.win[at] = ma
+        self.at = (at + 1) & WINDOW_MASK
+        n = self.jumps
+        if n >= NOISY_JUMPS:
+            self.calm_since = -1
+            if not self.noisy:
+                self._noisy(now, True)
+        elif self.noisy:
+            if n > 1:
+                self.calm_since = -1
+            elif self.calm_since < 0:
+                self.calm_since = now
+            elif now - self.calm_since >= CALM_MS:
+                self._noisy(now, False)
+        return self.noisy or n >= SUSPECT_JUMPS
+
+    def _fresh_window(self) -> None:
+        """Switched on: the jumps counted so far are forgotten, the next sample starts anew."""
+        self.fresh = True
+        self.jumps = 0
+        for i in range(WINDOW):
+            self.jumped[i] = 0
+
+    def _median(self) -> int:
+        m: int = sorted(self.win)[WINDOW // 2]
+        return m
 
     def _overload(self, now: int, ma: int) -> None:
         """A protected channel's I²t model says overload: it is not switched off for it (the
@@ -362,6 +451,11 @@ class Channel:
             ma = self.inrush_lim if self.state == ST_INRUSH else self.trip_lim
         if self.offset_ma:  # protection uses the reading without the sensor's known offset
             ma = ma - self.offset_ma if ma > self.offset_ma else 0
+        jumpy = False  # the window jumps: protection takes its median, no instant trip
+        if not (blind or tripped or low):
+            jumpy = self._sample(now, ma)
+            if jumpy:
+                ma = self._median()
         st = self.state
         if st == ST_ON or st == ST_INRUSH:  # noqa: SIM109 (no tuple built on the hot path)
             if not sw:
@@ -371,7 +465,7 @@ class Channel:
                     return
             else:
                 self.mismatch_n = 0
-            if blind:
+            if blind or jumpy:
                 self.over_n = 0
             elif ma >= (self.inrush_lim if st == ST_INRUSH else self.trip_lim):
                 self.over_n += 1
@@ -421,7 +515,9 @@ class Channel:
                 h = self.heat - self.start2 * dt
                 self.heat = h if h > 0 else 0
             if st != ST_FAULTED:
-                if ma > self.stuck_on_ma:
+                if jumpy:  # a noisy sensor cannot tell a switch stuck on: not judged
+                    self.stuck_since = -1
+                elif ma > self.stuck_on_ma:
                     if self.stuck_since < 0:
                         self.stuck_since = now
                         self.open_sum = self.open_n = 0

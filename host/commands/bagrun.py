@@ -29,9 +29,10 @@ import asyncio
 import dataclasses
 import logging
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from host.daemon.core import RobotFiles
 from host.daemon.stream import EventStream
@@ -42,9 +43,12 @@ from host.observers.base import Update
 from host.observers.payload import TopicMessage
 from host.observers.sources.ros2_graph import GRAPH
 from host.observers.sources.ros2_message import RosMessage
-from host.ros import graphlog
+from host.ros import boardstream, graphlog
 from host.ros.bag import NS, Bag, BagWriter
 from host.ros.offline import ClockedObservers, Diagnosing, Reorder, bag_observers
+
+if TYPE_CHECKING:
+    from host.observers.sources.ros2 import Ros2Source
 
 log = logging.getLogger(__name__)
 
@@ -99,7 +103,6 @@ async def record(robot: RobotFiles, bag_path: Path, journal: Journal | None,
     called once every topic is subscribed and matched with its publishers (at most
     ``wait_s`` later; with the observed topics nobody publishes yet): from then on nothing
     published is missed (``host.ros.matched``)."""
-    from host.observers.sources.ros2 import Ros2Source
     from host.ros.matched import wait_matched
 
     spec = robot.observers.source
@@ -108,7 +111,7 @@ async def record(robot: RobotFiles, bag_path: Path, journal: Journal | None,
     diagnosing = Diagnosing(robot.theory, stream.emit)
     observers = ClockedObservers(bag_observers(robot.observers.observers), diagnosing.apply)
     writer = BagWriter(bag_path)
-    source = Ros2Source(spec.domain, dict(spec.types), clock=clock, name="dxboard_recorder")
+    source = recorder_source(spec.domain, spec.types, clock)
     waiting = Reorder(GRACE_S)
     last = [clock()]  # the latest arrival
 
@@ -147,6 +150,17 @@ async def record(robot: RobotFiles, bag_path: Path, journal: Journal | None,
         diagnosing.close()
     return RunStats(writer.count, end - start, time.perf_counter() - t0,
                     len(diagnosing.records))
+
+
+def recorder_source(domain: int | None, types: Iterable[tuple[str, str]],
+                    clock: Callable[[], float]) -> Ros2Source:
+    """The recorder's ROS 2 source. Every board item counts (a trip is a few of them), so it
+    keeps as many of ``/board_stream``'s messages while it lags as their publisher does
+    (``boardstream.DEPTH``, reliable): a recorder held up on a busy machine loses none."""
+    from host.observers.sources.ros2 import Ros2Source
+
+    return Ros2Source(domain, dict(types), clock=clock, name="dxboard_recorder",
+                      depths={boardstream.TOPIC: boardstream.DEPTH})
 
 
 def whole_ns(t: float) -> float:

@@ -388,7 +388,7 @@ class HardwareObserver(Observer[BoardInput]):
             self.doubted.add(d.name)
             self._forget(in_band, now)
             log.warning("%s: the board doubts the current sensor of %s's channel %d (sensor "
-                        "flag: no reading, or current with the switch open): the sensor is "
+                        "flag: no reading, current with the switch open, or noise): the sensor is "
                         "suspect, not %s; its current is not judged until the sensor reads "
                         "again", self.name, d.name, d.channel, d.name)
         else:

@@ -51,6 +51,10 @@ from host.observers.sources.ros2_message import RosMessage
 log = logging.getLogger(__name__)
 
 TOPIC = "/board_stream"
+# messages of the stream its publisher and a recorder keep while the other end lags: 30 s of
+# items at the board's 100 Hz (a few hundred bytes each). With ROS's usual 100 a recorder held
+# up 1 s on a loaded machine (two suites side by side) lost board items, two trips among them
+DEPTH = 3000
 TYPE = "diagnostic_msgs/msg/DiagnosticArray"
 NAME = "dxboard board stream"
 CHANNEL, INFO = f"{NAME}: channel ", f"{NAME}: info"

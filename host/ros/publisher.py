@@ -62,7 +62,8 @@ class RosPublisher:
         self._diagnosis = node.create_publisher(DiagnosticArray, "/diagnosis", LATCHED)
         self._measurements = node.create_publisher(Float32MultiArray, "/board_measurements", 10)
         self._battery = node.create_publisher(BatteryState, "/battery_state", 10)
-        self._stream = node.create_publisher(DiagnosticArray, boardstream.TOPIC, 100)
+        self._stream = node.create_publisher(DiagnosticArray, boardstream.TOPIC,
+                                            boardstream.DEPTH)
         self._closed = False
         self._last: tuple[Status, ...] = tuple(self.fold.statuses())
         self._publish_statuses()

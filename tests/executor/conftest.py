@@ -94,10 +94,11 @@ class Rig:
                  topics: Sequence[str] = (), endpoint: str | None = None,
                  max_attempts: int = 3, dry_run: bool = False, verify_s: float = VERIFY_S,
                  refresh: float = REFRESH, stretch: float = 1.0,
-                 judge_s: dict[str, float] | None = None) -> None:
+                 judge_s: dict[str, float] | None = None,
+                 hardware_refresh: float | None = None) -> None:
         """``refresh``: how often observers repeat an unchanged literal (validity 3.5x);
-        ``stretch``: the executor's stretch of each step's time (the daemon's follows the
-        machine's load)."""
+        ``hardware_refresh``: the hardware observer's, if not ``refresh``; ``stretch``: the
+        executor's stretch of each step's time (the daemon's follows the machine's load)."""
         self.stretch = stretch
         self.judge_s = judge_s
         self.robot = robot
@@ -112,6 +113,7 @@ class Rig:
         self.max_attempts = max_attempts
         self.dry_run = dry_run
         self.refresh, self.validity = refresh, refresh * VALIDITY / REFRESH
+        self.hw_refresh = refresh if hardware_refresh is None else hardware_refresh
         self.diagnoser = Diagnoser(generate(self.model))
         self.beliefs = ObservedBeliefs(self.diagnoser.observations)
         self.events: list[Event] = []
@@ -130,7 +132,8 @@ class Rig:
         observers: list[Observer[Any]] = [HardwareObserver(
             {d: Device(d, c.channel or 0, c.current) for d in self.devices
              for c in [self.model.components[d]]},
-            link_timeout=0.5, refresh=self.refresh, validity=self.validity)]
+            link_timeout=0.5, refresh=self.hw_refresh,
+            validity=self.hw_refresh * VALIDITY / REFRESH)]
         observers += [NodeObserver(n, refresh=self.refresh, validity=self.validity)
                       for n in self.nodes]
         observers += [FrequencyObserver(t, rate=20, tolerance=8, window=0.5,

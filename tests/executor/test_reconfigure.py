@@ -17,8 +17,8 @@ from pathlib import Path
 
 from host.events import ActionState
 from host.planning.plan import Plan, Step
-from host.repair.executor import ExecutionResult, Outcome, StepReport
-from tests.executor.conftest import EXPECTED_FAILURE_VERIFY_S, TEDUSAR, Rig, robot_dir
+from host.repair.executor import ExecutionResult, Outcome, StepReport, load_stretch
+from tests.executor.conftest import EXPECTED_FAILURE_VERIFY_S, REFRESH, TEDUSAR, Rig, robot_dir
 
 HOKUYO = 3
 BOOT_S = 3.0  # the lidar's settle time here: the power cycle is verified this long after
@@ -78,6 +78,10 @@ async def _blind_driver(rig: Rig, flag: Path) -> Reconfigure:
 
 
 def _rig(tmp_path: Path, endpoint: str, **kw: float) -> Rig:
+    # the daemon's stretch (the machine's load): a step that works ends the moment its effect
+    # is seen, so this only gives a busy machine the time the daemon would give it (two
+    # suites side by side at load 20+ once ran out of the unstretched 33 s)
+    kw.setdefault("stretch", load_stretch())
     return Rig(_robot(tmp_path, endpoint), ["hokuyo"], ["hokuyo_node"], ["/scan"], endpoint,
                **kw)
 
@@ -121,9 +125,12 @@ async def test_a_reconfigure_ends_on_its_output_not_on_a_refresh_of_its_running_
     # Found in the ROS 2 hang runs (08:30): a reconfigure whose /scan was seen 84 ms after it
     # began ended 0.8 s later, at the process observer's next refresh of the unchanged
     # running(hokuyo_node): the same process throughout, its running is kept, not new. Here
-    # observers repeat unchanged literals only every 60 s: one awaited would fail the step.
+    # the node and topic observers repeat unchanged literals only every 60 s: one awaited
+    # would fail the step. The board's observer refreshes as usual: the power cycle's on(hokuyo)
+    # must not hang on seeing the 0.3 s off (three agreeing readings), which a loaded machine
+    # can miss (then on(hokuyo) never changed, and with no refresh it was never seen again)
     flag = tmp_path / "connected"
-    async with _rig(tmp_path, endpoint, refresh=60.0) as rig:
+    async with _rig(tmp_path, endpoint, refresh=60.0, hardware_refresh=REFRESH) as rig:
         await _blind_driver(rig, flag)
         res = await _execute(rig)
         assert res.outcome is Outcome.DONE, res.reason
@@ -132,6 +139,8 @@ async def test_a_reconfigure_ends_on_its_output_not_on_a_refresh_of_its_running_
         await rig.supervisor.stop("hokuyo_node")
         await rig.until({"running(hokuyo_node)": False})
         flag.unlink()
+        # expected to fail: a short deadline, unstretched (else it waits out 30 s x stretch)
+        rig.executor.verify_s, rig.stretch = EXPECTED_FAILURE_VERIFY_S, 1.0
         plan = Plan((Step(0, "reconfigure_node", ("hokuyo_node",)),), (frozenset(),))
         res = await _execute(rig, plan)
         assert res.outcome is Outcome.FAILED

@@ -2,7 +2,9 @@
 
 ``load_ma[ch]`` is what the channel draws while its switch is on; ``offset_ma[ch]`` is added to
 every reading (a faulty current sensor); ``blind[ch]`` makes the sensor give no reading (-1,
-a chip that does not answer); ``stuck[ch]`` forces the switch (None = follows the
+a chip that does not answer); ``noise_ma[ch]`` adds zero-mean Gaussian noise of that standard
+deviation to every reading, which never reads below 0 (as the emulator's ``sensor_noise``;
+a fixed seed: the same samples on every run); ``stuck[ch]`` forces the switch (None = follows the
 command, True = stuck on, False = stuck off). The same file runs
 under CPython and MicroPython. ``Rig`` boots an ``App`` on it and steps it on simulated time.
 """
@@ -20,6 +22,8 @@ class TestHal:
         self.offset_ma = [0] * n  # a current sensor's error: read even with the switch open
         self.stuck = [None] * n
         self.blind = [False] * n
+        self.noise_ma = [0] * n
+        self.seed = 12345
         self.cmd = [False] * n
         self.switch_log = []  # (now, ch, on) for every change of a command
         self.input_mv = 24000
@@ -42,7 +46,19 @@ class TestHal:
     def read_current_ma(self, ch):
         if self.blind[ch]:
             return -1
-        return (self.load_ma[ch] if self._on(ch) else 0) + self.offset_ma[ch]
+        v = (self.load_ma[ch] if self._on(ch) else 0) + self.offset_ma[ch]
+        if self.noise_ma[ch]:
+            v = int(v + self.noise_ma[ch] * self._gauss())
+            return v if v > 0 else 0
+        return v
+
+    def _gauss(self):
+        """About N(0, 1): twelve uniforms of a fixed LCG, less 6 (Irwin-Hall)."""
+        s = 0
+        for _ in range(12):
+            self.seed = (self.seed * 1103515245 + 12345) & 0x7FFFFFFF
+            s += self.seed
+        return s / 0x80000000 - 6.0
 
     def set_switch(self, ch, on):
         if self.cmd[ch] != on:

@@ -17,7 +17,8 @@ a topic subscribed through ``types`` before its publishers are known gets best e
 ``DEPTH`` is 100, not ROS's usual 10: the reader holds what arrives while the executor is
 held up (a daemon descheduled on a busy machine), a second of a 100 Hz topic; with 10 a stall
 of 0.1 s dropped messages, which the frequency observer took for a rate drop. The messages
-stay serialized in DDS's history and take memory only while the executor lags.
+stay serialized in DDS's history and take memory only while the executor lags. ``depths``
+(topic -> depth) gives a topic more (a recorder's ``/board_stream``: every item counts).
 
 ``GRAPH`` (``/_graph/nodes``) is not a DDS topic: subscribing it delivers, every
 ``discovery_s``, a message whose values are ``{"nodes": [names...]}`` from the ROS 2 graph,
@@ -85,9 +86,10 @@ class Ros2Source(TopicSource):
     def __init__(self, domain_id: int | None = None, types: Mapping[str, str] | None = None,
                  discovery_s: float = 0.5, name: str = "dxboard_observer",
                  publishers: Mapping[str, Collection[str]] | None = None,
-                 **kwargs: Any) -> None:
+                 depths: Mapping[str, int] | None = None, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self.types = dict(types or {})
+        self.depths = dict(depths or {})
         self.publishers = {t: frozenset(n) for t, n in (publishers or {}).items()}
         self.on_stranger: Callable[[str, str], None] | None = None
         self.ros = RosNode(name, domain_id)
@@ -170,6 +172,10 @@ class Ros2Source(TopicSource):
         reliable = bool(pubs) and all(
             p.qos_profile.reliability == QoSReliabilityPolicy.RELIABLE for p in pubs)
         qos = RELIABLE if reliable else BEST_EFFORT
+        depth = self.depths.get(topic)
+        if depth is not None:
+            qos = QoSProfile(history=QoSHistoryPolicy.KEEP_LAST, depth=depth,
+                             reliability=qos.reliability)
         sub.sub = self.ros.node.create_subscription(msg_type, topic, on_raw, qos, raw=True)
         log.info("observing %s (%s, %s)", topic, type_name,
                  "reliable" if reliable else "best effort")
