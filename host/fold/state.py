@@ -32,7 +32,7 @@ from __future__ import annotations
 import logging
 from collections import Counter, deque
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from host.events import (
     ActionRecord,
@@ -65,7 +65,8 @@ QUARANTINED, HELD = "quarantined", "held"
 @dataclass(frozen=True)
 class Exclusion:
     """A component out of automatic repair (``state``: quarantined or held) since ``since``
-    (wall time), why, by whom (daemon, person, board) and, for a quarantine, its safe state."""
+    (wall time), why, by whom (daemon, person, board) and, for a quarantine, its safe state;
+    ``change`` is the event that set it, whole (a restarted daemon restores it)."""
 
     component: str
     state: str
@@ -73,6 +74,7 @@ class Exclusion:
     by: str
     since: float
     safe_state: str = ""
+    change: QuarantineChange | HoldChange | None = field(default=None, compare=False)
 
 
 @dataclass(frozen=True)
@@ -172,10 +174,9 @@ class EventFold:
             case RunStarted():
                 self.run = e
             case QuarantineChange():
-                self._exclude(e.component, QUARANTINED, e.quarantined, e.reason, e.by,
-                              stamped.wall, e.safe_state)
+                self._exclude(e, QUARANTINED, e.quarantined, stamped.wall, e.safe_state)
             case HoldChange():
-                self._exclude(e.component, HELD, e.held, e.reason, e.by, stamped.wall)
+                self._exclude(e, HELD, e.held, stamped.wall)
             case JournalHealth():
                 self.journal = e
             case LoopLag():
@@ -202,12 +203,12 @@ class EventFold:
         else:
             self.repairing -= set(e.args)
 
-    def _exclude(self, component: str, state: str, now_set: bool, reason: str, by: str,
-                 wall: float, safe_state: str = "") -> None:
-        self.excluded.pop((component, state), None)  # set again: it moves to the end
+    def _exclude(self, e: QuarantineChange | HoldChange, state: str, now_set: bool, wall: float,
+                 safe_state: str = "") -> None:
+        self.excluded.pop((e.component, state), None)  # set again: it moves to the end
         if now_set:
-            self.excluded[component, state] = Exclusion(component, state, reason, by, wall,
-                                                        safe_state)
+            self.excluded[e.component, state] = Exclusion(e.component, state, e.reason, e.by,
+                                                          wall, safe_state, e)
 
     # --- the facts every view reads, derived here once ---
 

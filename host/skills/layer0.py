@@ -33,6 +33,7 @@ from host.atoms import Atom
 from host.events import (
     ActionRecord,
     DiagnosisRecord,
+    Event,
     HoldChange,
     Observation,
     QuarantineChange,
@@ -118,7 +119,7 @@ class Layer0View:
         one reading the daemon's own fold missed nothing)."""
         if not self._own_fold:
             return
-        told = [DiagnosisRecord.of([list(bad) for bad in diagnoses]),
+        told: list[Event] = [DiagnosisRecord.of([list(bad) for bad in diagnoses]),
                 *(QuarantineChange(c, True, why) for c, why in quarantined.items()),
                 *(HoldChange(c, True, why) for c, why in held.items())]
         for event in told:

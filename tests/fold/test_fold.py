@@ -2,7 +2,7 @@
 version and tells its listeners; a listener that raises is logged and the others still hear;
 repair actions keep the order they started in (bounded, or all for an offline reader); what is
 out of repair keeps the order it was set in; the first diagnoser run is not a diagnosis; layer 0
-as the skills see it reads the fold it is given.
+as the skills see it reads the fold it is given; the journal's replay folds with it too.
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ import logging
 import pytest
 
 from host.events import (
+    JOURNALED,
     ActionRecord,
     ActionState,
     ChannelSample,
@@ -26,6 +27,8 @@ from host.events import (
     Stamped,
 )
 from host.fold import EventFold
+from host.journal.entries import Entry
+from host.journal.summary import Replay
 from host.skills import AvailState, Layer0View
 from tests.fold.story import STAMPED
 
@@ -137,3 +140,17 @@ def test_layer0_reads_a_fold_it_is_given_and_folds_nothing_again() -> None:
     own.seed([["jaguar"]], {}, {"imu": ""})
     assert (own.bad_topics, own.suspects, own.held) == ({"/scan"}, {"jaguar"},
                                                         {"imu": "held by person"})
+
+
+def test_the_journal_replay_folds_with_the_same_fold_and_keeps_every_action_and_change() -> None:
+    entries = [Entry(i + 1, s.wall, s.mono, s.event) for i, s in enumerate(STAMPED)
+               if s.event.kind in JOURNALED]
+    end = Replay.of(entries)
+    assert end.fold.version == len(entries)  # every journaled entry changed the one fold
+    assert [(a, r.state) for a, r in end.actions.items()] == [
+        ("a1", ActionState.FAILED), ("a2", ActionState.FAILED), ("a3", ActionState.SUCCEEDED)]
+    midway = Replay.of(e for e in entries if e.wall <= STAMPED[26].wall)  # hokuyo quarantined
+    q = midway.quarantined["hokuyo"]
+    assert (q.reason, q.safe_state, q.attempts) == ("2 attempts failed", "shutdown(hokuyo)", 2)
+    assert midway.held["jaguar"].reason == "new cable" and midway.abnormal() == {"hokuyo"}
+    assert not end.quarantined and not end.held
