@@ -4,7 +4,9 @@
 by hand); each ``Stamped`` event that changes what it holds returns True, bumps ``version``,
 sets ``updated`` (the event's wall time) and is passed on to the ``listeners`` (the
 projections: the page, ``/diagnostics``), which read the fold and never fold again; a listener
-that raises is logged and never stops the others. It holds:
+that raises is logged and never stops the others. ``sections`` counts the changes of each part
+(``channels``, ``observations``, ``diagnosis``, ``actions``, ...), so that a view rebuilds only
+what changed. It holds:
 
 - the run (``RunStarted``), the board link (``LinkChange``: up, why not, what the board said of
   the key), the latest channel sample with a short history of currents per channel and the
@@ -124,6 +126,7 @@ class EventFold:
         self.mission_seen = False  # any event of the mission's yet
         self.updated = 0.0  # wall time of the newest event that changed the fold
         self.version = 0
+        self.sections: Counter[str] = Counter()  # section -> its own version (a view's cache)
         self.listeners: list[Callable[[Stamped], None]] = []
 
     def __call__(self, stamped: Stamped) -> None:
@@ -131,8 +134,10 @@ class EventFold:
 
     def feed(self, stamped: Stamped) -> bool:
         """Fold one event in; True (and the listeners told) when it changed the fold."""
-        if not self._fold(stamped):
+        section = self._fold(stamped)
+        if section is None:
             return False
+        self.sections[section] += 1
         self.version += 1
         self.updated = stamped.wall
         for listener in list(self.listeners):
@@ -143,51 +148,66 @@ class EventFold:
                               type(stamped.event).__name__)
         return True
 
-    def _fold(self, stamped: Stamped) -> bool:
+    def _fold(self, stamped: Stamped) -> str | None:
+        """Fold ``stamped`` in; the section it changed (``sections``), None when none."""
         e = stamped.event
         match e:
             case ChannelSample():
                 self.channels = e
                 for c in e.channels:
                     self.history.setdefault(c.name, deque(maxlen=HISTORY)).append(c.current_ma)
+                return "channels"
             case Observation():
                 self.observations[e.literal] = e.value
                 self.observation_changes += 1
+                return "observations"
             case DiagnosisRecord():
                 self.diagnosis = e
+                return "diagnosis"
             case DiagnosisRun():
                 self.diagnosis_runs += 1
                 self.last_run_wall = stamped.wall
                 self.diagnosis_latency_sum_s += e.elapsed_s
                 self.diagnosis_last_latency_s = e.elapsed_s
+                return "runs"
             case ActionRecord():
                 self._action(e, stamped)
+                return "actions"
             case PlanRecord():
                 self.plans.append(e)
+                return "plans"
             case RepairEnded():
                 self.repairs_by_outcome[e.outcome] += 1
                 self.repairing.clear()
+                return "outcomes"
             case LinkChange():
                 self.link_up, self.link_reason = e.up, e.reason
                 if e.up:
                     self.board_key = e.key
+                return "link"
             case RunStarted():
                 self.run = e
+                return "run"
             case QuarantineChange():
                 self._exclude(e, QUARANTINED, e.quarantined, stamped.wall, e.safe_state)
+                return "excluded"
             case HoldChange():
                 self._exclude(e, HELD, e.held, stamped.wall)
+                return "excluded"
             case JournalHealth():
                 self.journal = e
+                return "journal"
             case LoopLag():
                 self.lag = e
+                return "lag"
             case BoardEvent() if e.channel is not None:
                 self.last_board_event[e.channel] = e.event
+                return "board_events"
             case _:
                 if self.mission(e) is None:
-                    return False
+                    return None
                 self.mission_seen = True
-        return True
+                return "mission"
 
     def _action(self, e: ActionRecord, stamped: Stamped) -> None:
         def wall(mono: float | None) -> float | None:

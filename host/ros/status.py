@@ -42,7 +42,7 @@ diagnoses, channel currents and the board's input voltage, for ``/diagnosis``,
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from host.events import journal_health_text, loop_lag_text
@@ -71,10 +71,26 @@ class Diagnostics:
     def __init__(self, components: Sequence[str], fold: EventFold) -> None:
         self.components = list(components)
         self.fold = fold
+        self._parts: dict[str, tuple[tuple[int, ...], list[DiagnosticStatus]]] = {}
 
     def statuses(self) -> list[DiagnosticStatus]:
-        return [*(self._component(c) for c in self.components), *self._board(),
+        return [*self._part("components", ("diagnosis", "excluded", "actions"),
+                            self._components),
+                *self._part("board", ("channels", "link", "board_events"), self._board),
                 self._diagnosis(), self._repair(), self._daemon()]
+
+    def _part(self, name: str, sections: tuple[str, ...],
+              make: Callable[[], list[DiagnosticStatus]]) -> list[DiagnosticStatus]:
+        """``make()``, again only when one of the fold's ``sections`` it reads changed."""
+        seen = tuple(self.fold.sections[s] for s in sections)
+        hit = self._parts.get(name)
+        if hit is None or hit[0] != seen:
+            hit = self._parts[name] = (seen, make())
+        return hit[1]
+
+    def _components(self) -> list[DiagnosticStatus]:
+        quarantined, held = self.fold.quarantined, self.fold.held
+        return [self._component(c, quarantined, held) for c in self.components]
 
     def _diagnosis(self) -> DiagnosticStatus:
         name = f"{PREFIX}/diagnosis"
@@ -116,7 +132,8 @@ class Diagnostics:
                                            ("behind", "true" if lag.behind else "false"),
                                            ("loop_lag_s", f"{lag.lag_s:.3f}")))
 
-    def _component(self, name: str) -> DiagnosticStatus:
+    def _component(self, name: str, quarantined_all: dict[str, str],
+                   held: dict[str, str]) -> DiagnosticStatus:
         f = self.fold
         diags = f.diagnoses
         inside = sum(1 for d in diags if name in d)
@@ -130,7 +147,7 @@ class Diagnostics:
             level, message = STALE, "unknown: its observations expired"
         else:
             level, message = OK, "normal in every minimal diagnosis"
-        quarantined = f.quarantined.get(name)
+        quarantined = quarantined_all.get(name)
         if quarantined is not None:
             level, message = ERROR, f"{message}; quarantined: {quarantined or 'quarantined'}"
         action = f.action_of.get(name)
@@ -139,17 +156,17 @@ class Diagnostics:
         return DiagnosticStatus(level, f"{PREFIX}/components/{name}", message, name, (
             ("diagnoses", f"{inside} of {len(diags)}"), ("repair", repair),
             ("quarantined", "true" if quarantined is not None else "false"),
-            ("held", "true" if name in f.held else "false")))
+            ("held", "true" if name in held else "false")))
 
     def _board(self) -> list[DiagnosticStatus]:
         f = self.fold
+        volts = f.input_v
         out = [DiagnosticStatus(OK if f.link_up else ERROR, f"{PREFIX}/board/link",
                                 "link up" if f.link_up else f"link down: {f.link_reason}",
                                 "board",
                                 (("link", "up" if f.link_up else "down"),
                                  ("total_current_a", f"{sum(f.currents_a):.3f}"),
-                                 ("input_v", "unknown" if f.input_v is None
-                                  else f"{f.input_v:.3f}")))]
+                                 ("input_v", "unknown" if volts is None else f"{volts:.3f}")))]
         for c in f.channels.channels if f.channels else ():
             if not f.link_up:
                 level, message = STALE, "board link down"

@@ -9,13 +9,16 @@ release it (the command, with the run's operator socket when it is not the defau
 channel a person switched off, switching it on again), the running counters that ``/metrics``
 exports, the journal's health, the daemon's lag and the mission. ``PageProjection(source,
 fold)`` keeps a ``MemoryStatusSource`` equal to it: a listener of the fold, it sets a new status
-after every event that changed the fold. It folds nothing itself: what the page shows is what
-the stream said, folded once, for the page and ``/diagnostics`` alike.
+after every event that changed the fold, rebuilding only the parts whose sections of the fold
+changed (``Parts``). It folds nothing itself: what the page shows is what the stream said,
+folded once, for the page and ``/diagnostics`` alike.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any, TypeVar, cast
 
 from host.events import Stamped
 from host.fold import EventFold, Exclusion
@@ -29,24 +32,45 @@ from host.web.status import (
     Status,
 )
 
+T = TypeVar("T")
 
-def page_status(fold: EventFold, robot: str = "") -> Status:
+
+class Parts:
+    """The parts of the page's status, each rebuilt only when a section of the fold it reads
+    changed (``EventFold.sections``): a channel sample, most of the stream, rebuilds the
+    channels and nothing else."""
+
+    def __init__(self, fold: EventFold) -> None:
+        self.fold = fold
+        self._cache: dict[str, tuple[tuple[int, ...], Any]] = {}
+
+    def get(self, name: str, sections: tuple[str, ...], make: Callable[[], T]) -> T:
+        seen = tuple(self.fold.sections[s] for s in sections)
+        hit = self._cache.get(name)
+        if hit is None or hit[0] != seen:
+            hit = self._cache[name] = (seen, make())
+        return cast(T, hit[1])
+
+
+def page_status(fold: EventFold, robot: str = "", parts: Parts | None = None) -> Status:
     """The page's ``Status`` of what ``fold`` holds (its ``version`` is the source's)."""
+    part = (parts or Parts(fold)).get
     run = fold.run
     return Status(
-        channels=tuple(
+        channels=part("channels", ("channels",), lambda: tuple(
             ChannelView(c.id, c.name, c.on, c.state, c.current_ma,
                         tuple(fold.history.get(c.name, ())))
-            for c in (fold.channels.channels if fold.channels is not None else ())),
-        observations=dict(fold.observations),
-        diagnoses=tuple(DiagnosisStatus(bad, p) for bad, p in
-                        zip(fold.diagnoses, fold.probabilities(), strict=True) if bad),
+            for c in (fold.channels.channels if fold.channels is not None else ()))),
+        observations=part("observations", ("observations",), lambda: dict(fold.observations)),
+        diagnoses=part("diagnoses", ("diagnosis",), lambda: tuple(
+            DiagnosisStatus(bad, p)
+            for bad, p in zip(fold.diagnoses, fold.probabilities(), strict=True) if bad)),
         diagnosis_complete=fold.diagnosis.complete if fold.diagnosis is not None else True,
         unknown=fold.unknown,
         diagnosed_at=fold.diagnosed_at,
-        repairs=tuple(RepairStatus(a.record.action, tuple(a.record.args), str(a.record.state),
-                                   a.started_wall, a.finished_wall)
-                      for a in fold.actions.values()),
+        repairs=part("repairs", ("actions",), lambda: tuple(
+            RepairStatus(a.record.action, tuple(a.record.args), str(a.record.state),
+                         a.started_wall, a.finished_wall) for a in fold.actions.values())),
         board_link_up=fold.link_up,
         board_key=fold.board_key,
         updated=fold.updated,
@@ -55,15 +79,17 @@ def page_status(fold: EventFold, robot: str = "") -> Status:
         diagnosis_runs=fold.diagnosis_runs,
         diagnosis_latency_sum_s=fold.diagnosis_latency_sum_s,
         diagnosis_last_latency_s=fold.diagnosis_last_latency_s,
-        repairs_by_outcome=dict(fold.repairs_by_outcome),
-        quarantined=fold.quarantined,
-        held=fold.held,
-        out_of_repair=tuple(OutOfRepair(x.component, x.state, x.reason, x.by, x.since,
-                                        release(fold, x), x.safe_state)
-                            for x in fold.out_of_repair()),
+        repairs_by_outcome=part("outcomes", ("outcomes",),
+                                lambda: dict(fold.repairs_by_outcome)),
+        quarantined=part("quarantined", ("excluded",), lambda: fold.quarantined),
+        held=part("held", ("excluded",), lambda: fold.held),
+        out_of_repair=part("out_of_repair", ("excluded", "run"), lambda: tuple(
+            OutOfRepair(x.component, x.state, x.reason, x.by, x.since, release(fold, x),
+                        x.safe_state) for x in fold.out_of_repair())),
         run_id=run.run_id if run is not None else "",
-        healthy=dict(run.healthy) if run is not None else {},
-        mission=fold.mission_status.to_json() if fold.mission_seen else {},
+        healthy=part("healthy", ("run",), lambda: dict(run.healthy) if run is not None else {}),
+        mission=part("mission", ("mission",),
+                     lambda: fold.mission_status.to_json() if fold.mission_seen else {}),
         journal_problem=fold.journal.problem,
         journal_held=fold.journal.held,
         journal_dropped=fold.journal.dropped,
@@ -93,8 +119,9 @@ class PageProjection:
         self.source = source
         self.fold = fold
         self.robot = source.snapshot().robot
+        self.parts = Parts(fold)
         fold.listeners.append(self)
 
     def __call__(self, stamped: Stamped) -> None:
         """The fold changed with ``stamped``: show the new status (``updated``: its time)."""
-        self.source.set(page_status(self.fold, self.robot))
+        self.source.set(page_status(self.fold, self.robot, self.parts))

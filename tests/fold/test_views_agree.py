@@ -4,7 +4,8 @@ is healthy, whether it has been diagnosed, the diagnosis (best first, every mini
 unknown), the repair running and its latest step, the board link, what is quarantined and held
 and why, the journal and the daemon's lag. Each fact changes during the run, so agreeing is not
 trivially true, and a projection that recomputes a fact its own way is caught: each skewed page
-below disagrees somewhere in the run.
+below disagrees somewhere in the run. The views rebuild only the parts whose sections of the fold
+changed; what they keep equals what a fresh view builds whole, after every event.
 """
 
 from __future__ import annotations
@@ -18,9 +19,9 @@ import pytest
 
 from host.fold import EventFold
 from host.ros.status import OK, Diagnostics, DiagnosticStatus
-from host.web.fold import page_status
+from host.web.fold import PageProjection, page_status
 from host.web.headline import headline
-from host.web.status import DiagnosisStatus, RepairStatus, Status
+from host.web.status import DiagnosisStatus, MemoryStatusSource, RepairStatus, Status
 from tests.fold.story import COMPONENTS, STAMPED
 
 Facts = dict[str, Any]
@@ -162,3 +163,15 @@ def test_the_helpers_read_what_they_compare() -> None:  # guards the comparison 
                     repairs=(RepairStatus("power_cycle", ("hokuyo",), "started", 1.0),))
     facts = page_facts(status)
     assert facts["best"] == ("hokuyo",) and facts["running"] == {"power_cycle(hokuyo)"}
+
+
+def test_views_that_rebuild_only_what_changed_equal_views_built_whole() -> None:
+    fold = EventFold()
+    source = MemoryStatusSource(Status(robot="tedusar"))
+    PageProjection(source, fold)
+    view = Diagnostics(COMPONENTS, fold)
+    for i, stamped in enumerate(STAMPED):
+        fold.feed(stamped)
+        kept = dataclasses.replace(source.snapshot(), version=0)
+        assert kept == page_status(fold, "tedusar"), f"page after event {i}"
+        assert view.statuses() == Diagnostics(COMPONENTS, fold).statuses(), f"event {i}"
