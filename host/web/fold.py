@@ -9,16 +9,17 @@ release it (the command, with the run's operator socket when it is not the defau
 channel a person switched off, switching it on again), the running counters that ``/metrics``
 exports, the journal's health, the daemon's lag and the mission. ``PageProjection(source,
 fold)`` keeps a ``MemoryStatusSource`` equal to it: a listener of the fold, it sets a new status
-after every event that changed the fold, rebuilding only the parts whose sections of the fold
-changed (``Parts``). It folds nothing itself: what the page shows is what the stream said,
-folded once, for the page and ``/diagnostics`` alike.
+after every event that changed the fold, rebuilding only the fields whose sections of the fold
+changed (``FIELDS``: each field, the sections it reads and how). It folds nothing itself: what
+the page shows is what the stream said, folded once, for the page and ``/diagnostics`` alike.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, TypeVar, cast
+from typing import Any
 
 from host.events import Stamped
 from host.fold import EventFold, Exclusion
@@ -32,70 +33,63 @@ from host.web.status import (
     Status,
 )
 
-T = TypeVar("T")
+
+def _channels(f: EventFold) -> tuple[ChannelView, ...]:
+    return tuple(ChannelView(c.id, c.name, c.on, c.state, c.current_ma,
+                             tuple(f.history.get(c.name, ())))
+                 for c in (f.channels.channels if f.channels is not None else ()))
 
 
-class Parts:
-    """The parts of the page's status, each rebuilt only when a section of the fold it reads
-    changed (``EventFold.sections``): a channel sample, most of the stream, rebuilds the
-    channels and nothing else."""
-
-    def __init__(self, fold: EventFold) -> None:
-        self.fold = fold
-        self._cache: dict[str, tuple[tuple[int, ...], Any]] = {}
-
-    def get(self, name: str, sections: tuple[str, ...], make: Callable[[], T]) -> T:
-        seen = tuple(self.fold.sections[s] for s in sections)
-        hit = self._cache.get(name)
-        if hit is None or hit[0] != seen:
-            hit = self._cache[name] = (seen, make())
-        return cast(T, hit[1])
+def _diagnoses(f: EventFold) -> tuple[DiagnosisStatus, ...]:
+    return tuple(DiagnosisStatus(bad, p)
+                 for bad, p in zip(f.diagnoses, f.probabilities(), strict=True) if bad)
 
 
-def page_status(fold: EventFold, robot: str = "", parts: Parts | None = None) -> Status:
+def _repairs(f: EventFold) -> tuple[RepairStatus, ...]:
+    return tuple(RepairStatus(a.record.action, tuple(a.record.args), str(a.record.state),
+                              a.started_wall, a.finished_wall) for a in f.actions.values())
+
+
+def _out_of_repair(f: EventFold) -> tuple[OutOfRepair, ...]:
+    return tuple(OutOfRepair(x.component, x.state, x.reason, x.by, x.since, release(f, x),
+                             x.safe_state) for x in f.out_of_repair())
+
+
+# each field of the page's Status: the sections of the fold it reads, and how
+FIELDS: dict[str, tuple[tuple[str, ...], Callable[[EventFold], Any]]] = {
+    "channels": (("channels",), _channels),
+    "observations": (("observations",), lambda f: dict(f.observations)),
+    "observation_changes": (("observations",), lambda f: f.observation_changes),
+    "diagnoses": (("diagnosis",), _diagnoses),
+    "diagnosis_complete": (("diagnosis",),
+                           lambda f: f.diagnosis.complete if f.diagnosis is not None else True),
+    "unknown": (("diagnosis",), lambda f: f.unknown),
+    "diagnosed_at": (("diagnosis", "runs"), lambda f: f.diagnosed_at),
+    "diagnosis_runs": (("runs",), lambda f: f.diagnosis_runs),
+    "diagnosis_latency_sum_s": (("runs",), lambda f: f.diagnosis_latency_sum_s),
+    "diagnosis_last_latency_s": (("runs",), lambda f: f.diagnosis_last_latency_s),
+    "repairs": (("actions",), _repairs),
+    "repairs_by_outcome": (("outcomes",), lambda f: dict(f.repairs_by_outcome)),
+    "board_link_up": (("link",), lambda f: f.link_up),
+    "board_key": (("link",), lambda f: f.board_key),
+    "quarantined": (("excluded",), lambda f: f.quarantined),
+    "held": (("excluded",), lambda f: f.held),
+    "out_of_repair": (("excluded", "run"), _out_of_repair),
+    "run_id": (("run",), lambda f: f.run.run_id if f.run is not None else ""),
+    "healthy": (("run",), lambda f: dict(f.run.healthy) if f.run is not None else {}),
+    "mission": (("mission",), lambda f: f.mission_status.to_json() if f.mission_seen else {}),
+    "journal_problem": (("journal",), lambda f: f.journal.problem),
+    "journal_held": (("journal",), lambda f: f.journal.held),
+    "journal_dropped": (("journal",), lambda f: f.journal.dropped),
+    "loop_lag_s": (("lag",), lambda f: f.lag.lag_s),
+    "loop_behind": (("lag",), lambda f: f.lag.behind),
+}
+
+
+def page_status(fold: EventFold, robot: str = "") -> Status:
     """The page's ``Status`` of what ``fold`` holds (its ``version`` is the source's)."""
-    part = (parts or Parts(fold)).get
-    run = fold.run
-    return Status(
-        channels=part("channels", ("channels",), lambda: tuple(
-            ChannelView(c.id, c.name, c.on, c.state, c.current_ma,
-                        tuple(fold.history.get(c.name, ())))
-            for c in (fold.channels.channels if fold.channels is not None else ()))),
-        observations=part("observations", ("observations",), lambda: dict(fold.observations)),
-        diagnoses=part("diagnoses", ("diagnosis",), lambda: tuple(
-            DiagnosisStatus(bad, p)
-            for bad, p in zip(fold.diagnoses, fold.probabilities(), strict=True) if bad)),
-        diagnosis_complete=fold.diagnosis.complete if fold.diagnosis is not None else True,
-        unknown=fold.unknown,
-        diagnosed_at=fold.diagnosed_at,
-        repairs=part("repairs", ("actions",), lambda: tuple(
-            RepairStatus(a.record.action, tuple(a.record.args), str(a.record.state),
-                         a.started_wall, a.finished_wall) for a in fold.actions.values())),
-        board_link_up=fold.link_up,
-        board_key=fold.board_key,
-        updated=fold.updated,
-        robot=robot,
-        observation_changes=fold.observation_changes,
-        diagnosis_runs=fold.diagnosis_runs,
-        diagnosis_latency_sum_s=fold.diagnosis_latency_sum_s,
-        diagnosis_last_latency_s=fold.diagnosis_last_latency_s,
-        repairs_by_outcome=part("outcomes", ("outcomes",),
-                                lambda: dict(fold.repairs_by_outcome)),
-        quarantined=part("quarantined", ("excluded",), lambda: fold.quarantined),
-        held=part("held", ("excluded",), lambda: fold.held),
-        out_of_repair=part("out_of_repair", ("excluded", "run"), lambda: tuple(
-            OutOfRepair(x.component, x.state, x.reason, x.by, x.since, release(fold, x),
-                        x.safe_state) for x in fold.out_of_repair())),
-        run_id=run.run_id if run is not None else "",
-        healthy=part("healthy", ("run",), lambda: dict(run.healthy) if run is not None else {}),
-        mission=part("mission", ("mission",),
-                     lambda: fold.mission_status.to_json() if fold.mission_seen else {}),
-        journal_problem=fold.journal.problem,
-        journal_held=fold.journal.held,
-        journal_dropped=fold.journal.dropped,
-        loop_lag_s=fold.lag.lag_s,
-        loop_behind=fold.lag.behind,
-    )
+    return Status(robot=robot, updated=fold.updated,
+                  **{name: make(fold) for name, (_, make) in FIELDS.items()})
 
 
 def release(fold: EventFold, x: Exclusion) -> str:
@@ -113,15 +107,24 @@ def release(fold: EventFold, x: Exclusion) -> str:
 
 
 class PageProjection:
-    """Keeps ``source`` equal to ``page_status(fold)``; ``fold`` is read, never fed, here."""
+    """Keeps ``source`` equal to ``page_status(fold)``; ``fold`` is read, never fed, here.
+    After each change it rebuilds only the fields whose sections of the fold changed."""
 
     def __init__(self, source: MemoryStatusSource, fold: EventFold) -> None:
         self.source = source
         self.fold = fold
         self.robot = source.snapshot().robot
-        self.parts = Parts(fold)
+        self._seen: dict[str, int] = {}
+        source.set(page_status(fold, self.robot))
+        self._seen = dict(fold.sections)
         fold.listeners.append(self)
 
     def __call__(self, stamped: Stamped) -> None:
         """The fold changed with ``stamped``: show the new status (``updated``: its time)."""
-        self.source.set(page_status(self.fold, self.robot, self.parts))
+        now = self.fold.sections
+        changed = {s for s, n in now.items() if self._seen.get(s) != n}
+        self._seen = dict(now)
+        fields = {name: make(self.fold) for name, (sections, make) in FIELDS.items()
+                  if not changed.isdisjoint(sections)}
+        self.source.set(dataclasses.replace(self.source.snapshot(), updated=self.fold.updated,
+                                            **fields))
