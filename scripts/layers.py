@@ -35,6 +35,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("emulator",),  # the firmware on a simulated HAL
     ("host", "host.errors", "host.atoms", "host.layers", "host.lifeline"),  # shared by every floor
     ("host.events",),  # the one event stream's values
+    ("host.fold",),  # the one fold of that stream, which every view reads
     ("host.transports",),  # bytes
     ("host.board",),  # messages
     ("host.diagnosis",),  # clauses and literals

@@ -2,8 +2,10 @@
 
 A fake tree with one name defined in two modules (and one defined twice in a single module,
 which is not a second meaning) is listed with its places and counted; ``--check`` fails past
-the limit; a file that does not parse is one line and exit code 2. On the real tree at most
-five names are defined twice, each place with a comment saying why.
+the limit, and so does a name outside the allow-list (``KNOWN``) under it; a file that does not
+parse is one line and exit code 2. On the real tree only names of the allow-list are defined
+twice (three since one fold serves the page and ``/diagnostics``: no ``Status`` nor
+``StatusFold`` twice), each place with a comment saying why.
 """
 
 from __future__ import annotations
@@ -48,6 +50,18 @@ def test_check_fails_past_the_limit(tmp_path: Path) -> None:
     assert "6 class names defined more than once (at most 5 wanted)" in out.stdout
 
 
+def test_check_fails_on_a_name_outside_the_allow_list(tmp_path: Path) -> None:
+    known = run("--root", str(write(tmp_path / "a", {"host/a.py": "class Task: ...\n",
+                                                      "emulator/b.py": "class Task: ...\n"})),
+                "--check")
+    assert known.returncode == 0, known.stdout
+    new = run("--root", str(write(tmp_path / "b", {"host/a.py": "class StatusFold: ...\n",
+                                                    "host/b.py": "class StatusFold: ...\n"})),
+              "--check")
+    assert new.returncode == 1
+    assert "StatusFold is not in KNOWN: rename one, or add it to KNOWN" in new.stdout
+
+
 def test_a_file_that_does_not_parse_is_one_line_and_exit_code_2(tmp_path: Path) -> None:
     out = run("--root", str(write(tmp_path, {"host/bad.py": "class (:\n"})))
     assert out.returncode == 2
@@ -60,6 +74,8 @@ def test_the_real_tree_keeps_the_limit_and_says_why_at_each_second_name() -> Non
     assert out.returncode == 0, out.stdout
     listed = [line for line in out.stdout.splitlines()[:-1] if " x" in line]
     assert len(listed) <= 5
+    names = {line.split(" x", 1)[0] for line in listed}
+    assert names <= {"BoardEvent", "Observation", "Task"}, names  # not Status nor StatusFold
     for line in listed:  # "Name x2: path:line, path:line": a comment right above each
         for place in line.split(": ", 1)[1].split(", "):
             path, lineno = place.rsplit(":", 1)

@@ -10,8 +10,9 @@ Theory of operation. ``Daemon`` builds the pieces from the robot directory and o
 - the ``RepairService`` (``host.repair.service``), fed every changed diagnosis and the board
   link, emitting plans, steps, results and quarantines;
 - one ``EventStream``: everything the daemon learns or does is emitted there once, as a typed
-  event (``host.events``), and the journal, the web page's status (``host.web.fold``), the
-  terminal's lines (``host.commands.terminal``) and any other reader are projections of it.
+  event (``host.events``), and the journal, the one fold of it (``host.fold``) that the web
+  page's status (``host.web.fold``) and ``/diagnostics`` read, the terminal's lines
+  (``host.commands.terminal``) and any other reader are projections of it.
 
 Tasks on one asyncio loop: the board task keeps a ``BoardClient`` subscribed (a new client
 after a failed one, waiting as the one reconnect policy, ``host.board.backoff``, says) and
@@ -58,6 +59,7 @@ from host.errors import RemoteError, UserError
 from host.events import JOURNALED, Event, LinkChange, Note, RunStarted, Stamped
 from host.events import BoardEvent as BoardEventRecord
 from host.fleet.metrics import FleetMetrics, LagProbe
+from host.fold import EventFold
 from host.journal import Journal, TelemetryDownsampler
 from host.journal.runs import Run, list_runs, new_run_id
 from host.journal.summary import Replay
@@ -72,7 +74,7 @@ from host.repair import service
 from host.repair.external import ExternalNode, lifecycle_nodes, load_external
 from host.repair.planner import RepairPlanner
 from host.repair.processes import ProcessConfig, load_processes, managed_nodes
-from host.web.fold import StatusFold
+from host.web.fold import PageProjection
 from host.web.server import WebServer
 from host.web.status import MemoryStatusSource, Status
 
@@ -186,7 +188,9 @@ class Daemon:
         self.stream = EventStream(clock, wall)
         self.emit = self.stream.emit
         self.status = MemoryStatusSource(Status(robot=opts.robot or self.model.name))
-        self.stream.subscribe(StatusFold(self.status))
+        self.fold = EventFold()  # the one fold of the stream; the page and /diagnostics read it
+        self.stream.subscribe(self.fold)
+        PageProjection(self.status, self.fold)
         self.lag = LagProbe()
         self.metrics = FleetMetrics(self.status, robot=opts.robot or self.model.name,
                                     site=opts.site, components=list(self.model.components),
@@ -280,8 +284,7 @@ class Daemon:
             self.source.on_stranger = self._stranger  # type: ignore[attr-defined]
             from host.ros.lifecycle import LifecycleActuator
             from host.ros.publisher import RosPublisher
-            self.ros_out = RosPublisher(list(self.model.components), spec.domain)
-            self.stream.subscribe(self.ros_out)
+            self.ros_out = RosPublisher(list(self.model.components), spec.domain, fold=self.fold)
             self.lifecycle = LifecycleActuator(spec.domain, self._managed)  # reconfigure_node
             self.lifecycle.open()  # its node now, each managed node's services once seen
             self.repairs.executor.actuators.add("reconfigure_node",

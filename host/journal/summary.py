@@ -1,7 +1,8 @@
 """Reading a journal back: one-line summaries of entries, and replaying a history into state.
 
 ``summarize`` (``host.events.describe``) gives the short human line that ``dxboard journal``
-prints and the web page shows in its journal tail. ``Replay`` folds entries, in id order,
+prints and the web page shows in its journal tail. ``Replay`` folds entries, in id order, with
+the one fold of the event stream (``host.fold.EventFold``, which the live views read too),
 into what the daemon knew at that point: the value of every observed literal, the latest
 diagnoses, and every repair action with its latest state (the ``started`` entry and the one
 that finished it share an ``action_id``), and what is quarantined or held.
@@ -14,17 +15,17 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Iterable
-from dataclasses import dataclass, field
 
 from host.events import (
     ActionRecord,
     DiagnosisRecord,
     HoldChange,
-    Observation,
     PlanRecord,
     QuarantineChange,
+    Stamped,
     describe,
 )
+from host.fold import EventFold
 from host.journal.entries import Entry
 
 log = logging.getLogger(__name__)
@@ -33,43 +34,21 @@ log = logging.getLogger(__name__)
 summarize = describe  # the journal's name for it
 
 
-@dataclass
 class Replay:
-    """What the daemon knew after the entries folded in so far."""
+    """What the daemon knew after the entries folded in so far (by the one ``EventFold``,
+    keeping every action and plan: a journal is read once, offline)."""
 
-    observations: dict[str, bool | None] = field(default_factory=dict)
-    diagnosis: DiagnosisRecord | None = None
-    actions: dict[str, ActionRecord] = field(default_factory=dict)
-    plans: list[PlanRecord] = field(default_factory=list)
-    quarantined: dict[str, QuarantineChange] = field(default_factory=dict)
-    held: dict[str, HoldChange] = field(default_factory=dict)
-    last_id: int = 0
-    last_wall: float = 0.0
+    def __init__(self) -> None:
+        self.fold = EventFold(keep_actions=None, keep_plans=None)
+        self.last_id = 0
+        self.last_wall = 0.0
 
     def apply(self, entry: Entry) -> None:
         """Fold one entry in; entries must come in id order."""
         if entry.id <= self.last_id:
             raise ValueError(f"entry {entry.id} replayed after {self.last_id}")
         self.last_id, self.last_wall = entry.id, entry.wall
-        p = entry.payload
-        if isinstance(p, Observation):
-            self.observations[p.literal] = p.value
-        elif isinstance(p, DiagnosisRecord):
-            self.diagnosis = p
-        elif isinstance(p, ActionRecord):
-            self.actions[p.action_id] = p
-        elif isinstance(p, PlanRecord):
-            self.plans.append(p)
-        elif isinstance(p, QuarantineChange):
-            if p.quarantined:
-                self.quarantined[p.component] = p
-            else:
-                self.quarantined.pop(p.component, None)
-        elif isinstance(p, HoldChange):
-            if p.held:
-                self.held[p.component] = p
-            else:
-                self.held.pop(p.component, None)
+        self.fold.feed(Stamped(entry.wall, entry.mono, entry.payload))
 
     @classmethod
     def of(cls, entries: Iterable[Entry]) -> Replay:
@@ -77,6 +56,33 @@ class Replay:
         for entry in entries:
             replay.apply(entry)
         return replay
+
+    @property
+    def observations(self) -> dict[str, bool | None]:
+        return self.fold.observations
+
+    @property
+    def diagnosis(self) -> DiagnosisRecord | None:
+        return self.fold.diagnosis
+
+    @property
+    def actions(self) -> dict[str, ActionRecord]:
+        """Every repair action by id, with its latest state, in the order they started."""
+        return {aid: a.record for aid, a in self.fold.actions.items()}
+
+    @property
+    def plans(self) -> list[PlanRecord]:
+        return list(self.fold.plans)
+
+    @property
+    def quarantined(self) -> dict[str, QuarantineChange]:
+        return {x.component: x.change for x in self.fold.out_of_repair("quarantined")
+                if isinstance(x.change, QuarantineChange)}
+
+    @property
+    def held(self) -> dict[str, HoldChange]:
+        return {x.component: x.change for x in self.fold.out_of_repair("held")
+                if isinstance(x.change, HoldChange)}
 
     def abnormal(self) -> frozenset[str]:
         """Components in every current diagnosis (surely broken), as the timeline rows show."""

@@ -2,7 +2,8 @@
 
 ``RosPublisher(components, domain_id)`` is one rclpy node, ``dxboard`` (``sources.ros2_node``: a
 thread of its own), subscribed to the daemon's ``EventStream`` (it is called with every
-``Stamped`` event on the loop's thread). It folds the events with ``host.ros.status`` and
+``Stamped`` event on the loop's thread) or, in the daemon, a listener of its one ``EventFold``
+(``host.fold``, which the page reads too). It reads the fold with ``host.ros.status`` and
 publishes, with standard types only, so any ROS 2 tool reads them (``rqt_robot_monitor``,
 the diagnostic aggregator, Foxglove, ``ros2 topic echo``)::
 
@@ -35,16 +36,18 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticArray, KeyValue
+from diagnostic_msgs.msg import DiagnosticStatus as StatusMsg
 from rclpy.qos import DurabilityPolicy, QoSProfile
 from sensor_msgs.msg import BatteryState
 from std_msgs.msg import Float32MultiArray, MultiArrayDimension
 
 from host.events import ChannelSample, DiagnosisRecord, Stamped
+from host.fold import EventFold
 from host.observers.hardware import BoardInput
 from host.observers.sources.ros2_node import RosNode
 from host.ros import boardstream
-from host.ros.status import ERROR, OK, STALE, Status, StatusFold
+from host.ros.status import ERROR, OK, STALE, Diagnostics, DiagnosticStatus
 
 log = logging.getLogger(__name__)
 
@@ -54,8 +57,10 @@ LATCHED = QoSProfile(depth=10, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 class RosPublisher:
     def __init__(self, components: Sequence[str], domain_id: int | None = None,
-                 name: str = "dxboard") -> None:
-        self.fold = StatusFold(list(components))
+                 name: str = "dxboard", fold: EventFold | None = None) -> None:
+        self._own_fold = fold is None  # then it is fed by calling this publisher
+        self.fold = fold if fold is not None else EventFold()
+        self.diagnostics = Diagnostics(components, self.fold)
         self.ros = RosNode(name, domain_id)
         node = self.ros.node
         self._diagnostics = node.create_publisher(DiagnosticArray, "/diagnostics", LATCHED)
@@ -65,20 +70,27 @@ class RosPublisher:
         self._stream = node.create_publisher(DiagnosticArray, boardstream.TOPIC,
                                             boardstream.DEPTH)
         self._closed = False
-        self._last: tuple[Status, ...] = tuple(self.fold.statuses())
+        self._last: tuple[DiagnosticStatus, ...] = tuple(self.diagnostics.statuses())
         self._publish_statuses()
         self._timer = node.create_timer(PERIOD_S, self._publish_statuses)  # on rclpy's thread
+        self.fold.listeners.append(self._changed)
 
     def __call__(self, stamped: Stamped) -> None:
-        """A reader of the event stream (on the daemon's loop thread)."""
-        if self._closed or not self.fold.feed(stamped):
+        """A reader of the event stream, for a publisher with a fold of its own (on the
+        daemon's loop thread); one given a fold publishes when that fold changes."""
+        if self._own_fold and not self._closed:
+            self.fold.feed(stamped)
+
+    def _changed(self, stamped: Stamped) -> None:
+        """The fold changed with ``stamped`` (on the daemon's loop thread)."""
+        if self._closed:
             return
         event = stamped.event
         if isinstance(event, DiagnosisRecord):
             self._diagnosis.publish(self._diagnosis_msg(event))
         elif isinstance(event, ChannelSample):
             self._publish_board()
-        statuses = tuple(self.fold.statuses())
+        statuses = tuple(self.diagnostics.statuses())
         if statuses != self._last:
             self._last = statuses  # one reference swap: the timer's thread reads it
             self._publish_statuses()
@@ -131,7 +143,7 @@ class RosPublisher:
             level, text = (ERROR, ", ".join(bad)) if bad else (
                 (STALE, "unknown: " + ", ".join(record.unknown)) if record.unknown
                 else (OK, "all healthy"))
-            msg.status.append(DiagnosticStatus(
+            msg.status.append(StatusMsg(
                 level=bytes([level]), name=f"dxboard diagnosis {i}",
                 message=text, hardware_id="", values=values))
         return msg
@@ -142,7 +154,7 @@ class RosPublisher:
         self.ros.close()
 
 
-def _status(s: Status) -> DiagnosticStatus:
-    return DiagnosticStatus(level=bytes([s.level]), name=s.name, message=s.message,
+def _status(s: DiagnosticStatus) -> StatusMsg:
+    return StatusMsg(level=bytes([s.level]), name=s.name, message=s.message,
                             hardware_id=s.hardware_id,
                             values=[KeyValue(key=k, value=v) for k, v in s.values])

@@ -1,10 +1,12 @@
-"""The daemon's state in ``diagnostic_msgs`` terms: a fold of its event stream into statuses.
+"""The daemon's state in ``diagnostic_msgs`` terms: a projection of the one fold of its events.
 
-``StatusFold(components)`` reads ``Stamped`` events (``host.events``) and keeps what a ROS 2
-robot monitor shows; it is pure (no rclpy, no clock), so it is tested on its own and the
-publisher (``host.ros.publisher``) only turns its ``Status`` values into messages. Status names
-are paths under ``dxboard/`` that the standard ``diagnostic_aggregator`` groups into one tree
-(``ros/dxboard_ros/config/analyzers.yaml``; rqt_robot_monitor shows it as it is)::
+``Diagnostics(components, fold)`` reads an ``EventFold`` (``host.fold``: the daemon's event
+stream folded once, for the page and for this alike) into what a ROS 2 robot monitor shows; it
+folds nothing itself and is pure (no rclpy, no clock), so it is tested on its own and the
+publisher (``host.ros.publisher``) only turns its ``DiagnosticStatus`` values into messages.
+Status names are paths under ``dxboard/`` that the standard ``diagnostic_aggregator`` groups
+into one tree (``ros/dxboard_ros/config/analyzers.yaml``; rqt_robot_monitor shows it as it
+is)::
 
     dxboard/components/NAME       one per component of the model (hardware_id: the component)
     dxboard/board/link            the board (hardware_id ``board``)
@@ -33,30 +35,18 @@ latest one started or succeeded, ERROR when it failed or timed out (key/values a
 state). The daemon is OK "journal: writing", ERROR "journal: disk full, N entries held"
 while its journal cannot write, WARN "behind: its event loop runs N s late" while its loop
 lags over 1 s (``host.daemon.lagwatch``; key/values journal, journal_held, journal_dropped,
-behind, loop_lag_s). ``diagnoses``, ``currents_a`` and ``input_v`` are the latest minimal
+behind, loop_lag_s). The fold's ``diagnoses``, ``currents_a`` and ``input_v`` are the latest minimal
 diagnoses, channel currents and the board's input voltage, for ``/diagnosis``,
 ``/board_measurements`` and ``/battery_state``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
-from host.events import (
-    ActionRecord,
-    BoardEvent,
-    ChannelSample,
-    DiagnosisRecord,
-    HoldChange,
-    JournalHealth,
-    LinkChange,
-    LoopLag,
-    QuarantineChange,
-    Stamped,
-    journal_health_text,
-    loop_lag_text,
-)
+from host.events import journal_health_text, loop_lag_text
+from host.fold import EventFold
 
 OK, WARN, ERROR, STALE = 0, 1, 2, 3
 BAD_STATES = ("tripped", "latched", "faulted")
@@ -64,10 +54,10 @@ PREFIX = "dxboard"  # the root of every status name: one tree in the aggregator
 BAD_ACTION_STATES = ("failed", "timeout")
 
 
-# a REP-107 DiagnosticStatus; host/web/status.py's Status is the page's: two projections of
-# the event stream, each folded by its StatusFold until one fold serves both (issue 26 item 3)
 @dataclass(frozen=True)
-class Status:
+class DiagnosticStatus:
+    """A REP-107 ``diagnostic_msgs/DiagnosticStatus``, as plain values."""
+
     level: int
     name: str
     message: str
@@ -75,154 +65,118 @@ class Status:
     values: tuple[tuple[str, str], ...] = ()
 
 
-@dataclass
-class _Component:
-    repair: str = "none"
-    quarantined: str = ""  # the reason, when quarantined
-    held: bool = False
+class Diagnostics:
+    """``/diagnostics`` of ``fold`` for the model's ``components``; it only reads the fold."""
 
+    def __init__(self, components: Sequence[str], fold: EventFold) -> None:
+        self.components = list(components)
+        self.fold = fold
+        self._parts: dict[str, tuple[tuple[int, ...], list[DiagnosticStatus]]] = {}
 
-# /diagnostics' fold of the event stream; host/web/fold.py has the page's (scripts/names.py)
-@dataclass
-class StatusFold:
-    components: Sequence[str]
-    diagnosis: DiagnosisRecord | None = None
-    channels: ChannelSample | None = None
-    link_up: bool = False
-    link_reason: str = "not connected yet"
-    _comp: dict[str, _Component] = field(default_factory=dict)
-    _last_event: dict[int, str] = field(default_factory=dict)
-    journal: JournalHealth = field(default_factory=lambda: JournalHealth(""))
-    last_action: ActionRecord | None = None
-    lag: LoopLag = field(default_factory=lambda: LoopLag(0.0, False))
-
-    def __post_init__(self) -> None:
-        self._comp = {c: _Component() for c in self.components}
-
-    def feed(self, stamped: Stamped) -> bool:
-        """Take one event; True when the statuses may have changed."""
-        e = stamped.event
-        match e:
-            case DiagnosisRecord():
-                self.diagnosis = e
-            case ChannelSample():
-                self.channels = e
-            case LinkChange():
-                self.link_up, self.link_reason = e.up, e.reason
-            case ActionRecord():
-                self.last_action = e
-                for arg in e.args:
-                    if arg in self._comp:
-                        self._comp[arg].repair = f"{e.action}({', '.join(e.args)}) {e.state}"
-            case QuarantineChange() if e.component in self._comp:
-                self._comp[e.component].quarantined = (e.reason or "quarantined"
-                                                       if e.quarantined else "")
-            case HoldChange() if e.component in self._comp:
-                self._comp[e.component].held = e.held
-            case JournalHealth():
-                self.journal = e
-            case LoopLag():
-                self.lag = e
-            case BoardEvent() if e.channel is not None:
-                self._last_event[e.channel] = e.event
-            case _:
-                return False
-        return True
-
-    @property
-    def diagnoses(self) -> tuple[tuple[str, ...], ...]:
-        return self.diagnosis.diagnoses if self.diagnosis is not None else ()
-
-    @property
-    def input_v(self) -> float | None:
-        """The board's input voltage (V) while the link is up and the board says it."""
-        mv = self.channels.input_mv if self.channels is not None else None
-        return mv / 1000.0 if mv is not None and self.link_up else None
-
-    @property
-    def currents_a(self) -> list[float]:
-        """Every channel's current (A), in channel order; empty before the first sample."""
-        return [c.current_ma / 1000.0 for c in self.channels.channels] if self.channels else []
-
-    def statuses(self) -> list[Status]:
-        return [*(self._component(c) for c in self.components), *self._board(),
+    def statuses(self) -> list[DiagnosticStatus]:
+        return [*self._part("components", ("diagnosis", "excluded", "actions"),
+                            self._components),
+                *self._part("board", ("channels", "link", "board_events"), self._board),
                 self._diagnosis(), self._repair(), self._daemon()]
 
-    def _diagnosis(self) -> Status:
+    def _part(self, name: str, sections: tuple[str, ...],
+              make: Callable[[], list[DiagnosticStatus]]) -> list[DiagnosticStatus]:
+        """``make()``, again only when one of the fold's ``sections`` it reads changed."""
+        seen = tuple(self.fold.sections[s] for s in sections)
+        hit = self._parts.get(name)
+        if hit is None or hit[0] != seen:
+            hit = self._parts[name] = (seen, make())
+        return hit[1]
+
+    def _components(self) -> list[DiagnosticStatus]:
+        quarantined, held = self.fold.quarantined, self.fold.held
+        return [self._component(c, quarantined, held) for c in self.components]
+
+    def _diagnosis(self) -> DiagnosticStatus:
         name = f"{PREFIX}/diagnosis"
-        if self.diagnosis is None:
-            return Status(STALE, name, "not diagnosed yet", PREFIX)
-        diags = self.diagnoses
-        best = diags[0] if diags else ()
+        f = self.fold
+        if f.diagnosis is None:
+            return DiagnosticStatus(STALE, name, "not diagnosed yet", PREFIX)
+        diags, best, unknown = f.diagnoses, f.best, f.unknown
         values = (("best", ", ".join(best) or "none"), ("diagnoses", str(len(diags))),
                   ("all", "; ".join("{" + ", ".join(d) + "}" for d in diags)),
-                  ("unknown", ", ".join(self.diagnosis.unknown)))
-        if not best and self.diagnosis.unknown:  # unobserved is not healthy
-            return Status(STALE, name, "unknown: " + ", ".join(self.diagnosis.unknown), PREFIX,
-                          values)
+                  ("unknown", ", ".join(unknown)))
+        if not best and unknown:  # unobserved is not healthy
+            return DiagnosticStatus(STALE, name, "unknown: " + ", ".join(unknown), PREFIX,
+                                    values)
         if not best:
-            return Status(OK, name, "every component normal", PREFIX, values)
-        return Status(ERROR, name, "best diagnosis {" + ", ".join(best) + "}", PREFIX, values)
+            return DiagnosticStatus(OK, name, "every component normal", PREFIX, values)
+        return DiagnosticStatus(ERROR, name, "best diagnosis {" + ", ".join(best) + "}", PREFIX,
+                                values)
 
-    def _repair(self) -> Status:
+    def _repair(self) -> DiagnosticStatus:
         name = f"{PREFIX}/repair"
-        a = self.last_action
+        a = self.fold.last_action
         if a is None:
-            return Status(OK, name, "no repair yet", PREFIX, (("action", "none"), ("state", "")))
+            return DiagnosticStatus(OK, name, "no repair yet", PREFIX,
+                                    (("action", "none"), ("state", "")))
         text = f"{a.action}({', '.join(a.args)})"
-        return Status(ERROR if a.state in BAD_ACTION_STATES else OK, name, f"{text} {a.state}",
-                      PREFIX, (("action", text), ("state", str(a.state))))
+        return DiagnosticStatus(ERROR if a.state in BAD_ACTION_STATES else OK, name,
+                                f"{text} {a.state}", PREFIX,
+                                (("action", text), ("state", str(a.state))))
 
-    def _daemon(self) -> Status:
-        j, lag = self.journal, self.lag
+    def _daemon(self) -> DiagnosticStatus:
+        j, lag = self.fold.journal, self.fold.lag
         level = ERROR if j.problem else WARN if lag.behind else OK
         message = "; ".join([journal_health_text(j)] + ([loop_lag_text(lag)] if lag.behind
                                                          else []))
-        return Status(level, f"{PREFIX}/daemon", message,
-                      "daemon", (("journal", j.problem or "writing"),
-                                 ("journal_held", str(j.held)),
-                                 ("journal_dropped", str(j.dropped)),
-                                 ("behind", "true" if lag.behind else "false"),
-                                 ("loop_lag_s", f"{lag.lag_s:.3f}")))
+        return DiagnosticStatus(level, f"{PREFIX}/daemon", message,
+                                "daemon", (("journal", j.problem or "writing"),
+                                           ("journal_held", str(j.held)),
+                                           ("journal_dropped", str(j.dropped)),
+                                           ("behind", "true" if lag.behind else "false"),
+                                           ("loop_lag_s", f"{lag.lag_s:.3f}")))
 
-    def _component(self, name: str) -> Status:
-        comp = self._comp[name]
-        diags = self.diagnoses
+    def _component(self, name: str, quarantined_all: dict[str, str],
+                   held: dict[str, str]) -> DiagnosticStatus:
+        f = self.fold
+        diags = f.diagnoses
         inside = sum(1 for d in diags if name in d)
-        if self.diagnosis is None:
+        if f.diagnosis is None:
             level, message = STALE, "not diagnosed yet"
-        elif diags and name in diags[0]:
-            level, message = ERROR, "abnormal in the best diagnosis {" + ", ".join(diags[0]) + "}"
+        elif name in f.best:
+            level, message = ERROR, "abnormal in the best diagnosis {" + ", ".join(f.best) + "}"
         elif inside:
             level, message = WARN, f"abnormal in {inside} of {len(diags)} minimal diagnoses"
-        elif name in self.diagnosis.unknown:
+        elif name in f.unknown:
             level, message = STALE, "unknown: its observations expired"
         else:
             level, message = OK, "normal in every minimal diagnosis"
-        if comp.quarantined:
-            level, message = ERROR, f"{message}; quarantined: {comp.quarantined}"
-        return Status(level, f"{PREFIX}/components/{name}", message, name, (
-            ("diagnoses", f"{inside} of {len(diags)}"), ("repair", comp.repair),
-            ("quarantined", "true" if comp.quarantined else "false"),
-            ("held", "true" if comp.held else "false")))
+        quarantined = quarantined_all.get(name)
+        if quarantined is not None:
+            level, message = ERROR, f"{message}; quarantined: {quarantined or 'quarantined'}"
+        action = f.action_of.get(name)
+        repair = "none" if action is None else \
+            f"{action.action}({', '.join(action.args)}) {action.state}"
+        return DiagnosticStatus(level, f"{PREFIX}/components/{name}", message, name, (
+            ("diagnoses", f"{inside} of {len(diags)}"), ("repair", repair),
+            ("quarantined", "true" if quarantined is not None else "false"),
+            ("held", "true" if name in held else "false")))
 
-    def _board(self) -> list[Status]:
-        out = [Status(OK if self.link_up else ERROR, f"{PREFIX}/board/link",
-                      "link up" if self.link_up else f"link down: {self.link_reason}", "board",
-                      (("link", "up" if self.link_up else "down"),
-                       ("total_current_a", f"{sum(self.currents_a):.3f}"),
-                       ("input_v", "unknown" if self.input_v is None
-                        else f"{self.input_v:.3f}")))]
-        for c in self.channels.channels if self.channels else ():
-            if not self.link_up:
+    def _board(self) -> list[DiagnosticStatus]:
+        f = self.fold
+        volts = f.input_v
+        out = [DiagnosticStatus(OK if f.link_up else ERROR, f"{PREFIX}/board/link",
+                                "link up" if f.link_up else f"link down: {f.link_reason}",
+                                "board",
+                                (("link", "up" if f.link_up else "down"),
+                                 ("total_current_a", f"{sum(f.currents_a):.3f}"),
+                                 ("input_v", "unknown" if volts is None else f"{volts:.3f}")))]
+        for c in f.channels.channels if f.channels else ():
+            if not f.link_up:
                 level, message = STALE, "board link down"
             elif c.state in BAD_STATES:
                 level, message = ERROR, c.state
             else:
                 level, message = OK, c.state
-            out.append(Status(level, f"{PREFIX}/board/channels/{c.name}", message,
-                              f"channel {c.id}", (
+            out.append(DiagnosticStatus(level, f"{PREFIX}/board/channels/{c.name}", message,
+                                        f"channel {c.id}", (
                 ("channel", str(c.id)), ("state", c.state), ("on", str(c.on).lower()),
                 ("current_a", f"{c.current_ma / 1000.0:.3f}"),
-                ("last_event", self._last_event.get(c.id, "none")))))
+                ("last_event", f.last_board_event.get(c.id, "none")))))
         return out

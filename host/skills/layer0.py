@@ -1,9 +1,11 @@
-"""Layer 0 as the layers above see it: a fold of the daemon's event stream.
+"""Layer 0 as the layers above see it: a projection of the one fold of the daemon's event stream.
 
 A skill needs components (``jaguar``, ``hokuyo_node``) and topics (``/scan``). Whether it can run
 is decided from what layer 0 *says* — its diagnoses, quarantines, holds and repairs, as events on
 the daemon's one stream (``host.events``) — never by reading the board or the processes again.
-``Layer0View`` is a reader of that stream (``daemon.subscribe(view)``); it keeps:
+``Layer0View`` is a reader of that stream (``daemon.subscribe(view)``) that feeds an
+``EventFold`` (``host.fold``, the fold the page and ``/diagnostics`` read; one that is given
+the daemon's fold only reads it) and reads from it:
 
 - ``suspects``: the components in any minimal diagnosis of the latest ``DiagnosisRecord``;
 - ``quarantined`` and ``held`` (``QuarantineChange``, ``HoldChange``), with their reasons;
@@ -30,14 +32,15 @@ from enum import StrEnum
 from host.atoms import Atom
 from host.events import (
     ActionRecord,
-    ActionState,
     DiagnosisRecord,
+    Event,
     HoldChange,
     Observation,
     QuarantineChange,
     RepairEnded,
     Stamped,
 )
+from host.fold import EventFold
 
 log = logging.getLogger(__name__)
 
@@ -62,54 +65,65 @@ class Availability:
 class Layer0View:
     """What layer 0 has said so far; call it with every stamped event of the stream."""
 
-    def __init__(self, repair_active: Callable[[], bool] | None = None) -> None:
-        self.suspects: set[str] = set()
-        self.quarantined: dict[str, str] = {}
-        self.held: dict[str, str] = {}
-        self.repairing: set[str] = set()
-        self.bad_topics: set[str] = set()
-        self.diagnosed = False
+    def __init__(self, repair_active: Callable[[], bool] | None = None,
+                 fold: EventFold | None = None) -> None:
+        self._own_fold = fold is None  # then this view feeds it
+        self.fold = fold if fold is not None else EventFold()
         self._repair_active = repair_active or (lambda: bool(self.repairing))
         self.listeners: list[Callable[[], None]] = []
+        self.fold.listeners.append(self._changed)
 
     def __call__(self, stamped: Stamped) -> None:
-        event = stamped.event
-        match event:
-            case DiagnosisRecord():
-                self.suspects = {c for bad in event.diagnoses for c in bad}
-                self.diagnosed = True
-            case QuarantineChange(quarantined=True):
-                self.quarantined[event.component] = event.reason or "quarantined"
-            case QuarantineChange():
-                self.quarantined.pop(event.component, None)
-            case HoldChange(held=True):
-                self.held[event.component] = event.reason or f"held by {event.by}"
-            case HoldChange():
-                self.held.pop(event.component, None)
-            case ActionRecord(state=ActionState.STARTED):
-                self.repairing |= set(event.args)
-            case ActionRecord():
-                self.repairing -= set(event.args)
-            case RepairEnded():
-                self.repairing.clear()
-            case Observation() if event.literal.startswith("ok("):
-                topic = Atom.parse(event.literal).arg
-                if event.value is False:
-                    self.bad_topics.add(topic)
-                else:
-                    self.bad_topics.discard(topic)
-            case _:
-                return
-        for listener in list(self.listeners):
-            listener()
+        if self._own_fold:
+            self.fold.feed(stamped)
+
+    def _changed(self, stamped: Stamped) -> None:
+        """The fold changed: tell the listeners when it was something layer 0 says."""
+        e = stamped.event
+        if isinstance(e, DiagnosisRecord | QuarantineChange | HoldChange | ActionRecord
+                      | RepairEnded) or (isinstance(e, Observation)
+                                         and e.literal.startswith("ok(")):
+            for listener in list(self.listeners):
+                listener()
+
+    @property
+    def diagnosed(self) -> bool:
+        return self.fold.diagnosis is not None
+
+    @property
+    def suspects(self) -> set[str]:
+        return self.fold.suspects
+
+    @property
+    def quarantined(self) -> dict[str, str]:
+        return {c: why or "quarantined" for c, why in self.fold.quarantined.items()}
+
+    @property
+    def held(self) -> dict[str, str]:
+        return {x.component: x.reason or f"held by {x.by}"
+                for x in self.fold.out_of_repair("held")}
+
+    @property
+    def repairing(self) -> set[str]:
+        return self.fold.repairing
+
+    @property
+    def bad_topics(self) -> set[str]:
+        """Topics observed not ``ok`` (``ok(/t)`` false)."""
+        return {Atom.parse(lit).arg for lit, value in self.fold.observations.items()
+                if lit.startswith("ok(") and value is False}
 
     def seed(self, diagnoses: Iterable[Iterable[str]], quarantined: dict[str, str],
              held: dict[str, str]) -> None:
-        """Start from what layer 0 says now (a view that subscribes late missed the events)."""
-        self.suspects = {c for bad in diagnoses for c in bad}
-        self.diagnosed = True
-        self.quarantined.update(quarantined)
-        self.held.update(held)
+        """Start from what layer 0 says now (a view that subscribes late missed the events;
+        one reading the daemon's own fold missed nothing)."""
+        if not self._own_fold:
+            return
+        told: list[Event] = [DiagnosisRecord.of([list(bad) for bad in diagnoses]),
+                *(QuarantineChange(c, True, why) for c, why in quarantined.items()),
+                *(HoldChange(c, True, why) for c, why in held.items())]
+        for event in told:
+            self.fold.feed(Stamped(0.0, 0.0, event))
 
     def availability(self, needs: Iterable[str]) -> Availability:
         needs = list(needs)

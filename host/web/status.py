@@ -11,8 +11,9 @@ the wall time of the newest data in it, and the running counters that
 ``/metrics`` exports. ``StatusSource`` is the whole contract between the
 daemon and the web server: ``snapshot()`` returns the latest ``Status`` and ``wait_changed``
 waits (on the daemon's loop) until a newer one exists. ``MemoryStatusSource`` is a complete
-implementation that holds a status and lets its owner replace or update it; the daemon can use
-it as it is (call ``update`` on every change), and the tests drive the page with it. The server
+implementation that holds a status and lets its owner replace or update it; the daemon's
+``PageProjection`` (``host.web.fold``) sets it from the one fold of the event stream, and the
+tests drive the page with it. The server
 never reads anything else from the daemon; times are the daemon's (``updated``), never read
 here.
 """
@@ -87,7 +88,6 @@ class OutOfRepair:
         return dataclasses.asdict(self)
 
 
-# the page's status; host/ros/status.py has /diagnostics' (scripts/names.py)
 @dataclass(frozen=True)
 class Status:
     """One snapshot; ``version`` grows with every change (the source sets it)."""
@@ -116,7 +116,7 @@ class Status:
     out_of_repair: tuple[OutOfRepair, ...] = ()  # the same, in detail, in the order set
     run_id: str = ""
     healthy: Mapping[str, bool] = field(default_factory=dict)  # atom -> its healthy value
-    mission: Mapping[str, Any] = field(default_factory=dict)  # host.web.mission, as JSON
+    mission: Mapping[str, Any] = field(default_factory=dict)  # host.fold.mission, as JSON
     # the journal: why it cannot write ("" while it does, e.g. "disk full"), the entries it
     # holds in memory until it can, and those it lost beyond its bound
     journal_problem: str = ""

@@ -14,7 +14,8 @@ import time
 from host.daemon import lagwatch
 from host.events import LoopLag, Stamped
 from host.fleet.metrics import LagProbe
-from host.ros.status import OK, WARN, StatusFold
+from host.fold import EventFold
+from host.ros.status import OK, WARN, Diagnostics
 from host.web.headline import headline
 from host.web.status import Status
 
@@ -59,16 +60,17 @@ def test_a_stalled_loop_is_told_behind_then_caught_up() -> None:
 
 
 def test_diagnostics_warn_with_the_lag() -> None:
-    fold = StatusFold(["hokuyo"])
-    daemon = fold.statuses()[-1]
+    fold = EventFold()
+    view = Diagnostics(["hokuyo"], fold)
+    daemon = view.statuses()[-1]
     assert (daemon.name, daemon.level) == ("dxboard/daemon", OK)
     assert fold.feed(Stamped(0.0, 0.0, LoopLag(2.345, True, 1.0)))
-    daemon = fold.statuses()[-1]
+    daemon = view.statuses()[-1]
     assert daemon.level == WARN
     assert "behind: its event loop runs 2.3 s late" in daemon.message
     assert ("loop_lag_s", "2.345") in daemon.values and ("behind", "true") in daemon.values
     fold.feed(Stamped(0.0, 0.0, LoopLag(0.02, False, 1.0)))
-    daemon = fold.statuses()[-1]
+    daemon = view.statuses()[-1]
     assert daemon.level == OK and ("behind", "false") in daemon.values
 
 

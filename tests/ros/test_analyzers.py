@@ -17,7 +17,8 @@ from typing import Any
 import yaml
 
 from host.events import ChannelReading, ChannelSample, DiagnosisRecord, LinkChange, Stamped
-from host.ros.status import StatusFold
+from host.fold import EventFold
+from host.ros.status import Diagnostics
 
 ROOT = Path(__file__).resolve().parents[2]
 ANALYZERS = ROOT / "ros" / "dxboard_ros" / "config" / "analyzers.yaml"
@@ -53,12 +54,13 @@ def test_every_status_lands_in_one_analyzer_of_the_dxboard_group() -> None:
     params = yaml.safe_load(ANALYZERS.read_text())["analyzers"]["ros__parameters"]
     analyzers = generic_analyzers(params, "/" + params["path"])
     assert analyzers and all(p.startswith("/Robot/dxboard/") for p, _ in analyzers)
-    fold = StatusFold(["hokuyo", "hokuyo_node", "link"])  # a component named like a status
+    fold = EventFold()
+    view = Diagnostics(["hokuyo", "hokuyo_node", "link"], fold)  # a component named like a status
     for event in (LinkChange(True, "up"), DiagnosisRecord.of([["hokuyo"]]),
                   ChannelSample((ChannelReading(0, "hokuyo", True, "on", 1.0),
                                  ChannelReading(1, "link", True, "on", 1.0)))):
         fold.feed(Stamped(0.0, 0.0, event))
-    where = {s.name: [p for p, a in analyzers if matches(a, s.name)] for s in fold.statuses()}
+    where = {s.name: [p for p, a in analyzers if matches(a, s.name)] for s in view.statuses()}
     assert where == {
         "dxboard/components/hokuyo": ["/Robot/dxboard/components"],
         "dxboard/components/hokuyo_node": ["/Robot/dxboard/components"],

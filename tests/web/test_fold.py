@@ -14,8 +14,9 @@ from host.events import (
     RunStarted,
     Stamped,
 )
+from host.fold import EventFold
 from host.web import MemoryStatusSource
-from host.web.fold import StatusFold
+from host.web.fold import PageProjection
 from host.web.status import Status
 
 WALL0 = 1_800_000_000.0
@@ -23,7 +24,8 @@ WALL0 = 1_800_000_000.0
 
 def _fold(*events: Event) -> Status:
     source = MemoryStatusSource(Status(robot="tedusar"))
-    fold = StatusFold(source)
+    fold = EventFold()
+    PageProjection(source, fold)
     for i, e in enumerate(events):
         fold(Stamped(WALL0 + i, 100.0 + i, e))
     return source.snapshot()

@@ -1,8 +1,8 @@
 """The mission on the page (paper 001's layers): the mission's events folded into the status
-(``host.web.mission`` through ``StatusFold``) and shown beside the components in real headless
-Chromium — the plan with the current step, the tree's nodes with a guard holding, the results
-and the knowledge base's changes, and the latest plan-execution diagnosis with the plan made
-from it."""
+(``host.fold.mission`` in the one ``EventFold``, read by ``PageProjection``) and shown beside
+the components in real headless Chromium — the plan with the current step, the tree's nodes
+with a guard holding, the results and the knowledge base's changes, and the latest
+plan-execution diagnosis with the plan made from it."""
 
 from __future__ import annotations
 
@@ -22,9 +22,10 @@ from host.events import (
     describe,
     event_from_json,
 )
+from host.fold import EventFold
 from host.layers import MISSION, Cause
 from host.web import MemoryStatusSource, WebServer
-from host.web.fold import StatusFold
+from host.web.fold import PageProjection
 from tests.web.chromium import Chromium
 
 PLAN = (MissionStep("level_laser", (), 0.0, 1.0),
@@ -44,7 +45,8 @@ EVENTS = [
 
 
 def fold(source: MemoryStatusSource) -> None:
-    f = StatusFold(source)
+    f = EventFold()
+    PageProjection(source, f)
     for e in EVENTS:
         f(Stamped(time.time(), time.monotonic(), e))
 
@@ -106,7 +108,8 @@ def test_a_plan_diagnosis_is_journaled_whole() -> None:
 
 def test_the_status_holds_the_latest_plan_diagnosis_and_the_plan_made_from_it() -> None:
     source = MemoryStatusSource()
-    f = StatusFold(source)
+    f = EventFold()
+    PageProjection(source, f)
     for e in [*EVENTS, DIAGNOSIS]:
         f(Stamped(time.time(), time.monotonic(), e))
     d = source.snapshot().to_json()["mission"]["diagnosis"]
@@ -127,7 +130,8 @@ async def test_the_page_shows_the_plan_diagnosis(server: WebServer,
                                                  source: MemoryStatusSource) -> None:
     async with Chromium.launch(f"http://127.0.0.1:{server.port}/") as page:
         assert await page.wait_for("document.querySelectorAll('.channel').length") == 10
-        f = StatusFold(source)
+        f = EventFold()
+        PageProjection(source, f)
         for e in [*EVENTS, DIAGNOSIS, REPLAN]:
             f(Stamped(time.time(), time.monotonic(), e))
         assert await page.wait_for(

@@ -1,4 +1,4 @@
-"""The mission on the page (paper 001's layers): a fold of the mission's events.
+"""The mission as every view sees it (paper 001's layers): a fold of the mission's events.
 
 ``MissionFold`` reads the mission's events of the daemon's stream (``host.events``) into one
 ``MissionStatus``: the mission's id and state (started, planned, replanning, completed, stopped,
@@ -8,8 +8,8 @@ latest status (a guard's reason to hold), the last results of layers 2 and 3 wit
 explanations, the recent changes of the knowledge base (effects, sensing, diagnosis), and the
 latest plan-execution diagnosis (``diagnosis``: the alarm, the class of the fault, the symptoms,
 the fault region, the alternative histories, the winning path of the context tree, the corrected
-knowledge base or the plan error, and the new plan the mission made from it). ``StatusFold``
-(``host.web.fold``) puts it into the page's ``Status``.
+knowledge base or the plan error, and the new plan the mission made from it). ``EventFold``
+(``host.fold.state``) holds it; the page (``host.web.fold``) shows it.
 """
 
 from __future__ import annotations
