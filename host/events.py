@@ -2,7 +2,8 @@
 
 Everything the daemon learns or does is one of these frozen dataclasses, emitted once on its
 event stream (``host.daemon.stream``); the journal, the web page's status, the terminal's
-lines and any other reader are projections of that stream, each folding it its own way.
+lines and any other reader are projections of that stream; the present state every view shows
+is folded once, by ``host.fold.EventFold``.
 ``Observation`` is a change of one observed literal (``value`` True, False, or None when it
 became unknown or expired); ``DiagnosisRecord`` the minimal diagnoses (their bad sets) of one
 diagnoser run that changed them, with what triggered it; ``DiagnosisRun`` the cost of every run

@@ -3,10 +3,10 @@
 ``EventStream(clock, wall)`` is the one way out of the daemon: the board task, the observers'
 sink, the diagnosis runner and the repair service ``emit`` typed events (``host.events``), and
 the stream stamps each with the daemon's wall and monotonic times and hands the ``Stamped``
-value to every reader in the order they subscribed. The readers are projections that fold the
-stream their own way: the journal keeps the journaled kinds, the web page's status folds them
-into a snapshot, the terminal prints a line for the ones a person must see, a ROS 2 publisher
-turns them into ``/diagnostics``. A reader that raises is logged and never stops the stream or
+value to every reader in the order they subscribed. The readers: the journal keeps the
+journaled kinds, one ``host.fold.EventFold`` folds them into the present state that the web
+page and the ROS 2 ``/diagnostics`` publisher project, the terminal prints a line for the ones
+a person must see. A reader that raises is logged and never stops the stream or
 the others (a broken page must not stop a repair). ``emit`` runs on the daemon's loop thread.
 """
 

@@ -3,7 +3,7 @@
 ``FleetMetrics(source, robot=..., site=..., components=..., protected=..., journal=...)`` owns
 one ``CollectorRegistry`` per daemon (never the process-global one, so two daemons in a process
 or a test never share series). At every scrape a custom collector turns the latest ``Status``
-snapshot (``host.web.fold`` folds it from the event stream) into gauges; ``EventMetrics``
+snapshot (the page's projection, ``host.web.fold``, of the daemon's one ``EventFold``) into gauges; ``EventMetrics``
 (``host.fleet.events``) keeps the counters and histograms only the stream knows. Every series
 carries ``robot`` (the model's name or ``dxboard run --robot``) and ``site`` labels, so a
 fleet's Prometheus can scrape many daemons (or receive them by remote-write) without
