@@ -1,0 +1,21 @@
+"""``RangeEvents``: on a wire without events (Modbus, CAN) the host's transport makes the
+``low`` flag's range EVENTs (PROTOCOL.md section 10) from the live flags of two polls: one
+when the flag comes, one when it goes, none while it stays."""
+
+from __future__ import annotations
+
+from host.transports.translate import RangeEvents
+from protocol.constants import EV_RANGE, F_LOW, F_OPEN_LOAD, ST_ON
+
+
+def test_one_event_each_way_and_none_while_it_stays() -> None:
+    r = RangeEvents()
+    states, currents = [ST_ON] * 3, [500, 0, 300]
+    assert r.changes(10, [0, 0, 0], states, currents) == []
+    (came,) = r.changes(20, [0, F_LOW, F_OPEN_LOAD], states, currents)
+    assert (came.kind, came.channel, came.old_state, came.new_state, came.faults,
+            came.value_ma, came.uptime_ms) == (EV_RANGE, 1, ST_ON, ST_ON, F_LOW, 0, 20)
+    assert r.changes(30, [0, F_LOW, 0], states, currents) == []
+    (went,) = r.changes(40, [0, 0, 0], states, [500, 140, 300])
+    assert (went.channel, went.faults, went.value_ma) == (1, 0, 140)
+    assert went.seq > came.seq
