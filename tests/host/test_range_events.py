@@ -1,6 +1,7 @@
 """``RangeEvents``: on a wire without events (Modbus, CAN) the host's transport makes the
 ``low`` flag's range EVENTs (PROTOCOL.md section 10) from the live flags of two polls: one
-when the flag comes, one when it goes, none while it stays."""
+when the flag comes, one when it goes, none while it stays. ``dxboard board status`` shows such
+a channel's current as low, not measured, and not as a fault."""
 
 from __future__ import annotations
 
@@ -19,3 +20,17 @@ def test_one_event_each_way_and_none_while_it_stays() -> None:
     (went,) = r.changes(40, [0, 0, 0], states, [500, 140, 300])
     assert (went.channel, went.faults, went.value_ma) == (1, 0, 140)
     assert went.seq > came.seq
+
+
+def test_the_status_table_says_low_not_measured_not_a_fault() -> None:
+    from host.commands.board import format_status
+
+    info = {"board_id": "b", "firmware": "f", "boot_id": 1, "url": "tcp://h:7000"}
+    chan = {"channel": 6, "name": "thermal_camera", "state": "on", "current_ma": 0,
+            "live_faults": ["low"], "sticky_faults": []}
+    state = {"uptime_ms": 1000, "input_mv": 12000, "total_ma": 0, "board_flags": [],
+             "config_status": "ok", "channels": [chan]}
+    lines = format_status(info, state).splitlines()
+    row = next(line for line in lines if "thermal_camera" in line)
+    assert row.split()[-3:] == ["low", "*", "-"]  # no fault listed, no 0.000 A
+    assert lines[-1].startswith("* low, not measured")
