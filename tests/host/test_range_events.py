@@ -34,3 +34,30 @@ def test_the_status_table_says_low_not_measured_not_a_fault() -> None:
     row = next(line for line in lines if "thermal_camera" in line)
     assert row.split()[-3:] == ["low", "*", "-"]  # no fault listed, no 0.000 A
     assert lines[-1].startswith("* low, not measured")
+
+
+async def test_the_can_transport_pushes_the_event_before_the_reading() -> None:
+    """CAN carries each channel's live flags in DXB_Channel but no events: the transport makes
+    the range EVENT from them, before the DXB_Currents reading that completes the tick."""
+    from host.transports.can import CanTransport
+    from host.transports.url import parse
+    from protocol import can as layout
+    from protocol.messages import Event, Measurement
+
+    t = CanTransport(parse("can://virtual/dxb-range-test"))
+    pushed: list[object] = []
+    t.push = pushed.append  # type: ignore[method-assign, assignment]
+    t.n, t._subscribed = 2, True
+    commanded, physical, trips, retries = True, True, 0, 0
+    for live in (0, F_LOW, F_LOW, 0):
+        for k in range(2):
+            flags = live if k == 1 else 0
+            t._frame(layout.channel_id(0, k), layout.channel_frame(
+                (commanded, physical, ST_ON, 0, flags, 0, trips, retries)))
+        t._frame(layout.currents_id(0, 0), layout.currents_frame([500, 0, 0, 0], 0))
+    kinds = [(type(m).__name__, getattr(m, "faults", None)) for m in pushed]
+    assert kinds == [("Measurement", None), ("Event", F_LOW), ("Measurement", None),
+                     ("Measurement", None), ("Event", 0), ("Measurement", None)]
+    events = [m for m in pushed if isinstance(m, Event)]
+    assert all(e.kind == EV_RANGE and e.channel == 1 for e in events)
+    assert not any(m.fault_mask for m in pushed if isinstance(m, Measurement))
