@@ -58,12 +58,13 @@ CHIP_FAULTS = tuple(f for f in PART_FAULTS if f.startswith("chip_"))
 SWITCH_FAULTS = tuple(f for f in PART_FAULTS if f.startswith("switch_"))
 PART_OF: dict[str, tuple[str, ...]] = {"ina226": CHIP_FAULTS, "ina3221": CHIP_FAULTS,
                                        "profet": SWITCH_FAULTS}
+FLASHED_TUG_PORT = 5000  # ``tug_port`` flashed for ``--tug`` (the original board's port)
 ONE_SHOT = ("chip_reset",)  # happens once: not applied again when other faults are cleared
 
 
 class BoardRuntime(MicroRuntime):
     def __init__(self, rev: str, flash: Path, modbus: tuple[str, int] | None = None,
-                 micropython: str | None = None) -> None:
+                 micropython: str | None = None, tug: bool = False) -> None:
         self.rev = rev
         self.chip = boards.load(rev)["sense"]["chip"]
         self.flash = flash
@@ -71,8 +72,8 @@ class BoardRuntime(MicroRuntime):
         self.modbus_at = modbus
         self.modbus_port = (modbus[1] or free_port()) if modbus is not None else free_port()
         self.serial_port = None
-        self.tug_port = None
-        self.tug_switch = False
+        self.tug_port = free_port() if tug else None  # where main.py's tug_port listens
+        self.tug_switch = False  # the flashed configuration's tug_switch decides on the board
         self.can = False
         self.can_out = []
         self.caps = 0
@@ -82,7 +83,7 @@ class BoardRuntime(MicroRuntime):
         env = dict(os.environ, MICROPYPATH=":".join([*map(str, paths), ".frozen", str(ROOT)]))
         links = self._spawn(lambda port: [
             micropython or find_micropython(), "-m", "emulator.parts.bench", "127.0.0.1",
-            str(port), rev, str(self.tcp_port), str(self.modbus_port)],
+            str(port), rev, str(self.tcp_port), str(self.modbus_port), str(self.tug_port or 0)],
             env, flash, (b"A", b"B", b"U"))
         self.a = links[b"A"]
         self.b = links[b"B"]
@@ -95,7 +96,8 @@ class BoardRuntime(MicroRuntime):
                               modbus_at: tuple[str, int] | None, serial: bool,
                               can: str | None,
                               tug_at: tuple[str, int] | None = None) -> dict[str, str]:
-        """The native protocol behind the proxies, Modbus direct, the pty relayed to link U."""
+        """The native protocol behind the proxies, Modbus direct, the pty relayed to link U,
+        and the original TEDUSAR format (``tug_port`` flashed) behind a proxy too."""
         asyncio.get_running_loop().add_reader(self.b.sock.fileno(), self._serve_b)
         fronts.emu.reset_listeners.append(self.halt)
         host, port = await fronts.proxy_to(("127.0.0.1", self.tcp_port), listen)
@@ -104,6 +106,9 @@ class BoardRuntime(MicroRuntime):
             fronts.urls["modbus"] = f"modbus+tcp://127.0.0.1:{self.modbus_port}"
         if serial:
             await fronts.start_serial(relay_to=self.u.sock)
+        if tug_at is not None and self.tug_port is not None:
+            host, port = await fronts.proxy_to(("127.0.0.1", self.tug_port), tug_at)
+            fronts.urls["tug"] = f"tug://{host}:{port}"
         return fronts.urls
 
     # --- part faults (``Emulator.parts``) ---------------------------------------------------
@@ -136,8 +141,8 @@ class BoardFirmware(MicroFirmware):
 
     def start(self) -> None:
         self.rt.hal = self.hal
-        self.rt.request({"op": "boot", "cause": self.hal.cause, "t": self.hal.emu.now},
-                        BOOT_TIMEOUT_S)
+        self.rt.request({"op": "boot", "cause": self.hal.cause, "t": self.hal.emu.now,
+                         "mv": self.hal.read_input_mv()}, BOOT_TIMEOUT_S)
 
     def step(self) -> int:
         hal = self.hal

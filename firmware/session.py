@@ -55,7 +55,13 @@ from firmware.board import (
 )
 from protocol.auth import NONCE_LEN
 from protocol.connection import BOARD, Connection
-from protocol.constants import BOARD_CHANNEL, E_BAD_VALUE, ERROR_TEXT, PROTOCOL_VERSION
+from protocol.constants import (
+    BOARD_CHANNEL,
+    E_BAD_VALUE,
+    ERROR_TEXT,
+    NOT_FAULTS,
+    PROTOCOL_VERSION,
+)
 from protocol.framing import BadFrame
 from protocol.measurements import MAX_PER_FRAME
 from protocol.messages import (
@@ -361,7 +367,7 @@ class Session:
             c = chans[i]
             if c.physical:
                 on |= 1 << i
-            if c.live:
+            if c.live & ~NOT_FAULTS:  # not F_LOW: how a reading was made is no fault
                 faults |= 1 << i
             currents.append(c.current_ma)
         return Measurement(self.meas_seq, _uptime(b), _u16(b.input_mv), on, faults,

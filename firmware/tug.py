@@ -19,7 +19,8 @@ hardware observer takes ``status == 1`` for on), the current, and the input volt
 channel (0 on an off one). Frames hold at most ``MAX_CHANNELS`` channels.
 
 Safety, since the format has no authentication: the front end runs only when started
-(``dxboard emulate --tug``; ``TUG_PORT`` in ``firmware/main.py``); without ``switching``
+(``dxboard emulate --tug``; the flashed configuration's ``tug_port`` for ``firmware/main.py``,
+0 by default); without ``switching`` (its ``tug_switch``)
 every CHANNEL is refused (``ACK_READ_ONLY``); with it, switching never uses force, so a
 protected channel is never switched off from here, and a latched or inhibited channel stays
 as the board's protection left it; a CHANNEL with a channel the board lacks or a state other

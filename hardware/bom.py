@@ -6,8 +6,12 @@ around it), so that the parts list, the limits and the firmware cannot drift apa
 The limits are worked out, not typed: a channel's continuous current is the least of its
 switch's rating, its sense chip's full scale over the shunt and its connector; its fuse and its
 shunt's power rating follow from that (with the margins in ``parts.py``); the input range is the
-narrowest of the TVS's standoff, the switch, the sense chip's bus input, the ADC behind the
-divider and the regulator. Usage, from the repository root: ``python hardware/bom.py
+narrowest of the switch, the sense chip's bus input, the ADC behind the divider, the regulator
+and the surge stopper's clamp (its lowest, with the FB reference's and the divider's
+tolerances). The clamp at its highest must stay under the absolute maximum of every part
+behind the surge stopper, and the TVS's clamp under the surge stopper's and its MOSFETs':
+``protection`` checks both, and a revision that breaks either is refused (one line, exit 2).
+Usage, from the repository root: ``python hardware/bom.py
 [OUT_DIR]`` (default ``hardware``); ``tests/hardware/test_bom.py`` checks that the committed
 files are its output. A revision that names a part ``parts.py`` lacks: one line saying what to
 add, exit 2.
@@ -32,6 +36,56 @@ from pinmap import write  # noqa: E402
 from protocol import settings  # noqa: E402
 
 TRIP_FACTOR = next(d for name, _, d, _, _ in settings.CHANNEL if name == "trip_factor_x10") / 10
+
+
+def clamp(b: dict[str, Any]) -> dict[str, Any]:
+    """The surge stopper's output clamp: nominal, lowest and highest (the FB reference's and
+    both divider resistors' tolerances), and its divider."""
+    ss = P.INPUT["surge_stopper"]
+    top_kohm = P.choices(b)["clamp_top_kohm"]
+    ratio = top_kohm * 1000 / P.CLAMP_BOTTOM_OHM
+    t = P.RESISTOR_TOL
+    return {"top_kohm": top_kohm, "nominal": ss["fb_v"] * (1 + ratio),
+            "low": ss["fb_v"] * (1 - ss["fb_tol"]) * (1 + ratio * (1 - t) / (1 + t)),
+            "high": ss["fb_v"] * (1 + ss["fb_tol"]) * (1 + ratio * (1 + t) / (1 - t))}
+
+
+def protected_parts(b: dict[str, Any]) -> list[tuple[str, float]]:
+    """(part, absolute maximum voltage) of every part on the input rail behind the surge
+    stopper: what its clamp must stay under."""
+    c = P.choices(b)
+    sw, sense, mcu = P.SWITCHES[c["switch"]], P.chip(b), P.MCU[b["mcu"]]
+    out = [(f"the switch {sw['mpn']}", sw["abs_max_v"]),
+           (f"the regulator {P.INPUT['regulator']['mpn']}", P.INPUT["regulator"]["abs_max_v"]),
+           (f"the bulk capacitor {P.INPUT['bulk']['mpn']}", P.INPUT["bulk"]["abs_max_v"]),
+           (f"the fuses' {P.FUSE_V:g} V rating", P.FUSE_V),
+           ("the ADC behind the divider", mcu["adc_vref_v"] * b["vin"]["divider"])]
+    if sense["mpn"] != sw["mpn"]:  # a smart switch senses itself: counted once
+        out.insert(1, (f"the {sense['mpn']}", sense["abs_max_v"]))
+    return out
+
+
+def protection(b: dict[str, Any]) -> dict[str, Any]:
+    """The input protection's numbers, checked: ``PartsError`` if the clamp at its highest
+    reaches a protected part's absolute maximum, or the TVS's clamp the surge stopper's or
+    its MOSFETs'."""
+    cl = clamp(b)
+    weakest = min(protected_parts(b), key=lambda p: p[1])
+    if cl["high"] >= weakest[1]:
+        raise P.PartsError(
+            f"hardware/parts.py: {b['name']}'s surge stopper clamps at up to {cl['high']:.2f} V,"
+            f" not under {weakest[0]}'s {weakest[1]:g} V absolute maximum; lower its "
+            "clamp_top_kohm in REVISIONS")
+    ss, fet, tvs = P.INPUT["surge_stopper"], P.INPUT["mosfet"], P.INPUT["tvs"]
+    front = min((ss["abs_max_v"], f"the surge stopper {ss['mpn']}"),
+                (fet["abs_max_v"], f"the {fet['mpn']} MOSFETs"))
+    if tvs["clamp_v"] >= front[0]:
+        raise P.PartsError(f"hardware/parts.py: the TVS {tvs['mpn']} clamps at "
+                           f"{tvs['clamp_v']:g} V, not under the {front[0]:g} V of {front[1]}; "
+                           "choose a lower TVS")
+    sense_ohm = ss["sense_v"] / (P.choices(b)["input_fuse_a"] * P.CURRENT_LIMIT_MARGIN)
+    return {**cl, "weakest": weakest, "front": front, "sense_ohm": sense_ohm,
+            "sense": P.shunt_for(sense_ohm, ss["sense_v"] / sense_ohm)}
 
 
 def limits(b: dict[str, Any]) -> dict[str, Any]:
@@ -60,7 +114,9 @@ def limits(b: dict[str, Any]) -> dict[str, Any]:
     shunt_w, shunt_mpn, shunt_pkg = (0.0, "", "") if smart else P.shunt_for(
         r_ohm, max(cont[0], limit_a))
     adc_max_v = mcu["adc_vref_v"] * b["vin"]["divider"]
-    vmax = min((inp["tvs"]["standoff_v"], f"the TVS {inp['tvs']['mpn']}'s standoff"),
+    prot = protection(b)
+    vmax = min((int(prot["low"] * 10) / 10, f"the surge stopper's clamp (from "
+                f"{prot['low']:.2f} V)"),
                (sw["v_op"][1], f"the switch {sw['mpn']}"),
                (sense["bus_max_v"], f"the {sense['mpn']}'s bus input"),
                (adc_max_v, "the ADC behind the divider"),
@@ -81,7 +137,7 @@ def limits(b: dict[str, Any]) -> dict[str, Any]:
         "instant_rated_a": trip_cap[0] / TRIP_FACTOR, "trip_cap_by": trip_cap[1],
         "adc_max_v": adc_max_v, "vmax": vmax[0], "vmax_by": vmax[1], "vmin": vmin[0],
         "vmin_by": vmin[1], "input_fuse_a": in_fuse, "board_a": board_a,
-        "fet_loss_w": board_a * board_a * inp["mosfet"]["rds_on_ohm"],
+        "fet_loss_w": board_a * board_a * inp["mosfet"]["rds_on_ohm"], "protection": prot,
         "n_chips": n_chips, "bus_pf": bus_pf, "readback": bottom / (top + bottom),
         "pullup_max_ohm": P.I2C_RISE_NS * 1e-9 / (0.8473 * bus_pf * 1e-12), "smart": smart,
     }
@@ -107,6 +163,24 @@ def sense_parts(b: dict[str, Any], lim: dict[str, Any]) -> list[list[Any]]:
     ]
 
 
+def protection_parts(lim: dict[str, Any]) -> list[list[Any]]:
+    """The surge stopper's sense resistor and the FB divider that sets its clamp."""
+    prot = lim["protection"]
+    w, mpn, pkg = prot["sense"]
+    limit_a = P.INPUT["surge_stopper"]["sense_v"] / prot["sense_ohm"]
+    return [
+        ["RLIM", 1, "Vishay Dale", mpn, f"current sense {prot['sense_ohm'] * 1000:g} mOhm 1 % "
+         f"{w:g} W ({pkg}): the surge stopper limits at 50 mV, {limit_a:g} A "
+         f"({P.CURRENT_LIMIT_MARGIN} x the input fuse)"],
+        ["RFB1", 1, "Yageo", P.CLAMP_MPN.format(kohm=prot["top_kohm"]),
+         f"{prot['top_kohm']} kOhm 0.1 % 0603: the surge stopper's FB divider, top (clamp "
+         f"{prot['nominal']:.1f} V)"],
+        ["RFB2", 1, P.PASSIVES["divider_bottom"]["mfr"], P.PASSIVES["divider_bottom"]["mpn"],
+         f"{P.CLAMP_BOTTOM_OHM // 1000} kOhm 0.1 % 0603: the surge stopper's FB divider, "
+         "bottom"],
+    ]
+
+
 def bom_rows(b: dict[str, Any]) -> list[list[str]]:
     """(reference, quantity, manufacturer, part number, description), one row per part."""
     lim = limits(b)
@@ -118,9 +192,11 @@ def bom_rows(b: dict[str, Any]) -> list[list[str]]:
         ["U1", 1, mcu["mfr"], mcu["mpn"], mcu["what"]],
         ["U2", 1, P.INPUT["regulator"]["mfr"], P.INPUT["regulator"]["mpn"],
          P.INPUT["regulator"]["what"]],
-        ["U3", 1, P.INPUT["ideal_diode"]["mfr"], P.INPUT["ideal_diode"]["mpn"],
-         P.INPUT["ideal_diode"]["what"]],
-        ["Q1", 1, P.INPUT["mosfet"]["mfr"], P.INPUT["mosfet"]["mpn"], P.INPUT["mosfet"]["what"]],
+        ["U3", 1, P.INPUT["surge_stopper"]["mfr"], P.INPUT["surge_stopper"]["mpn"],
+         P.INPUT["surge_stopper"]["what"]],
+        ["Q1-Q2", 2, P.INPUT["mosfet"]["mfr"], P.INPUT["mosfet"]["mpn"],
+         P.INPUT["mosfet"]["what"]],
+        *protection_parts(lim),
         ["D1", 1, P.INPUT["tvs"]["mfr"], P.INPUT["tvs"]["mpn"], P.INPUT["tvs"]["what"]],
         ["F0", 1, "Littelfuse", P.FUSE_MPN.format(amps=in_fuse),
          f"ATO blade fuse {in_fuse} A 32 V: the input"],
@@ -208,9 +284,28 @@ def sense_limits(b: dict[str, Any], lim: dict[str, Any]) -> list[str]:
     return rows
 
 
+def protection_limits(lim: dict[str, Any]) -> list[str]:
+    """The input protection's rows: what the parts behind it can see, and what it stands."""
+    prot, ss, tvs = lim["protection"], P.INPUT["surge_stopper"], P.INPUT["tvs"]
+    weakest, front = prot["weakest"], prot["front"]
+    return [
+        f"| surge stopper clamp | {prot['nominal']:.1f} V, {prot['low']:.2f} V to "
+        f"{prot['high']:.2f} V | {ss['mpn']}: FB {ss['fb_v']:g} V +-{ss['fb_tol'] * 100:g} % x "
+        f"(1 + {prot['top_kohm']} k / {P.CLAMP_BOTTOM_OHM // 1000} k, "
+        f"+-{P.RESISTOR_TOL * 100:g} %); highest under {weakest[0]}'s {weakest[1]:g} V "
+        "absolute maximum, the lowest of the parts behind it |",
+        f"| surge stopper current limit | {ss['sense_v'] / prot['sense_ohm']:g} A | "
+        f"{ss['sense_v'] * 1000:g} mV / {prot['sense_ohm'] * 1000:g} mOhm; then its timer "
+        "turns the pass MOSFET off and retries |",
+        f"| TVS clamp at its rated surge | {tvs['clamp_v']:g} V | {tvs['mpn']}, before the surge"
+        f" stopper: under the {front[0]:g} V of {front[1]}; standoff {tvs['standoff_v']:g} V, "
+        "above the input range and a reversed battery |",
+    ]
+
+
 def markdown(b: dict[str, Any]) -> str:
     lim = limits(b)
-    sw, sense = lim["switch"], lim["sense"]
+    sw = lim["switch"]
     name = b["name"]
     out = [
         f"# {name}: parts and limits", "",
@@ -236,10 +331,9 @@ def markdown(b: dict[str, Any]) -> str:
         f"| input fuse | {lim['input_fuse_a']} A | the board's wiring |",
         f"| continuous current, whole board | {lim['board_a']:g} A | input fuse / "
         f"{P.FUSE_MARGIN} |",
-        f"| reverse-polarity MOSFET loss at that current | {lim['fet_loss_w']:.2f} W | "
-        f"I^2 x {P.INPUT['mosfet']['rds_on_ohm'] * 1000:g} mOhm |",
-        f"| TVS clamp at its rated surge | {P.INPUT['tvs']['clamp_v']:g} V | "
-        f"{P.INPUT['tvs']['mpn']} (the {sense['mpn']} withstands {sense['abs_max_v']:g} V) |",
+        f"| input MOSFETs' loss at that current | {lim['fet_loss_w']:.2f} W each | "
+        f"I^2 x {P.INPUT['mosfet']['rds_on_ohm'] * 1000:g} mOhm (Q1 pass, Q2 ideal diode) |",
+        *protection_limits(lim),
         *sense_limits(b, lim)[1:],
         "", "## The protected channel", "",
         "The channel the configuration marks `protected` (`dxboard flash --config`) powers the"

@@ -5,8 +5,21 @@ revision's ``bom.csv`` and ``board.md``).
 The revision files in ``firmware/boards`` say what the firmware needs (pins, sense chip,
 addresses, shunt, divider); this module says what is bought around them: the microcontroller
 module, each sense chip and the high-side switch it goes with, the shunt series (one part
-number per power rating), the fuses, the input protection (TVS, reverse-polarity controller and
-its MOSFET), the 5 V regulator, the connectors and the passives. ``REVISIONS`` holds what a
+number per power rating), the fuses, the input protection, the 5 V regulator, the connectors
+and the passives.
+
+The input protection is a surge stopper, not a TVS alone: a TVS that lets 26 V through clamps
+a surge at about 42 V, above the INA3221's and the smart switch's absolute maxima (26 V,
+28 V), so it protects nothing downstream. The LTC4364-2 (Analog Devices) instead drives a pass
+MOSFET as a linear regulator during a surge, holding its output at a clamp its FB divider sets
+(1.25 V x (1 + top / bottom), chosen per revision under the lowest absolute maximum behind
+it), limits the current through a sense resistor (50 mV), turns the pass MOSFET off when a
+surge or overcurrent outlasts its timer and retries (the -2 version), and drives a second
+MOSFET as an ideal diode against a reversed battery; it runs from 4 V to 80 V and withstands
+100 V. A bidirectional TVS in front of it (standoff 33 V: neither the highest input nor a
+reversed battery makes it conduct) clamps what would exceed the stopper's and the MOSFETs'
+ratings. ``hardware/bom.py`` works the clamp's tolerance out and refuses a revision whose
+clamp could reach a part's absolute maximum. ``REVISIONS`` holds what a
 revision chooses beyond its firmware file (which switch, the input fuse); a revision without an
 entry gets its sense chip's defaults, so a new revision file is enough for a first BOM. Every
 rating here is the datasheet's (the document is named beside it); nothing is measured.
@@ -27,17 +40,18 @@ MCU: dict[str, dict[str, Any]] = {
 
 # The sense chip of each revision (``BOARD["sense"]["chip"]``). ``fullscale_v`` is the shunt
 # voltage at which the chip's reading saturates; ``bus_max_v`` the highest common-mode/bus
-# voltage it measures; ``per_chip`` the channels one package serves.
+# voltage it measures; ``per_chip`` the channels one package serves; ``lsb_v`` one count of its
+# shunt voltage reading.
 SENSE: dict[str, dict[str, Any]] = {
     "ina226": {
         "mfr": "Texas Instruments", "mpn": "INA226AIDGSR", "what": "current/power monitor, "
         "I2C, 16 bit (VSSOP-10)", "per_chip": 1, "fullscale_v": 0.08192, "bus_max_v": 36.0,
-        "abs_max_v": 40.0, "switch": "tps1h100a", "datasheet": "TI SBOS547",
+        "abs_max_v": 40.0, "lsb_v": 2.5e-6, "switch": "tps1h100a", "datasheet": "TI SBOS547",
     },
     "ina3221": {
         "mfr": "Texas Instruments", "mpn": "INA3221AIRGVR", "what": "3-channel current/bus "
         "monitor, I2C, 13 bit (VQFN-16)", "per_chip": 3, "fullscale_v": 0.1638,
-        "bus_max_v": 26.0, "abs_max_v": 26.0, "switch": "tps1h100a",
+        "bus_max_v": 26.0, "abs_max_v": 26.0, "lsb_v": 40e-6, "switch": "tps1h100a",
         "datasheet": "TI SBOS576",
     },
     # a smart-switch board: the switch senses its own current (IS = I_L / k_ILIS into the
@@ -61,14 +75,15 @@ SWITCHES: dict[str, dict[str, Any]] = {
         "mfr": "Texas Instruments", "mpn": "TPS1H100AQPWPRQ1", "what": "smart high-side "
         "switch, 1 channel, 100 mOhm, adjustable current limit, version A (open-drain "
         "status) (HTSSOP-14)", "per_chip": 1, "i_max_a": 4.0, "limit_a": 5.0,
-        "v_op": (5.0, 40.0), "datasheet": "TI SLVSCM2",
+        "v_op": (5.0, 40.0), "abs_max_v": 48.0, "datasheet": "TI SLVSCM2",
     },
     "bts7008": {
         "mfr": "Infineon", "mpn": "BTS7008-2EPA", "what": "PROFET+2 12V smart high-side "
         "switch, 2 x 8 mOhm, analog current sense IS (k_ILIS 4785), DEN/DSEL "
         "(PG-TSDSO-14)", "per_chip": 2, "i_max_a": 7.5, "limit_a": 40.0,
         "rds_on_ohm": 0.008, "k_ilis": 4785, "i_is_fault_a": (4.4e-3, 10e-3),
-        "v_op": (6.0, 18.0), "datasheet": "Infineon BTS7008-2EPA data sheet rev. 1.20",
+        "v_op": (6.0, 18.0), "abs_max_v": 28.0,
+        "datasheet": "Infineon BTS7008-2EPA data sheet rev. 1.20",
     },
 }
 
@@ -86,25 +101,36 @@ SHUNT_MARGIN = 2.0  # the shunt's rating is at least twice its I^2 R at the chan
 FUSE_SIZES_A: tuple[int, ...] = (1, 2, 3, 4, 5, 10, 15, 20, 25, 30)
 FUSE_MARGIN = 1.25  # a fuse is rated at least 1.25 x the continuous current it carries
 FUSE_MPN = "0287{amps:03d}.PXCN"
+FUSE_V = 32.0  # the ATO series' voltage rating
 FUSE_HOLDER = {"mfr": "Keystone Electronics", "mpn": "3557-2",
                "what": "PCB fuse holder for ATO blade fuses, 30 A"}
 
 INPUT: dict[str, dict[str, Any]] = {
-    "tvs": {"mfr": "Littelfuse", "mpn": "SMCJ26A", "what": "TVS diode 1500 W, "
-            "unidirectional, standoff 26 V, breakdown 28.9 V min, clamp 42.1 V at 35.6 A "
-            "(DO-214AB)", "standoff_v": 26.0, "clamp_v": 42.1},
-    "ideal_diode": {"mfr": "Texas Instruments", "mpn": "LM74700QDBVRQ1", "what": "ideal-diode "
-                    "controller, reverse-polarity protection, 3.2 V to 65 V (SOT-23-6)",
-                    "v_max": 65.0},
+    "tvs": {"mfr": "Littelfuse", "mpn": "SMCJ33CA", "what": "TVS diode 1500 W, "
+            "bidirectional, standoff 33 V, breakdown 36.7 V min, clamp 53.3 V at 28.2 A "
+            "(DO-214AB), in front of the surge stopper", "standoff_v": 33.0, "clamp_v": 53.3,
+            "datasheet": "Littelfuse SMCJ series data sheet"},
+    "surge_stopper": {"mfr": "Analog Devices", "mpn": "LTC4364IMS-2#PBF", "what": "surge "
+                      "stopper with ideal diode: output clamp set by a divider on FB "
+                      "(1.25 V), 50 mV current limit, fault timer with auto-retry, reverse "
+                      "input to -40 V; 4 V to 80 V, 100 V absolute (MSOP-16)",
+                      "v_op": (4.0, 80.0), "abs_max_v": 100.0, "fb_v": 1.25, "fb_tol": 0.02,
+                      "sense_v": 0.050, "datasheet": "Analog Devices LTC4364 data sheet"},
     "mosfet": {"mfr": "Texas Instruments", "mpn": "CSD18540Q5B", "what": "N-channel MOSFET "
-               "60 V, 1.8 mOhm at VGS 10 V (SON 5x6), driven by the LM74700",
-               "rds_on_ohm": 0.0018},
+               "60 V, 1.8 mOhm at VGS 10 V (SON 5x6): Q1 the LTC4364's pass device (HGATE), "
+               "Q2 its ideal diode against a reversed battery (DGATE)", "rds_on_ohm": 0.0018,
+               "abs_max_v": 60.0, "datasheet": "TI SLPS412"},
     "regulator": {"mfr": "RECOM", "mpn": "R-78E5.0-0.5", "what": "5 V 0.5 A switching "
                   "regulator, input 7 V to 28 V (SIP-3), feeds the Pico's VSYS",
-                  "v_in": (7.0, 28.0)},
+                  "v_in": (7.0, 28.0), "abs_max_v": 28.0},
     "bulk": {"mfr": "Panasonic", "mpn": "EEU-FR1V471", "what": "470 uF 35 V electrolytic, "
-             "input bulk capacitor"},
+             "input bulk capacitor, after the surge stopper", "abs_max_v": 35.0},
 }
+CLAMP_BOTTOM_OHM = 10000  # the FB divider's lower resistor; the upper one is per revision
+RESISTOR_TOL = 0.001  # the 0.1 % thin-film resistors of the FB divider
+# Yageo RT0603 0.1 %: the part number of a value in kOhm (E96)
+CLAMP_MPN = "RT0603BRD07{kohm}KL"
+CURRENT_LIMIT_MARGIN = 1.25  # the surge stopper limits at 1.25 x the input fuse's rating
 
 CONNECTORS: dict[str, dict[str, Any]] = {
     "input": {"mfr": "AMASS", "mpn": "XT60PW-M", "what": "XT60 male, PCB, right angle: the "
@@ -138,12 +164,16 @@ PASSIVES: dict[str, dict[str, Any]] = {
 }
 
 # What a revision chooses beyond its firmware file; missing keys: the sense chip's defaults.
+# ``clamp_top_kohm``: the FB divider's upper resistor (E96), which sets the surge stopper's clamp
+# (rev A 26.9 V under the regulator's 28 V; rev B 24.6 V under the INA3221's 26 V; rev C 20.0 V,
+# just above the BTS7008's 18 V operating range, far under its 28 V).
 REVISIONS: dict[str, dict[str, Any]] = {
-    "rev-a": {"switch": "tps1h100a", "input_fuse_a": 20},
-    "rev-b": {"switch": "tps1h100a", "input_fuse_a": 20},
-    "rev-c": {"switch": "bts7008", "input_fuse_a": 20},
+    "rev-a": {"switch": "tps1h100a", "input_fuse_a": 20, "clamp_top_kohm": 205},
+    "rev-b": {"switch": "tps1h100a", "input_fuse_a": 20, "clamp_top_kohm": 187},
+    "rev-c": {"switch": "bts7008", "input_fuse_a": 20, "clamp_top_kohm": 150},
 }
 DEFAULT_INPUT_FUSE_A = 20
+DEFAULT_CLAMP_TOP_KOHM = 187  # 24.6 V: under every part's absolute maximum here but the INA3221's
 I2C_RISE_NS = 300  # fast mode (400 kHz): SDA/SCL rise time at most 300 ns (I2C-bus spec UM10204)
 I2C_PIN_PF = 10  # input capacitance per chip on the bus, pF (INA226: 3 pF typ; generous)
 I2C_TRACE_PF = 50  # the bus's copper and the Pico's pins, pF
@@ -163,7 +193,8 @@ def chip(board: dict[str, Any]) -> dict[str, Any]:
 
 def choices(board: dict[str, Any]) -> dict[str, Any]:
     """The revision's choices: its ``REVISIONS`` entry over its sense chip's defaults."""
-    got = {"switch": chip(board)["switch"], "input_fuse_a": DEFAULT_INPUT_FUSE_A}
+    got = {"switch": chip(board)["switch"], "input_fuse_a": DEFAULT_INPUT_FUSE_A,
+           "clamp_top_kohm": DEFAULT_CLAMP_TOP_KOHM}
     got.update(REVISIONS.get(board["name"], {}))
     if got["switch"] not in SWITCHES:
         raise PartsError(f"hardware/parts.py: {board['name']} uses switch {got['switch']!r}, "

@@ -44,7 +44,7 @@ def smart(sense: dict[str, Any]) -> bool:
 def switch_in(b: dict[str, Any], ch: int) -> str:
     """What channel ``ch``'s enable pin drives: its switch's IN, or IN0/IN1 of a dual part."""
     if smart(b["sense"]):
-        return f"channel {ch}: {b['sense']['part']} U{ch // 2 + 1} IN{ch % 2}"
+        return f"channel {ch}: {b['sense']['part']} SW{ch // 2 + 1} IN{ch % 2}"
     return f"channel {ch} high-side switch IN"
 
 
@@ -54,7 +54,7 @@ def sense_rows(b: dict[str, Any]) -> list[tuple[int, str, str]]:
     sense = b["sense"]
     if smart(sense):
         part = sense["part"]
-        rows = [(pin, "switch diagnosis enable", f"{part} U{d + 1} DEN")
+        rows = [(pin, "switch diagnosis enable", f"{part} SW{d + 1} DEN")
                 for d, pin in enumerate(sense["den_pins"])]
         rows.append((sense["dsel_pin"], "switch diagnosis select",
                      f"DSEL of every {part} (low: channel 0 of the part, high: channel 1)"))
@@ -110,7 +110,7 @@ def markdown(b: dict[str, Any]) -> str:
                 "DEN at a time and sets DSEL for the channel:", "",
                 "| channel | part | its IN pin | DEN | DSEL |", "|---|---|---|---|---|"]
         for ch in range(b["channels"]):
-            out.append(f"| {ch} | U{ch // 2 + 1} | IN{ch % 2} | GP{sense['den_pins'][ch // 2]}"
+            out.append(f"| {ch} | SW{ch // 2 + 1} | IN{ch % 2} | GP{sense['den_pins'][ch // 2]}"
                        f" | {'high' if ch % 2 else 'low'} |")
         return "\n".join(out) + "\n"
     out += ["", f"Current monitors on I2C{sense['i2c']['id']} at {sense['i2c']['freq'] // 1000} "
@@ -152,7 +152,7 @@ def svg(b: dict[str, Any]) -> str:
                   f'<rect x="300" y="{y - 8}" width="120" height="28" fill="none" '
                   'stroke="black"/>']
         if smart(sense):
-            parts += [f'<text x="306" y="{y + 10}">U{ch // 2 + 1} IN{ch % 2}, OUT{ch % 2}</text>',
+            parts += [f'<text x="306" y="{y + 10}">SW{ch // 2 + 1} IN{ch % 2}, OUT{ch % 2}</text>',
                       f'<line x1="420" y1="{y + 6}" x2="560" y2="{y + 6}" stroke="black"/>',
                       f'<text x="565" y="{y + 10}">load {ch}; sensed by IS: DEN '
                       f'GP{sense["den_pins"][ch // 2]}, DSEL {"high" if ch % 2 else "low"}'

@@ -30,6 +30,8 @@ F_SHED_TOTAL = const(0x0040)  # switched off to keep the board under its total l
 F_SHED_UV = const(0x0080)  # switched off by input under-voltage
 F_DEADMAN = const(0x0100)  # set to the safe state by the host dead-man timeout
 F_SENSOR = const(0x0200)  # the current sensor reads current while the switch reads back open
+F_LOW = const(0x0400)  # not a fault: below the sensing part's accurate range, low, not measured
+NOT_FAULTS = F_LOW  # live flags that say how a reading was made, not that anything is wrong
 FAULT_NAMES = (
     "short",
     "overload",
@@ -41,6 +43,7 @@ FAULT_NAMES = (
     "shed_uv",
     "deadman",
     "sensor",
+    "low",
 )
 
 # --- board flags (u16 bit mask) ---------------------------------------------------------
@@ -59,7 +62,8 @@ EV_FAULT = const(3)  # a fault flag was set or cleared
 EV_REBOOT = const(4)  # the board booted (first event of every boot)
 EV_WARNING = const(5)  # a warning (open load, under-voltage, ...)
 EV_SHED = const(6)  # a channel was shed by a board-level rule
-EVENT_NAMES = ("", "trip", "state", "fault", "reboot", "warning", "shed")
+EV_RANGE = const(7)  # a channel's current left (flags low) or came back into the sensed range
+EVENT_NAMES = ("", "trip", "state", "fault", "reboot", "warning", "shed", "range")
 
 # --- reset causes (u8) ----------------------------------------------------------------
 RESET_POWER_ON = const(0)

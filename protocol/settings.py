@@ -2,10 +2,12 @@
 
 A board's configuration is ``{"version": 1, "board": {...}, "channels": [{...}, ...]}``. Every
 field is one row below: its name, its kind on the wire (``protocol.fields`` kinds, in the order
-of CHANNEL_CONFIG / BOARD_CONFIG, PROTOCOL.md §4.4; ``None`` for the two board fields that
-never travel: the HMAC ``key``, hex, and ``listen``, the IPv4 address the board's servers
+of CHANNEL_CONFIG / BOARD_CONFIG, PROTOCOL.md §4.4; ``None`` for the board fields that
+never travel: the HMAC ``key``, hex; ``listen``, the IPv4 address the board's servers
 listen on, "" for its own address on the network, never every interface unless it says
-"0.0.0.0"), its default and its range.
+"0.0.0.0"; ``tug_port``, the TCP port of the original TEDUSAR board's format, which has no
+authentication, 0 (off) unless flashed, the original board's being 5000; and ``tug_switch``,
+whether its clients may switch channels, never a protected one off), its default and its range.
 The message classes (``protocol.messages``), the firmware's persisted file
 (``firmware/config.py``), the Modbus register map (``protocol/modbus_map.py``), the emulator's
 board config and ``dxboard flash`` all read these tables; a range never exceeds what the wire
@@ -58,6 +60,8 @@ BOARD: "tuple[tuple[str, str | None, object, int, int], ...]" = (
     ("modbus_allow", "[I", [], 0, 0),
     ("key", None, "", 0, 128),
     ("listen", None, "", 0, 64),
+    ("tug_port", None, 0, 0, 65535),
+    ("tug_switch", None, False, 0, 1),
 )
 
 CHANNEL_WIRE = (("channel", "B"),) + tuple((r[0], r[1]) for r in CHANNEL)

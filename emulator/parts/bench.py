@@ -16,7 +16,8 @@ Lock-step: ``time`` is the World's clock (``emulator/parts/clock/time.py``), whi
 emulator moves. It connects three times to the emulator, each link naming itself first:
 
 - link A (emulator -> board, JSON lines, one reply each): ``{"op": "boot", "cause": C, "t":
-  ms}`` (a power-on, watchdog, soft or brown-out reset at the emulator's time ``t``: the
+  ms, "mv": mv}`` (a power-on, watchdog, soft or brown-out reset at the emulator's time ``t``,
+  with the input voltage then: the
   microcontroller restarts, the chips keep their registers; answered once ``main.py`` serves),
   ``{"op": "step", "t": ms, "ma": [..], "sw": [..], "mv": mv}`` (this step's electrical inputs:
   each channel's current through its shunt, each switch's output, the input voltage; the clock
@@ -38,7 +39,8 @@ emulator moves. It connects three times to the emulator, each link naming itself
   only real file descriptors), which the emulator relays to its pty.
 
 The servers ``main.py`` starts go through ``start_server`` here, which listens on the loopback
-port the emulator chose for the board's port (7000 -> TCP, 502 -> Modbus) and keeps every socket
+port the emulator chose for the board's port (7000 -> TCP, 502 -> Modbus, 5000 -> the original
+TEDUSAR format, served when the flashed configuration sets ``tug_port`` 5000) and keeps every socket
 so that a reset closes them all, as the real board's reset drops every connection. A reset the
 firmware makes itself (``machine.reset()``, a starved watchdog) raises ``BoardReset`` out of
 its loop; the next link A answer says so, and the emulator boots it again.
@@ -66,7 +68,7 @@ from protocol.constants import RESET_BROWNOUT, RESET_POWER_ON, RESET_SOFT, RESET
 CAUSES = {RESET_POWER_ON: _world.PWRON_RESET, RESET_WATCHDOG: _world.WDT_RESET,
           RESET_SOFT: _world.WDT_RESET, RESET_BROWNOUT: _world.PWRON_RESET}
 UART_ID = 1
-BOARD_PORTS = (7000, 502)  # firmware/main.py's TCP_PORT and MODBUS_PORT
+BOARD_PORTS = (7000, 502, 5000)  # firmware/main.py's TCP_PORT, MODBUS_PORT; tug_port flashed
 
 
 class Unwind(BaseException):
@@ -330,6 +332,7 @@ class Bench:
         w.pending = 0
         w.cause = CAUSES.get(req["cause"], _world.PWRON_RESET)
         w.set_time(req["t"] * 1000)
+        self.mv = req.get("mv", self.mv)  # the input the board powers up on, as it measures it
         self.reset = False
         asyncio.new_event_loop()  # nothing of the last boot runs
         for name in ("firmware.main", "firmware.boot"):
@@ -373,13 +376,17 @@ def connect(host: str, port: int, name: bytes) -> object:
     return sock
 
 
-def main(host: str, port: int, rev: str, tcp: int, modbus: int) -> None:
+def main(host: str, port: int, rev: str, tcp: int, modbus: int, tug: int = 0) -> None:
     a = connect(host, port, b"A")
     b = connect(host, port, b"B")
     u = connect(host, port, b"U")
     u.setblocking(False)  # type: ignore[attr-defined]
-    Bench(rev, a, b, u, {BOARD_PORTS[0]: tcp, BOARD_PORTS[1]: modbus}).run()
+    ports = {BOARD_PORTS[0]: tcp, BOARD_PORTS[1]: modbus}
+    if tug:
+        ports[BOARD_PORTS[2]] = tug
+    Bench(rev, a, b, u, ports).run()
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], int(sys.argv[2]), sys.argv[3], int(sys.argv[4]), int(sys.argv[5]))
+    main(sys.argv[1], int(sys.argv[2]), sys.argv[3], int(sys.argv[4]), int(sys.argv[5]),
+         int(sys.argv[6]) if len(sys.argv) > 6 else 0)

@@ -105,10 +105,17 @@ def format_status(info: dict[str, Any], state: dict[str, Any]) -> str:
              f"input {state['input_mv'] / 1000:.2f} V, total {state['total_ma'] / 1000:.2f} A, "
              f"flags {','.join(state['board_flags']) or '-'}, config {state['config_status']}",
              f"{'CH':>2}  {'NAME':<16} {'STATE':<8} {'CURRENT':>9}  FAULTS"]
+    low = False
     for c in state["channels"]:
-        faults = _faults(c["live_faults"], c["sticky_faults"])
-        lines.append(f"{c['channel']:>2}  {c['name']:<16} {c['state']:<8} "
-                     f"{c['current_ma'] / 1000:>7.3f} A  {faults}")
+        live = [f for f in c["live_faults"] if f != "low"]  # low: how it was read, no fault
+        faults = _faults(live, c["sticky_faults"])
+        current = f"{c['current_ma'] / 1000:>7.3f} A"
+        if "low" in c["live_faults"]:
+            low, current = True, f"{'low *':>9}"
+        lines.append(f"{c['channel']:>2}  {c['name']:<16} {c['state']:<8} {current}  {faults}")
+    if low:
+        lines.append("* low, not measured: below the range the board's current sense measures "
+                     "(a small load, not an open one)")
     return "\n".join(lines)
 
 

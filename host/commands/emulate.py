@@ -30,8 +30,10 @@ revision's parts (``emulator.board_rt``): its own HAL reads the chips over the m
 ``machine.I2C`` (rev A, rev B) or the smart switches over ``machine.ADC`` (rev C), fed by the
 same simulated electronics in lock-step; the part faults (``dxboard inject ... chip_nack`` and
 the other ``chip_*``; ``switch_*`` on rev C) reach those parts. ``main.py``
-serves no CAN and (``TUG_PORT = 0``) no tug; its Modbus server listens on ``--modbus``
-directly. An unknown revision is refused with the known ones.
+serves no CAN, and the original TEDUSAR format only as flashed: ``--tug`` flashes its
+configuration with ``tug_port`` 5000 (and ``tug_switch`` as ``--tug-switch`` says; a ``--flash``
+directory that already holds a stored configuration keeps its own); its Modbus server listens
+on ``--modbus`` directly. An unknown revision is refused with the known ones.
 ``--tug`` serves the original TEDUSAR board's format (``firmware/tug.py``), which has no
 authentication: read-only unless ``--tug-switch`` is given, and even then it never switches a
 protected channel off.
@@ -127,12 +129,9 @@ def run(args: argparse.Namespace) -> int:
         if args.runtime != "micropython":
             raise UserError("--board-rev needs --runtime micropython",
                             "add --runtime micropython: the shipped main.py runs there")
-        for given, what in ((args.can, "--can"), (args.tug, "--tug")):
-            if given:
-                raise UserError(f"{what} with --board-rev: the shipped main.py serves no "
-                                f"{'CAN' if what == '--can' else 'tug'}",
-                                f"drop {what}, or use --runtime micropython without "
-                                "--board-rev")
+        if args.can:
+            raise UserError("--can with --board-rev: the shipped main.py serves no CAN",
+                            "drop --can, or use --runtime micropython without --board-rev")
     if args.world and not args.robot:
         raise UserError("--world needs --robot", "add --robot: the world moves the robot's devices")
     opts = Options(

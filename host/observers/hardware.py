@@ -48,6 +48,13 @@ within a second, faster than any device fault) is the sensor's fault, not the de
 lasts ``in_band(d)`` is retracted (unknown) and every reading is looked at, as while the board
 itself doubts the sensor (its ``sensor`` flag).
 
+A current the board could not measure (its ``low`` flag, PROTOCOL.md section 10: below the
+sensing part's accurate range, as a smart switch's current sense is at small loads; the
+reading is 0) is *low, not measured*: from the range EVENT that says so (it comes before the
+readings of that tick) or a STATE with ``low`` live, until the range EVENT that ends it, the
+device's ``in_band(d)`` is retracted (unknown: not ``under`` its band, not an open load, not a
+sensor fault) and its readings are not judged.
+
 Detection latency (``settle`` readings, default 3): ``on`` after 3 readings (30 ms at 100 Hz,
 20 ms more than believing the first); ``in_band`` after 3 readings; a trip 3 readings after the
 board switched the channel off (the event itself comes first; at 100 Hz the trip counts about
@@ -78,8 +85,10 @@ from host.observers.noise import NoiseMeter
 from host.observers.silence import JITTER_GAIN, JITTER_MEMORY_S, Confirmation, SlidingExtreme
 from protocol.constants import (
     EV_FAULT,
+    EV_RANGE,
     EV_TRIP,
     EV_WARNING,
+    F_LOW,
     F_OVERLOAD,
     F_SENSOR,
     ST_FAULTED,
@@ -194,6 +203,7 @@ class HardwareObserver(Observer[BoardInput]):
         self.bands: dict[str, str] = {}  # device -> the settled band (nominal, over, under)
         self.doubted: set[str] = set()  # devices whose current sensor the board doubts
         self.noisy: set[str] = set()  # devices whose current sensor the readings show noisy
+        self.low: set[str] = set()  # devices whose current is low, not measured (``low``)
         self._noise = {d.name: NoiseMeter() for d in self.devices.values() if d.band}
         self._ev = {d: self._fresh() for d in self.devices}
         self._last_reading: float | None = None  # the last sign of life (reading, STATE)
@@ -248,6 +258,7 @@ class HardwareObserver(Observer[BoardInput]):
                 ev.health.force(None)  # the new boot's readings tell again
                 ev.claim = None
                 self._forget(self._atoms[d.name][1], now)
+                self._low(d, False, now)  # the new boot says it again
 
     def _fresh(self) -> _Evidence:
         return _Evidence(Settled(self.settle), Settled(self.settle), Settled(self.settle))
@@ -308,13 +319,15 @@ class HardwareObserver(Observer[BoardInput]):
             self._switch(d, ch.physical, now)
             self._say(self._atoms[d.name][1], ch.state in _BAD_STATES, now)
             self._doubt(d, bool(ch.live_faults & F_SENSOR), now)
+            self._low(d, bool(ch.live_faults & F_LOW), now)
 
     def _device(self, d: Device, on: bool, fault: bool, current_ma: int, now: float) -> None:
         """One reading of one device's channel: each of its facts counts once it settled."""
         ev = self._ev[d.name]
         if ev.on.add(on) and ev.on.value is not None:
             self._switch(d, ev.on.value, now)
-        band = d.classify(current_ma / 1000.0) if d.band is not None and on else None
+        band = d.classify(current_ma / 1000.0) if d.band is not None and on \
+            and d.name not in self.low else None
         meter = self._noise.get(d.name)
         if meter is not None and (turned := meter.add(band, now)) is not None:
             self._noisy(d, turned, now)
@@ -356,6 +369,9 @@ class HardwareObserver(Observer[BoardInput]):
         if d is None:
             return
         ev = self._ev[d.name]
+        if e.kind == EV_RANGE:  # how the board measures the current, not a state
+            self._low(d, bool(e.faults & F_LOW), now)
+            return
         if e.kind == EV_FAULT and e.old_state == e.new_state:  # about the sensor, not a state
             self._doubt(d, bool(e.faults & F_SENSOR), now)
             return
@@ -395,6 +411,24 @@ class HardwareObserver(Observer[BoardInput]):
             self.doubted.discard(d.name)
             log.info("%s: the current sensor of %s's channel %d reads again", self.name,
                      d.name, d.channel)
+
+    def _low(self, d: Device, low: bool, now: float) -> None:
+        """The board says ``d``'s current is low, not measured (or measured again): while it
+        is, ``d``'s current is unknown (``in_band(d)`` retracted), judged afresh after."""
+        if low == (d.name in self.low):
+            return
+        self._ev[d.name].band.force(None)
+        self.bands.pop(d.name, None)
+        if low:
+            self.low.add(d.name)
+            self._forget(self._atoms[d.name][2], now)
+            log.info("%s: %s on channel %d draws less than the board's current sense can "
+                     "measure: low, not measured (its current is unknown, not judged)",
+                     self.name, d.name, d.channel)
+        else:
+            self.low.discard(d.name)
+            log.info("%s: %s's current on channel %d is measured again", self.name, d.name,
+                     d.channel)
 
     def _noisy(self, d: Device, noisy: bool, now: float) -> None:
         """The readings show ``d``'s current sensor noisy (``host.observers.noise``), or quiet

@@ -33,7 +33,7 @@ from typing import Any
 import can as pycan
 
 from host.transports.base import AUTH, CYCLE, PUSH
-from host.transports.translate import Handler, TranslatingTransport, WireRefused
+from host.transports.translate import Handler, RangeEvents, TranslatingTransport, WireRefused
 from host.transports.url import BoardUrl
 from protocol import can as layout
 from protocol.can import (
@@ -55,6 +55,7 @@ from protocol.constants import (
     CAP_CAN,
     CAP_SUBSCRIBE,
     E_AUTH_REQUIRED,
+    NOT_FAULTS,
     PROTOCOL_VERSION,
     ST_OFF,
 )
@@ -106,6 +107,7 @@ class CanTransport(TranslatingTransport):
         self.n = 0
         self.counter = 0
         self._seq = 0
+        self._ranges = RangeEvents()  # the low flag's range EVENTs (no events on CAN)
         self._subscribed = False
         self._results: dict[tuple[int, int], collections.deque[asyncio.Future[bytes]]] = \
             collections.defaultdict(collections.deque)
@@ -163,7 +165,13 @@ class CanTransport(TranslatingTransport):
             self.currents[g] = layout.parse_currents(data)
             if self._subscribed and self.n and g == (self.n - 1) // 4:
                 self._seq += 1
-                self.push(self._measurement())
+                reading = self._measurement()
+                chans = [self.chan.get(k, (ST_OFF, False, False, 0, 0, 0, 0))
+                         for k in range(self.n)]
+                for ev in self._ranges.changes(reading.uptime_ms, [c[4] for c in chans],
+                                               [c[0] for c in chans], reading.currents_ma):
+                    self.push(ev)
+                self.push(reading)
         elif can_id == ID_RESULT + n:
             op, ch = layout.parse_result(data)[:2]
             waiters = self._results[(op, ch)]
@@ -183,7 +191,7 @@ class CanTransport(TranslatingTransport):
     def _measurement(self) -> Measurement:
         currents = [self.currents.get(k // 4, [0] * 4)[k % 4] for k in range(self.n)]
         on = sum(1 << k for k, c in self.chan.items() if c[2] and k < self.n)
-        bad = sum(1 << k for k, c in self.chan.items() if c[4] and k < self.n)
+        bad = sum(1 << k for k, c in self.chan.items() if c[4] & ~NOT_FAULTS and k < self.n)
         mv = self.status[1] if self.status else 0
         return Measurement(self._seq, self._uptime(), mv, on, bad, currents)
 

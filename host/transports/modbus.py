@@ -42,7 +42,7 @@ from pymodbus.exceptions import ModbusException
 
 from host.transports.base import PUSH, SAVE
 from host.transports.errors import BadUrl, UnexpectedDevice
-from host.transports.translate import Handler, TranslatingTransport, WireRefused
+from host.transports.translate import Handler, RangeEvents, TranslatingTransport, WireRefused
 from host.transports.url import BoardUrl
 from protocol import modbus_map as M
 from protocol.constants import (
@@ -52,6 +52,7 @@ from protocol.constants import (
     E_BAD_VALUE,
     E_INHIBITED,
     E_INTERNAL,
+    NOT_FAULTS,
     PROTOCOL_VERSION,
     RESET_UNKNOWN,
     ST_OFF,
@@ -161,6 +162,7 @@ class ModbusTransport(TranslatingTransport):
         self.boot = 0
         self._last_uptime = -1
         self._seq = 0
+        self._ranges = RangeEvents()  # the low flag's range EVENTs (no events on Modbus)
         self._poller: asyncio.Task[None] | None = None
         self._lock = asyncio.Lock()
 
@@ -310,7 +312,10 @@ class ModbusTransport(TranslatingTransport):
             else:
                 up = self._uptime(snap)
                 on = sum(1 << k for k, p in enumerate(snap.physical) if p)
-                bad = sum(1 << k for k in range(self.n) if snap.faulty[k] or snap.live[k])
+                bad = sum(1 << k for k in range(self.n)
+                          if snap.faulty[k] or snap.live[k] & ~NOT_FAULTS)
+                for ev in self._ranges.changes(up, snap.live, snap.state, snap.current_ma):
+                    self.push(ev)
                 self.push(Measurement(self._seq, up, min(snap.input_mv, 0xFFFF), on, bad,
                                       snap.current_ma))
             due = max(due + period, loop.time())

@@ -9,6 +9,10 @@ as on the native protocol) and ``OSError`` when the link broke (the inbox then e
 ``LinkLost``). Pushes (measurements the transport polls or the board broadcasts) go in with
 ``push``. A message without a handler is ``NotSupported`` before anything is sent. A power
 cycle the wire cannot express is done here as off, wait, on (``emulated_cycle``).
+A wire that carries no events but each channel's live flags (Modbus, CAN) gets the ``low``
+flag's range EVENTs from ``RangeEvents``: made from the flag's changes between two polls and
+pushed before the reading that shows them, as the native board pushes them (PROTOCOL.md
+section 10), so that a host knows a 0 it cannot measure from one it can.
 """
 
 from __future__ import annotations
@@ -17,15 +21,15 @@ import asyncio
 import contextlib
 import logging
 import time
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Sequence
 from typing import Any
 
 from host.transports.base import Transport
 from host.transports.errors import LinkLost, NotSupported
 from host.transports.url import BoardUrl
-from protocol.constants import ERROR_TEXT
+from protocol.constants import ERROR_TEXT, EV_RANGE, F_LOW
 from protocol.framing import BadFrame
-from protocol.messages import Error, Message, PowerCycle, Switch, Switched
+from protocol.messages import Error, Event, Message, PowerCycle, Switch, Switched
 
 log = logging.getLogger(__name__)
 
@@ -150,3 +154,26 @@ class TranslatingTransport(Transport):
         await self.emulated_cycle(self._switch, msg.channel, msg.off_ms)
         back = await self._read_back(msg.channel, False)
         return Switched(back.channel, True, back.physical, back.state)
+
+
+class RangeEvents:
+    """The range EVENTs of the ``low`` flag for a wire without events (see the module
+    docstring): ``changes`` compares each channel's live flags with the last poll's."""
+
+    def __init__(self) -> None:
+        self.low = 0  # channel k's bit: ``low`` was live at the last poll
+        self.seq = 0
+
+    def changes(self, uptime_ms: int, live: Sequence[int], states: Sequence[int],
+                currents: Sequence[int]) -> list[Event]:
+        out = []
+        for k, flags in enumerate(live):
+            low = bool(flags & F_LOW)
+            if low != bool(self.low >> k & 1):
+                self.low ^= 1 << k
+                self.seq += 1
+                st = states[k] if k < len(states) else 0
+                ma = currents[k] if k < len(currents) and not low else 0
+                out.append(Event(self.seq, uptime_ms, EV_RANGE, k, st, st,
+                                 F_LOW if low else 0, ma))
+        return out

@@ -162,7 +162,7 @@ def test_part_faults_need_part_models() -> None:
 @pytest.mark.parametrize(("args", "said"), [
     (["--runtime", "micropython", "--board-rev", "rev-z"], "rev-a"),
     (["--board-rev", "rev-a"], "--runtime micropython"),
-    (["--runtime", "micropython", "--board-rev", "rev-a", "--tug", "127.0.0.1:0"], "tug"),
+    (["--runtime", "micropython", "--board-rev", "rev-a", "--can", "virtual:x"], "CAN"),
 ])
 def test_bad_revision_options_are_one_line_exit_2(args: list[str], said: str) -> None:
     p = subprocess.run([DXBOARD, "emulate", str(TEDUSAR), *args], capture_output=True,

@@ -9,7 +9,7 @@ from collections.abc import Iterator
 import pytest
 from pymodbus.client import AsyncModbusTcpClient
 
-from protocol.constants import ST_ON
+from protocol.constants import NOT_FAULTS, ST_ON
 from protocol.messages import Ack, GetState, Measurement, State, Subscribe, Switch, Switched
 from tests.emulator.wire import RUNTIMES, Emulate, Wire
 from tests.wait import wait_until_async
@@ -80,7 +80,7 @@ async def test_modbus_matches_native(board: Emulate) -> None:
             assert regs[64 + k] == c.trips
             assert coils.bits[k] == c.commanded
             assert discrete.bits[k] == c.physical
-            assert discrete.bits[16 + k] == bool(c.live_faults)
+            assert discrete.bits[16 + k] == bool(c.live_faults & ~NOT_FAULTS)  # low: no fault
         assert regs[10:16] == [0] * 6  # no channels 10..15
         assert board_regs[6] == st.reset_cause and board_regs[7] == st.config_status
         assert board_regs[8] == 10 and board_regs[9] == 1

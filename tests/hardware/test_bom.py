@@ -1,15 +1,19 @@
 """The committed BOMs and parts pages in ``hardware/`` are what ``hardware/bom.py`` makes from
 ``firmware/boards`` and ``hardware/parts.py`` now, for every revision there is; the limits are
 the arithmetic of the parts' ratings (a shunt's power rating from I^2 R at its channel's
-limit, a fuse from the continuous current); and a revision naming a part the catalogue lacks
-gets one line and exit 2."""
+limit, a fuse from the continuous current, the surge stopper's clamp under the absolute
+maximum of every part behind it); and a revision naming a part the catalogue lacks, or whose
+clamp could reach a part's absolute maximum, gets one line and exit 2."""
 
 from __future__ import annotations
 
 import csv
+import importlib.util
+import re
 import subprocess
 import sys
 from pathlib import Path
+from types import ModuleType
 
 import pytest
 
@@ -46,13 +50,15 @@ def test_rev_a_parts_follow_from_the_ratings() -> None:
     # 4 A continuous x 1.25 = 5 A fuse per channel; one holder per fuse and one for the input
     assert got["F1-F10"]["mpn"] == "0287005.PXCN"
     assert got["XF0-XF10"]["quantity"] == "11"
-    assert got["D1"]["mpn"] == "SMCJ26A"
+    assert got["D1"]["mpn"] == "SMCJ33CA" and got["U3"]["mpn"] == "LTC4364IMS-2#PBF"
+    assert got["RFB1"]["mpn"] == "RT0603BRD07205KL"  # 1.25 V x (1 + 205 k / 10 k) = 26.9 V
+    assert got["RLIM"]["mpn"] == "WSLP2512R0020FEA"  # 50 mV / 2 mOhm = 25 A = 1.25 x 20 A
     assert all(r["manufacturer"] and r["mpn"] for r in got.values())
 
 
 def test_rev_a_limits_are_stated() -> None:
     text = (ROOT / "hardware" / "rev-a" / "board.md").read_text()
-    assert "| input voltage | 7 V to 26 V |" in text
+    assert "| input voltage | 7 V to 26.2 V |" in text  # the clamp starts from 26.29 V
     assert "| input voltage the ADC can read | 0 V to 36.3 V |" in text
     assert "| sense full scale per channel | 8.19 A | 81.92 mV / 10 mOhm |" in text
     assert "| largest rated_ma for which the instant trip can fire | 1667 mA |" in text
@@ -109,7 +115,7 @@ def test_a_new_revision_file_is_picked_up(tmp_path: Path) -> None:
     # 20 mOhm at the switch's 5 A limit: 0.5 W, twice that wanted: the 1 W 2512 part
     assert got["RS1-RS4"]["mpn"] == "WSL2512R0200FEA"
     board = (out / "rev-z" / "board.md").read_text()
-    assert "| input voltage | 7 V to 26 V |" in board  # the INA3221's bus input: 26 V
+    assert "| input voltage | 7 V to 24 V |" in board  # the clamp under the INA3221's 26 V
     assert "| sense full scale per channel | 8.19 A | 163.8 mV / 20 mOhm |" in board
 
 
@@ -132,3 +138,56 @@ def test_rev_b_and_rev_c_parts_follow_from_the_ratings() -> None:
     assert "| sense full scale per channel | 18.18 A |" in text
     assert "| ADC pin at the highest fault current | 3.00 V |" in text
     assert "I2C" not in text.split("## Parts")[0]
+
+
+def load_bom() -> ModuleType:
+    spec = importlib.util.spec_from_file_location("hardware_bom", ROOT / "hardware" / "bom.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.parametrize("rev", REVS)
+def test_the_clamp_stays_under_every_part_behind_it(rev: str) -> None:
+    """The surge stopper's clamp at its highest (FB reference +2 %, divider +-0.1 %) is under
+    the absolute maximum of every part on the rail behind it (the old TVS let 42 V through to
+    a 26 V INA3221 and a 28 V switch); the TVS in front clamps under the stopper's and its
+    MOSFETs' ratings, with its standoff above the highest input; and the page says so."""
+    bom = load_bom()
+    from firmware import boards
+
+    b = boards.load(rev)
+    prot = bom.protection(b)
+    parts = dict(bom.protected_parts(b))
+    assert prot["low"] < prot["nominal"] < prot["high"]
+    assert all(prot["high"] < vmax for vmax in parts.values()), (prot, parts)
+    assert len(parts) >= 5  # switch, sense chip (if not the switch), regulator, cap, fuses, ADC
+    lim = bom.limits(b)
+    assert lim["vmax"] <= prot["low"]  # the stopper never clamps inside the input range
+    tvs, ss, fet = (bom.P.INPUT[k] for k in ("tvs", "surge_stopper", "mosfet"))
+    assert tvs["clamp_v"] < ss["abs_max_v"] and tvs["clamp_v"] < fet["abs_max_v"]
+    assert tvs["standoff_v"] > lim["vmax"]
+    text = (ROOT / "hardware" / rev / "board.md").read_text()
+    row = re.search(r"^\| surge stopper clamp \| ([\d.]+) V, ([\d.]+) V to ([\d.]+) V \|", text,
+                    re.M)
+    assert row is not None
+    assert float(row[3]) == round(prot["high"], 2)
+    assert "42.1" not in text
+
+
+def test_a_clamp_that_could_reach_a_part_is_refused_in_one_line(tmp_path: Path) -> None:
+    """Rev B's divider set for rev A's 26.9 V: up to 27.46 V on a 26 V INA3221."""
+    for d in ("firmware", "protocol", "hardware"):
+        subprocess.run(["cp", "-r", str(ROOT / d), str(tmp_path / d)], check=True)
+    parts = tmp_path / "hardware" / "parts.py"
+    text = parts.read_text()
+    assert '"input_fuse_a": 20, "clamp_top_kohm": 187}' in text
+    parts.write_text(text.replace('"clamp_top_kohm": 187}', '"clamp_top_kohm": 205}'))
+    done = subprocess.run([sys.executable, "hardware/bom.py", str(tmp_path / "out")],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120,
+                          env={"PATH": "/usr/bin:/bin"})
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
+    assert "rev-b" in done.stderr and "INA3221AIRGVR" in done.stderr
+    assert "clamp_top_kohm" in done.stderr

@@ -51,13 +51,14 @@ def test_rev_c_pins_are_the_smart_switches() -> None:
     rows = [line.split(",", 2) for line in
             (ROOT / "hardware" / "rev-c" / "pins.csv").read_text().splitlines()[1:]]
     by_pin = {int(r[0]): (r[1], r[2]) for r in rows}
-    assert by_pin[3] == ("switch enable", "channel 1: BTS7008-2EPA U1 IN1")
-    assert by_pin[16] == ("switch diagnosis enable", "BTS7008-2EPA U5 DEN")
+    # the parts' references are the BOM's (SW1-SW5; U1 is the Pico W there)
+    assert by_pin[3] == ("switch enable", "channel 1: BTS7008-2EPA SW1 IN1")
+    assert by_pin[16] == ("switch diagnosis enable", "BTS7008-2EPA SW5 DEN")
     assert by_pin[17][0] == "switch diagnosis select"
     assert by_pin[27][0] == "ADC" and "IS sense node" in by_pin[27][1]
     assert not any("I2C" in fn for fn, _ in by_pin.values())
     md = (ROOT / "hardware" / "rev-c" / "pins.md").read_text()
-    assert "| 9 | U5 | IN1 | GP16 | high |" in md
+    assert "| 9 | SW5 | IN1 | GP16 | high |" in md
     ET.fromstring((ROOT / "hardware" / "rev-c" / "wiring.svg").read_text())
 
 

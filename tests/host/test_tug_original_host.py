@@ -1,6 +1,8 @@
 """The original TEDUSAR host driver (``tug_host_peer``: Controller.cpp, Message.cpp and main.cpp
 byte for byte) against our board's tug front end, ``dxboard emulate --tug H:P --tug-switch``,
-with the firmware under CPython and under the real MicroPython interpreter.
+with the firmware under CPython and under the real MicroPython interpreter, and with the
+shipped ``boot.py`` and ``main.py`` of each board revision (``--board-rev``: booted unmodified,
+its configuration flashed with ``tug_port`` and ``tug_switch``).
 
 It must get what the original board gave it: the specifications on connect, measurements once
 a second although it asks for 200 Hz, a one-byte ACK it reads as ``ErrorCode= 0``, an answer
@@ -26,9 +28,14 @@ TUG_OPTIONS = ("--tug", "127.0.0.1:0", "--tug-switch")
 RATED_A = [1.5, 1.0, 5.0, 1.0, 1.0, 1.0, 0.5, 10.0, 1.0, 1.0]  # models/tedusar/board.json
 
 
-@pytest.fixture(scope="module", params=["cpython", "micropython"])
+RUNTIMES = {"cpython": ("--runtime", "cpython"), "micropython": ("--runtime", "micropython"),
+            **{rev: ("--runtime", "micropython", "--board-rev", rev)
+               for rev in ("rev-a", "rev-b", "rev-c")}}
+
+
+@pytest.fixture(scope="module", params=list(RUNTIMES))
 def emu(request: pytest.FixtureRequest) -> Iterator[Emulate]:
-    e = Emulate(*TUG_OPTIONS, "--runtime", request.param)
+    e = Emulate(*TUG_OPTIONS, *RUNTIMES[request.param])
     yield e
     e.stop()
 
@@ -54,7 +61,7 @@ def test_specifications_on_connect(host: OriginalHost) -> None:
     assert host.wait_until(lambda: host.specifications)
     specs = host.specifications[0]
     assert [round(a, 3) for a, _v in specs] == RATED_A
-    assert all(20.0 < v < 30.0 for _a, v in specs)  # the board's input voltage
+    assert all(20.0 < v < 30.0 for _a, v in specs), specs  # the board's input voltage
     first = host.frames[0]
     assert first[0] == 0 and first[1] == 1 + 8 * 10  # the first frame, before anything asked
 

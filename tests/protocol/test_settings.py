@@ -113,3 +113,15 @@ class ListenTest(unittest.TestCase):
         for bad in ("eth0", "::", "1.2.3", 7):
             self.assertEqual(settings.check_board({"listen": bad}), "listen")
         self.assertEqual(settings.default_board()["listen"], "")  # not every interface
+
+
+class TugTest(unittest.TestCase):
+    def test_the_original_format_is_off_unless_flashed_and_never_travels(self):
+        b = settings.default_board()
+        self.assertEqual((b["tug_port"], b["tug_switch"]), (0, False))
+        self.assertIsNone(settings.check_board({"tug_port": 5000, "tug_switch": True}))
+        for bad in (-1, 65536, "5000", True):
+            self.assertEqual(settings.check_board({"tug_port": bad}), "tug_port")
+        self.assertEqual(settings.check_board({"tug_switch": 1}), "tug_switch")
+        self.assertNotIn("tug_port", settings.BOARD_WIRE_KEYS)
+        self.assertNotIn("tug_switch", settings.BOARD_WIRE_KEYS)

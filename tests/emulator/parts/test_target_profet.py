@@ -14,7 +14,17 @@ from emulator.parts.world import World, install
 from firmware import boards
 from firmware.hal import LOW, NO_READING, TRIPPED
 from firmware.hal.storage import MemStorage
-from protocol.constants import EV_TRIP, EV_WARNING, F_OPEN_LOAD, F_SENSOR, F_SHORT, ST_ON
+from protocol.constants import (
+    EV_RANGE,
+    EV_TRIP,
+    EV_WARNING,
+    F_LOW,
+    F_OPEN_LOAD,
+    F_SENSOR,
+    F_SHORT,
+    NOT_FAULTS,
+    ST_ON,
+)
 from tests.emulator.parts.test_machine import target_on
 from tests.emulator.parts.test_target_ina226 import BoardBench
 
@@ -71,6 +81,30 @@ class DriverTest(unittest.TestCase):
         self.assertFalse(ch.live & F_OPEN_LOAD)
         self.assertFalse(ch.live & F_SENSOR)  # low is not a sensor fault either
         self.assertFalse([e for e in b.events() if e[1] == EV_WARNING and e[2] == 2])
+
+    def test_low_not_measured_is_a_live_flag_the_host_is_told_of(self):
+        """The ``low`` flag (PROTOCOL.md section 10): live from the first LOW reading, with a
+        range EVENT; never sticky, never a fault; ended by 50 measured readings in a row."""
+        b = Bench()
+        b.load_a[2] = 0.03
+        b.boot()
+        ch = b.board.channels[2]
+        self.assertTrue(ch.live & F_LOW)
+        self.assertFalse(ch.sticky & F_LOW)
+        self.assertFalse(ch.live & ~NOT_FAULTS)  # nothing is wrong with it
+        self.assertFalse(b.board.channels[3].live & F_LOW)  # 1.25 A: measured
+        said = [(e[5], e[6]) for e in b.events() if e[1] == EV_RANGE and e[2] == 2]
+        self.assertEqual(said, [(F_LOW, 0)])  # once, however many low readings followed
+        b.load_a[2] = 1.0  # measured again: the flag waits for 50 readings in a row
+        b.run(200)
+        self.assertTrue(ch.live & F_LOW)
+        b.run(600)
+        self.assertFalse(ch.live & F_LOW)
+        said = [(e[5], e[6] > 500) for e in b.events() if e[1] == EV_RANGE and e[2] == 2]
+        self.assertEqual(said, [(0, True)])
+        b.load_a[2] = 0.03
+        b.run(20)
+        self.assertTrue(ch.live & F_LOW)
 
     def test_a_disconnected_load_while_off_is_seen_as_open_load_off(self):
         b = Bench()
