@@ -119,6 +119,14 @@ from protocol.constants import (
     ST_TRIPPED,
 )
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from typing import Any
+
+    from firmware.events import EventLog
+    from firmware.hal import Hal
+
+    ChannelConfig = dict[str, Any]  # one channel's entry of the configuration
+
 # inputs of the state machine
 X_ON = const(0)
 X_OFF = const(1)
@@ -187,7 +195,7 @@ TRANSITIONS = {
 class Channel:
     """One channel's configuration, state machine and protection. ``log`` is an EventLog."""
 
-    def __init__(self, index: int, hal: object, log: object, cfg: dict) -> None:  # type: ignore[type-arg]
+    def __init__(self, index: int, hal: "Hal", log: "EventLog", cfg: "ChannelConfig") -> None:
         self.index = index
         self.hal = hal
         self.log = log
@@ -224,7 +232,7 @@ class Channel:
         self.cfg = cfg
         self.apply(cfg)
 
-    def apply(self, cfg: dict) -> None:  # type: ignore[type-arg]
+    def apply(self, cfg: "ChannelConfig") -> None:
         """Take a (validated) configuration; precompute the integer limits of the hot path."""
         self.cfg = cfg
         rated = cfg["rated_ma"]
@@ -266,7 +274,7 @@ class Channel:
         if new != old:
             self.state = new
             self._enter(new, now)
-            self.log.put(EV_STATE, self.index, old, new, self.live,  # type: ignore[attr-defined]
+            self.log.put(EV_STATE, self.index, old, new, self.live,
                          self.current_ma, now - self.boot_ms)
         return 0
 
@@ -278,10 +286,10 @@ class Channel:
             self.mismatch_n = 0
             self.cycle_at = -1
             self._fresh_window()
-            self.hal.set_switch(self.index, True)  # type: ignore[attr-defined]
+            self.hal.set_switch(self.index, True)
             self._limit(self.inrush_lim)
         elif st != ST_ON:
-            self.hal.set_switch(self.index, False)  # type: ignore[attr-defined]
+            self.hal.set_switch(self.index, False)
             self.low_since = -1
             self.stuck_since = -1
             if self.live & F_OPEN_LOAD:
@@ -314,7 +322,7 @@ class Channel:
             delay = self.retry_ms[0] if self.retry_ms else 1000
             self.short_used += 1
             x = X_TRIP
-        self.log.put(EV_TRIP, self.index, self.state,  # type: ignore[attr-defined]
+        self.log.put(EV_TRIP, self.index, self.state,
                      ST_TRIPPED if x == X_TRIP else ST_LATCHED, flag, ma, now - self.boot_ms)
         self.fire(x, now)
         self.deadline = now + delay
@@ -323,7 +331,7 @@ class Channel:
         self.live |= flag
         self.sticky |= flag
         self.last_fault_ms = now
-        self.log.put(EV_FAULT, self.index, self.state, ST_FAULTED,  # type: ignore[attr-defined]
+        self.log.put(EV_FAULT, self.index, self.state, ST_FAULTED,
                      flag, self.current_ma, now - self.boot_ms)
         self.fire(x, now)
 
@@ -351,7 +359,7 @@ class Channel:
         if not self.live & F_SENSOR:
             self.live |= F_SENSOR
             self.sticky |= F_SENSOR
-            self.log.put(EV_FAULT, self.index, self.state, self.state,  # type: ignore[attr-defined]
+            self.log.put(EV_FAULT, self.index, self.state, self.state,
                          F_SENSOR, self.current_ma, now - self.boot_ms)
         if self.state == ST_LATCHED and self.commanded:
             self.fire(X_DOUBT, now)
@@ -373,7 +381,7 @@ class Channel:
             if not self.offset_ma and not self.noisy:  # a known offset keeps the doubt
                 self.live &= ~F_SENSOR
             flags = 0
-        self.log.put(EV_FAULT, self.index, self.state, self.state,  # type: ignore[attr-defined]
+        self.log.put(EV_FAULT, self.index, self.state, self.state,
                      flags, 0, now - self.boot_ms)
 
     def _noisy(self, now: int, noisy: bool) -> None:
@@ -389,7 +397,7 @@ class Channel:
             if not self.offset_ma and not self.unread:
                 self.live &= ~F_SENSOR
             flags = 0
-        self.log.put(EV_FAULT, self.index, self.state, self.state,  # type: ignore[attr-defined]
+        self.log.put(EV_FAULT, self.index, self.state, self.state,
                      flags, self.current_ma, now - self.boot_ms)
 
     def _sample(self, now: int, ma: int) -> bool:
@@ -434,7 +442,7 @@ class Channel:
             self.live |= F_LOW
         else:
             self.live &= ~F_LOW
-        self.log.put(EV_RANGE, self.index, self.state, self.state,  # type: ignore[attr-defined]
+        self.log.put(EV_RANGE, self.index, self.state, self.state,
                      F_LOW if low else 0, ma, now - self.boot_ms)
 
     def _overload(self, now: int, ma: int) -> None:
@@ -444,7 +452,7 @@ class Channel:
         if not self.live & F_OVERLOAD:
             self.live |= F_OVERLOAD
             self.sticky |= F_OVERLOAD
-            self.log.put(EV_WARNING, self.index, self.state,  # type: ignore[attr-defined]
+            self.log.put(EV_WARNING, self.index, self.state,
                          self.state, F_OVERLOAD, ma, now - self.boot_ms)
 
     def step(self, now: int, ma: int, sw: bool, dt: int) -> None:
@@ -516,7 +524,7 @@ class Channel:
                 self._overload(now, ma)
             elif self.live & F_OVERLOAD and h <= self.heat_max // 2:
                 self.live &= ~F_OVERLOAD  # cooled: the warning is over
-                self.log.put(EV_WARNING, self.index, st, st, 0,  # type: ignore[attr-defined]
+                self.log.put(EV_WARNING, self.index, st, st, 0,
                              ma, now - self.boot_ms)
             if low:
                 self.low_since = -1  # low, not measured: no open-load judgement
@@ -526,13 +534,13 @@ class Channel:
                 elif now - self.low_since >= self.open_ms and not self.live & F_OPEN_LOAD:
                     self.live |= F_OPEN_LOAD
                     self.sticky |= F_OPEN_LOAD
-                    self.log.put(EV_WARNING, self.index, st, st,  # type: ignore[attr-defined]
+                    self.log.put(EV_WARNING, self.index, st, st,
                                  F_OPEN_LOAD, ma, now - self.boot_ms)
             elif self.low_since >= 0:
                 self.low_since = -1
                 if self.live & F_OPEN_LOAD:
                     self.live &= ~F_OPEN_LOAD
-                    self.log.put(EV_FAULT, self.index, st, st, 0,  # type: ignore[attr-defined]
+                    self.log.put(EV_FAULT, self.index, st, st, 0,
                                  ma, now - self.boot_ms)
         else:
             if self.heat:
