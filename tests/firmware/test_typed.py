@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-CEILING = 72  # lower it whenever a change removes some; never raise it
+CEILING = 59  # lower it whenever a change removes some; never raise it
 IGNORE = re.compile(r"#\s*type:\s*ignore\b")
 TYPING_ONLY = ("typing", "collections.abc", "typing_extensions")
 
