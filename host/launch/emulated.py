@@ -18,10 +18,9 @@ import signal
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from subprocess import Popen
 
 from host.errors import UserError
-from host.launch.procs import Child
+from host.launch.procs import Child, Printed
 
 log = logging.getLogger(__name__)
 
@@ -36,23 +35,9 @@ def _has_urls(child: Child) -> bool:
 
 
 @dataclass
-class EmulatedBoard:
+class EmulatedBoard(Printed):
     child: Child
     key: bytes
-
-    @property
-    def process(self) -> Popen[bytes]:
-        return self.child.proc
-
-    @property
-    def urls(self) -> dict[str, str]:
-        """Every ``name: url`` line it printed."""
-        return self.child.urls()
-
-    @property
-    def devices(self) -> dict[str, str]:
-        """Device name -> URL."""
-        return self.child.devices()
 
     @property
     def board_url(self) -> str:

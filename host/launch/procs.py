@@ -14,6 +14,7 @@ or, when none is given, to the log (the last ones kept for an error message).
 open), False if the child exited first, ``TimeoutError`` at the deadline. ``stop()`` is the
 bounded escalation: a signal (SIGTERM by default), ``grace_s`` to exit, then SIGKILL (to the
 whole group when asked). The coroutines ``aready``/``astop`` are the same, off the event loop.
+``Printed`` is the base of what a launcher hands out for a child that prints its URLs.
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ from host.lifeline import lifeline
 log = logging.getLogger(__name__)
 
 READ_JOIN_S = 5.0  # how long a stop waits for the readers of a child's (closed) output
-SETTLE_POLL_S = 0.05
+SETTLE_POLL_S = 0.05  # how often readiness is asked again without a new line
 
 
 def url_lines(lines: Sequence[str]) -> tuple[dict[str, str], dict[str, str]]:
@@ -58,9 +59,11 @@ class Child:
 
     def __init__(self, argv: Sequence[str], *, env: Mapping[str, str] | None = None,
                  cwd: Path | None = None, stderr: Path | None = None, name: str = "",
-                 own_session: bool = True, tie: int = signal.SIGTERM) -> None:
-        """``stderr``: a file its stderr is appended to (default: the log). ``tie``: the
-        signal the kernel sends it when this process ends (``host.lifeline``)."""
+                 own_session: bool = True, tie: int = signal.SIGTERM,
+                 merge_stderr: bool = False) -> None:
+        """``stderr``: a file its stderr is appended to (default: the log; ``merge_stderr``:
+        into ``lines`` with stdout, in the order written). ``tie``: the signal the kernel
+        sends it when this process ends (``host.lifeline``)."""
         self.argv = list(argv)
         self.name = name or Path(self.argv[0]).name
         self.lines: list[str] = []  # stdout, one entry per line, as they come
@@ -76,7 +79,8 @@ class Child:
             self.proc = subprocess.Popen(
                 self.argv, cwd=cwd, env=dict(env) if env is not None else None,
                 stdout=subprocess.PIPE,
-                stderr=err_file if err_file is not None else subprocess.PIPE,
+                stderr=(subprocess.STDOUT if merge_stderr else
+                        err_file if err_file is not None else subprocess.PIPE),
                 preexec_fn=tied, start_new_session=own_session)
         finally:
             if err_file is not None:
@@ -120,22 +124,26 @@ class Child:
         return url_lines(list(self.lines))[1]
 
     def wait_ready(self, ready: Callable[[Child], bool], timeout: float,
-                   settle_s: float = 0.0) -> bool:
+                   settle_s: float = 0.0, poll_s: float = SETTLE_POLL_S) -> bool:
         """Wait until ``ready(self)`` holds and no new line came for ``settle_s`` (the rest of
         a block printed at once); False if its output ended first (it exited), TimeoutError
-        at ``timeout``. ``ready`` is asked on every line, and every 50 ms (a port's state)."""
+        at ``timeout``. ``ready`` is asked on every line and every ``poll_s`` (a port's
+        state), never while a reader waits to add a line."""
         end = time.monotonic() + timeout
-        with self._changed:
-            while True:
-                now = time.monotonic()
-                if ready(self):
-                    if self._eof or now - self._last_line >= settle_s:
-                        return True
-                elif self._eof:
-                    return False
-                if now >= end:
-                    raise TimeoutError(f"{self.name} not ready after {timeout:g} s")
-                self._changed.wait(SETTLE_POLL_S)
+        while True:
+            with self._changed:
+                eof, last_line, seen = self._eof, self._last_line, len(self.lines)
+            now = time.monotonic()
+            if ready(self):
+                if eof or now - last_line >= settle_s:
+                    return True
+            elif eof:
+                return False
+            if now >= end:
+                raise TimeoutError(f"{self.name} not ready after {timeout:g} s")
+            with self._changed:
+                if len(self.lines) == seen and not self._eof:
+                    self._changed.wait(poll_s)
 
     def running(self) -> bool:
         return self.proc.poll() is None
@@ -182,3 +190,23 @@ class Child:
                     group: bool = False) -> int:
         """``stop`` without blocking the event loop."""
         return await asyncio.to_thread(self.stop, sig, grace_s, group)
+
+
+class Printed:
+    """A started child that printed ``name: url`` lines: its process, URLs and devices."""
+
+    child: Child
+
+    @property
+    def proc(self) -> subprocess.Popen[bytes]:
+        return self.child.proc
+
+    @property
+    def urls(self) -> dict[str, str]:
+        """Every ``name: url`` line it printed (board, control, ...)."""
+        return self.child.urls()
+
+    @property
+    def devices(self) -> dict[str, str]:
+        """Device name -> URL."""
+        return self.child.devices()

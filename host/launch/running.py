@@ -10,7 +10,10 @@ journal, SIGINT (``interrupt()``, ``ctrl_c()`` to its whole group as a terminal 
 -9``; ``close()`` stops it as a person would, and kills it only if it hangs. Its waits poll
 until generous deadlines (``MIN_WAIT_S`` at least, ``host.launch.waiting``): a busy machine
 is slow, and a deadline only bounds how long a broken run takes to fail. ``healthy(status)``
-says the robot is up and well; ``key_file(tmp, key)`` writes a key as ``--key-file`` wants it.
+says the robot is up and well; ``key_file(tmp, key)`` writes a key as ``--key-file`` wants it;
+``healthy_robot(tmp, system, key)`` is a daemon once its robot is healthy, stopped afterwards.
+Questions about a run: ``node_processes`` (the virtual robot's node processes),
+``last_id`` (a mark in the journal), ``actions_started`` (the repair actions since a mark).
 """
 
 from __future__ import annotations
@@ -23,10 +26,13 @@ import subprocess
 import sys
 import time
 import urllib.request
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+import psutil
+
+from host.events import ActionRecord, ActionState
 from host.journal import Entry, JournalReader
 from host.launch.ports import clashed, zenoh_endpoint
 from host.launch.procs import Child
@@ -52,7 +58,7 @@ class RunningDaemon:
         where the nodes it left behind reconnect); default: a fresh one. ``env``: variables
         to set for it (and the nodes it starts), e.g. a ROS 2 domain of its own.
         ``journal_dir``: where the journal and the node logs go (default ``tmp``; a small
-        disk of its own, ``tests.fulldisk``). ``board``: the URL of a board that runs
+        disk of its own, ``benchmarks._rigs.fulldisk``). ``board``: the URL of a board that runs
         on its own (``--board``; default ``--emulate``, a board that dies with the daemon)."""
         self.env = {**os.environ, **(env or {})}
         self.system_dir = system_dir
@@ -215,3 +221,45 @@ def healthy(s: dict[str, Any]) -> bool:
     """The robot is up: board link up, nothing diagnosed, and every repair action finished."""
     return bool(s["board_link_up"]) and not s["diagnoses"] and bool(s["repairs"]) and all(
         r["state"] in ("succeeded", "failed", "timeout") for r in s["repairs"])
+
+
+@contextlib.contextmanager
+def healthy_robot(tmp: Path, system_dir: Path, key: bytes,
+                  heal_s: float = 90.0) -> Iterator[RunningDaemon]:
+    """``dxboard run SYSTEM --emulate`` with a key file, once it has powered up and is healthy
+    (a shared daemon of many questions); stopped afterwards."""
+    d = RunningDaemon(tmp, system_dir, extra_args=("--key-file", str(key_file(tmp, key))))
+    try:
+        d.wait_for(healthy, heal_s, "the robot powered up and healthy")
+        yield d
+    finally:
+        d.close()
+
+
+def node_processes(robot: Path) -> dict[str, list[int]]:
+    """The virtual robot's node processes of this robot directory, by node."""
+    out: dict[str, list[int]] = {}
+    for p in psutil.process_iter(["pid", "cmdline"]):
+        try:
+            cmd = p.info["cmdline"] or []
+            if "emulator.robot.node" not in cmd or p.status() == psutil.STATUS_ZOMBIE:
+                continue
+            if p.environ().get("DXBOARD_ROBOT") != str(robot.resolve()):
+                continue
+        except psutil.Error:
+            continue
+        out.setdefault(cmd[cmd.index("emulator.robot.node") + 1], []).append(p.info["pid"])
+    return out
+
+
+def last_id(d: RunningDaemon) -> int:
+    """The journal's last entry once it holds everything recorded until now (a mark)."""
+    d.caught_up()
+    return max((e.id for e in d.journal()), default=0)
+
+
+def actions_started(d: RunningDaemon, after: int) -> list[str]:
+    """The repair actions (``power_cycle(hokuyo)``) started since the journal entry ``after``."""
+    return [f"{p.action}({','.join(p.args)})" for e in d.journal("action") if e.id > after
+            for p in [e.payload] if isinstance(p, ActionRecord)
+            and p.state == ActionState.STARTED]
