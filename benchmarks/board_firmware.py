@@ -27,7 +27,6 @@ import sys
 # the checkout before benchmarks/ (no pathlib on MicroPython, which runs it from the checkout)
 ROOT = __file__.rsplit("/", 2)[0] if __file__.count("/") >= 2 else "."
 sys.path.insert(0, ROOT)
-sys.path.insert(0, ROOT + "/tests/mpy")
 
 FIRMWARE_FILES = ("firmware/__init__.py", "firmware/app.py", "firmware/board.py",
                   "firmware/session.py", "firmware/net.py", "firmware/modbus.py",

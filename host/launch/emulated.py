@@ -60,7 +60,8 @@ class EmulatedBoard(Printed):
         # a session of its own: Ctrl-C on the terminal reaches the daemon alone, which stops
         # its nodes and then this board, in order (the board gone first read as a lost link
         # at every stop); it still dies with the daemon, even a killed one (host.lifeline)
-        board = cls(Child(argv, env=env, name="emulator", tie=signal.SIGKILL), key)
+        board = cls(Child(argv, env=env, name="emulator", tie=signal.SIGKILL, any_thread=True),
+                    key)
         try:
             up = await board.child.aready(_has_urls, START_TIMEOUT_S, SETTLE_S)
         except TimeoutError:

@@ -4,14 +4,14 @@ Every process dxboard's launcher starts for a robot — the emulated board (``dx
 a daemon (``dxboard run``), and the servers the tests and benchmarks start beside them — is a
 ``Child``. ``Child(argv, ...)`` starts it (``subprocess.Popen``) in a session of its own (so a
 terminal's Ctrl-C reaches only whom it is meant for, and a whole group can be signalled) and,
-when started from the main thread, tied to this process by ``host.lifeline`` (it gets SIGTERM
-from the kernel when we end, however we end; only from the main thread, because the kernel
-sends the signal when the *thread* that started the child ends). A thread per output stream
-reads every line as it comes, so a full pipe never stalls the child: stdout's lines are kept
-(``lines``; ``name: url`` lines are read by ``urls()``/``devices()``), stderr's go to a file
-or, when none is given, to the log (the last ones kept for an error message).
-``wait_ready(ready, timeout)`` waits until ``ready(child)`` holds (a line printed, a port
-open), False if the child exited first, ``TimeoutError`` at the deadline. ``stop()`` is the
+when started from the main thread (or asked to from another), tied to this process by
+``host.lifeline`` (it gets SIGTERM from the kernel when we end, however we end; the kernel sends
+the signal when the *thread* that started the child ends, so a pool's thread must not tie it). A
+thread per output stream reads every line as it comes, so a full pipe never stalls the child:
+stdout's lines are kept (``lines``; ``name: url`` lines are read by ``urls()``/``devices()``),
+stderr's go to a file or, when none is given, to the log (the last ones kept for an error
+message). ``wait_ready(ready, timeout)`` waits until ``ready(child)`` holds (a line printed, a
+port open), False if the child exited first, ``TimeoutError`` at the deadline. ``stop()`` is the
 bounded escalation: a signal (SIGTERM by default), ``grace_s`` to exit, then SIGKILL (to the
 whole group when asked). The coroutines ``aready``/``astop`` are the same, off the event loop.
 ``Printed`` is the base of what a launcher hands out for a child that prints its URLs.
@@ -60,20 +60,24 @@ class Child:
     def __init__(self, argv: Sequence[str], *, env: Mapping[str, str] | None = None,
                  cwd: Path | None = None, stderr: Path | None = None, name: str = "",
                  own_session: bool = True, tie: int = signal.SIGTERM,
-                 merge_stderr: bool = False) -> None:
+                 merge_stderr: bool = False, keep_err: int = 50,
+                 any_thread: bool = False) -> None:
         """``stderr``: a file its stderr is appended to (default: the log; ``merge_stderr``:
         into ``lines`` with stdout, in the order written). ``tie``: the signal the kernel
-        sends it when this process ends (``host.lifeline``)."""
+        sends it when this process ends (``host.lifeline``), if started from the main thread or
+        ``any_thread`` (then it dies with the thread that started it: right for an event
+        loop's thread, wrong for a pool's). ``keep_err``: how many of its last stderr lines
+        ``err_tail`` keeps."""
         self.argv = list(argv)
         self.name = name or Path(self.argv[0]).name
         self.lines: list[str] = []  # stdout, one entry per line, as they come
-        self.err_tail: collections.deque[str] = collections.deque(maxlen=50)
+        self.err_tail: collections.deque[str] = collections.deque(maxlen=keep_err)
         self.group = own_session
         self._changed = threading.Condition()
         self._last_line = time.monotonic()
         self._eof = False
-        tied = (lifeline(tie) if threading.current_thread() is threading.main_thread()
-                else None)
+        tied = (lifeline(tie) if any_thread
+                or threading.current_thread() is threading.main_thread() else None)
         err_file: IO[bytes] | None = stderr.open("ab") if stderr is not None else None
         try:
             self.proc = subprocess.Popen(

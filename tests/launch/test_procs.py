@@ -1,18 +1,22 @@
 """The launcher's child process (``host.launch.procs.Child``) with real processes: readiness read
 from what it prints, the end of its output when it exits first, a stop that escalates to
-SIGKILL when the child ignores the signal, and a whole group stopped. Deadlines are generous
+SIGKILL when the child ignores the signal, a whole group stopped, and a child tied to the
+thread that started it (``host.lifeline``) gone with that thread. Deadlines are generous
 (they bound a failure, never decide a pass); the children are tiny Python scripts."""
 
 from __future__ import annotations
 
 import signal
 import sys
+import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
+import psutil
 import pytest
 
 from host.launch.procs import Child, url_lines
+from host.launch.waiting import wait_until
 
 LONG_S = 120.0
 
@@ -82,8 +86,6 @@ time.sleep(600)
 
 
 def test_a_group_stop_reaches_the_childs_own_children() -> None:
-    import psutil
-
     with child(GROUP) as c:
         assert c.wait_ready(lambda ch: "kid" in ch.urls(), LONG_S)
         kid = psutil.Process(int(c.urls()["kid"]))
@@ -94,3 +96,16 @@ def test_a_group_stop_reaches_the_childs_own_children() -> None:
 def test_url_lines_reads_names_and_devices() -> None:
     assert url_lines(["board: tcp://a:1", "device: d1 tcp://b:2", "noise", "web: http://c/"]) \
         == ({"board": "tcp://a:1", "web": "http://c/"}, {"d1": "tcp://b:2"})
+
+
+def test_a_child_tied_to_a_thread_gets_sigterm_when_that_thread_ends() -> None:
+    started: list[Child] = []
+    t = threading.Thread(target=lambda: started.append(
+        Child([sys.executable, "-c", "import time; time.sleep(600)"], any_thread=True)))
+    t.start()
+    t.join()
+    try:
+        wait_until(lambda: not started[0].running(), LONG_S, "the tied child gone")
+        assert started[0].proc.returncode == -signal.SIGTERM
+    finally:
+        started[0].stop(signal.SIGKILL, 10)

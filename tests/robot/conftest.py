@@ -30,6 +30,7 @@ import zenoh
 
 from host.commands.inject import request
 from host.launch.boards import RunningBoard
+from host.launch.procs import Child
 from tests.ports import clashed, zenoh_endpoint
 from tests.wait import wait_until
 
@@ -237,43 +238,39 @@ class Topics:
 
 
 class Nodes:
-    """Node processes: ``python -m emulator.robot.node NAME DIR``, stopped at the end."""
+    """Node processes: ``python -m emulator.robot.node NAME DIR [EXTRA]``, each a launcher's
+    ``host.launch.procs.Child``, stopped at the end (SIGTERM, SIGKILL if one hangs)."""
 
     def __init__(self, system_dir: Path, robot: Robot, topics: Topics) -> None:
         self.system_dir = system_dir
         self.env = {**os.environ, "DXBOARD_ZENOH": topics.endpoint,
                     "DXBOARD_DEVICES": json.dumps(robot.devices),
                     "PYTHONPATH": str(ROOT)}
-        self.procs: dict[str, subprocess.Popen[str]] = {}
+        self.children: dict[str, Child] = {}
 
-    def start(self, *names: str) -> None:
+    @property
+    def procs(self) -> dict[str, subprocess.Popen[bytes]]:
+        return {name: c.proc for name, c in self.children.items()}
+
+    def start(self, *names: str, extra: tuple[str, ...] = ()) -> None:
         for name in names:
-            self.procs[name] = subprocess.Popen(
-                [sys.executable, "-m", "emulator.robot.node", name, str(self.system_dir)],
-                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=self.env,
-                cwd=ROOT)
+            self.children[name] = Child(
+                [sys.executable, "-m", "emulator.robot.node", name, str(self.system_dir),
+                 *extra], env=self.env, cwd=ROOT, name=name, keep_err=100000)
 
     def running(self, name: str) -> bool:
-        return self.procs[name].poll() is None
+        return self.children[name].running()
 
     def stop(self, name: str) -> int:
-        p = self.procs[name]
-        if p.poll() is None:
-            p.send_signal(signal.SIGTERM)
-            try:
-                p.wait(10)
-            except subprocess.TimeoutExpired:
-                p.kill()
-                p.wait(10)
-        return p.returncode
+        return self.children[name].stop(signal.SIGTERM, 10)
 
     def log(self, name: str) -> str:
-        p = self.procs[name]
+        """Its stderr (once stopped)."""
         self.stop(name)
-        return p.stderr.read() if p.stderr else ""
+        return "".join(line + "\n" for line in self.children[name].err_tail)
 
     def stop_all(self) -> None:
-        for name in self.procs:
+        for name in self.children:
             self.stop(name)
 
 
