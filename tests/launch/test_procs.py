@@ -100,10 +100,20 @@ def test_url_lines_reads_names_and_devices() -> None:
 
 def test_a_child_tied_to_a_thread_gets_sigterm_when_that_thread_ends() -> None:
     started: list[Child] = []
-    t = threading.Thread(target=lambda: started.append(
-        Child([sys.executable, "-c", "import time; time.sleep(600)"], any_thread=True)))
+    raised: list[BaseException] = []
+
+    def start() -> None:
+        try:
+            started.append(Child([sys.executable, "-c", "import time; time.sleep(600)"],
+                                 any_thread=True))
+        except BaseException as exc:  # e.g. --in-process's skip: raised again in the test
+            raised.append(exc)
+
+    t = threading.Thread(target=start)
     t.start()
     t.join()
+    if raised:
+        raise raised[0]
     try:
         wait_until(lambda: not started[0].running(), LONG_S, "the tied child gone")
         assert started[0].proc.returncode == -signal.SIGTERM
