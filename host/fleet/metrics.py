@@ -3,21 +3,20 @@
 ``FleetMetrics(source, robot=..., site=..., components=..., protected=..., journal=...)`` owns
 one ``CollectorRegistry`` per daemon (never the process-global one, so two daemons in a process
 or a test never share series). At every scrape a custom collector turns the latest ``Status``
-snapshot (the page's projection, ``host.web.fold``, of the daemon's one ``EventFold``) into gauges; ``EventMetrics``
-(``host.fleet.events``) keeps the counters and histograms only the stream knows. Every series
-carries ``robot`` (the model's name or ``dxboard run --robot``) and ``site`` labels, so a
-fleet's Prometheus can scrape many daemons (or receive them by remote-write) without
-relabelling. Per component: ``dxboard_component_health`` (0 healthy, 1 suspect — in some
-minimal diagnosis, 2 abnormal — in the best one, 3 out of automatic repair: needs a person),
-``dxboard_component_abnormal`` (in the best diagnosis), ``..._quarantined`` and ``..._held``
-(0 or 1 for every component of the model). Per channel: current in amperes, on, the state as
-an enum, whether it is protected, switches. The board link, the input voltage in volts, the
-journal's backlog (entries waiting for the disk), write failures and drops, the daemon's own
+snapshot (the page's projection, ``host.web.fold``, of the daemon's one ``EventFold``) into
+gauges; ``EventMetrics`` (``host.fleet.events``) keeps the counters and histograms only the
+stream knows. Every series carries ``robot`` (the model's name or ``dxboard run --robot``) and
+``site`` labels, so a fleet's Prometheus can scrape many daemons (or receive them by
+remote-write) without relabelling. Per component: ``dxboard_component_health`` (0 healthy, 1
+suspect — in some minimal diagnosis, 2 abnormal — in the best one, 3 out of automatic repair:
+needs a person), ``dxboard_component_abnormal`` (in the best diagnosis), ``..._quarantined`` and
+``..._held`` (0 or 1 for every component of the model). Per channel: current in amperes, on, the
+state as an enum, whether it is protected, switches. The board link, the input voltage in volts,
+the journal's backlog (entries waiting for the disk), write failures and drops, the daemon's own
 loop lag (``LagProbe``: how late a 0.5 s sleep wakes, the worst of the last ten), and the
-running counters the page had before (observations, diagnosis runs and their durations,
-repairs by outcome). ``render()`` returns the text exposition format 0.0.4 that Prometheus
-2.x and ``promtool check metrics`` read.
-"""
+running counters the page had before (observations, diagnosis runs and their durations, repairs
+by outcome). ``render()`` returns the text exposition format 0.0.4 that Prometheus 2.x and
+``promtool check metrics`` read. """
 
 from __future__ import annotations
 

@@ -11,6 +11,7 @@ tests failed: the noisy lidar tripped, and no F_SENSOR was said.
 
 import unittest
 
+from benchmarks._rigs.testhal import Rig
 from protocol.constants import (
     EV_FAULT,
     EV_TRIP,
@@ -22,7 +23,6 @@ from protocol.constants import (
     ST_ON,
     ST_TRIPPED,
 )
-from tests.firmware.testhal import Rig
 
 CH = 3
 RATED = 1000
