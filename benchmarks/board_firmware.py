@@ -27,7 +27,6 @@ import sys
 # the checkout before benchmarks/ (no pathlib on MicroPython, which runs it from the checkout)
 ROOT = __file__.rsplit("/", 2)[0] if __file__.count("/") >= 2 else "."
 sys.path.insert(0, ROOT)
-sys.path.insert(0, ROOT + "/tests/mpy")
 
 FIRMWARE_FILES = ("firmware/__init__.py", "firmware/app.py", "firmware/board.py",
                   "firmware/session.py", "firmware/net.py", "firmware/modbus.py",
@@ -43,7 +42,7 @@ FIRMWARE_FILES = ("firmware/__init__.py", "firmware/app.py", "firmware/board.py"
 
 def tick_cost(clock, n_ticks):
     """Mean cost (us) of one Board.tick with 10 channels on, loads normal."""
-    from tests.firmware.testhal import Rig
+    from benchmarks._rigs.testhal import Rig
 
     chans = {}
     for i in range(10):
@@ -69,7 +68,7 @@ def mpy_part():
     us = tick_cost(lambda: time.ticks_us(), 2000)
     gc.collect()
     base = gc.mem_alloc()
-    from tests.firmware.testhal import Rig
+    from benchmarks._rigs.testhal import Rig
 
     gc.collect()
     before = gc.mem_alloc()

@@ -52,6 +52,7 @@ import psutil
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the checkout before benchmarks/
 
+from benchmarks._rigs.robots import KEY
 from benchmarks.loop import start_board, stop_boards
 from host.board import BoardClient
 from host.board.types import Reading
@@ -59,11 +60,11 @@ from host.diagnosis import Diagnoser, generate, load_system
 from host.diagnosis.observations import ObservationSet
 from host.diagnosis.runner import DiagnosisRunner, fold_updates
 from host.events import DiagnosisRecord, Event
+from host.launch.running import TEDUSAR
 from host.observers import ObserverHub, load_observers
 from host.observers.base import Update
 from host.observers.hardware import HardwareObserver
 from host.transports.errors import BoardRefused
-from tests.daemon.runner import KEY, TEDUSAR
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "RESULTS.md"

@@ -2,7 +2,7 @@
 
 Issue 25's "Done when" for item 4: the lidar hang healthy within 15 s of the fault while the
 disk is full, the backlog journalled within 5 s of space returning, 0 entries lost. Each run is
-``tests.daemon.disk_scenario.full_disk_run``: a real ``dxboard run --emulate`` (Zenoh) with its
+``benchmarks._rigs.disk.full_disk_run``: a real ``dxboard run --emulate`` (Zenoh) with its
 journal and node logs on a 3 MB tmpfs this benchmark mounts (it must run as root), the disk
 filled once the robot is healthy, ``hokuyo hang`` injected, the space freed once the robot is
 healthy again, every entry the daemon says it recorded looked for in the journal. There is no
@@ -30,7 +30,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:] = [str(ROOT), *(p for p in sys.path
                             if Path(p or ".").resolve() not in (ROOT, ROOT / "benchmarks"))]
 
-from tests.daemon.disk_scenario import FullDiskRun, full_disk_run  # noqa: E402
+from benchmarks._rigs.disk import FullDiskRun, full_disk_run  # noqa: E402
 
 HEAL_GOAL_S = 15.0
 JOURNAL_GOAL_S = 5.0

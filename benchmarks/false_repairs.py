@@ -1,7 +1,7 @@
 """False repairs under the faults of issue 25, item 7: how many in N runs of each.
 
 Each case runs the fast virtual TEDUSAR robot under a real ``dxboard run`` (the same runner the
-tests use, ``tests.daemon.runner``) and counts, per run, the *false repairs*: actions that
+tests use, ``host.launch.running``) and counts, per run, the *false repairs*: actions that
 switch a healthy device's power (``power_cycle``, ``power_up``, ``shutdown``), quarantines, and
 for the freeze a note that the board refused the daemon's key.
 
@@ -42,20 +42,18 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+from benchmarks._rigs.robots import fast_copy, healthy_robot, key_file  # noqa: E402
 from host.events import LinkChange  # noqa: E402
 from host.journal import QuarantineChange  # noqa: E402
-from tests.daemon.board import Board, daemon  # noqa: E402
-from tests.daemon.runner import (  # noqa: E402
+from host.launch.boards import RunningBoard, daemon_on  # noqa: E402
+from host.launch.running import (  # noqa: E402
     RunningDaemon,
     actions_started,
-    fast_copy,
     healthy,
-    healthy_robot,
-    key_file,
     last_id,
     node_processes,
 )
-from tests.wait import wait_until  # noqa: E402
+from host.launch.waiting import wait_until  # noqa: E402
 
 POWER = ("power_cycle", "power_up", "shutdown")
 HEAL_S = 120.0
@@ -123,17 +121,17 @@ def one_run(d: RunningDaemon, case: str, amps: float, noise_s: float) -> list[st
 
 def restarts(tmp: Path, runs: int, say: Callable[[str], None]) -> list[list[str]]:
     system, key = fast_copy(tmp), key_file(tmp)
-    b = Board(system, key)
+    b = RunningBoard(system, key_file=key)
     out: list[list[str]] = []
     try:
-        d = daemon(tmp / "d0", b, system, key)
+        d = daemon_on(tmp / "d0", b, system, key)
         try:
             d.wait_for(healthy, HEAL_S, "the robot up")
             for k in range(1, runs + 1):
                 d.kill()
                 d.close()
                 wait_until(lambda: not node_processes(system), 60, "the nodes gone")
-                d = daemon(tmp / f"d{k}", b, system, key)
+                d = daemon_on(tmp / f"d{k}", b, system, key)
                 unhealed = []
                 try:
                     d.wait_for(healthy, HEAL_S, "healthy after the restart")

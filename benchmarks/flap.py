@@ -9,7 +9,7 @@ free ports, short device boot times, journal in a temporary folder; the board st
 channels at 100 Hz, the nodes run as real processes), is left alone with a healthy robot.
 ``--middleware ros2`` runs the ROS 2 robot as ``make run`` starts it (``dxboard run
 --middleware ros2``: the nodes real ROS 2 nodes, the lidar's driver a managed one), on a DDS
-domain of the benchmark's own (``tests.ros.domain``), watched by an independent rclpy peer
+domain of the benchmark's own (``host.launch.domains``), watched by an independent rclpy peer
 (``benchmarks.ros_arrivals``) instead of a Zenoh one; default: the Zenoh robot.
 
 1. baseline, the idle machine (``--idle-minutes``, default 3; quick 0.5);
@@ -58,6 +58,7 @@ import psutil
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the checkout before benchmarks/
 
+from benchmarks._rigs.robots import fast_copy, key_file
 from benchmarks.loop import (
     Sample,
     TopicClock,
@@ -70,8 +71,8 @@ from benchmarks.loop import (
     write_section,
 )
 from host.journal import ActionRecord, DiagnosisRecord, LinkChange, Observation
-from tests.daemon.runner import RunningDaemon, fast_copy, healthy, key_file
-from tests.ros.domain import claim_domain, domain_env
+from host.launch.domains import claim_domain, domain_env
+from host.launch.running import RunningDaemon, healthy
 
 TOPICS = ["/scan", "/imu_data", "/odom", "/cmd_vel", "/map", "/thermal/image"]
 
@@ -231,7 +232,7 @@ def without_own_time(system_dir: Path) -> None:
 @contextlib.contextmanager
 def robot(tmp: Path, own_time: bool, middleware: str = "zenoh"
           ) -> Iterator[tuple[RunningDaemon, Peer]]:
-    """The fast virtual TEDUSAR robot (``tests.daemon.runner.healthy_robot``) on
+    """The fast virtual TEDUSAR robot (``benchmarks._rigs.robots.healthy_robot``) on
     ``middleware`` (on ROS 2 in a DDS domain of its own), its topics' silences judged in the
     publishers' own time or not; and an independent peer watching its topics."""
     system = fast_copy(tmp)

@@ -2,7 +2,7 @@
 
     .venv/bin/python -m benchmarks.fleet [--robots N] [--seconds S] [--rate HZ]
 
-Starts ``--robots`` (default 50) lightweight robots (``tests/fleet/lite.py``: the board
+Starts ``--robots`` (default 50) lightweight robots (``benchmarks/_rigs/robots.py``: the board
 emulator and the daemon, no nodes; ``dxboard run --emulate --robot rover-N --site bench``,
 free ports, journals in a temporary folder), waits until every board link is up, then measures
 each daemon's CPU (user + system of the daemon process, from /proc via psutil; its emulator is
@@ -35,10 +35,10 @@ import psutil
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the checkout before benchmarks/
 
-from tests.daemon.runner import RunningDaemon
-from tests.fleet.lite import lite_model
-from tests.fleet.servers import prometheus, query
-from tests.wait import wait_until
+from benchmarks._rigs.robots import lite_model
+from host.launch.prometheus import prometheus, query
+from host.launch.running import RunningDaemon
+from host.launch.waiting import wait_until
 
 
 def start(tmp: Path, i: int, rate: int) -> RunningDaemon:

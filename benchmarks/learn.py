@@ -42,12 +42,13 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from benchmarks._rigs.robots import KEY  # noqa: E402
 from benchmarks.campaign import Campaign  # noqa: E402
 from benchmarks.campaign_plan import Trial, plan_trials  # noqa: E402
 from host.experiment.robot import fast_model  # noqa: E402
-from tests.robot.conftest import KEY_HEX, Robot  # noqa: E402
-from tests.ros.domain import claim_domain, domain_env  # noqa: E402
-from tests.wait import wait_until  # noqa: E402
+from host.launch.boards import RunningBoard  # noqa: E402
+from host.launch.domains import claim_domain, domain_env  # noqa: E402
+from host.launch.waiting import wait_until  # noqa: E402
 
 TEDUSAR = ROOT / "models" / "tedusar"
 DXBOARD = str(Path(sys.executable).parent / "dxboard")
@@ -63,7 +64,7 @@ def learn(out: Path, duration: float, env: dict[str, str]) -> float:
     """Start the virtual robot on ROS 2, learn it with the probe; the learn's wall time."""
     work = Path(tempfile.mkdtemp(prefix="dxboard-learn-robot-"))
     robot_dir = fast_model(TEDUSAR, work)
-    robot = Robot(robot_dir)
+    robot = RunningBoard(robot_dir, key=KEY)
     procs: list[subprocess.Popen[bytes]] = []
     try:
         for ch in range(10):
@@ -82,7 +83,7 @@ def learn(out: Path, duration: float, env: dict[str, str]) -> float:
         board = robot.urls["board"].removeprefix("tcp://")
         t0 = time.monotonic()
         p = subprocess.run([DXBOARD, "model", "learn", str(out), "--duration", str(duration),
-                            "--board", board, "--probe"], env={**env, "DXBOARD_KEY": KEY_HEX},
+                            "--board", board, "--probe"], env={**env, "DXBOARD_KEY": KEY.hex()},
                            cwd=ROOT, capture_output=True, text=True, timeout=duration + 600)
         took = time.monotonic() - t0
         sys.stderr.write(p.stderr)

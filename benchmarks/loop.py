@@ -73,6 +73,7 @@ import psutil
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the checkout before benchmarks/
 
+from benchmarks._rigs.robots import KEY, healthy_robot
 from host.board import BoardClient
 from host.diagnosis import Diagnoser, generate, load_system
 from host.diagnosis.diagnoser import UnknownLiteral
@@ -86,18 +87,12 @@ from host.journal import (
     Telemetry,
 )
 from host.launch.ports import free_port
+from host.launch.running import TEDUSAR, RunningDaemon, healthy
 from host.observers import load_observers
 from host.observers.base import Update
 from host.observers.hardware import HardwareObserver
 from host.observers.topics import DEFAULT_SILENCE, FrequencyObserver
 from host.repair.limits import DEFAULT_STABLE_S
-from tests.daemon.runner import (
-    KEY,
-    TEDUSAR,
-    RunningDaemon,
-    healthy,
-    healthy_robot,
-)
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "RESULTS.md"

@@ -39,9 +39,10 @@ import psutil
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the checkout before benchmarks/
 
+from benchmarks._rigs.robots import fast_copy, key_file
 from benchmarks.loop import KINDS, TOPIC, TopicClock, ms, one_fault, schedule, spaced
-from tests.daemon.runner import RunningDaemon, fast_copy, healthy, key_file
-from tests.wait import wait_until
+from host.launch.running import RunningDaemon, healthy
+from host.launch.waiting import wait_until
 
 SAMPLE_S = 5.0
 

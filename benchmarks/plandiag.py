@@ -1,6 +1,6 @@
 """Plan-execution diagnosis: SAT against the context tree, naive enumeration and K*, in one run.
 
-Random mission domains (``tests/plandiag/synth.py``: 4 actions, 1-3 fault modes each, 1-5
+Random mission domains (``benchmarks/_rigs/synth.py``: 4 actions, 1-3 fault modes each, 1-5
 exogenous event types) and histories of 10-500 executed actions on 8 objects in which one or
 two faults really happened and the last step's expected-state check saw the world; the first
 seed whose history needs at least one fault to be explained is used. Per history:
@@ -45,6 +45,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from benchmarks._rigs.synth import (  # noqa: E402
+    synthetic_domain,
+    synthetic_history,
+    synthetic_model,
+)
 from benchmarks.plandiag_kstar import minimum_diagnoses  # noqa: E402
 from host.diagnosis.result import Bound  # noqa: E402
 from host.plandiag.context import Context, interpret_context  # noqa: E402
@@ -58,11 +63,6 @@ from host.plandiag.interpret import (  # noqa: E402
 from host.plandiag.limits import ExplainOutcome, Limits  # noqa: E402
 from host.plandiag.model import PlanModel  # noqa: E402
 from host.plandiag.region import Region, fault_region  # noqa: E402
-from tests.plandiag.synth import (  # noqa: E402
-    synthetic_domain,
-    synthetic_history,
-    synthetic_model,
-)
 
 BUDGET = 20.0
 KSTAR_TIMEOUT = 300

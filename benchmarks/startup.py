@@ -75,8 +75,8 @@ def _run_fd(domain: Path, problem: Path, workdir: Path) -> tuple[float, float]:
 def fifty_step_history(where: Path) -> Path:
     """A 50-step mission history needing one fault, with its domain (benchmarks/plandiag.py's
     case of 2 fault modes per action and 3 event types)."""
+    from benchmarks._rigs.synth import synthetic_domain
     from benchmarks.plandiag import find_case
-    from tests.plandiag.synth import synthetic_domain
 
     case = find_case(2, 3, 50)
     mission, faults = synthetic_domain(11, modes=2, events=3)

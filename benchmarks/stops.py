@@ -2,7 +2,7 @@
 
 Two measurements of issue 25's "Done when":
 
-1. **Signals under a flood.** ``tests.daemon.flood_child`` runs the daemon's real zenoh topic
+1. **Signals under a flood.** ``benchmarks._rigs.flood_child`` runs the daemon's real zenoh topic
    source fed 2,000 messages a second by a real zenoh publisher, holds its event loop up for
    2 s and sends itself SIGINT 1.5 s into the stall. A run counts when the loop hears the signal
    within 10 s of it. ``--runs`` runs (default 100) with the daemon's signal handling
@@ -10,7 +10,7 @@ Two measurements of issue 25's "Done when":
    (default 10) with asyncio's ``add_signal_handler`` on its shared self-pipe, as ``dxboard
    run`` had before.
 2. **Hostile boards x stop.** ``dxboard run --board URL`` against each kind of hostile board of
-   ``tests.daemon.hostile`` (silent, garbage, flood, half-open, slow drip, reset mid-frame,
+   ``benchmarks._rigs.hostile`` (silent, garbage, flood, half-open, slow drip, reset mid-frame,
    accept-and-close, never-accepting, echo, refused) and a real emulated board holding another
    key (wrong key): 11 kinds. The daemon meets the board for 8 s, gets SIGTERM, and counts when
    it has exited within 10 s; the table says how long each took, its exit code and the stages
@@ -38,10 +38,12 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from tests.daemon.hostile import KINDS, HostileBoard  # noqa: E402
-from tests.daemon.stopper import StoppedRun  # noqa: E402
-from tests.host.emulate import ENV, Emulate  # noqa: E402
-from tests.ports import zenoh_endpoint  # noqa: E402
+from benchmarks._rigs.hostile import KINDS, HostileBoard  # noqa: E402
+from benchmarks._rigs.robots import KEY  # noqa: E402
+from benchmarks._rigs.stopper import StoppedRun  # noqa: E402
+from host.launch.boards import RunningBoard  # noqa: E402
+from host.launch.ports import zenoh_endpoint  # noqa: E402
+from host.launch.running import TEDUSAR  # noqa: E402
 
 WITHIN_S = 10.0
 RATE = 2000
@@ -51,10 +53,11 @@ HEARD = re.compile(r"heard SIGINT after (-?[\d.]+) s")
 
 def flood_run(baseline: bool) -> float | None:
     """One flood run: seconds from SIGINT to the loop hearing it, or None (lost)."""
-    argv = [sys.executable, "-m", "tests.daemon.flood_child", zenoh_endpoint(), str(RATE),
+    argv = [sys.executable, "-m", "benchmarks._rigs.flood_child", zenoh_endpoint(), str(RATE),
             str(STALL_S), *(["--asyncio"] if baseline else [])]
     try:
-        out = subprocess.run(argv, cwd=ROOT, env=ENV, capture_output=True, text=True,
+        out = subprocess.run(argv, cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)},
+                             capture_output=True, text=True,
                              timeout=120)
     except subprocess.TimeoutExpired:
         return None
@@ -82,7 +85,7 @@ def hostile(tmp: Path) -> list[tuple[str, StoppedRun]]:
             run = StoppedRun.against(board.url, tmp / kind, give_up_s=60)
         out.append((kind, run))
         print(f"  {kind}: {run.seconds:.1f} s, exit {run.code}", flush=True)
-    emu = Emulate()
+    emu = RunningBoard(TEDUSAR, key=KEY, robot=False)
     (tmp / "wrong_key").mkdir()
     try:
         run = StoppedRun.against(emu.urls["board"], tmp / "wrong_key", key_hex="ff" * 16,

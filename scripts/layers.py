@@ -13,6 +13,9 @@ type-only import is not a run-time dependency, but a reader and mypy need the ot
 understand the signature, so it binds the layers just the same; such arrows are marked
 ``(type)`` so that the fix is obvious (usually a ``Protocol`` on the lower floor). Packages
 on one floor know nothing of each other: an arrow between them is reported as sideways.
+The benchmarks stand beside the product, not on the tests: a module of ``benchmarks/`` that
+imports ``tests`` (anywhere in it, lazily too) fails the check as well, naming the place; what
+a benchmark needs to launch comes from ``host.launch``, the rest from ``benchmarks/_rigs``.
 ``--root DIR`` checks another tree (the tests use a small fake one); ``--dot`` prints the graph
 for Graphviz.
 """
@@ -152,6 +155,23 @@ def scan(root: Path) -> list[Arrow]:
     return sorted(arrows.values())
 
 
+def benchmarks_on_tests(root: Path) -> list[str]:
+    """Every import of ``tests`` by a module of ``benchmarks/``, as a line naming the place."""
+    found: list[str] = []
+    for path in sorted((root / "benchmarks").rglob("*.py")):
+        module, is_package = _module_name(root, path)
+        try:
+            tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        except SyntaxError as exc:
+            raise BadInput(
+                f"{path}:{exc.lineno}: does not parse ({exc.msg}); fix the file") from exc
+        for imported, line, _ in _imports(tree, module, is_package):
+            if imported == "tests" or imported.startswith("tests."):
+                found.append(f"benchmark imports tests: {path.relative_to(root)}:{line} imports "
+                             f"{imported}; take it from host.launch or benchmarks/_rigs")
+    return found
+
+
 def floors(layers: Sequence[Sequence[str]]) -> dict[str, int]:
     """Package -> its floor number (0 at the bottom)."""
     return {name: number for number, floor in enumerate(layers) for name in floor}
@@ -259,11 +279,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             print("\n".join(dot(arrows)))
             return 0
         lines, problems = report(arrows, LAYERS)
+        on_tests = benchmarks_on_tests(root)
     except BadInput as exc:
         print(f"layers: {exc}", file=sys.stderr)
         return 2
+    lines += [*on_tests, f"{len(on_tests)} imports of tests/ by benchmarks/"]
     print("\n".join(lines))
-    return 1 if problems else 0
+    return 1 if problems or on_tests else 0
 
 
 if __name__ == "__main__":

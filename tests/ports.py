@@ -7,7 +7,7 @@ the launcher's (``host.launch.ports``): a random port *below* the kernel's ephem
 free at the moment of asking, which only another explicit chooser can take before our bind.
 For that rare case (and for the micropython runtime of the emulator, which picks its ports
 itself), ``CLASH`` is the text every listener here reports and ``clashed(text)`` lets a
-starter retry on a fresh port.
+starter retry on a fresh port (both the launcher's too, as is ``zenoh_endpoint()``).
 
 ``reserved_udp_port()`` holds a UDP port for the duration of a test (a socket bound with
 SO_REUSEADDR, which the python-can multicast bus also sets): Linux delivers multicast to every
@@ -20,18 +20,9 @@ import contextlib
 import socket
 from collections.abc import Iterator
 
-from host.launch.ports import free_port
+from host.launch.ports import CLASH, clashed, free_port, zenoh_endpoint
 
-CLASH = ("Address already in use", "EADDRINUSE")  # CPython and Rust; MicroPython
-
-
-def zenoh_endpoint() -> str:
-    return f"tcp/127.0.0.1:{free_port()}"
-
-
-def clashed(text: str) -> bool:
-    """True when a listener failed because another process took its port first."""
-    return any(c in text for c in CLASH)
+__all__ = ["CLASH", "clashed", "free_port", "reserved_udp_port", "zenoh_endpoint"]
 
 
 @contextlib.contextmanager

@@ -110,11 +110,36 @@ def test_a_directory_without_packages_is_bad_input(tmp_path: Path) -> None:
     assert "pass the repository with --root" in out.stderr
 
 
+@pytest.mark.parametrize("text", [
+    "from tests.daemon.runner import RunningDaemon\n",
+    "import tests.wait\n",
+    "def main():\n    from tests.plandiag.synth import synthetic_domain\n",
+])
+def test_a_benchmark_that_imports_the_tests_fails_naming_the_place(
+        tmp_path: Path, text: str) -> None:
+    files = {**CLEAN, "benchmarks/loop.py": "import host.errors\n" + text,
+             "benchmarks/_rigs.py": "from host.launch.running import RunningDaemon\n"}
+    out = run("--root", str(tree(tmp_path, files)))
+    assert out.returncode == 1, out.stdout + out.stderr
+    assert "benchmark imports tests: benchmarks/loop.py:" in out.stdout
+    assert "1 imports of tests/ by benchmarks/" in out.stdout
+    assert "0 running up or sideways, 0 cycles" in out.stdout  # the floors are not the reason
+
+
+def test_benchmarks_on_the_launcher_and_their_rigs_pass(tmp_path: Path) -> None:
+    files = {**CLEAN, "benchmarks/loop.py": "from benchmarks._rigs import KEY\n",
+             "benchmarks/_rigs.py": "from host.launch.running import RunningDaemon\n"}
+    out = run("--root", str(tree(tmp_path, files)))
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "0 imports of tests/ by benchmarks/" in out.stdout
+
+
 def test_the_real_tree_keeps_its_layers() -> None:
     out = run()
     assert out.returncode == 0, out.stdout + out.stderr
     assert "host.planning" in out.stdout
     assert "0 running up or sideways, 0 cycles" in out.stdout
+    assert "0 imports of tests/ by benchmarks/" in out.stdout
 
 
 def test_dot_prints_the_graph_for_graphviz(tmp_path: Path) -> None:

@@ -1,68 +1,8 @@
-"""Waiting in tests: poll a condition until it holds, with a generous deadline, never a fixed sleep.
-
-A test that sleeps a fixed time and then asserts ("it has happened by now") fails on a busy
-machine. ``wait_until(probe, timeout, what)`` instead calls ``probe`` until it returns something
-truthy and returns that value; at the deadline it raises ``AssertionError`` naming what was
-awaited, how long, and what was seen last (the probe's last value, or ``show()`` when given).
-``wait_until_async`` is the same on an event loop: the probe may be a coroutine function, and
-``each`` runs every round (e.g. to re-publish). Deadlines are generous on purpose: they only
-decide how long a broken test takes to fail, never whether a working one passes.
-
-Absence ("no repair was started") cannot be awaited; such a test first waits for evidence that
-the thing under test had its chance (a later diagnosis, a later message), then asserts.
+"""Waiting in tests: the launcher's ``host.launch.waiting`` (one copy for the product, the tests
+and the benchmarks): poll a condition until it holds, with a generous deadline, never a fixed
+sleep; a missed deadline fails the test naming what was awaited and what was seen last.
 """
 
-from __future__ import annotations
+from host.launch.waiting import TIMEOUT_S, wait_until, wait_until_async
 
-import asyncio
-import inspect
-import time
-from collections.abc import Awaitable, Callable
-from typing import Any, TypeVar
-
-T = TypeVar("T")
-
-TIMEOUT_S = 30.0  # the default deadline: a loaded 2-core machine is slow, not this slow
-
-
-def _fail(what: str, timeout: float, last: object, show: Callable[[], object] | None) -> None:
-    seen = show() if show is not None else last
-    raise AssertionError(f"timed out after {timeout:g} s waiting for {what}; "
-                         f"last seen: {seen!r}")
-
-
-def wait_until(probe: Callable[[], T], timeout: float = TIMEOUT_S, what: str = "the condition",
-               *, interval: float = 0.05, show: Callable[[], object] | None = None) -> T:
-    """Poll ``probe`` until its value is truthy; return that value (sync)."""
-    end = time.monotonic() + timeout
-    while True:
-        value = probe()
-        if value:
-            return value
-        if time.monotonic() >= end:
-            _fail(what, timeout, value, show)
-        time.sleep(interval)
-
-
-async def wait_until_async(probe: Callable[[], T | Awaitable[T]], timeout: float = TIMEOUT_S,
-                           what: str = "the condition", *, interval: float = 0.05,
-                           show: Callable[[], object] | None = None,
-                           each: Callable[[], Any] | None = None) -> T:
-    """Poll ``probe`` (a function or a coroutine function) until its value is truthy (async).
-
-    ``each`` is called (and awaited, if it returns an awaitable) before every poll."""
-    loop = asyncio.get_running_loop()
-    end = loop.time() + timeout
-    while True:
-        if each is not None:
-            done = each()
-            if inspect.isawaitable(done):
-                await done
-        value = probe()
-        if inspect.isawaitable(value):
-            value = await value
-        if value:
-            return value  # type: ignore[return-value]
-        if loop.time() >= end:
-            _fail(what, timeout, value, show)
-        await asyncio.sleep(interval)
+__all__ = ["TIMEOUT_S", "wait_until", "wait_until_async"]

@@ -8,6 +8,8 @@ the kernel never hands such a port to anybody's ``bind(0)`` or ``connect()``. A 
 ``bind(0)`` and released is the next ``bind(0)``'s to take: the emulated robot's devices bind
 theirs so, and one once took the zenoh endpoint's, which made its driver dial zenoh instead of
 the device. Only another explicit chooser can take a port between this check and its bind.
+For that rare case, ``CLASH`` is the text every listener here reports and ``clashed(text)``
+lets a starter retry on a fresh port; ``zenoh_endpoint()`` is a fresh zenoh endpoint so.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ import socket
 from pathlib import Path
 
 LOWEST = 20000  # above the well-known and most registered services
+CLASH = ("Address already in use", "EADDRINUSE")  # CPython and Rust; MicroPython
 
 
 def _ephemeral_low() -> int:
@@ -43,3 +46,13 @@ def free_port(kind: socket.SocketKind = socket.SOCK_STREAM) -> int:
         if _free(port, kind):
             return port
     raise RuntimeError(f"no free port between {LOWEST} and {high}")
+
+
+def zenoh_endpoint() -> str:
+    """A zenoh endpoint on a port from ``free_port()``."""
+    return f"tcp/127.0.0.1:{free_port()}"
+
+
+def clashed(text: str) -> bool:
+    """True when a listener failed because another process took its port first."""
+    return any(c in text for c in CLASH)

@@ -134,7 +134,7 @@ class LaunchedRobot:
         hello = await arequest(emu.control_url, {"op": "hello"})
         boot = {str(k): float(v) / 1000.0 for k, v in dict(hello.get("boot_ms", {})).items()}
         env = {"DXBOARD_DEVICES": json.dumps(emu.devices)} if emu.devices else {}
-        return emu.board_url, emu.key, env, boot, {d: emu.process.pid for d in emu.devices}
+        return emu.board_url, emu.key, env, boot, {d: emu.proc.pid for d in emu.devices}
 
     async def __aexit__(self, exc_type: type[BaseException] | None,
                         exc: BaseException | None, tb: TracebackType | None) -> None:

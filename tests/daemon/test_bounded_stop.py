@@ -13,11 +13,11 @@ from pathlib import Path
 
 import pytest
 
+from benchmarks._rigs.hostile import HostileBoard
+from benchmarks._rigs.stopper import StoppedRun, alive
 from host.daemon.core import JOURNAL_S, STOP_BUDGET_S
 from host.launch.emulated import STOP_GRACE_S
 from host.launch.signals import DEADLINE_S
-from tests.daemon.hostile import HostileBoard
-from tests.daemon.stopper import StoppedRun, alive
 from tests.host.emulate import ROOT
 from tests.wait import wait_until
 

@@ -3,7 +3,7 @@
 The finding: with the journal and node logs on a full 3 MB tmpfs, a lidar hang was diagnosed,
 the repair stopped at ``stop_node(hokuyo_node) started`` for good, the robot was not healthy
 90 s after space was freed, and only stderr said anything. Here a real daemon on a real tmpfs
-(``tests.daemon.disk_scenario``): the hang is repaired while the disk is full, the page and
+(``benchmarks._rigs.disk``): the hang is repaired while the disk is full, the page and
 ``/api/status`` say "journal: disk full, N entries held", the terminal says it once and says
 once that it writes again, the node restarted on the full disk runs with its output to
 /dev/null (said once), and after the space returns every entry the daemon recorded is in the
@@ -15,7 +15,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from tests.daemon.disk_scenario import full_disk_run
+from benchmarks._rigs.disk import full_disk_run
 
 
 def test_a_lidar_hang_is_repaired_on_a_full_disk_and_no_entry_is_lost(tmp_path: Path) -> None:

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
+from benchmarks._rigs.stopper import alive, children
 from tests.daemon.runner import RunningDaemon, fast_copy, key_file, node_processes
-from tests.daemon.stopper import alive, children
 from tests.ros.domain import claim_domain, domain_env
 from tests.wait import wait_until
 

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.daemon.board import Board, daemon
+from host.launch.boards import RunningBoard, daemon_on
 from tests.daemon.runner import actions_started, fast_copy, healthy, key_file, node_processes
 from tests.wait import wait_until
 
@@ -28,9 +28,9 @@ FALSE = ("power_cycle", "power_up", "shutdown", "stop_node")
 
 
 @pytest.fixture
-def board(tmp_path: Path) -> Iterator[tuple[Board, Path, Path]]:
+def board(tmp_path: Path) -> Iterator[tuple[RunningBoard, Path, Path]]:
     system, key = fast_copy(tmp_path), key_file(tmp_path)
-    b = Board(system, key)
+    b = RunningBoard(system, key_file=key)
     try:
         yield b, system, key
     finally:
@@ -38,16 +38,16 @@ def board(tmp_path: Path) -> Iterator[tuple[Board, Path, Path]]:
 
 
 def test_a_daemon_restarted_after_kill_9_repairs_nothing(
-        tmp_path: Path, board: tuple[Board, Path, Path]) -> None:
+        tmp_path: Path, board: tuple[RunningBoard, Path, Path]) -> None:
     b, system, key = board
-    first = daemon(tmp_path / "1", b, system, key)
+    first = daemon_on(tmp_path / "1", b, system, key)
     try:
         first.wait_for(healthy, HEAL_S, "the robot up")
         first.kill()
     finally:
         first.close()
     wait_until(lambda: not node_processes(system), 60, "the killed daemon's nodes gone")
-    second = daemon(tmp_path / "2", b, system, key)
+    second = daemon_on(tmp_path / "2", b, system, key)
     try:
         second.wait_for(healthy, HEAL_S, "the robot healthy again")
         second.settled(3.0)

@@ -3,7 +3,7 @@
 The finding: with the event loop held up, every zenoh/ROS 2 message written one byte into the
 loop's self-pipe (``call_soon_threadsafe``), the pipe filled, and the byte that carries
 SIGINT's number to ``add_signal_handler`` was refused: the signal was lost. Reproduced with a
-real child process (``tests.daemon.flood_child``): the daemon's real topic source flooded at
+real child process (``benchmarks._rigs.flood_child``): the daemon's real topic source flooded at
 2,000 msg/s by a real zenoh publisher, the loop stalled 2 s, a real SIGINT in the stall.
 """
 
@@ -20,17 +20,17 @@ from pathlib import Path
 
 import pytest
 
+from benchmarks._rigs.stopper import alive, children
 from host.launch.signals import EXIT_SECOND, StopSignals
 from host.observers.sources.inbox import Inbox
 from tests.daemon.runner import RunningDaemon
-from tests.daemon.stopper import alive, children
 from tests.host.emulate import ENV, ROOT
 from tests.ports import zenoh_endpoint
 from tests.wait import wait_until
 
 
 def test_sigint_is_heard_under_a_flood_with_the_loop_stalled() -> None:
-    out = subprocess.run([sys.executable, "-m", "tests.daemon.flood_child", zenoh_endpoint(),
+    out = subprocess.run([sys.executable, "-m", "benchmarks._rigs.flood_child", zenoh_endpoint(),
                           "2000", "2"], cwd=ROOT, env=ENV, capture_output=True, text=True,
                          timeout=300)
     assert out.returncode == 0 and "heard SIGINT" in out.stdout, out.stdout + out.stderr

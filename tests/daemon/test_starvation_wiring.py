@@ -35,7 +35,7 @@ async def test_the_scan_observer_reads_the_lidar_chains_processes(tmp_path: Path
                          zenoh_listen=[zenoh_endpoint()])
     async with LaunchedRobot(Launch(system, daemon=opts)) as robot:
         assert robot.emulated is not None
-        emulator = robot.emulated.process.pid
+        emulator = robot.emulated.proc.pid
         assert robot.daemon.opts.device_pids["hokuyo"] == emulator
         probe = _observer(robot, "/scan").probe
         assert isinstance(probe, WaitProbe)

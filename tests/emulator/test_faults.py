@@ -6,6 +6,7 @@ import json
 
 import pytest
 
+from benchmarks._rigs.testhal import config_text
 from emulator import faults as F
 from emulator.model import EmulatorModelError, parse
 from emulator.sim import Emulator
@@ -13,7 +14,6 @@ from firmware import config
 from firmware.hal.storage import FileStorage
 from protocol.constants import E_PROTECTED
 from tests.emulator.conftest import TEDUSAR, tedusar
-from tests.firmware.testhal import config_text
 
 
 def ch(emu: Emulator, name: str) -> dict:  # type: ignore[type-arg]

@@ -173,8 +173,8 @@ async def test_net_skips_measurements_for_a_stuck_writer_only(per_frame: int) ->
     """Net over in-memory streams, on the test HAL's simulated clock; with ``per_frame`` 4
     the free writer gets its readings four a frame, none lost, and the stuck one's gap shows
     in its batches as well."""
+    from benchmarks._rigs.testhal import Rig
     from firmware.net import HARD_CAP, Net
-    from tests.firmware.testhal import Rig
 
     rig = Rig(board={"key": KEY.hex()})
     net = Net(rig.app, "test", 0)

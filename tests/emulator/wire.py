@@ -1,11 +1,11 @@
 """Test helpers: ``dxboard emulate`` as a subprocess, and a minimal native-protocol client.
 
 ``Emulate(*options)`` starts ``dxboard emulate models/tedusar`` with a key in the environment
-and parses the URLs it prints; ``Wire`` is a raw asyncio client on ``protocol.connection``
-(the host's own BoardClient is tested elsewhere; these tests look at the board's bytes).
-``board_bench(rev, flash)`` is an in-process emulator of a board revision on its part models
-(the shipped firmware in one ``micropython`` process) with the tedusar devices on, and
-``devices_on`` puts them back on between tests.
+(the launcher's ``host.launch.boards.RunningBoard``) and parses the URLs it prints; ``Wire`` is
+a raw asyncio client on ``protocol.connection`` (the host's own BoardClient is tested elsewhere;
+these tests look at the board's bytes). ``board_bench(rev, flash)`` is an in-process emulator of
+a board revision on its part models (the shipped firmware in one ``micropython`` process) with
+the tedusar devices on, and ``devices_on`` puts them back on between tests.
 """
 
 from __future__ import annotations
@@ -13,9 +13,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
-import os
-import signal
-import subprocess
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -25,10 +22,10 @@ from emulator import model
 from emulator.board_rt import BoardRuntime
 from emulator.sim import Emulator
 from firmware.hal.storage import FileStorage
+from host.launch.boards import RunningBoard
 from protocol.connection import HOST, Connection
 from protocol.framing import BadFrame
 from protocol.messages import Hello, Message
-from tests.ports import clashed
 
 #: the most fed to a ``Connection`` at once, as the host's transports do: a read after the
 #: client was descheduled may hold more than a ``Decoder`` takes undrained (``BUFFER_CAP``)
@@ -84,54 +81,17 @@ def devices_on(e: Emulator) -> None:
     e.advance(1500)
 
 
-class Emulate:
-    def __init__(self, *options: str, key: bytes | None = KEY) -> None:
-        env = dict(os.environ)
-        env.pop("DXBOARD_KEY", None)
-        if key is not None:
-            env["DXBOARD_KEY"] = key.hex()
-        want = 2 + sum(o in ("--modbus", "--serial", "--can") for o in options)
-        for _ in range(3):  # a port the runtime picked was taken meanwhile: start again
-            err = self._start([DXBOARD, "emulate", str(TEDUSAR), *options], env, want)
-            if not clashed(err):
-                break
-        if err:
-            raise AssertionError("dxboard emulate ended: " + err)
+class Emulate(RunningBoard):
+    """``dxboard emulate models/tedusar OPTIONS`` (the launcher's ``RunningBoard``) with
+    ``key`` (None: no key at all) in its environment; a context manager."""
 
-    def _start(self, argv: list[str], env: dict[str, str], want: int) -> str:
-        """Start it and read ``want`` URLs; "" when it is up, else what it said on exiting."""
-        self.proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                     env=env, text=True, cwd=ROOT)
-        self.urls: dict[str, str] = {}
-        assert self.proc.stdout is not None and self.proc.stderr is not None
-        while len(self.urls) < want:
-            line = self.proc.stdout.readline()
-            if not line:
-                self.proc.wait()
-                return self.proc.stderr.read() or f"exit {self.proc.returncode}"
-            name, _, url = line.strip().partition(": ")
-            self.urls[name] = url
-        return ""
+    def __init__(self, *options: str, key: bytes | None = KEY) -> None:
+        super().__init__(TEDUSAR, *options, key=key, robot=False)
 
     def address(self, name: str = "board") -> tuple[str, int]:
         rest = self.urls[name].split("://", 1)[1]
         host, _, port = rest.rpartition(":")
         return host, int(port)
-
-    def stop(self) -> int:
-        self.proc.send_signal(signal.SIGTERM)
-        try:
-            return self.proc.wait(10)
-        finally:
-            if self.proc.poll() is None:
-                self.proc.kill()
-
-    def __enter__(self) -> Emulate:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        if self.proc.poll() is None:
-            self.stop()
 
 
 class Wire:

@@ -15,9 +15,9 @@ from pathlib import Path
 
 import pytest
 
+from benchmarks._rigs.fulldisk import small_disk
 from host.repair.processes import ProcessConfig
 from host.repair.supervisor import ProcessSupervisor
-from tests.fulldisk import small_disk
 
 SLEEPER = "import time, sys\nprint('up', flush=True)\ntime.sleep(60)\n"
 

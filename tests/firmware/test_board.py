@@ -2,6 +2,7 @@
 
 import unittest
 
+from benchmarks._rigs.testhal import Rig
 from firmware.events import EventLog
 from protocol.constants import (
     B_DEADMAN,
@@ -23,7 +24,6 @@ from protocol.constants import (
     ST_ON,
     ST_TRIPPED,
 )
-from tests.firmware.testhal import Rig
 
 POWERUP = {
     0: {"powerup": True, "priority": 50},

@@ -3,6 +3,7 @@
 import struct
 import unittest
 
+from benchmarks._rigs.testhal import Rig
 from firmware.can import CanNode
 from protocol.can import (
     ID_CHANNEL,
@@ -39,7 +40,6 @@ from protocol.constants import (
     ST_OFF,
     ST_ON,
 )
-from tests.firmware.testhal import Rig
 
 KEY = bytes(range(32))
 KEY_HEX = "".join("%02x" % b for b in KEY)

@@ -2,6 +2,7 @@
 
 import unittest
 
+from benchmarks._rigs.testhal import Rig
 from firmware.channel import TRANSITIONS, X_CLEAR, X_OFF, X_ON, X_SHED
 from protocol.constants import (
     E_LATCHED,
@@ -21,7 +22,6 @@ from protocol.constants import (
     ST_ON,
     ST_TRIPPED,
 )
-from tests.firmware.testhal import Rig
 
 RATED = 1000
 

@@ -3,6 +3,7 @@
 import json
 import unittest
 
+from benchmarks._rigs.testhal import Rig
 from firmware import bootlog, config
 from firmware.hal.storage import MemStorage
 from protocol.constants import (
@@ -19,7 +20,6 @@ from protocol.constants import (
     ST_OFF,
     ST_ON,
 )
-from tests.firmware.testhal import Rig
 
 CHANS = {2: {"powerup": True, "protected": True, "name": "pc"}, 4: {"powerup": True}}
 
@@ -99,8 +99,8 @@ class BootTest(unittest.TestCase):
     def test_factory_defaults_when_given(self):
         r = Rig(channels=CHANS)
         r.hal.storage.files[config.SLOTS[0]] = b"garbage"
+        from benchmarks._rigs.testhal import TestHal
         from firmware.app import App
-        from tests.firmware.testhal import TestHal
 
         hal = TestHal(storage=r.hal.storage)
         factory = {"board": {}, "channels": [{}, {}, {"powerup": True, "protected": True}]}

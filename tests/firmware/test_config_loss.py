@@ -9,6 +9,7 @@ configuration built into its firmware: the computer's channel on and protected, 
 
 import unittest
 
+from benchmarks._rigs.testhal import Rig
 from firmware import config
 from firmware.hal.storage import MemStorage
 from protocol.compat import crc32
@@ -24,7 +25,6 @@ from protocol.constants import (
     ST_ON,
 )
 from protocol.settings import merge
-from tests.firmware.testhal import Rig
 
 PC = 2
 KEY_HEX = "00112233445566778899aabbccddeeff"

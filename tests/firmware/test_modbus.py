@@ -3,9 +3,9 @@
 import struct
 import unittest
 
+from benchmarks._rigs.testhal import Rig, config_text
 from firmware.modbus import Framer, handle
 from protocol.constants import ST_LATCHED, ST_OFF, ST_ON
-from tests.firmware.testhal import Rig, config_text
 
 ALLOWED = "10.0.0.5"
 

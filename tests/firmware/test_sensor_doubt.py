@@ -7,6 +7,7 @@ without the computer."""
 
 import unittest
 
+from benchmarks._rigs.testhal import Rig
 from protocol.constants import (
     EV_FAULT,
     EV_WARNING,
@@ -18,7 +19,6 @@ from protocol.constants import (
     ST_LATCHED,
     ST_ON,
 )
-from tests.firmware.testhal import Rig
 
 PC = 2
 

@@ -5,6 +5,7 @@ switched off for it (issue 27 item 4)."""
 
 import unittest
 
+from benchmarks._rigs.testhal import Rig
 from protocol.constants import (
     EV_FAULT,
     EV_STATE,
@@ -16,7 +17,6 @@ from protocol.constants import (
     ST_OFF,
     ST_ON,
 )
-from tests.firmware.testhal import Rig
 
 CH = 4
 

@@ -2,6 +2,7 @@
 
 import unittest
 
+from benchmarks._rigs.testhal import Rig, config_text
 from firmware.session import Session
 from protocol.connection import HOST, Connection
 from protocol.constants import (
@@ -47,7 +48,6 @@ from protocol.messages import (
     Switched,
 )
 from protocol.settings import check_board, int_to_ip, ip_to_int
-from tests.firmware.testhal import Rig, config_text
 
 KEY = bytes(range(32))
 KEY_HEX = KEY.hex() if hasattr(KEY, "hex") else "".join("%02x" % b for b in KEY)

@@ -3,10 +3,10 @@ on both interpreters: what the original host gets, and what it can never make th
 
 import unittest
 
+from benchmarks._rigs.testhal import Rig
 from firmware.tug import TugSession
 from protocol import tug as tw
 from protocol.constants import ST_LATCHED, ST_TRIPPED
-from tests.firmware.testhal import Rig
 
 CHANNELS = {2: {"protected": True, "powerup": True, "rated_ma": 5000},
             7: {"rated_ma": 1000, "short_retries": 0, "retry_ms": [], "inrush_ms": 0}}

@@ -1,6 +1,6 @@
 """End to end with real parts: three emulated robots, the real Prometheus and Alertmanager.
 
-Three lightweight robots (``tests/fleet/lite.py``: board emulator plus daemon each, no nodes)
+Three lightweight robots (``benchmarks/_rigs/robots.py``: board emulator plus daemon each, no nodes)
 run as ``dxboard run --emulate --robot rover-N --site lab``; Prometheus scrapes them every
 second and evaluates the shipped rules (a copy with the fault alert's ``for:`` cut to a few
 seconds), sending alerts to Alertmanager; ``dxboard fleet`` serves its page from that
@@ -28,9 +28,9 @@ from typing import Any
 import pytest
 import yaml
 
+from benchmarks._rigs.robots import lite_model
+from host.launch.prometheus import alertmanager, get_json, prometheus, query
 from tests.daemon.runner import RunningDaemon
-from tests.fleet.lite import lite_model
-from tests.fleet.servers import alertmanager, get_json, prometheus, query
 from tests.wait import wait_until
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -26,8 +26,8 @@ from host.events import (
 )
 from host.fleet.metrics import FleetMetrics, LagProbe
 from host.journal import Journal
+from host.launch.prometheus import prometheus, query
 from host.web import MemoryStatusSource
-from tests.fleet.servers import prometheus, query
 from tests.web.demo import demo_status
 
 ROOT = Path(__file__).resolve().parents[2]

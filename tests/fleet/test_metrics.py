@@ -15,6 +15,7 @@ from pathlib import Path
 import aiohttp
 import pytest
 
+from benchmarks._rigs.robots import lite_model
 from host.events import (
     ActionRecord,
     ActionState,
@@ -31,7 +32,6 @@ from host.journal import Journal
 from host.web import MemoryStatusSource, WebServer
 from host.web.status import ChannelView, Status
 from tests.daemon.runner import RunningDaemon
-from tests.fleet.lite import lite_model
 from tests.fleet.tools import promtool, samples
 from tests.wait import wait_until, wait_until_async
 from tests.web.demo import demo_status

@@ -7,9 +7,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from benchmarks._rigs.robots import lite_model
+from host.launch.prometheus import prometheus, prometheus_agent, query
 from tests.daemon.runner import RunningDaemon
-from tests.fleet.lite import lite_model
-from tests.fleet.servers import prometheus, prometheus_agent, query
 from tests.wait import wait_until
 
 

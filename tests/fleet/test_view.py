@@ -11,7 +11,7 @@ import aiohttp
 
 from host.fleet.view import FleetView
 from host.launch.ports import free_port
-from tests.fleet.servers import prometheus, query
+from host.launch.prometheus import prometheus, query
 from tests.wait import wait_until_async
 
 ROOT = Path(__file__).resolve().parents[2]

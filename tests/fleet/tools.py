@@ -10,22 +10,22 @@ returns its exit code and output; ``samples(text)`` reads an exposition into
 from __future__ import annotations
 
 import re
-import shutil
 import subprocess
 
 import pytest
 
+from host.errors import UserError
+from host.launch.prometheus import binary
+
 SAMPLE = re.compile(r'^([a-zA-Z_:][a-zA-Z0-9_:]*)(\{.*\})? (\S+)$')
-NAMES = {"alertmanager": ("prometheus-alertmanager", "alertmanager")}
 
 
 def tool(name: str) -> str:
-    for candidate in NAMES.get(name, (name,)):
-        path = shutil.which(candidate)
-        if path is not None:
-            return path
-    pytest.fail(f"{name} is not installed: run scripts/ensure-prometheus (as root) or "
-                "apt-get install prometheus prometheus-alertmanager")
+    """The launcher's ``binary(name)``; a missing one fails the test saying how to install it."""
+    try:
+        return binary(name)
+    except UserError as exc:
+        pytest.fail(str(exc))  # "prometheus is not installed (run scripts/ensure-...)"
 
 
 def promtool(*args: str, stdin: str | None = None, cwd: str | None = None) -> tuple[int, str]:

@@ -15,6 +15,7 @@ import asyncio
 
 import pytest
 
+from benchmarks._rigs.testhal import config_text
 from host.board import BoardClient, LinkDown, LinkUp, Reading, Rebooted
 from host.transports import memory, open_transport, parse
 from host.transports.errors import (
@@ -30,7 +31,6 @@ from host.transports.errors import (
 from protocol.constants import ST_OFF, ST_ON
 from protocol.framing import encode_frame
 from protocol.messages import Hello, State
-from tests.firmware.testhal import config_text
 from tests.host.memboard import KEY, MemoryBoard, tedusar
 from tests.wait import wait_until_async
 

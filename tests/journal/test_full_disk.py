@@ -14,9 +14,9 @@ from pathlib import Path
 
 import pytest
 
+from benchmarks._rigs.fulldisk import small_disk
 from host.events import Note
 from host.journal import Journal
-from tests.fulldisk import small_disk
 from tests.wait import wait_until
 
 T0 = 1_700_000_000.0

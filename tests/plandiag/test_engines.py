@@ -15,6 +15,7 @@ from functools import cache
 
 import pytest
 
+from benchmarks._rigs.synth import Generated, synthetic_history, synthetic_model
 from host.diagnosis.result import Bound
 from host.plandiag.context import Context, interpret_context
 from host.plandiag.engines import ENGINES
@@ -24,7 +25,6 @@ from host.plandiag.limits import Limits, Order
 from host.plandiag.model import PlanModel
 from host.plandiag.problem import simulate
 from host.plandiag.region import Region, fault_region
-from tests.plandiag.synth import Generated, synthetic_history, synthetic_model
 
 CASES = 150
 DOMAINS = 6  # distinct random domains (parsing one costs ~0.3 s)

@@ -51,7 +51,7 @@ class DescribeTest(unittest.TestCase):
 
 class FirmwareEventsTest(unittest.TestCase):
     def test_the_firmwares_brownout_warning_decodes_right(self):
-        from tests.firmware.testhal import Rig
+        from benchmarks._rigs.testhal import Rig
 
         r = Rig(board={"uv_warn_mv": 21000, "uv_shed_mv": 20400, "uv_off_mv": 19800})
         r.run(100)
@@ -64,7 +64,7 @@ class FirmwareEventsTest(unittest.TestCase):
         self.assertEqual(warnings[-1]["board_flags"], ["uv_warn", "uv_shed", "uv_off"])
 
     def test_the_firmwares_deadman_warning_decodes_right(self):
-        from tests.firmware.testhal import Rig
+        from benchmarks._rigs.testhal import Rig
 
         r = Rig(board={"deadman_ms": 500})
         r.run(100)

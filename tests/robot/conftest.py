@@ -29,6 +29,8 @@ import yaml
 import zenoh
 
 from host.commands.inject import request
+from host.launch.boards import RunningBoard
+from host.launch.procs import Child
 from tests.ports import clashed, zenoh_endpoint
 from tests.wait import wait_until
 
@@ -51,44 +53,16 @@ def robot_dir(tmp_path: Path) -> Path:
     return d
 
 
-class Robot:
-    """One ``dxboard emulate DIR --robot [EXTRA...]`` process: board, control and device URLs
-    (and ``world`` with ``--world``)."""
+class Robot(RunningBoard):
+    """One ``dxboard emulate DIR --robot [EXTRA...]`` process (the launcher's ``RunningBoard``)
+    with the tests' key: board, control and device URLs (and ``world`` with ``--world``), and
+    what a test asks of it."""
 
     def __init__(self, system_dir: Path, *extra: str) -> None:
-        self.env = {**os.environ, "DXBOARD_KEY": KEY_HEX}
-        self.proc = subprocess.Popen([DXBOARD, "emulate", str(system_dir), "--robot", *extra],
-                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                     env=self.env, cwd=ROOT)
-        self.urls: dict[str, str] = {}
-        self.devices: dict[str, str] = {}
-        n = len(yaml.safe_load((system_dir / "robot.yaml").read_text())["devices"])
-        assert self.proc.stdout is not None
-        while len(self.devices) < n or ("--world" in extra and "world" not in self.urls):
-            line = self.proc.stdout.readline()
-            if not line:
-                err = self.proc.stderr.read() if self.proc.stderr else ""
-                raise RuntimeError(f"dxboard emulate --robot did not start: {err}")
-            name, _, url = line.strip().partition(": ")
-            if name == "device":
-                dev, _, url = url.partition(" ")
-                self.devices[dev] = url
-            else:
-                self.urls[name] = url
+        super().__init__(system_dir, *extra, key=bytes.fromhex(KEY_HEX))
 
     def port(self, device: str) -> int:
         return int(self.devices[device].rsplit(":", 1)[1])
-
-    def board(self, *args: str) -> str:
-        p = subprocess.run([DXBOARD, "board", self.urls["board"], *args], capture_output=True,
-                           text=True, env=self.env, timeout=20)
-        assert p.returncode == 0, p.stderr
-        return p.stdout
-
-    def inject(self, channel: str, fault: str, *params: str) -> None:
-        p = subprocess.run([DXBOARD, "inject", self.urls["control"], channel, fault, *params],
-                           capture_output=True, text=True, timeout=20)
-        assert p.returncode == 0, p.stderr
 
     def now_ms(self) -> int:
         """The emulator's clock, the one every device frame's ``t_ms`` is stamped with."""
@@ -101,16 +75,6 @@ class Robot:
         found: dict[str, Any] = next(c for c in status["state"]["channels"]
                                      if c["name"] == name)
         return found
-
-    def stop(self) -> int:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-            try:
-                self.proc.wait(10)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait(10)
-        return self.proc.returncode
 
 
 class Conn:
@@ -274,43 +238,39 @@ class Topics:
 
 
 class Nodes:
-    """Node processes: ``python -m emulator.robot.node NAME DIR``, stopped at the end."""
+    """Node processes: ``python -m emulator.robot.node NAME DIR [EXTRA]``, each a launcher's
+    ``host.launch.procs.Child``, stopped at the end (SIGTERM, SIGKILL if one hangs)."""
 
     def __init__(self, system_dir: Path, robot: Robot, topics: Topics) -> None:
         self.system_dir = system_dir
         self.env = {**os.environ, "DXBOARD_ZENOH": topics.endpoint,
                     "DXBOARD_DEVICES": json.dumps(robot.devices),
                     "PYTHONPATH": str(ROOT)}
-        self.procs: dict[str, subprocess.Popen[str]] = {}
+        self.children: dict[str, Child] = {}
 
-    def start(self, *names: str) -> None:
+    @property
+    def procs(self) -> dict[str, subprocess.Popen[bytes]]:
+        return {name: c.proc for name, c in self.children.items()}
+
+    def start(self, *names: str, extra: tuple[str, ...] = ()) -> None:
         for name in names:
-            self.procs[name] = subprocess.Popen(
-                [sys.executable, "-m", "emulator.robot.node", name, str(self.system_dir)],
-                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=self.env,
-                cwd=ROOT)
+            self.children[name] = Child(
+                [sys.executable, "-m", "emulator.robot.node", name, str(self.system_dir),
+                 *extra], env=self.env, cwd=ROOT, name=name, keep_err=100000)
 
     def running(self, name: str) -> bool:
-        return self.procs[name].poll() is None
+        return self.children[name].running()
 
     def stop(self, name: str) -> int:
-        p = self.procs[name]
-        if p.poll() is None:
-            p.send_signal(signal.SIGTERM)
-            try:
-                p.wait(10)
-            except subprocess.TimeoutExpired:
-                p.kill()
-                p.wait(10)
-        return p.returncode
+        return self.children[name].stop(signal.SIGTERM, 10)
 
     def log(self, name: str) -> str:
-        p = self.procs[name]
+        """Its stderr (once stopped)."""
         self.stop(name)
-        return p.stderr.read() if p.stderr else ""
+        return "".join(line + "\n" for line in self.children[name].err_tail)
 
     def stop_all(self) -> None:
-        for name in self.procs:
+        for name in self.children:
             self.stop(name)
 
 

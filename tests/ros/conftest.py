@@ -16,8 +16,6 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-import subprocess
-import sys
 import threading
 import time
 from collections.abc import Iterator
@@ -121,14 +119,11 @@ class RosNodes(Nodes):
         self.system_dir = system_dir
         self.env = {**env, "DXBOARD_MIDDLEWARE": "ros2",
                     "DXBOARD_DEVICES": json.dumps(robot.devices), "PYTHONPATH": str(ROOT)}
-        self.procs: dict[str, subprocess.Popen[str]] = {}
+        self.children = {}
 
     def start_managed(self, name: str) -> None:
         """Start driver ``name`` as a managed (lifecycle) node."""
-        self.procs[name] = subprocess.Popen(
-            [sys.executable, "-m", "emulator.robot.node", name, str(self.system_dir),
-             "--managed"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-            env=self.env, cwd=ROOT)
+        self.start(name, extra=("--managed",))
 
 
 @pytest.fixture

@@ -1,45 +1,8 @@
-"""A ROS 2 DDS domain of a test's own (no rclpy here: importable by any test that starts ROS 2
-processes, e.g. the daemon's end-to-end tests parametrized over the middleware).
-
-``claim_domain()`` picks a ``ROS_DOMAIN_ID`` from the test process's pid and holds an exclusive
-lock file per domain (``/tmp/dxboard-ros-domain-N.lock``) until the block ends, so two suites
-beside each other, or two tests of one, never share a domain. ``domain_env(d)`` is what a
-process needs to use it, with discovery kept on this machine.
+"""A ROS 2 DDS domain of a test's own: the launcher's ``host.launch.domains`` (one copy for the
+tests and the benchmarks): ``claim_domain()`` holds a free ``ROS_DOMAIN_ID`` until the block
+ends, ``domain_env(d)`` is what a process needs to use it, discovering on this host only.
 """
 
-from __future__ import annotations
+from host.launch.domains import claim_domain, domain_env
 
-import contextlib
-import fcntl
-import os
-from collections.abc import Iterator
-from pathlib import Path
-
-DOMAINS = 100  # 1..100: Fast DDS's port formula fits them all on one host
-_counter = [0]
-
-
-@contextlib.contextmanager
-def claim_domain() -> Iterator[int]:
-    """A free domain id, held (by a lock file) until the block ends."""
-    _counter[0] += 1
-    start = (os.getpid() * 7 + _counter[0]) % DOMAINS
-    for i in range(DOMAINS):
-        d = 1 + (start + i) % DOMAINS
-        f = Path(f"/tmp/dxboard-ros-domain-{d}.lock").open("w")  # noqa: SIM115 - held
-        try:
-            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            f.close()
-            continue
-        try:
-            yield d
-        finally:
-            f.close()
-        return
-    raise RuntimeError("every ROS 2 domain 1..100 is taken by other tests")
-
-
-def domain_env(domain: int) -> dict[str, str]:
-    """The variables that put a ROS 2 process on ``domain``, discovering on this host only."""
-    return {"ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+__all__ = ["claim_domain", "domain_env"]

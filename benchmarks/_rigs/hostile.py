@@ -16,7 +16,7 @@ robot whose board is wrong, broken or not a board at all:
 - ``echo``: sends back whatever it is sent;
 - ``refused``: nothing listens there (a closed port);
 - ``wrong_key`` is not one of these: a real ``dxboard emulate`` with another key
-  (``tests.host.emulate.Emulate``).
+  (``host.launch.boards.RunningBoard``).
 """
 
 from __future__ import annotations

@@ -1,10 +1,12 @@
-"""The real Prometheus and Alertmanager, started for a test or a benchmark and always stopped.
+"""The real Prometheus and Alertmanager beside a fleet of daemons, started and always stopped.
 
-``alertmanager(tmp)`` and ``prometheus(tmp, targets, ...)`` are context managers that start
-Debian's binaries on free loopback ports (``host.launch.ports``; a port taken meanwhile by
-another process is retried on a fresh one) with their data in ``tmp``, wait until the server
-says it is ready (``/-/ready``, polled until a generous deadline), yield its base URL, and in a
-``finally`` stop it (SIGTERM, then SIGKILL if it hangs) whatever happened. The configurations
+For the tests and benchmarks of the fleet view. ``alertmanager(tmp)`` and ``prometheus(tmp,
+targets, ...)`` are context managers that start Debian's binaries (``binary(name)``; a missing
+one is a ``UserError`` saying how to install it) as ``host.launch.procs.Child`` on free
+loopback ports (``host.launch.ports``; a port taken meanwhile by another process is retried on
+a fresh one) with their data in ``tmp``, wait until the server says it is ready (``/-/ready``,
+polled until a generous deadline), yield its base URL, and in a ``finally`` stop it (SIGTERM,
+then SIGKILL if it hangs) whatever happened. The configurations
 are the shipped ones in deploy/ (the Prometheus ones with the test's targets and intervals).
 Alertmanager runs alone (no cluster port). Prometheus scrapes ``targets`` (``host:port`` of
 daemons, keeping their ``robot`` and ``site`` labels) every ``scrape_s`` and evaluates
@@ -17,22 +19,35 @@ from __future__ import annotations
 
 import contextlib
 import json
-import subprocess
+import shutil
+import signal
 import urllib.parse
 import urllib.request
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
 import yaml
 
-from host.launch.ports import free_port
-from tests.fleet.tools import tool
-from tests.ports import clashed
-from tests.wait import wait_until
+from host.errors import UserError
+from host.launch.ports import clashed, free_port
+from host.launch.procs import Child
 
 READY_S = 120.0  # a busy machine starts Prometheus in seconds; this only bounds a failure
+STOP_GRACE_S = 30.0
 DEPLOY = Path(__file__).resolve().parents[2] / "deploy"
+NAMES = {"alertmanager": ("prometheus-alertmanager", "alertmanager")}  # Debian's, upstream's
+
+
+def binary(name: str) -> str:
+    """The path of ``promtool``, ``prometheus`` or ``alertmanager``."""
+    for candidate in NAMES.get(name, (name,)):
+        path = shutil.which(candidate)
+        if path is not None:
+            return path
+    raise UserError(f"{name} is not installed",
+                    "run scripts/ensure-prometheus (as root) or apt-get install prometheus "
+                    "prometheus-alertmanager")
 
 
 def get_json(url: str, timeout: float = 10.0) -> Any:
@@ -51,42 +66,39 @@ def query(url: str, promql: str) -> list[dict[str, Any]]:
 def _ready(url: str) -> bool:
     try:
         with urllib.request.urlopen(f"{url}/-/ready", timeout=5) as r:
-            return r.status == 200
+            return bool(r.status == 200)
     except OSError:
         return False
+
+
+def _answers(url: str) -> Callable[[Child], bool]:
+    return lambda _child: _ready(url)
 
 
 @contextlib.contextmanager
 def _server(name: str, argv: Sequence[str], log: Path) -> Iterator[str]:
     """Start ``argv`` (with ``{port}`` filled in) until it gets a port; yield its URL."""
-    proc: subprocess.Popen[bytes] | None = None
+    child: Child | None = None
     try:
         for _ in range(5):
             port = free_port()
-            with log.open("ab") as out:
-                proc = subprocess.Popen([a.format(port=port) for a in argv], stdout=out,
-                                        stderr=subprocess.STDOUT, start_new_session=True)
             url = f"http://127.0.0.1:{port}"
-
-            def up(p: subprocess.Popen[bytes] = proc, u: str = url) -> bool | None:
-                return True if _ready(u) else (None if p.poll() is None else False)
-
-            state = wait_until(lambda: up() is not None, READY_S, f"{name} to be ready",
-                               interval=0.2, show=lambda: log.read_text()[-2000:])
-            if state and up():
+            child = Child([a.format(port=port) for a in argv], stderr=log, name=name)
+            try:
+                up = child.wait_ready(_answers(url), READY_S, poll_s=0.2)
+            except TimeoutError:
+                raise AssertionError(f"{name} not ready after {READY_S:g} s: "
+                                     f"{log.read_text()[-2000:]}") from None
+            if up and child.running():
                 yield url
                 return
+            child.stop()
             if not clashed(log.read_text()):
                 raise AssertionError(f"{name} exited: {log.read_text()[-2000:]}")
         raise AssertionError(f"{name}: no free port in 5 tries")
     finally:
-        if proc is not None and proc.poll() is None:
-            proc.terminate()
-            try:
-                proc.wait(30)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+        if child is not None:
+            child.stop(signal.SIGTERM, STOP_GRACE_S)
 
 
 @contextlib.contextmanager
@@ -95,7 +107,7 @@ def alertmanager(tmp: Path) -> Iterator[str]:
     here: notifications fail, the API still holds every alert)."""
     tmp.mkdir(parents=True, exist_ok=True)
     with _server("alertmanager", [
-            tool("alertmanager"), f"--config.file={DEPLOY / 'alertmanager' / 'alertmanager.yml'}",
+            binary("alertmanager"), f"--config.file={DEPLOY / 'alertmanager' / 'alertmanager.yml'}",
             f"--storage.path={tmp / 'data'}", "--web.listen-address=127.0.0.1:{port}",
             "--cluster.listen-address="], tmp / "alertmanager.log") as url:
         yield url
@@ -120,7 +132,7 @@ def prometheus(tmp: Path, targets: Sequence[str], *, rules: Sequence[Path] = (),
         del config["alerting"]
     (tmp / "prometheus.yml").write_text(yaml.safe_dump(config))
     with _server("prometheus", [
-            tool("prometheus"), f"--config.file={tmp / 'prometheus.yml'}",
+            binary("prometheus"), f"--config.file={tmp / 'prometheus.yml'}",
             f"--storage.tsdb.path={tmp / 'data'}", "--web.listen-address=127.0.0.1:{port}",
             "--rules.alert.resend-delay=1s", *extra], tmp / "prometheus.log") as url:
         yield url
@@ -140,7 +152,7 @@ def prometheus_agent(tmp: Path, targets: Sequence[str], remote_write: str,
                                      queue_config={"batch_send_deadline": "1s"})
     (tmp / "agent.yml").write_text(yaml.safe_dump(config))
     with _server("prometheus agent", [
-            tool("prometheus"), "--enable-feature=agent", f"--config.file={tmp / 'agent.yml'}",
+            binary("prometheus"), "--enable-feature=agent", f"--config.file={tmp / 'agent.yml'}",
             f"--storage.agent.path={tmp / 'data'}", "--web.listen-address=127.0.0.1:{port}"],
             tmp / "agent.log") as url:
         yield url

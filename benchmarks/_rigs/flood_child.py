@@ -1,7 +1,7 @@
 """A child process for the signal tests and ``benchmarks/stops.py``: the daemon's topic delivery
 flooded while its event loop is held up, then a real SIGINT.
 
-``python -m tests.daemon.flood_child ENDPOINT RATE STALL_S [--asyncio]`` opens the daemon's real
+``python -m benchmarks._rigs.flood_child ENDPOINT RATE STALL_S [--asyncio]`` opens the daemon's real
 topic source (``ZenohSource`` listening on ENDPOINT), a zenoh publisher (a second session, on a
 thread) that sends RATE messages a second to it, and hears SIGINT/SIGTERM the way ``dxboard
 run`` does (``host.launch.signals.StopSignals``; on code from before issue 25, which has no such

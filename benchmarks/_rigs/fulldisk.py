@@ -1,6 +1,6 @@
 """A real small filesystem that really fills up: a tmpfs of a few MB mounted by the test.
 
-``small_disk(directory, size="3m")`` mounts a tmpfs on ``directory`` (the tests run as root) and
+``small_disk(directory, size="3m")`` mounts a tmpfs on ``directory`` (the suite runs as root) and
 always unmounts it on the way out, even when the test fails; the ``SmallDisk`` it yields fills
 the disk with one file (``fill()``: writes until the kernel answers ENOSPC) and frees the space
 by deleting that file (``free()``). Nothing is simulated: the journal and the node logs on it

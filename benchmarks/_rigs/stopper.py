@@ -1,11 +1,12 @@
 """``dxboard run --board URL`` as a real process, signalled and timed: how long its stop takes.
 
 ``StoppedRun.against(url, tmp)`` starts the daemon on a board URL (a hostile board, a real
-emulator), waits until it printed its URLs (it is up, whatever the board does), lets it meet
-the board for ``meet_s`` (so that the stop starts while the link is being tried, failing or
-reconnecting), sends ``sig`` and returns the seconds from the signal to the exit, the exit
-code and what it said. The daemon is killed (with its process group) if it outlives
-``give_up_s``, so nothing is left behind when a test fails.
+emulator) as a ``host.launch.procs.Child``, waits until it printed its URLs (it is up, whatever
+the board does), lets it meet the board for ``meet_s`` (so that the stop starts while the link
+is being tried, failing or reconnecting), sends ``sig`` and returns the seconds from the
+signal to the exit, the exit code and what it said. The daemon is killed (with its process
+group) if it outlives ``give_up_s``, so nothing is left behind when a test fails.
+``children(pid)`` and ``alive(pids)`` follow the processes it started.
 """
 
 from __future__ import annotations
@@ -15,14 +16,14 @@ import os
 import signal
 import subprocess
 import sys
-import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from tests.host.emulate import ENV, ROOT
-from tests.ports import zenoh_endpoint
-from tests.wait import wait_until
+from host.launch.ports import zenoh_endpoint
+from host.launch.procs import Child
+from host.launch.running import ROOT, TEDUSAR
+from host.launch.waiting import wait_until
 
 
 @dataclass
@@ -36,38 +37,34 @@ class StoppedRun:
     def against(cls, url: str, tmp: Path, key_hex: str = "ab" * 16, meet_s: float = 8.0,
                 sig: int = signal.SIGTERM, give_up_s: float = 120.0,
                 extra: tuple[str, ...] = ()) -> StoppedRun:
-        argv = [sys.executable, "-m", "host.cli", "run", str(ROOT / "models" / "tedusar"),
+        argv = [sys.executable, "-m", "host.cli", "run", str(TEDUSAR),
                 "--board", url, "--web", "127.0.0.1:0", "--journal", str(tmp / "j.sqlite"),
                 "--zenoh", zenoh_endpoint(), *extra]
-        proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE,
-                                stderr=subprocess.STDOUT, text=True, start_new_session=True,
-                                env={**ENV, "DXBOARD_KEY": key_hex})
-        lines: list[str] = []
-        reader = threading.Thread(target=lambda: lines.extend(proc.stdout or ()), daemon=True)
-        reader.start()
+        env = {**os.environ, "PYTHONPATH": str(ROOT), "DXBOARD_KEY": key_hex}
+        child = Child(argv, cwd=ROOT, env=env, merge_stderr=True, name="dxboard run")
+        proc = child.proc
         try:
-            wait_until(lambda: any(x.startswith("journal: ") for x in lines) or
-                       proc.poll() is not None, give_up_s, "the daemon up",
-                       show=lambda: lines[-20:])
-            if proc.poll() is not None:
-                raise AssertionError("dxboard run exited: " + "".join(lines[-20:]))
+            try:
+                up = child.wait_ready(lambda c: any(x.startswith("journal: ") for x in c.lines),
+                                      give_up_s)
+            except TimeoutError:
+                raise AssertionError("dxboard run not up: "
+                                     + "\n".join(child.lines[-20:])) from None
+            if not up:
+                raise AssertionError("dxboard run exited: " + "\n".join(child.lines[-20:]))
             end = time.monotonic() + meet_s
             wait_until(lambda: time.monotonic() >= end, meet_s + 60, "the board met")
             kids = children(proc.pid)
             t0 = time.monotonic()
-            proc.send_signal(sig)
+            child.send(sig)
             try:
                 code = proc.wait(give_up_s)
-            except subprocess.TimeoutExpired:
-                code = -999  # never stopped: the caller's assertion says so
+            except subprocess.TimeoutExpired:  # never stopped
+                code = -999  # the caller's assertion says so
             seconds = time.monotonic() - t0
         finally:
-            if proc.poll() is None:
-                with contextlib.suppress(ProcessLookupError):
-                    os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait()
-            reader.join(5)
-        return cls(seconds, code, [x.rstrip("\n") for x in lines], kids)
+            child.stop(signal.SIGKILL, 10, group=True)  # only if it still runs
+        return cls(seconds, code, list(child.lines), kids)
 
 
 def children(pid: int) -> list[int]:

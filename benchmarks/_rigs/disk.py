@@ -1,15 +1,16 @@
 """Issue 25 item 4 end to end: a real daemon repairs a lidar hang while its disk is full.
 
 ``full_disk_run(tmp)`` runs the fast virtual TEDUSAR robot under ``dxboard run --emulate``
-(Zenoh: the lighter middleware) with its journal and node logs on a 3 MB tmpfs the run mounts
-(``tests.fulldisk``), and, once the robot is healthy: fills the disk and waits until the daemon
-says so (``/api/status``: ``journal.problem``); injects ``hokuyo hang`` and waits until the
-robot is healthy again after a power cycle of the lidar that started after the fault (while
-the disk is still full); frees the space and waits until every entry the daemon had recorded
-by then (``dxboard_journal_recorded_entries_total`` on ``/metrics``; ids come without gaps) is
-in the journal file; stops the daemon with SIGINT and counts the entries the daemon said it
-recorded that are not in the journal. The test (tests/daemon/test_full_disk.py) asserts on the
-``FullDiskRun`` it returns, and ``benchmarks/disk.py`` reports its times.
+(Zenoh: the lighter middleware) with its journal and node logs on a 3 MB tmpfs the run
+mounts (``benchmarks._rigs.fulldisk``), and, once the robot is healthy: fills the disk and
+waits until the daemon says so (``/api/status``: ``journal.problem``); injects ``hokuyo
+hang`` and waits until the robot is healthy again after a power cycle of the lidar that
+started after the fault (while the disk is still full); frees the space and waits until every
+entry the daemon had recorded by then (``dxboard_journal_recorded_entries_total`` on
+``/metrics``; ids come without gaps) is in the journal file; stops the daemon with SIGINT and
+counts the entries the daemon said it recorded that are not in the journal. The test
+(tests/daemon/test_full_disk.py) asserts on the ``FullDiskRun`` it returns, and
+``benchmarks/disk.py`` reports its times.
 """
 
 from __future__ import annotations
@@ -21,9 +22,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from tests.daemon.runner import MIN_WAIT_S, RunningDaemon, fast_copy, healthy, key_file
-from tests.fulldisk import small_disk
-from tests.wait import wait_until
+from benchmarks._rigs.fulldisk import small_disk
+from benchmarks._rigs.robots import fast_copy, key_file
+from host.launch.running import MIN_WAIT_S, RunningDaemon, healthy
+from host.launch.waiting import wait_until
 
 HEAL_S = 120.0
 
