@@ -17,13 +17,40 @@ sockets stand in for the interface, and ``run()`` says so.
 
 import json
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from collections.abc import Callable
+    from typing import Any, Protocol
+
+    class Nic(Protocol):
+        """A network interface of the port (``network.LAN()``, ``network.WLAN(STA_IF)``)."""
+
+        def active(self, on: "bool | None" = None) -> bool: ...
+
+        def isconnected(self) -> bool: ...
+
+        def ifconfig(self) -> "tuple[str, str, str, str]": ...
+
+        def connect(self, ssid: str, key: str) -> None: ...
+
+        def status(self) -> int: ...
+
+    class Network(Protocol):
+        """The port's ``network`` module, as far as ``boot.py`` and ``main.py`` use it (``LAN``
+        only where the port has one: looked up with ``hasattr``)."""
+
+        STA_IF: int
+
+        def LAN(self) -> Nic: ...
+
+        def WLAN(self, interface: int) -> Nic: ...
+
 WIFI_FILE = "wifi.json"
 LAN_WAIT_MS = 3000
 WIFI_WAIT_MS = 15000
 POLL_MS = 100
 
 
-def read_wifi(path: str = WIFI_FILE) -> "dict | None":  # type: ignore[type-arg]
+def read_wifi(path: str = WIFI_FILE) -> "dict[str, Any] | None":
     """The flashed Wi-Fi credentials, or None (no file, or not ``{"ssid": ...}``)."""
     try:
         with open(path) as f:
@@ -35,16 +62,18 @@ def read_wifi(path: str = WIFI_FILE) -> "dict | None":  # type: ignore[type-arg]
     return got
 
 
-def _wait(nic: object, ms: int, sleep_ms: object, ticks_ms: object) -> bool:
-    start = ticks_ms()  # type: ignore[operator]
-    while not nic.isconnected():  # type: ignore[attr-defined]
-        if ticks_ms() - start >= ms:  # type: ignore[operator]
+def _wait(nic: "Nic", ms: int, sleep_ms: "Callable[[int], None]",
+          ticks_ms: "Callable[[], int]") -> bool:
+    start = ticks_ms()
+    while not nic.isconnected():
+        if ticks_ms() - start >= ms:
             return False
-        sleep_ms(POLL_MS)  # type: ignore[operator]
+        sleep_ms(POLL_MS)
     return True
 
 
-def up(network: object, wifi: "dict | None", sleep_ms: object, ticks_ms: object) -> str:  # type: ignore[type-arg]
+def up(network: "Network | None", wifi: "dict[str, Any] | None",
+       sleep_ms: "Callable[[int], None]", ticks_ms: "Callable[[], int]") -> str:
     if network is None:
         return "network: none (no network module: the host's sockets stand in)"
     if hasattr(network, "LAN"):
@@ -60,7 +89,7 @@ def up(network: object, wifi: "dict | None", sleep_ms: object, ticks_ms: object)
         return "network: none (no link on the wired interface, no Wi-Fi)"
     if wifi is None:
         return "network: none (no link on the wired interface, no " + WIFI_FILE + " flashed)"
-    sta = network.WLAN(network.STA_IF)  # type: ignore[attr-defined]
+    sta = network.WLAN(network.STA_IF)
     sta.active(True)
     sta.connect(wifi["ssid"], wifi.get("password", ""))
     if _wait(sta, WIFI_WAIT_MS, sleep_ms, ticks_ms):
@@ -75,9 +104,10 @@ def run() -> str:
     import time
 
     try:
-        import network  # type: ignore[import-not-found]
+        import network  # type: ignore[import-not-found]  # MicroPython's: no stubs
     except ImportError:
         network = None
+    # sleep_ms and ticks_ms: MicroPython's time, which CPython's stubs lack
     line = up(network, read_wifi(), time.sleep_ms, time.ticks_ms)  # type: ignore[attr-defined]
     print(line)
     return line

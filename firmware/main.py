@@ -17,7 +17,7 @@ configuration says ``listen: "0.0.0.0"``.
 
 import asyncio
 
-import machine  # type: ignore[import-not-found]
+import machine  # type: ignore[import-not-found]  # MicroPython only: no stubs
 
 from firmware import boards, build, modbus, tug
 from firmware.app import App
@@ -36,6 +36,16 @@ from protocol.constants import (
     CAP_VOLTAGE,
 )
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from typing import Protocol
+
+    from firmware.boot import Nic
+    from firmware.net import ByteReader, ByteWriter
+
+    class Stream(ByteReader, ByteWriter, Protocol):
+        """MicroPython's ``asyncio.StreamReader`` over a UART: its one ``Stream`` class, which
+        reads and writes."""
+
 TCP_PORT = 7000
 MODBUS_PORT = 502
 UART_ID = 1
@@ -48,20 +58,20 @@ def listen_address(app: App) -> str:
     """Where the servers listen: the configuration's ``listen`` if set (``dxboard flash``;
     "0.0.0.0" means every interface, on purpose), else the address of the network interface
     ``boot.py`` brought up (wired first, then Wi-Fi station), else loopback only."""
-    chosen = app.board.cfg["board"].get("listen", "")
+    chosen: str = app.board.cfg["board"].get("listen", "")
     if chosen:
-        return chosen  # type: ignore[no-any-return]
+        return chosen
     try:
-        import network  # type: ignore[import-not-found]
+        import network  # type: ignore[import-not-found]  # MicroPython's: no stubs
     except ImportError:
         return "127.0.0.1"
     for kind in ("LAN", "WLAN"):
         if not hasattr(network, kind):
             continue
         try:
-            nic = network.LAN() if kind == "LAN" else network.WLAN(network.STA_IF)
+            nic: "Nic" = network.LAN() if kind == "LAN" else network.WLAN(network.STA_IF)
             if nic.active() and nic.isconnected():
-                return nic.ifconfig()[0]  # type: ignore[no-any-return]
+                return nic.ifconfig()[0]
         except (OSError, ValueError):
             continue
     return "127.0.0.1"
@@ -76,7 +86,8 @@ async def run(app: App, uart: object) -> None:
     if b.get("tug_port", 0):  # flashed only: the original format has no authentication
         await tug.serve(net, host, b["tug_port"], b.get("tug_switch", False))
     tasks = [asyncio.create_task(net.housekeeping())]
-    stream = asyncio.StreamReader(uart)  # type: ignore[arg-type] # MicroPython: one Stream
+    # MicroPython's StreamReader(uart) is its one Stream, both halves; CPython's takes a limit
+    stream: "Stream" = asyncio.StreamReader(uart)  # type: ignore[arg-type, assignment]
     tasks.append(asyncio.create_task(net.serve_serial(stream, stream)))
     build.running = True  # dxboard flash checks this after a reset
     await net.protect()

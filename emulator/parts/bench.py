@@ -88,7 +88,8 @@ def _readable(sock: object) -> object:
 
 
 class Bench:
-    def __init__(self, rev: str, a: object, b: object, u: object, ports: dict) -> None:  # type: ignore[type-arg]
+    def __init__(self, rev: str, a: object, b: "socket.socket", u: object,
+                 ports: dict) -> None:  # type: ignore[type-arg]
         self.board = boards.load(rev)
         n = self.board["channels"]
         self.n = n
@@ -146,7 +147,7 @@ class Bench:
     def drive(self, ch: int, level: int) -> None:
         """The electronics after the switch of channel ``ch``: its output on or off."""
         if bool(level) != self.closed[ch]:
-            self.closed = self.link.call(["set_switch", ch, bool(level)])  # type: ignore[assignment]
+            self.closed = self.link.call(["set_switch", ch, bool(level)])
 
     def follow(self) -> None:
         """A smart switch that protected itself (latched off) opens the electronics' switch."""
@@ -369,7 +370,7 @@ class Bench:
             req = self.read_blocking()
 
 
-def connect(host: str, port: int, name: bytes) -> object:
+def connect(host: str, port: int, name: bytes) -> "socket.socket":
     sock = socket.socket()
     sock.connect(socket.getaddrinfo(host, port)[0][-1])
     sock.write(name + b"\n")  # type: ignore[attr-defined]
@@ -380,7 +381,7 @@ def main(host: str, port: int, rev: str, tcp: int, modbus: int, tug: int = 0) ->
     a = connect(host, port, b"A")
     b = connect(host, port, b"B")
     u = connect(host, port, b"U")
-    u.setblocking(False)  # type: ignore[attr-defined]
+    u.setblocking(False)
     ports = {BOARD_PORTS[0]: tcp, BOARD_PORTS[1]: modbus}
     if tug:
         ports[BOARD_PORTS[2]] = tug

@@ -16,6 +16,11 @@ input 0-2); a smart-switch board (``chip``: "profet") has no I2C: see ``rev_c.py
 ``vref_mv``}.
 """
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from typing import Any
+
+    Revision = dict[str, Any]  # a revision's ``BOARD``: nested plain data, as the keys above
+
 DEFAULT = "rev-a"
 SELECTED = "board_rev"
 
@@ -30,7 +35,7 @@ def selected() -> str:
     return name or DEFAULT
 
 
-def known() -> list:  # type: ignore[type-arg]
+def known() -> "list[str]":
     """The revisions this firmware has: one ``rev_x.py`` (or ``.mpy``) file each here."""
     try:
         import os
@@ -45,7 +50,7 @@ def known() -> list:  # type: ignore[type-arg]
     return sorted(out)
 
 
-def load(name: str = "") -> dict:  # type: ignore[type-arg]
+def load(name: str = "") -> "Revision":
     """A revision's description; ``ValueError`` naming the revisions if there is none."""
     name = name or selected()
     mod = "rev_" + name[4:] if name.startswith("rev-") else ""
@@ -53,9 +58,10 @@ def load(name: str = "") -> dict:  # type: ignore[type-arg]
         module = __import__("firmware.boards." + mod, None, None, ["BOARD"])
     except ImportError:
         raise ValueError("no board revision " + repr(name) + ": " + ", ".join(known())) from None
-    return module.BOARD  # type: ignore[no-any-return]
+    board: "Revision" = module.BOARD
+    return board
 
 
-def mv_per_count_x1000(vin: dict) -> int:  # type: ignore[type-arg]
+def mv_per_count_x1000(vin: "dict[str, Any]") -> int:
     """The input voltage per count of ``read_u16`` (16 bit full scale = vref), in mV x 1000."""
     return int(vin["vref_mv"] * vin["divider"] * 1000 // 65535)

@@ -24,6 +24,16 @@ import errno
 from firmware.hal import NO_READING
 from protocol.compat import const
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from typing import Protocol
+
+    class I2c(Protocol):
+        """A ``machine.I2C`` (or the emulator's bus): the two memory transfers the drivers use."""
+
+        def readfrom_mem_into(self, addr: int, memaddr: int, buf: bytearray) -> None: ...
+
+        def writeto_mem(self, addr: int, memaddr: int, buf: bytearray) -> None: ...
+
 REG_CONFIG = const(0x00)
 REG_MANUFACTURER = const(0xFE)
 REG_DIE = const(0xFF)
@@ -42,7 +52,8 @@ class ChipBank:
     CONFIG_TICK = 0
     BEFORE = False  # True when _before does something (the read then calls it every tick)
 
-    def __init__(self, i2c: object, chips: tuple, chip_of: list, input_of: list) -> None:  # type: ignore[type-arg]
+    def __init__(self, i2c: "I2c", chips: "tuple[int, ...]", chip_of: "list[int]",
+                 input_of: "list[int]") -> None:
         self.i2c = i2c
         self.chips = chips
         self.n_chips = len(chips)
@@ -59,13 +70,13 @@ class ChipBank:
         self.errors = 0  # transactions that failed
 
     def _get(self, chip: int, reg: int) -> int:
-        self.i2c.readfrom_mem_into(self.chips[chip], reg, self.buf)  # type: ignore[attr-defined]
+        self.i2c.readfrom_mem_into(self.chips[chip], reg, self.buf)
         return (self.buf[0] << 8) | self.buf[1]
 
     def _put(self, chip: int, reg: int, value: int) -> None:
         self.wbuf[0] = (value >> 8) & 0xFF
         self.wbuf[1] = value & 0xFF
-        self.i2c.writeto_mem(self.chips[chip], reg, self.wbuf)  # type: ignore[attr-defined]
+        self.i2c.writeto_mem(self.chips[chip], reg, self.wbuf)
 
     def _config_of(self, chip: int) -> int:
         return self.CONFIG_TICK
@@ -108,7 +119,7 @@ class ChipBank:
                 if self._failed(chip, exc):
                     return
 
-    def report(self) -> list:  # type: ignore[type-arg]
+    def report(self) -> "list[str]":
         """One line per channel, as the board prints them at boot: ``ch0 0x40 ina226 ok``,
         ``ch1 0x41 no answer``, ``ch2 0x42 wrong chip 5449:3220``, ``ch3 0x43 bus held low``
         (a chip with several inputs adds its input: ``ch4 0x41.1 ina3221 ok``)."""
@@ -151,7 +162,7 @@ class ChipBank:
             self._failed(chip, exc)
             return NO_READING
 
-    def read(self, out: list) -> None:  # type: ignore[type-arg]
+    def read(self, out: "list[int]") -> None:
         """Every channel's value into ``out``; then one chip's configuration checked."""
         if self.bus_wait:
             self.bus_wait -= 1

@@ -18,6 +18,9 @@ SHUNT read per channel and one CONFIG check (10 chips: each checked every 100 ms
 from firmware.hal.chipbank import ChipBank
 from protocol.compat import const
 
+if False:  # typing only (compiled away on the board)
+    from firmware.hal.chipbank import I2c
+
 REG_CONFIG = const(0x00)
 REG_SHUNT = const(0x01)
 REG_CALIBRATION = const(0x05)
@@ -36,7 +39,7 @@ class Ina226Bank(ChipBank):
     DIE = 0x2260
     CONFIG_TICK = 0x4327
 
-    def __init__(self, i2c: object, addrs: tuple, shunt_uohm: int) -> None:  # type: ignore[type-arg]
+    def __init__(self, i2c: "I2c", addrs: "tuple[int, ...]", shunt_uohm: int) -> None:
         n = len(addrs)
         super().__init__(i2c, addrs, list(range(n)), [0] * n)
         self.addrs = addrs
@@ -48,7 +51,7 @@ class Ina226Bank(ChipBank):
 
     def _sample(self, ch: int) -> int:
         buf = self.buf  # _get inlined: this runs for every channel every tick
-        self.i2c.readfrom_mem_into(self.chips[ch], REG_SHUNT, buf)  # type: ignore[attr-defined]
+        self.i2c.readfrom_mem_into(self.chips[ch], REG_SHUNT, buf)
         if buf[0] & 0x80:
             return 0  # current flowing back: none drawn
         return ((buf[0] << 8) | buf[1]) * 2500 // self.shunt_uohm  # 2.5 uV/LSB, in mA

@@ -27,6 +27,9 @@ from firmware.hal import TRIPPED
 from firmware.hal.chipbank import ChipBank
 from protocol.compat import const
 
+if False:  # typing only (compiled away on the board)
+    from firmware.hal.chipbank import I2c
+
 REG_CONFIG = const(0x00)
 REG_MASK = const(0x0F)
 CEN = const(0x0400)
@@ -53,7 +56,8 @@ class Ina3221Bank(ChipBank):
     DIE = 0x3220
     BEFORE = True  # MASK/ENABLE read once a chip, before its inputs
 
-    def __init__(self, i2c: object, chips: tuple, inputs: tuple, shunt_uohm: int) -> None:  # type: ignore[type-arg]
+    def __init__(self, i2c: "I2c", chips: "tuple[int, ...]",
+                 inputs: "tuple[tuple[int, int], ...]", shunt_uohm: int) -> None:
         super().__init__(i2c, chips, [c for c, _ in inputs], [k for _, k in inputs])
         self.shunt_uohm = shunt_uohm
         used = [0] * len(chips)
@@ -99,7 +103,7 @@ class Ina3221Bank(ChipBank):
             self.trips += 1
             return TRIPPED
         buf = self.buf  # _get inlined: this runs for every channel every tick
-        self.i2c.readfrom_mem_into(self.chips[chip], 1 + 2 * k, buf)  # type: ignore[attr-defined]
+        self.i2c.readfrom_mem_into(self.chips[chip], 1 + 2 * k, buf)
         if buf[0] & 0x80:
             return 0  # current flowing back: none drawn
         return (((buf[0] << 8) | buf[1]) >> 3) * 40000 // self.shunt_uohm  # 40 uV/LSB, mA

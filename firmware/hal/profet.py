@@ -28,24 +28,48 @@ whose IS is stuck driving would blind every channel); ``report`` says so per cha
 
 from firmware.hal import LOW, NO_READING, TRIPPED
 
+if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from typing import Any, Protocol
+
+    from firmware.hal.target import Adc
+
+    class IoPin(Protocol):
+        """A ``machine.Pin``: read (no argument) or set (0 or 1)."""
+
+        def value(self, v: "int | None" = None) -> int: ...
+
+    class PinClass(Protocol):
+        """``machine.Pin`` itself: builds a pin; ``OUT`` its output mode."""
+
+        OUT: int
+
+        def __call__(self, pin_id: int, mode: int = -1, value: int = 0) -> IoPin: ...
+
+    class Machine(Protocol):
+        """What this driver uses of the ``machine`` module."""
+
+        Pin: PinClass
+
+        def ADC(self, pin: IoPin) -> Adc: ...
+
 
 class ProfetBank:
     NAME = "profet"
 
-    def __init__(self, sense: dict, machine: object) -> None:  # type: ignore[type-arg]
-        pin = machine.Pin  # type: ignore[attr-defined]
+    def __init__(self, sense: "dict[str, Any]", machine: "Machine") -> None:
+        pin = machine.Pin
         self.den = [pin(p, pin.OUT, value=0) for p in sense["den_pins"]]
         self.dsel = pin(sense["dsel_pin"], pin.OUT, value=0)
-        self.adc = machine.ADC(pin(sense["is_adc_pin"]))  # type: ignore[attr-defined]
+        self.adc = machine.ADC(pin(sense["is_adc_pin"]))
         self.n = 2 * len(self.den)
-        self.k_ilis = sense["k_ilis"]
-        self.r_adc = sense["r_adc_ohm"]
-        self.vref_uv = sense["vref_mv"] * 1000
-        self.settle_reads = sense["settle_us"] // 2 + 1
-        self.accurate_ma = sense["accurate_ma"]
-        self.fault_ua = sense["fault_ua"]
-        self.oloff_ua = sense["oloff_ua"]
-        self.switches: list = []  # type: ignore[type-arg] # the IN pins (TargetHal sets them)
+        self.k_ilis: int = sense["k_ilis"]
+        self.r_adc: int = sense["r_adc_ohm"]
+        self.vref_uv: int = sense["vref_mv"] * 1000
+        self.settle_reads: int = sense["settle_us"] // 2 + 1
+        self.accurate_ma: int = sense["accurate_ma"]
+        self.fault_ua: int = sense["fault_ua"]
+        self.oloff_ua: int = sense["oloff_ua"]
+        self.switches: "list[IoPin]" = []  # the IN pins (TargetHal sets them)
         self.open_off = [False] * self.n
         self.faults = 0  # fault levels read with IN high (trips by the switch itself)
         self.node_ok = True
@@ -54,13 +78,13 @@ class ProfetBank:
         """Every DEN low: the node must read (almost) nothing."""
         self.node_ok = self._is_ua() < self.oloff_ua // 2
 
-    def report(self) -> list:  # type: ignore[type-arg]
+    def report(self) -> "list[str]":
         what = "profet ok" if self.node_ok else "sense node driven with every DEN low"
         return ["ch%d part%d.%d %s" % (ch, ch // 2, ch % 2, what) for ch in range(self.n)]
 
     def _is_ua(self) -> int:
-        a = self.adc.read_u16() >> 4  # type: ignore[attr-defined]
-        b = self.adc.read_u16() >> 4  # type: ignore[attr-defined]
+        a = self.adc.read_u16() >> 4
+        b = self.adc.read_u16() >> 4
         return (a + b) * self.vref_uv // (2 * 4095 * self.r_adc)
 
     def _select(self, ch: int) -> int:
@@ -72,7 +96,7 @@ class ProfetBank:
         self.dsel.value(ch % 2)
         self.den[part].value(1)
         for _ in range(self.settle_reads):
-            self.adc.read_u16()  # type: ignore[attr-defined]
+            self.adc.read_u16()
         return self._is_ua()
 
     def _in(self, ch: int) -> bool:
@@ -96,7 +120,7 @@ class ProfetBank:
         ma = ua * self.k_ilis // 1000
         return LOW if ma < self.accurate_ma else ma
 
-    def read(self, out: list) -> None:  # type: ignore[type-arg]
+    def read(self, out: "list[int]") -> None:
         """Every channel into ``out``, as ``read_one`` each in turn, in one loop (the tick's hot
         path: the bound methods in locals, each part's DEN raised once for its two channels
         rather than every other DEN lowered again per channel: the same levels on the pins)."""
@@ -104,7 +128,7 @@ class ProfetBank:
             for ch in range(self.n):
                 out[ch] = NO_READING
             return
-        rd = self.adc.read_u16  # type: ignore[attr-defined]
+        rd = self.adc.read_u16
         dsel = self.dsel.value
         den = self.den
         sw = self.switches

@@ -44,7 +44,7 @@ from firmware.net import Net
 from firmware.session import FIRMWARE_VERSION, board_key
 
 if False:  # typing only; MicroPython never imports typing (the block is compiled away)
-    from typing import Any
+    from typing import Any, Protocol
 
     from firmware.can import Frame
     from firmware.hal import Storage
@@ -52,18 +52,30 @@ if False:  # typing only; MicroPython never imports typing (the block is compile
 
     Request = dict[str, Any]  # a JSON request of link A, or its reply
 
+    class Sock(Protocol):
+        """A blocking socket (``socket.socket``; emulator/parts/bench.py passes its own)."""
+
+        def sendall(self, data: bytes) -> None: ...
+
+        def recv(self, n: int) -> bytes: ...
+
+
+def heap() -> "tuple[int, int]":
+    """The bytes of the heap allocated and free (MicroPython's ``gc``)."""
+    return gc.mem_alloc(), gc.mem_free()  # type: ignore[attr-defined]  # MicroPython's gc
+
 
 class Link:
     """Link B: blocking JSON-line requests to the emulator."""
 
-    def __init__(self, sock: object) -> None:  # a socket (emulator/parts/bench.py: its own)
+    def __init__(self, sock: "Sock") -> None:
         self.sock = sock
         self.buf = b""
 
-    def call(self, req: "list[Any]") -> object:
-        self.sock.sendall(json.dumps(req).encode() + b"\n")  # type: ignore[attr-defined]  # socket
+    def call(self, req: "list[Any]") -> "Any":  # the JSON answer
+        self.sock.sendall(json.dumps(req).encode() + b"\n")
         while b"\n" not in self.buf:
-            chunk = self.sock.recv(4096)  # type: ignore[attr-defined]  # a socket
+            chunk = self.sock.recv(4096)
             if not chunk:
                 raise OSError("emulator link closed")
             self.buf += chunk
@@ -79,7 +91,7 @@ class RemoteStorage:
 
     def read(self, name: str) -> "bytes | None":
         got = self.link.call(["read", name])
-        return None if got is None else binascii.unhexlify(got)  # type: ignore[arg-type]  # hex
+        return None if got is None else binascii.unhexlify(got)
 
     def write(self, name: str, data: bytes) -> None:
         self.link.call(["write", name, binascii.hexlify(data).decode()])
@@ -117,7 +129,7 @@ class RemoteHal:
         return self.ma[ch]
 
     def set_switch(self, ch: int, on: bool) -> None:
-        self.sw = self.link.call(["set_switch", ch, on])  # type: ignore[assignment]  # JSON list
+        self.sw = self.link.call(["set_switch", ch, on])  # the read-backs, a JSON list
 
     def read_switch(self, ch: int) -> bool:
         return self.sw[ch]
@@ -141,10 +153,10 @@ class RemoteHal:
 class Runner:
     def __init__(self, link: Link) -> None:
         gc.collect()
-        self.base = gc.mem_alloc()  # type: ignore[attr-defined]  # MicroPython's gc
+        self.base = heap()[0]
         self.link = link
-        self.app: "App" = None  # type: ignore[assignment]  # until boot, the first request
-        self.hal: "RemoteHal" = None  # type: ignore[assignment]  # (the same)
+        self.app: "App"  # declared, not set: boot (always the first request) sets both
+        self.hal: "RemoteHal"
         self.net: "Net | None" = None
         self.tasks: "list[asyncio.Task[None]]" = []
         self.can_cfg: "Request | None" = None
@@ -230,8 +242,8 @@ class Runner:
                 rep = {"ok": 1}
             elif op == "mem":
                 gc.collect()
-                rep = {"alloc": gc.mem_alloc() - self.base,  # type: ignore[attr-defined]  # (MicroPython)
-                       "free": gc.mem_free()}  # type: ignore[attr-defined]  # MicroPython's gc
+                alloc, free = heap()
+                rep = {"alloc": alloc - self.base, "free": free}
             else:
                 rep = self.call(req)
             writer.write(json.dumps(rep).encode() + b"\n")
