@@ -68,9 +68,10 @@ Protection, per tick, from the integer current ``ma`` (no floating point on the 
 - A noisy sensor (every channel): a load's current does not jump up and down by half its
   rating from one 10 ms sample to the next many times in a row; a sensor's noise does
   (``sensor_noise`` in the emulator, a bad shunt contact). Each channel keeps its latest
-  ``WINDOW`` samples and counts the *jumps* among them (two successive samples more than
-  ``jump_ma`` = max(rated/2, 200 mA) apart; switching on starts the window anew, so the
-  step of a switch-on is none). From ``SUSPECT_JUMPS`` jumps on, protection uses
+  ``WINDOW`` samples and counts the *jumps* among them: two successive samples more than
+  ``jump_ma`` = max(rated/2, 200 mA) apart, in the direction opposite to the last such move
+  (a swing back; a step is none, even one a sensing chip's averaging brings in over several
+  samples, as the INA226 does with a short's onset); switching on starts the window anew. From ``SUSPECT_JUMPS`` jumps on, protection uses
   the window's median instead of the sample (the mean would not do: noise adds its variance
   to I², and a sensor that reads at least 0 biases the mean upwards; the median of symmetric
   noise is the true current) and the sample-by-sample instant trip rests (a spike is not a
@@ -226,6 +227,7 @@ class Channel:
         self.at = 0
         self.jumps = 0  # the 1s in ``jumped``
         self.fresh = True  # the next sample starts the window anew (no jump from before)
+        self.swing = 0  # the way of the last move over jump_ma: 1 up, -1 down, 0 none yet
         self.noisy = False  # the sensor's samples jump: doubtful (F_SENSOR)
         self.calm_since = -1
         self.measured_n = 0  # readings measured in a row while F_LOW is live
@@ -405,7 +407,12 @@ class Channel:
         jumps (protection then uses its median)."""
         at = self.at
         d = ma - self.win[(at - 1) & WINDOW_MASK]
-        j = 1 if (d > self.jump_ma or -d > self.jump_ma) and not self.fresh else 0
+        j = 0
+        if (d > self.jump_ma or -d > self.jump_ma) and not self.fresh:
+            way = 1 if d > 0 else -1
+            if self.swing and way != self.swing:
+                j = 1  # a swing back: noise, not a step
+            self.swing = way
         self.fresh = False
         self.jumps += j - self.jumped[at]
         self.jumped[at] = j
@@ -428,6 +435,7 @@ class Channel:
     def _fresh_window(self) -> None:
         """Switched on: the jumps counted so far are forgotten, the next sample starts anew."""
         self.fresh = True
+        self.swing = 0
         self.jumps = 0
         for i in range(WINDOW):
             self.jumped[i] = 0
