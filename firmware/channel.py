@@ -71,8 +71,8 @@ Protection, per tick, from the integer current ``ma`` (no floating point on the 
   ``WINDOW`` samples and counts the *jumps* among them: two successive samples more than
   ``jump_ma`` = max(rated/2, 200 mA) apart, in the direction opposite to the last such move
   (a swing back; a step is none, even one a sensing chip's averaging brings in over several
-  samples, as the INA226 does with a short's onset); switching on starts the window anew. From ``SUSPECT_JUMPS`` jumps on, protection uses
-  the window's median instead of the sample (the mean would not do: noise adds its variance
+  samples, as the INA226 does with a short's onset); switching on starts the window anew.
+  From ``SUSPECT_JUMPS`` jumps on, protection uses the window's median instead of the sample (the mean would not do: noise adds its variance
   to I², and a sensor that reads at least 0 biases the mean upwards; the median of symmetric
   noise is the true current) and the sample-by-sample instant trip rests (a spike is not a
   short; a real short still trips on the median's I²t: 10x in about 30 ms after the median
