@@ -252,22 +252,6 @@ class SatContext:
         finally:
             self._watchdog.retarget(None)
 
-    @contextmanager
-    def sub_budget(self, seconds: float) -> Iterator[None]:
-        """Inside, the deadline is at most ``seconds`` away; the previous one comes back on
-        exit."""
-        saved = self._deadline
-        now = time.perf_counter()
-        self.start_budget(seconds if saved is None else min(seconds, saved - now))
-        try:
-            yield
-        finally:
-            self.stop_budget()
-            if saved is not None:
-                self._deadline = saved
-                if self._interruptible:
-                    self._watchdog.arm(saved)
-
     def remaining(self) -> float | None:
         """Seconds left of the budget (None: no budget)."""
         return None if self._deadline is None else self._deadline - time.perf_counter()

@@ -31,13 +31,14 @@ at all). All find diagnoses by non-decreasing size; the diagnoser ranks them by 
   stand for (``toplevel.py``). Without structure, RC2 runs over all components. Each call
   builds its RC2 afresh (observations are hard clauses); the budget interrupts it.
 - ``auto`` (default): ``cardinality``, except minimal-cardinality requests on models of at
-  least ``AUTO_FROM`` (500) components: straight to ``top-level`` when at least
-  ``TOP_LEVEL_DIRECT`` (1000) components are top-level, else ``cardinality`` for
-  ``AUTO_SLICE_S`` (20 ms) and then ``top-level`` if that did not settle it. Measured on
-  ISCAS-85 (benchmarks/RESULTS.md): ``cardinality`` is the faster one where the totalizer
-  bound's UNSAT proofs are easy (every circuit but c6288, and small models), ``top-level``
-  where they are not (c6288, minimum cardinality 4-5: seconds to minutes for ``cardinality``).
-  Robot-model re-diagnosis (no ``min_card_only``) is plain ``cardinality``.
+  least ``AUTO_FROM`` (500) components whose level 1 is empty: those go on with
+  ``top-level`` when at least ``TOP_LEVEL_DIRECT`` (1000) components are top-level, else
+  with ``cardinality`` (its minimum from RC2 over every component). Measured on ISCAS-85
+  (benchmarks/RESULTS.md): level 1 (a few propagations) answers most single faults on every
+  circuit; above it ``cardinality``'s RC2 is the faster one except where the reduction
+  leaves a big search (c6288, minimum cardinality 4-5: RC2 over every gate 0.4-1 s, seconds
+  for ``cardinality``'s totalizer). Robot-model re-diagnosis (no ``min_card_only``) is plain
+  ``cardinality``.
 
 All are cross-checked against brute force in ``tests/diagnosis``.
 """
@@ -58,6 +59,8 @@ Search = Callable[[SatContext, list[int], int | None, Quota, bool], SearchOutcom
 #: more diagnoses of the same size known without the solver, given one it found
 #: (plan diagnosis: the same event in another gap, checked by simulation)
 Expand = Callable[[frozenset[int]], Iterable[frozenset[int]]]
+#: the levels above 1 of a minimal-cardinality request by another search (None: not taken)
+BeyondOne = Callable[[SatContext, list[int], int | None, Quota], SearchOutcome | None]
 
 
 def cardinality_search(
@@ -67,7 +70,10 @@ def cardinality_search(
     quota: Quota,
     min_card_only: bool = False,
     expand: Expand | None = None,
+    beyond_one: BeyondOne | None = None,
 ) -> SearchOutcome:
+    """``beyond_one``: for a minimal-cardinality request whose level 1 is empty, the rest
+    by another search (``auto``), or None to go on here."""
     n = len(ctx.ab_vars)
     act = ctx.new_run()
     base = [*obs, act]
@@ -92,6 +98,10 @@ def cardinality_search(
             if k == 1 and quick:
                 known += conflicts
                 listed = _singles(ctx, obs, act, out, quota, conflicts[0], known)
+                if listed and not out.bad_sets and beyond_one is not None and limit >= 2:
+                    other = beyond_one(ctx, obs, max_card, quota)
+                    if other is not None:  # the levels above 1 by another algorithm
+                        return other
                 if listed and not out.bad_sets:  # no single one: bound the size from here
                     # (up to 1 only: is there a diagnosis at all? one call, not the bound's)
                     seed: list[frozenset[int]] = []
@@ -113,6 +123,9 @@ def cardinality_search(
                         left = None
                     continue
             else:
+                if quota.reached(k):  # e.g. RC2's optimum was the one wanted: no totalizer
+                    out.cut_by = Bound.MAX_COUNT  # (c7552: building it cost more than RC2)
+                    return out
                 listed = ctx.list_diagnoses(base + ctx.at_most(k), act, out, quota, k, expand)
             if not listed:
                 return out
@@ -350,13 +363,20 @@ def top_level_search(
     return min_card_search(ctx, obs, max_card, quota)
 
 
-#: ``auto``: from this many components, a minimal-cardinality request goes to ``top-level``
-#: at once when at least ``TOP_LEVEL_DIRECT`` components are top-level (the reduction left a
-#: big search, as on the c6288 multiplier), else it first gets ``AUTO_SLICE_S`` of
-#: ``cardinality`` and then, if that did not settle it, ``top-level``.
+#: ``auto``: from this many components, a minimal-cardinality request whose level 1 is empty
+#: goes on with ``top-level`` when at least ``TOP_LEVEL_DIRECT`` components are top-level
+#: (the reduction left a big search, as on the c6288 multiplier), else with ``cardinality``.
 AUTO_FROM = 500
-AUTO_SLICE_S = 0.02
 TOP_LEVEL_DIRECT = 1000
+
+
+def _top_level_beyond_one(ctx: SatContext, obs: list[int], max_card: int | None,
+                          quota: Quota) -> SearchOutcome | None:
+    """``auto``'s levels above 1 on big models: ``top-level`` when the top level is big
+    (None: ``cardinality`` goes on, its minimum from RC2 over every component)."""
+    if top_level_count(ctx, obs) < TOP_LEVEL_DIRECT:
+        return None
+    return min_card_search(ctx, obs, max_card, quota)
 
 
 def auto_search(
@@ -366,19 +386,14 @@ def auto_search(
     quota: Quota,
     min_card_only: bool = False,
 ) -> SearchOutcome:
-    """``cardinality``, except for minimal-cardinality requests on models of at least
-    ``AUTO_FROM`` components that it does not answer within ``AUTO_SLICE_S``: those go on
-    with ``top-level`` (the slice's work is dropped; both are exact)."""
+    """``cardinality``; on models of at least ``AUTO_FROM`` components a minimal-cardinality
+    request that level 1 does not answer goes on with ``top-level`` when the top level is
+    big. No wall-clock slice decides: a loaded machine cut the old 20 ms slice of
+    ``cardinality`` and ``top-level`` then redid the work from scratch (c2670, c7552)."""
     if not min_card_only or len(ctx.ab_vars) < AUTO_FROM:
         return cardinality_search(ctx, obs, max_card, quota, min_card_only)
-    if top_level_count(ctx, obs) >= TOP_LEVEL_DIRECT:
-        return top_level_search(ctx, obs, max_card, quota, min_card_only)
-    with ctx.sub_budget(AUTO_SLICE_S):
-        out = cardinality_search(ctx, obs, max_card, quota, min_card_only)
-    if out.cut_by is not Bound.TIME_BUDGET or ctx.out_of_time():
-        return out
-    quota.reset()
-    return top_level_search(ctx, obs, max_card, quota, min_card_only)
+    return cardinality_search(ctx, obs, max_card, quota, True,
+                              beyond_one=_top_level_beyond_one)
 
 
 ALGORITHMS: dict[str, Search] = {

@@ -127,3 +127,18 @@ def test_a_minimal_cardinality_request_past_an_empty_level_one() -> None:
     assert all(len(b) == 3 for b in smallest.bad_sets())
     assert capped.bad_sets() == [] and capped.cut_by is Bound.MAX_CARD and capped.explainable
     assert len(first.bad_sets()) == 1 and first.bad_sets()[0] in smallest.bad_sets()
+
+
+def test_one_minimum_from_rc2_builds_no_totalizer() -> None:
+    # minimum 2, one diagnosis wanted: RC2's optimum is it; building the totalizer for the
+    # rest of the level was wasted (c7552: more CPU than RC2's whole search)
+    theory = Theory(tuple([f"a{i}" for i in range(3)] + [f"b{i}" for i in range(3)]),
+                    tuple(_chain(3, "a") + _chain(3, "b")))
+    with Diagnoser(theory, algorithm="cardinality") as d:
+        d.observe("~ok_a(3)")
+        d.observe("~ok_b(3)")
+        one = d.diagnose(min_card_only=True, max_count=1)
+        assert len(one.bad_sets()) == 1 and len(one.bad_sets()[0]) == 2
+        assert d._ctx._tot is None
+        every = d.diagnose(min_card_only=True)
+    assert len(every.bad_sets()) == 9 and every.complete
