@@ -106,6 +106,20 @@ class _Watchdog:
                     self._cv.wait(remaining)
 
 
+def maxsat_formula(hard: list[list[int]], soft: list[int], nv: int) -> WCNF:
+    """A MaxSAT formula of the clauses ``hard`` (shared, not copied: RC2 and the solvers
+    copy what they keep) and one soft unit clause of weight 1 per literal of ``soft``, over
+    variables up to ``nv``. What ``WCNF.append`` per clause builds, without its per-clause
+    work (c7552: 30 ms of Python for 13,000 clauses, more than RC2's search)."""
+    wcnf = WCNF()
+    wcnf.hard = list(hard)
+    wcnf.soft = [[lit] for lit in soft]
+    wcnf.wght = [1] * len(soft)
+    wcnf.topw = len(soft) + 1
+    wcnf.nv = max(nv, max((abs(x) for x in soft), default=0))
+    return wcnf
+
+
 class SatContext:
     #: runs (activation variables, ``new_run``) after which ``renew`` starts a fresh solver
     RENEW_AFTER = 20_000
@@ -189,11 +203,8 @@ class SatContext:
         """The theory as a MaxSAT formula (hard: its clauses; soft: each component healthy,
         weight 1), built once; callers add the observations to their solver, not to it."""
         if self._wcnf is None:
-            self._wcnf = WCNF()
-            for clause in self.encoding.clauses:
-                self._wcnf.append(clause)
-            for v in self.ab_vars:
-                self._wcnf.append([-v], weight=1)
+            self._wcnf = maxsat_formula(self.encoding.clauses, [-v for v in self.ab_vars],
+                                        len(self.encoding.vars))
         return self._wcnf
 
     def structure(self) -> Structure | None:

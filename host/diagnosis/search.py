@@ -48,11 +48,10 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 
 from pysat.examples.rc2 import RC2  # type: ignore[import-untyped]
-from pysat.formula import WCNF  # type: ignore[import-untyped]
 
 from host.diagnosis.quota import Quota
 from host.diagnosis.result import Bound, SearchOutcome
-from host.diagnosis.satctx import SatContext
+from host.diagnosis.satctx import SatContext, maxsat_formula
 from host.diagnosis.toplevel import min_card_search, top_level_count
 
 Search = Callable[[SatContext, list[int], int | None, Quota, bool], SearchOutcome]
@@ -267,13 +266,8 @@ def maxsat_search(
     min_card_only: bool = False,
 ) -> SearchOutcome:
     out = SearchOutcome([])
-    wcnf = WCNF()
-    for clause in ctx.encoding.clauses:
-        wcnf.append(clause)
-    for lit in obs:
-        wcnf.append([lit])
-    for v in ctx.ab_vars:
-        wcnf.append([-v], weight=1)
+    wcnf = maxsat_formula([*ctx.encoding.clauses, *([lit] for lit in obs)],
+                          [-v for v in ctx.ab_vars], max(ctx.top, max(map(abs, obs), default=0)))
     n = len(ctx.ab_vars)
     with RC2(wcnf, solver="g3", adapt=True, exhaust=True, minz=True, trim=5) as rc2:
         while True:
