@@ -109,8 +109,11 @@ class _Watchdog:
 def maxsat_formula(hard: list[list[int]], soft: list[int], nv: int) -> WCNF:
     """A MaxSAT formula of the clauses ``hard`` (shared, not copied: RC2 and the solvers
     copy what they keep) and one soft unit clause of weight 1 per literal of ``soft``, over
-    variables up to ``nv``. What ``WCNF.append`` per clause builds, without its per-clause
-    work (c7552: 30 ms of Python for 13,000 clauses, more than RC2's search)."""
+    variables up to ``nv``, which must be the largest variable of the clauses, no more: RC2
+    numbers its own variables from there, and the solver decides on every variable up to
+    the largest (the context's ``top``, runs and totalizer included, made c6288 2x slower).
+    What ``WCNF.append`` per clause builds, without its per-clause work (c7552: 30 ms of
+    Python for 13,000 clauses, more than RC2's search)."""
     wcnf = WCNF()
     wcnf.hard = list(hard)
     wcnf.soft = [[lit] for lit in soft]

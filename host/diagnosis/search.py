@@ -267,7 +267,7 @@ def maxsat_search(
 ) -> SearchOutcome:
     out = SearchOutcome([])
     wcnf = maxsat_formula([*ctx.encoding.clauses, *([lit] for lit in obs)],
-                          [-v for v in ctx.ab_vars], max(ctx.top, max(map(abs, obs), default=0)))
+                          [-v for v in ctx.ab_vars], max([len(ctx.encoding.vars), *map(abs, obs)]))
     n = len(ctx.ab_vars)
     with RC2(wcnf, solver="g3", adapt=True, exhaust=True, minz=True, trim=5) as rc2:
         while True:

@@ -96,7 +96,7 @@ def min_card_search(ctx: SatContext, obs: list[int], max_card: int | None,
     hard = [*ctx.encoding.clauses, *([lit] for lit in obs),
             *([-v] for i, v in enumerate(ctx.ab_vars) if i not in keep)]
     wcnf = maxsat_formula(hard, [-ctx.ab_vars[i] for i in order],
-                          max(ctx.top, max(map(abs, obs), default=0)))
+                          max([len(ctx.encoding.vars), *map(abs, obs)]))
     if ctx.out_of_time():
         out.cut_by = Bound.TIME_BUDGET
         return out
