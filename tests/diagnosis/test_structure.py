@@ -128,9 +128,9 @@ def test_min_card_on_random_circuits_against_brute_force(
     assert structured == 250
 
 
-def _auto_against_brute_force(seed: int, n: int) -> int:
-    """``auto``'s minimal-cardinality answers on ``n`` random circuits against brute force;
-    how many had a minimum above 1."""
+def _auto_against_brute_force(seed: int, n: int, max_count: int | None = None) -> int:
+    """``auto``'s minimal-cardinality answers (``max_count`` of them) on ``n`` random
+    circuits against brute force; how many had a minimum above 1."""
     rng = random.Random(seed)
     above_one = 0
     for _ in range(n):
@@ -141,9 +141,12 @@ def _auto_against_brute_force(seed: int, n: int) -> int:
         with Diagnoser(theory, algorithm="auto") as d:
             for o in obs:
                 d.observe(o)
-            got = d.diagnose(min_card_only=True).bad_sets()
-        assert sorted(got, key=sorted) == sorted((e for e in expected if len(e) == smallest),
-                                                 key=sorted)
+            got = d.diagnose(min_card_only=True, max_count=max_count).bad_sets()
+        want = sorted((e for e in expected if len(e) == smallest), key=sorted)
+        if max_count is None:
+            assert sorted(got, key=sorted) == want
+        else:
+            assert len(got) == min(max_count, len(want)) and all(g in want for g in got)
     return above_one
 
 
@@ -177,13 +180,25 @@ def test_auto_routes_without_a_wall_clock_slice(monkeypatch: pytest.MonkeyPatch)
     # the routing must not depend on the machine's load: a 20 ms wall slice of cardinality,
     # cut on a busy machine, made top-level redo the work (c2670 0.40x, c7552 0.51x of RC2).
     # Here every deadline has passed as soon as it is set (a stalled machine), no budget
-    # was asked for, and the top level is small: top-level must never run
+    # was asked for, the top level is small and one diagnosis is wanted (RC2's optimum over
+    # every component is it): top-level must never run
     monkeypatch.setattr(search_mod, "AUTO_FROM", 0)
     monkeypatch.setattr(search_mod, "TOP_LEVEL_DIRECT", 10**9)
     monkeypatch.setattr(SatContext, "out_of_time", lambda self: self._deadline is not None)
     calls = _count_top_level(monkeypatch)
-    assert _auto_against_brute_force(11, 30) > 0
+    assert _auto_against_brute_force(11, 30, max_count=1) > 0
     assert calls == []
+
+
+def test_auto_lists_a_circuits_level_by_top_level(monkeypatch: pytest.MonkeyPatch) -> None:
+    # every minimal-cardinality diagnosis of a circuit above level 1: top-level's RC2 lists
+    # them from its cores (c7552: 1.0 s against the totalizer's 1.9 s), even on a small top
+    # level; one wanted (above) stays with cardinality's RC2 optimum
+    monkeypatch.setattr(search_mod, "AUTO_FROM", 0)
+    monkeypatch.setattr(search_mod, "TOP_LEVEL_DIRECT", 10**9)
+    calls = _count_top_level(monkeypatch)
+    above_one = _auto_against_brute_force(3, 40)
+    assert above_one > 0 and calls.count("min_card_search") == above_one
 
 
 def test_top_level_time_budget_zero_cuts() -> None:
