@@ -26,7 +26,8 @@ seed whose history needs at least one fault to be explained is used. Per history
   the whole history's (the same diagnoses: the tests check the region's are among them).
 
 The ratio columns are the baseline's time over SAT's in the same run. Run:
-``.venv/bin/python benchmarks/plandiag.py [--quick]`` (K* needs ``.[bench]``).
+``.venv/bin/python benchmarks/plandiag.py [--quick] [--sizes 50 500] [--planner-up-to STEPS]
+[--planner-timeout S]`` (K* needs ``.[bench]``; by default only up to 50 steps).
 """
 
 from __future__ import annotations
