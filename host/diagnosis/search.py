@@ -97,7 +97,19 @@ def cardinality_search(
         while k <= limit:
             if k == 1 and quick:
                 known += conflicts
-                listed = _singles(ctx, obs, act, out, quota, conflicts[0], known)
+                two = (beyond_one is not None and limit >= 2
+                       and _disjoint_cores(ctx, obs, conflicts, True, plain=True))
+                if two is None:
+                    out.cut_by = Bound.TIME_BUDGET
+                    return out
+                if two < 0:
+                    out.explainable = False
+                    return out
+                if two == 2:  # two disjoint conflicts: no single diagnosis (big models: one
+                    known.append(conflicts[-1])  # call instead of the candidates' checks)
+                    listed = True
+                else:
+                    listed = _singles(ctx, obs, act, out, quota, conflicts[0], known)
                 if listed and not out.bad_sets and beyond_one is not None and limit >= 2:
                     other = beyond_one(ctx, obs, max_card, quota)
                     if other is not None:  # the levels above 1 by another algorithm
