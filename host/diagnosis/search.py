@@ -88,22 +88,15 @@ def cardinality_search(
         # k = 1 in a few propagations where the bound costs calls of its own
         quick = expand is None and limit >= 1
         k = _disjoint_cores(ctx, obs if quick else base, conflicts, quick, plain=quick)
-        if k is None:
-            out.cut_by = Bound.TIME_BUDGET
+        if _settled(out, k):  # out of time, or a conflict of no component: no diagnosis
             return out
-        if k < 0:  # a conflict of no component: no diagnosis at all
-            out.explainable = False
-            return out
+        assert k is not None
         while k <= limit:
             if k == 1 and quick:
                 known += conflicts
                 two = (beyond_one is not None and limit >= 2
                        and _disjoint_cores(ctx, obs, conflicts, True, plain=True))
-                if two is None:
-                    out.cut_by = Bound.TIME_BUDGET
-                    return out
-                if two < 0:
-                    out.explainable = False
+                if _settled(out, two):
                     return out
                 if two == 2:  # two disjoint conflicts: no single diagnosis (big models: one
                     known.append(conflicts[-1])  # call instead of the candidates' checks)
@@ -120,12 +113,9 @@ def cardinality_search(
                     bound = (_any(ctx, obs) if limit < 2
                              else _min_card(ctx, obs, seed) if min_card_only
                              else _disjoint_cores(ctx, obs, conflicts, plain=True))
-                    if bound is None:
-                        out.cut_by = Bound.TIME_BUDGET
+                    if _settled(out, bound):
                         return out
-                    if bound < 0:
-                        out.explainable = False
-                        return out
+                    assert bound is not None
                     k = max(bound, 2)
                     left = True  # the bound's last call was satisfiable, nothing blocked yet
                     if seed and k <= limit:  # RC2's optimum: a diagnosis of that level
@@ -159,6 +149,18 @@ def cardinality_search(
         return out
     finally:
         ctx.end_run(act)
+
+
+def _settled(out: SearchOutcome, bound: int | None) -> bool:
+    """A lower bound's answer ends the search: None, out of time (``out`` says so); below 0,
+    no diagnosis at all (a conflict of no component)."""
+    if bound is None:
+        out.cut_by = Bound.TIME_BUDGET
+        return True
+    if bound < 0:
+        out.explainable = False
+        return True
+    return False
 
 
 def _min_card(ctx: SatContext, obs: list[int], seed: list[frozenset[int]]) -> int | None:
