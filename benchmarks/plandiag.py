@@ -8,7 +8,8 @@ seed whose history needs at least one fault to be explained is used. Per history
 * ``sat``: every minimal diagnosis (up to 3 faults, no count limit) of the whole history by
   the SAT engine, including what it costs to get there from the journal's history (alarm
   handler, context & plan interpreter, symptoms, fault region): the figure the targets are
-  about. Median of 3 runs.
+  about. Median of 3 runs; wall time (``sat``) and this thread's CPU time (``sat CPU``: the
+  engine is single-threaded, so on a loaded machine it says what the engine costs).
 * ``tree`` and ``naive``: the same search by the context tree and by naive enumeration (every
   fault set by size, each simulated), once, cut at ``BUDGET`` seconds (">" then); naive up to
   50 steps only.
@@ -25,7 +26,8 @@ seed whose history needs at least one fault to be explained is used. Per history
   the whole history's (the same diagnoses: the tests check the region's are among them).
 
 The ratio columns are the baseline's time over SAT's in the same run. Run:
-``.venv/bin/python benchmarks/plandiag.py [--quick]`` (K* needs ``.[bench]``).
+``.venv/bin/python benchmarks/plandiag.py [--quick] [--sizes 50 500] [--planner-up-to STEPS]
+[--planner-timeout S]`` (K* needs ``.[bench]``; by default only up to 50 steps).
 """
 
 from __future__ import annotations
@@ -146,18 +148,22 @@ def ratio(base: float | None, ours: float, cut: bool = False) -> str:
     return f"{'> ' if cut else ''}{base / ours:.0f}x"
 
 
-def run_case(case: Case, with_planner: bool) -> dict[str, str]:
+def run_case(case: Case, with_planner: bool, planner_timeout: int = KSTAR_TIMEOUT
+             ) -> dict[str, str]:
     limits = Limits(max_card=3, max_count=None, time_budget_s=BUDGET)
     sat_times = []
+    sat_cpu = []
     for _ in range(3):
         start = time.perf_counter()
+        cpu = time.thread_time()
         ctx, region = compile_history(case.model, case.history)
         sat, _ = timed("sat", ctx, None, limits)
         sat_times.append(time.perf_counter() - start)
+        sat_cpu.append(time.thread_time() - cpu)
     t_sat = statistics.median(sat_times)
     row = {"history": f"{case.steps} steps, {case.modes} modes, {case.events} events",
            "faults": str(len(ctx.problem.faults)), "diagnoses": str(len(sat.diagnoses)),
-           "sat": fmt(t_sat)}
+           "sat": fmt(t_sat), "sat CPU": fmt(statistics.median(sat_cpu))}
     tree, t_tree = timed("tree", ctx, None, limits)
     late = tree.cut_by is Bound.TIME_BUDGET
     row["tree"] = fmt(t_tree, late)
@@ -173,7 +179,7 @@ def run_case(case: Case, with_planner: bool) -> dict[str, str]:
     if with_planner:
         k = min(map(len, sat.diagnoses))
         cpu0 = _cpu()
-        plans = minimum_diagnoses(ctx.problem, KSTAR_TIMEOUT)
+        plans = minimum_diagnoses(ctx.problem, planner_timeout)
         t_kstar_cpu = _cpu() - cpu0
         row["k*"] = fmt(plans.seconds, plans.timed_out)
         row["k*/sat"] = ratio(plans.seconds, t_sat, plans.timed_out)
@@ -195,13 +201,22 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="10 and 50 steps only")
     parser.add_argument("--no-planner", action="store_true", help="leave K* out")
+    parser.add_argument("--sizes", type=int, nargs="+", default=None,
+                        help="history lengths (steps) to run (default: 10 50 100 500)")
+    parser.add_argument("--planner-up-to", type=int, default=50, metavar="STEPS",
+                        help="run K* on histories of at most this many steps (default 50)")
+    parser.add_argument("--planner-timeout", type=int, default=KSTAR_TIMEOUT, metavar="S",
+                        help=f"K*'s time limit per history, s (default {KSTAR_TIMEOUT})")
     args = parser.parse_args()
-    sizes = [10, 50] if args.quick else [10, 50, 100, 500]
+    sizes = args.sizes or ([10, 50] if args.quick else [10, 50, 100, 500])
     rows = []
+    print(f"load average {os.getloadavg()[0]:.1f} at the start", file=sys.stderr, flush=True)
     for steps in sizes:
         for modes, events in CONFIGS:
             case = find_case(modes, events, steps)
-            row = run_case(case, not args.no_planner and steps <= 50)
+            row = run_case(case, not args.no_planner and steps <= args.planner_up_to,
+                           args.planner_timeout)
+            row["load"] = f"{os.getloadavg()[0]:.1f}"
             rows.append(row)
             print(" | ".join(row.values()), file=sys.stderr, flush=True)
     cols = list(rows[0])

@@ -31,13 +31,15 @@ at all). All find diagnoses by non-decreasing size; the diagnoser ranks them by 
   stand for (``toplevel.py``). Without structure, RC2 runs over all components. Each call
   builds its RC2 afresh (observations are hard clauses); the budget interrupts it.
 - ``auto`` (default): ``cardinality``, except minimal-cardinality requests on models of at
-  least ``AUTO_FROM`` (500) components: straight to ``top-level`` when at least
-  ``TOP_LEVEL_DIRECT`` (1000) components are top-level, else ``cardinality`` for
-  ``AUTO_SLICE_S`` (20 ms) and then ``top-level`` if that did not settle it. Measured on
-  ISCAS-85 (benchmarks/RESULTS.md): ``cardinality`` is the faster one where the totalizer
-  bound's UNSAT proofs are easy (every circuit but c6288, and small models), ``top-level``
-  where they are not (c6288, minimum cardinality 4-5: seconds to minutes for ``cardinality``).
-  Robot-model re-diagnosis (no ``min_card_only``) is plain ``cardinality``.
+  least ``AUTO_FROM`` (500) components whose level 1 is empty: those go on with
+  ``top-level`` when at least ``TOP_LEVEL_DIRECT`` (1000) components are top-level or when
+  more than one diagnosis of a circuit is wanted, else with ``cardinality`` (its minimum
+  from RC2 over every component). Measured on ISCAS-85
+  (benchmarks/RESULTS.md): level 1 (a few propagations) answers most single faults on every
+  circuit; above it ``cardinality``'s RC2 is the faster one except where the reduction
+  leaves a big search (c6288, minimum cardinality 4-5: RC2 over every gate 0.4-1 s, seconds
+  for ``cardinality``'s totalizer). Robot-model re-diagnosis (no ``min_card_only``) is plain
+  ``cardinality``.
 
 All are cross-checked against brute force in ``tests/diagnosis``.
 """
@@ -47,17 +49,18 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 
 from pysat.examples.rc2 import RC2  # type: ignore[import-untyped]
-from pysat.formula import WCNF  # type: ignore[import-untyped]
 
 from host.diagnosis.quota import Quota
 from host.diagnosis.result import Bound, SearchOutcome
-from host.diagnosis.satctx import SatContext
+from host.diagnosis.satctx import SatContext, maxsat_formula
 from host.diagnosis.toplevel import min_card_search, top_level_count
 
 Search = Callable[[SatContext, list[int], int | None, Quota, bool], SearchOutcome]
 #: more diagnoses of the same size known without the solver, given one it found
 #: (plan diagnosis: the same event in another gap, checked by simulation)
 Expand = Callable[[frozenset[int]], Iterable[frozenset[int]]]
+#: the levels above 1 of a minimal-cardinality request by another search (None: not taken)
+BeyondOne = Callable[[SatContext, list[int], int | None, Quota], SearchOutcome | None]
 
 
 def cardinality_search(
@@ -67,7 +70,10 @@ def cardinality_search(
     quota: Quota,
     min_card_only: bool = False,
     expand: Expand | None = None,
+    beyond_one: BeyondOne | None = None,
 ) -> SearchOutcome:
+    """``beyond_one``: for a minimal-cardinality request whose level 1 is empty, the rest
+    by another search (``auto``), or None to go on here."""
     n = len(ctx.ab_vars)
     act = ctx.new_run()
     base = [*obs, act]
@@ -82,28 +88,34 @@ def cardinality_search(
         # k = 1 in a few propagations where the bound costs calls of its own
         quick = expand is None and limit >= 1
         k = _disjoint_cores(ctx, obs if quick else base, conflicts, quick, plain=quick)
-        if k is None:
-            out.cut_by = Bound.TIME_BUDGET
+        if _settled(out, k):  # out of time, or a conflict of no component: no diagnosis
             return out
-        if k < 0:  # a conflict of no component: no diagnosis at all
-            out.explainable = False
-            return out
+        assert k is not None
         while k <= limit:
             if k == 1 and quick:
                 known += conflicts
-                listed = _singles(ctx, obs, act, out, quota, conflicts[0], known)
+                two = (beyond_one is not None and limit >= 2
+                       and _disjoint_cores(ctx, obs, conflicts, True, plain=True))
+                if _settled(out, two):
+                    return out
+                if two == 2:  # two disjoint conflicts: no single diagnosis (big models: one
+                    known.append(conflicts[-1])  # call instead of the candidates' checks)
+                    listed = True
+                else:
+                    listed = _singles(ctx, obs, act, out, quota, conflicts[0], known)
+                if listed and not out.bad_sets and beyond_one is not None and limit >= 2:
+                    other = beyond_one(ctx, obs, max_card, quota)
+                    if other is not None:  # the levels above 1 by another algorithm
+                        return other
                 if listed and not out.bad_sets:  # no single one: bound the size from here
                     # (up to 1 only: is there a diagnosis at all? one call, not the bound's)
                     seed: list[frozenset[int]] = []
                     bound = (_any(ctx, obs) if limit < 2
                              else _min_card(ctx, obs, seed) if min_card_only
                              else _disjoint_cores(ctx, obs, conflicts, plain=True))
-                    if bound is None:
-                        out.cut_by = Bound.TIME_BUDGET
+                    if _settled(out, bound):
                         return out
-                    if bound < 0:
-                        out.explainable = False
-                        return out
+                    assert bound is not None
                     k = max(bound, 2)
                     left = True  # the bound's last call was satisfiable, nothing blocked yet
                     if seed and k <= limit:  # RC2's optimum: a diagnosis of that level
@@ -113,6 +125,9 @@ def cardinality_search(
                         left = None
                     continue
             else:
+                if quota.reached(k):  # e.g. RC2's optimum was the one wanted: no totalizer
+                    out.cut_by = Bound.MAX_COUNT  # (c7552: building it cost more than RC2)
+                    return out
                 listed = ctx.list_diagnoses(base + ctx.at_most(k), act, out, quota, k, expand)
             if not listed:
                 return out
@@ -134,6 +149,18 @@ def cardinality_search(
         return out
     finally:
         ctx.end_run(act)
+
+
+def _settled(out: SearchOutcome, bound: int | None) -> bool:
+    """A lower bound's answer ends the search: None, out of time (``out`` says so); below 0,
+    no diagnosis at all (a conflict of no component)."""
+    if bound is None:
+        out.cut_by = Bound.TIME_BUDGET
+        return True
+    if bound < 0:
+        out.explainable = False
+        return True
+    return False
 
 
 def _min_card(ctx: SatContext, obs: list[int], seed: list[frozenset[int]]) -> int | None:
@@ -254,13 +281,8 @@ def maxsat_search(
     min_card_only: bool = False,
 ) -> SearchOutcome:
     out = SearchOutcome([])
-    wcnf = WCNF()
-    for clause in ctx.encoding.clauses:
-        wcnf.append(clause)
-    for lit in obs:
-        wcnf.append([lit])
-    for v in ctx.ab_vars:
-        wcnf.append([-v], weight=1)
+    wcnf = maxsat_formula([*ctx.encoding.clauses, *([lit] for lit in obs)],
+                          [-v for v in ctx.ab_vars], max([len(ctx.encoding.vars), *map(abs, obs)]))
     n = len(ctx.ab_vars)
     with RC2(wcnf, solver="g3", adapt=True, exhaust=True, minz=True, trim=5) as rc2:
         while True:
@@ -350,13 +372,24 @@ def top_level_search(
     return min_card_search(ctx, obs, max_card, quota)
 
 
-#: ``auto``: from this many components, a minimal-cardinality request goes to ``top-level``
-#: at once when at least ``TOP_LEVEL_DIRECT`` components are top-level (the reduction left a
-#: big search, as on the c6288 multiplier), else it first gets ``AUTO_SLICE_S`` of
-#: ``cardinality`` and then, if that did not settle it, ``top-level``.
+#: ``auto``: from this many components, a minimal-cardinality request whose level 1 is empty
+#: goes on with ``top-level`` when at least ``TOP_LEVEL_DIRECT`` components are top-level
+#: (the reduction left a big search, as on the c6288 multiplier), else with ``cardinality``.
 AUTO_FROM = 500
-AUTO_SLICE_S = 0.02
 TOP_LEVEL_DIRECT = 1000
+
+
+def _top_level_beyond_one(ctx: SatContext, obs: list[int], max_card: int | None,
+                          quota: Quota) -> SearchOutcome | None:
+    """``auto``'s levels above 1 on big models: ``top-level`` when the top level is big, or
+    when more than one diagnosis is wanted of a circuit (its RC2 lists the level from its
+    cores: c7552, up to 1,000, 1.0 s against the totalizer's 1.9 s); None: ``cardinality``
+    goes on, its minimum, and for one diagnosis the diagnosis, from RC2 over every
+    component (c7552: 2-3x faster than ``top-level``'s reduction for that one)."""
+    if top_level_count(ctx, obs) < TOP_LEVEL_DIRECT and (
+            quota.count == 1 or ctx.structure() is None):
+        return None
+    return min_card_search(ctx, obs, max_card, quota)
 
 
 def auto_search(
@@ -366,19 +399,14 @@ def auto_search(
     quota: Quota,
     min_card_only: bool = False,
 ) -> SearchOutcome:
-    """``cardinality``, except for minimal-cardinality requests on models of at least
-    ``AUTO_FROM`` components that it does not answer within ``AUTO_SLICE_S``: those go on
-    with ``top-level`` (the slice's work is dropped; both are exact)."""
+    """``cardinality``; on models of at least ``AUTO_FROM`` components a minimal-cardinality
+    request that level 1 does not answer goes on with ``top-level`` when the top level is
+    big. No wall-clock slice decides: a loaded machine cut the old 20 ms slice of
+    ``cardinality`` and ``top-level`` then redid the work from scratch (c2670, c7552)."""
     if not min_card_only or len(ctx.ab_vars) < AUTO_FROM:
         return cardinality_search(ctx, obs, max_card, quota, min_card_only)
-    if top_level_count(ctx, obs) >= TOP_LEVEL_DIRECT:
-        return top_level_search(ctx, obs, max_card, quota, min_card_only)
-    with ctx.sub_budget(AUTO_SLICE_S):
-        out = cardinality_search(ctx, obs, max_card, quota, min_card_only)
-    if out.cut_by is not Bound.TIME_BUDGET or ctx.out_of_time():
-        return out
-    quota.reset()
-    return top_level_search(ctx, obs, max_card, quota, min_card_only)
+    return cardinality_search(ctx, obs, max_card, quota, True,
+                              beyond_one=_top_level_beyond_one)
 
 
 ALGORITHMS: dict[str, Search] = {

@@ -35,11 +35,10 @@ import itertools
 import math
 
 from pysat.examples.rc2 import RC2  # type: ignore[import-untyped]
-from pysat.formula import WCNF  # type: ignore[import-untyped]
 
 from host.diagnosis.quota import Quota
 from host.diagnosis.result import Bound, SearchOutcome
-from host.diagnosis.satctx import SatContext
+from host.diagnosis.satctx import SatContext, maxsat_formula
 from host.diagnosis.structure import Structure
 
 
@@ -93,17 +92,11 @@ def min_card_search(ctx: SatContext, obs: list[int], max_card: int | None,
     out = SearchOutcome([])
     order = top_level_order(ctx, obs)
     regions = _regions(ctx, obs)
-    wcnf = WCNF()
-    for clause in ctx.encoding.clauses:
-        wcnf.append(clause)
-    for lit in obs:
-        wcnf.append([lit])
     keep = set(order)
-    for i, v in enumerate(ctx.ab_vars):
-        if i not in keep:
-            wcnf.append([-v])
-    for i in order:
-        wcnf.append([-ctx.ab_vars[i]], weight=1)
+    hard = [*ctx.encoding.clauses, *([lit] for lit in obs),
+            *([-v] for i, v in enumerate(ctx.ab_vars) if i not in keep)]
+    wcnf = maxsat_formula(hard, [-ctx.ab_vars[i] for i in order],
+                          max([len(ctx.encoding.vars), *map(abs, obs)]))
     if ctx.out_of_time():
         out.cut_by = Bound.TIME_BUDGET
         return out

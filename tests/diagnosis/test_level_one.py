@@ -13,8 +13,12 @@ from __future__ import annotations
 
 import random
 import threading
+from typing import Any
+
+import pytest
 
 from host.diagnosis import Bound, Clause, Diagnoser, Literal, Theory, ab
+from host.diagnosis import search as search_mod
 from host.diagnosis.satctx import _Watchdog
 from tests.diagnosis.bruteforce import minimal_diagnoses, random_theory
 from tests.wait import wait_until
@@ -127,3 +131,48 @@ def test_a_minimal_cardinality_request_past_an_empty_level_one() -> None:
     assert all(len(b) == 3 for b in smallest.bad_sets())
     assert capped.bad_sets() == [] and capped.cut_by is Bound.MAX_CARD and capped.explainable
     assert len(first.bad_sets()) == 1 and first.bad_sets()[0] in smallest.bad_sets()
+
+
+def test_one_minimum_from_rc2_builds_no_totalizer() -> None:
+    # minimum 2, one diagnosis wanted: RC2's optimum is it; building the totalizer for the
+    # rest of the level was wasted (c7552: more CPU than RC2's whole search)
+    theory = Theory(tuple([f"a{i}" for i in range(3)] + [f"b{i}" for i in range(3)]),
+                    tuple(_chain(3, "a") + _chain(3, "b")))
+    with Diagnoser(theory, algorithm="cardinality") as d:
+        d.observe("~ok_a(3)")
+        d.observe("~ok_b(3)")
+        one = d.diagnose(min_card_only=True, max_count=1)
+        assert len(one.bad_sets()) == 1 and len(one.bad_sets()[0]) == 2
+        assert d._ctx._tot is None
+        every = d.diagnose(min_card_only=True)
+    assert len(every.bad_sets()) == 9 and every.complete
+
+
+def test_big_model_skips_level_one_on_two_disjoint_conflicts(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # auto on a big model, minimal cardinality: a second conflict disjoint from the first
+    # proves level 1 empty in one call, instead of checking the first conflict's candidates
+    # (c7552, multiple faults: 2-7 ms of checks before RC2, their cores not minimal)
+    monkeypatch.setattr(search_mod, "AUTO_FROM", 0)
+    monkeypatch.setattr(search_mod, "TOP_LEVEL_DIRECT", 10**9)
+    checked: list[int] = []
+    real = search_mod._singles
+
+    def spy(*args: Any, **kw: Any) -> bool:
+        checked.append(len(args[5]))
+        return real(*args, **kw)
+
+    monkeypatch.setattr(search_mod, "_singles", spy)
+    theory = Theory(tuple([f"a{i}" for i in range(6)] + [f"b{i}" for i in range(6)]),
+                    tuple(_chain(6, "a") + _chain(6, "b")))
+    with Diagnoser(theory) as d:
+        d.observe("~ok_a(6)")
+        d.observe("~ok_b(6)")
+        one = d.diagnose(min_card_only=True, max_count=1)
+        assert len(one.bad_sets()) == 1 and len(one.bad_sets()[0]) == 2
+        assert one.stats["sat_calls"] == 3 and checked == []  # two conflicts, RC2's optimum
+        d.observe("ok_b(6)")  # one fault left: level 1 answers it
+        single = d.diagnose(min_card_only=True)
+    assert sorted(single.bad_sets(), key=sorted) == [frozenset({f"a{i}"}) for i in range(6)]
+    assert single.complete and len(checked) == 1

@@ -9,6 +9,7 @@ import pytest
 
 from host.diagnosis import Bound, Clause, Diagnoser, Literal, Theory, ab, toplevel
 from host.diagnosis import search as search_mod
+from host.diagnosis.satctx import SatContext
 from host.diagnosis.structure import infer_structure
 from tests.diagnosis.bruteforce import minimal_diagnoses
 
@@ -90,13 +91,18 @@ def test_unstructured_theories_are_recognised() -> None:
     assert s is None or not (s.written[0] & s.written[1])
 
 
-@pytest.mark.parametrize("algorithm", ["top-level", "auto", "cardinality", "top-level/solver"])
+@pytest.mark.parametrize("algorithm", ["top-level", "auto", "auto/cardinality", "cardinality",
+                                       "top-level/solver"])
 def test_min_card_on_random_circuits_against_brute_force(
     algorithm: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    # force auto onto its slice-then-top-level path, with a slice that settles nothing
+    # force auto onto its big-model path: level 1, then top-level (or, "auto/cardinality",
+    # a top level too small for it: cardinality's RC2 minimum)
     monkeypatch.setattr(search_mod, "AUTO_FROM", 0)
-    monkeypatch.setattr(search_mod, "AUTO_SLICE_S", 0.0)
+    monkeypatch.setattr(search_mod, "TOP_LEVEL_DIRECT", 0)
+    if algorithm == "auto/cardinality":
+        monkeypatch.setattr(search_mod, "TOP_LEVEL_DIRECT", 10**9)
+        algorithm = "auto"
     if algorithm == "top-level/solver":  # every region expanded by the solver's enumeration
         monkeypatch.setattr(toplevel, "CHECK_EACH_UP_TO", 0)
         algorithm = "top-level"
@@ -122,29 +128,77 @@ def test_min_card_on_random_circuits_against_brute_force(
     assert structured == 250
 
 
-def test_auto_goes_to_top_level_directly_on_big_top_levels(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(search_mod, "AUTO_FROM", 0)
-    monkeypatch.setattr(search_mod, "TOP_LEVEL_DIRECT", 0)
-    calls: list[str] = []
-    real = search_mod.top_level_search
-
-    def spy(*args: object, **kw: object) -> search_mod.SearchOutcome:
-        calls.append("top-level")
-        return real(*args, **kw)  # type: ignore[arg-type]
-
-    monkeypatch.setattr(search_mod, "top_level_search", spy)
-    rng = random.Random(3)
-    for _ in range(40):
+def _auto_against_brute_force(seed: int, n: int, max_count: int | None = None) -> int:
+    """``auto``'s minimal-cardinality answers (``max_count`` of them) on ``n`` random
+    circuits against brute force; how many had a minimum above 1."""
+    rng = random.Random(seed)
+    above_one = 0
+    for _ in range(n):
         theory, obs = random_circuit(rng)
         expected = minimal_diagnoses(theory, obs)
         smallest = min(len(e) for e in expected)
+        above_one += smallest >= 2
         with Diagnoser(theory, algorithm="auto") as d:
             for o in obs:
                 d.observe(o)
-            got = d.diagnose(min_card_only=True).bad_sets()
-        assert sorted(got, key=sorted) == sorted((e for e in expected if len(e) == smallest),
-                                                 key=sorted)
-    assert len(calls) == 40
+            got = d.diagnose(min_card_only=True, max_count=max_count).bad_sets()
+        want = sorted((e for e in expected if len(e) == smallest), key=sorted)
+        if max_count is None:
+            assert sorted(got, key=sorted) == want
+        else:
+            assert len(got) == min(max_count, len(want)) and all(g in want for g in got)
+    return above_one
+
+
+def _count_top_level(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    calls: list[str] = []
+    for name in ("min_card_search", "top_level_search"):
+        real = getattr(search_mod, name)
+
+        def spy(*args: object, _real: object = real, _name: str = name,
+                **kw: object) -> search_mod.SearchOutcome:
+            calls.append(_name)
+            return _real(*args, **kw)  # type: ignore[operator, no-any-return]
+
+        monkeypatch.setattr(search_mod, name, spy)
+    return calls
+
+
+def test_auto_answers_level_one_itself_then_goes_to_top_level_on_big_top_levels(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # a single fault is answered by level 1's few propagations (no structure, no RC2); only
+    # a request whose level 1 is empty goes on with top-level when the top level is big
+    monkeypatch.setattr(search_mod, "AUTO_FROM", 0)
+    monkeypatch.setattr(search_mod, "TOP_LEVEL_DIRECT", 0)
+    calls = _count_top_level(monkeypatch)
+    above_one = _auto_against_brute_force(3, 40)
+    assert 0 < above_one < 40 and calls.count("min_card_search") == above_one
+
+
+def test_auto_routes_without_a_wall_clock_slice(monkeypatch: pytest.MonkeyPatch) -> None:
+    # the routing must not depend on the machine's load: a 20 ms wall slice of cardinality,
+    # cut on a busy machine, made top-level redo the work (c2670 0.40x, c7552 0.51x of RC2).
+    # Here every deadline has passed as soon as it is set (a stalled machine), no budget
+    # was asked for, the top level is small and one diagnosis is wanted (RC2's optimum over
+    # every component is it): top-level must never run
+    monkeypatch.setattr(search_mod, "AUTO_FROM", 0)
+    monkeypatch.setattr(search_mod, "TOP_LEVEL_DIRECT", 10**9)
+    monkeypatch.setattr(SatContext, "out_of_time", lambda self: self._deadline is not None)
+    calls = _count_top_level(monkeypatch)
+    assert _auto_against_brute_force(11, 30, max_count=1) > 0
+    assert calls == []
+
+
+def test_auto_lists_a_circuits_level_by_top_level(monkeypatch: pytest.MonkeyPatch) -> None:
+    # every minimal-cardinality diagnosis of a circuit above level 1: top-level's RC2 lists
+    # them from its cores (c7552: 1.0 s against the totalizer's 1.9 s), even on a small top
+    # level; one wanted (above) stays with cardinality's RC2 optimum
+    monkeypatch.setattr(search_mod, "AUTO_FROM", 0)
+    monkeypatch.setattr(search_mod, "TOP_LEVEL_DIRECT", 10**9)
+    calls = _count_top_level(monkeypatch)
+    above_one = _auto_against_brute_force(3, 40)
+    assert above_one > 0 and calls.count("min_card_search") == above_one
 
 
 def test_top_level_time_budget_zero_cuts() -> None:
