@@ -65,28 +65,28 @@ Protection, per tick, from the integer current ``ma`` (no floating point on the 
   or latch that the lying sensor caused is retried (``X_DOUBT``: LATCHED goes back to TRIPPED
   when the channel is wanted on). Reported currents stay the raw readings. ``clear`` forgets
   the offset. Other channels keep the stuck-on rule: off is their safe state.
-- A noisy sensor (every channel): a load's current does not jump up and down by half its
-  rating from one 10 ms sample to the next many times in a row; a sensor's noise does
-  (``sensor_noise`` in the emulator, a bad shunt contact). Each channel keeps its latest
-  ``WINDOW`` samples and counts the *jumps* among them: two successive samples more than
-  ``jump_ma`` = max(rated/2, 200 mA) apart, in the direction opposite to the last such move
-  (a swing back; a step is none, even one a sensing chip's averaging brings in over several
-  samples, as the INA226 does with a short's onset); switching on starts the window anew.
-  From ``SUSPECT_JUMPS`` jumps on, protection uses the window's median instead of the sample (the mean would not do: noise adds its variance
-  to I², and a sensor that reads at least 0 biases the mean upwards; the median of symmetric
-  noise is the true current) and the sample-by-sample instant trip rests (a spike is not a
-  short; a real short still trips on the median's I²t: 10x in about 30 ms after the median
+- A noisy sensor (every channel): a load's current does not jump up and down by half its rating
+  from one 10 ms sample to the next many times in a row; a sensor's noise does (``sensor_noise``
+  in the emulator, a bad shunt contact). Each channel keeps its latest ``WINDOW`` samples and
+  counts the *jumps* among them: two successive samples more than ``jump_ma`` = max(rated/2, 200
+  mA) apart, in the direction opposite to the last such move (a swing back; a step is none, even
+  one a sensing chip's averaging brings in over several samples, as the INA226 does with a
+  short's onset); switching on starts the window anew. From ``SUSPECT_JUMPS`` jumps on,
+  protection uses the window's median instead of the sample (the mean would not do: noise adds
+  its variance to I², and a sensor that reads at least 0 biases the mean upwards; the median of
+  symmetric noise is the true current) and the sample-by-sample instant trip rests (a spike is
+  not a short; a real short still trips on the median's I²t: 10x in about 30 ms after the median
   rose, 16 samples; and the part's fast trip input, ``TRIPPED``, still trips at once). At
-  ``NOISY_JUMPS`` jumps the sensor is doubtful: ``F_SENSOR`` live and sticky, an EV_FAULT;
-  after ``CALM_MS`` with at most one jump in the window, an EV_FAULT with 0 flags and the
-  live flag cleared. While the window jumps the stuck-on rule rests too (noise around 0 A
-  would read as current through an open switch). A real overload or short is one jump (its
-  onset): it is judged on the samples exactly as before, as fast as before. The one case a
-  board cannot tell in two samples: when noise starts, its first two samples may both read
-  above the instant trip and agree, as a short's do (2 of 300 onsets at 2.4 A on a 1 A
-  channel); the channel trips once, and its retry comes with the noise known. Noise of up to
-  3x the rating (standard deviation) neither trips nor latches a channel (the median's own
-  spread still heats the I²t model at more); a real 2x overload under it trips in 0.8-2 s.
+  ``NOISY_JUMPS`` jumps the sensor is doubtful: ``F_SENSOR`` live and sticky, an EV_FAULT; after
+  ``CALM_MS`` with at most one jump in the window, an EV_FAULT with 0 flags and the live flag
+  cleared. While the window jumps the stuck-on rule rests too (noise around 0 A would read as
+  current through an open switch). A real overload or short is one jump (its onset): it is
+  judged on the samples exactly as before, as fast as before. The one case a board cannot tell
+  in two samples: when noise starts, its first two samples may both read above the instant trip
+  and agree, as a short's do (2 of 300 onsets at 2.4 A on a 1 A channel); the channel trips
+  once, and its retry comes with the noise known. Noise of up to 3x the rating (standard
+  deviation) neither trips nor latches a channel (the median's own spread still heats the I²t
+  model at more); a real 2x overload under it trips in 0.8-2 s.
 
 ``live`` faults are conditions present now; ``sticky`` faults accumulate until ``clear``.
 """
