@@ -4,8 +4,9 @@
 (``host.mission.files``), connects to the world's skill servers (``host.skills.WorldClient``),
 and wires, as the daemon wires everything, with the daemon's clock and its one event stream:
 
-- layer 0 seen from above: a ``Layer0View`` subscribed to the daemon's stream, seeded with the
-  daemon's current diagnosis, quarantines and holds, and told whether a repair is running;
+- layer 0 seen from above: a ``Layer0View`` on the daemon's one fold of its stream (so it
+  knows the diagnosis, quarantines and holds from before the mission), told whether a repair is
+  running;
 - layer 1: a ``Skill`` per skill of ``mission.yaml``;
 - layer 2: the ``Executive`` with the recipes;
 - layer 3: the ``KnowledgeBase``, the ``Dispatcher`` (sensing from the world) and the
@@ -96,12 +97,9 @@ class MissionStack:
     async def start(cls, daemon: Daemon, world_url: str, system_dir: Path, *,
                     flat: bool = False, mission_id: str = "m1") -> MissionStack:
         files = load_mission(system_dir, daemon.model)
-        layer0 = Layer0View(repair_active=lambda: daemon.repairs.active)
-        unsubscribe = daemon.subscribe(layer0)
-        result = daemon.result
-        listing = daemon.repairs.listing()
-        layer0.seed([] if result is None else result.bad_sets(), listing["quarantined"],
-                    listing["held"])
+        # layer 0 reads the daemon's one fold: what happened before the mission is in it
+        layer0 = Layer0View(repair_active=lambda: daemon.repairs.active, fold=daemon.fold)
+        unsubscribe = layer0.detach
         world = await WorldClient.connect(world_url)
         runner = wire(files, world, layer0, daemon.clock, daemon.emit, flat=flat,
                       mission_id=mission_id)

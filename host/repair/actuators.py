@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING
 from host.errors import RemoteError, UserError
 from host.repair.problem import protected_channel_object
 from host.repair.supervisor import ProcessError
-from protocol.constants import F_SHORT, ST_FAULTED, ST_LATCHED, ST_TRIPPED
+from protocol.constants import F_SHORT, ST_FAULTED, ST_INRUSH, ST_LATCHED, ST_TRIPPED
 
 BOARD_RETRY_WAIT_S = 6.0  # longer than the board's longest default retry delay (5 s)
 
@@ -188,14 +188,16 @@ class Actuators:
 
     async def _unlatch(self, board: BoardClient, ch: int, device: str) -> str:
         """Make the channel switchable. The board's own protection comes first: a channel it
-        tripped has a retry pending, so wait for that retry (up to ``BOARD_RETRY_WAIT_S``, and
-        no longer than the board takes to retry or latch) rather than fight it. A channel it
+        tripped has a retry pending, so wait for that retry to end (up to
+        ``BOARD_RETRY_WAIT_S``, and no longer than the board takes to retry or latch) rather
+        than fight it: the retry's inrush is part of it (it may trip again and latch), so the
+        wait ends on a settled state, not on the retry's first reading. A channel it
         latched (or marked faulted) refuses to switch on until cleared: clear it — unless the
         board latched it for a short circuit: energising a short again is the board's call
         (its retries), not ours; that raises ``Unsafe`` until a person allows one try."""
         end = self.clock() + BOARD_RETRY_WAIT_S
         chan = (await board.state()).channels[ch]
-        while chan.state == ST_TRIPPED and self.clock() < end:
+        while chan.state in (ST_TRIPPED, ST_INRUSH) and self.clock() < end:
             await asyncio.sleep(0.1)
             chan = (await board.state()).channels[ch]
         if chan.state in (ST_LATCHED, ST_FAULTED):

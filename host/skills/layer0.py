@@ -77,6 +77,11 @@ class Layer0View:
         if self._own_fold:
             self.fold.feed(stamped)
 
+    def detach(self) -> None:
+        """Stop listening to the fold (a view on the daemon's own fold, when its mission ends)."""
+        if self._changed in self.fold.listeners:
+            self.fold.listeners.remove(self._changed)
+
     def _changed(self, stamped: Stamped) -> None:
         """The fold changed: tell the listeners when it was something layer 0 says."""
         e = stamped.event

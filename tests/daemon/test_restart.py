@@ -17,6 +17,7 @@ from pathlib import Path
 import psutil
 import pytest
 
+from host.events import ActionRecord, ActionState
 from host.journal import QuarantineChange
 from tests.daemon.runner import RunningDaemon, fast_copy, healthy, key_file, node_processes
 from tests.wait import wait_until
@@ -45,6 +46,14 @@ def test_killed_during_a_repair_the_next_daemon_resumes_without_doubles(
         first.inject("hokuyo", "hang")
         first.wait_for(lambda s: any(r["state"] == "started" for r in s["repairs"]
                                      if r["action"] == "power_cycle"), 30, "a repair running")
+        # the page shows an action as it starts; its journal entry is committed by the
+        # journal's writer thread a moment later (an fsync: long on a busy machine). What the
+        # next daemon knows is what was committed, so kill once the start is on disk.
+        wait_until(lambda: any(isinstance(e.payload, ActionRecord)
+                               and e.payload.action == "power_cycle"
+                               and e.payload.state is ActionState.STARTED
+                               for e in first.journal("action")), 30,
+                   "the power cycle's start committed to the journal")
         first.kill()  # kill -9 in the middle of the repair
     finally:
         first.close()

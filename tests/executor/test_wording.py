@@ -31,3 +31,34 @@ def test_a_computed_time_limit_is_said_in_tenths_of_a_second() -> None:
     assert within(12.8619) == "within 12.9 s"  # was "within 12.8619 s"
     assert within(5.0) == "within 5.0 s"
     assert within(312.25) == "within 312 s"
+
+
+class _Board:
+    """A board whose channel 0 goes through the given states, one per ``state()`` read."""
+
+    def __init__(self, *states: tuple[int, int]) -> None:
+        self.states = list(states)
+        self.switched: list[bool] = []
+
+    async def state(self) -> object:
+        from types import SimpleNamespace
+
+        st, sticky = self.states.pop(0) if len(self.states) > 1 else self.states[0]
+        return SimpleNamespace(channels=[SimpleNamespace(state=st, sticky_faults=sticky)])
+
+
+async def test_the_wait_for_the_board_s_retry_includes_its_inrush_and_ends_on_the_latch() -> None:
+    # the board tripped a short, retries (INRUSH), trips again and latches: the repair must
+    # see the latch, not take the retry's inrush for the end of the retry (a suite run under
+    # load caught the inrush and sent a power_up the board then latched)
+    import pytest
+
+    from host.repair.actuators import Unsafe
+    from protocol.constants import F_SHORT, ST_INRUSH, ST_LATCHED, ST_TRIPPED
+
+    model = load_system(TEDUSAR)
+    actuators = Actuators(model, None, spacing_s=0.0, off_s=1.0)
+    board = _Board((ST_TRIPPED, F_SHORT), (ST_INRUSH, F_SHORT), (ST_INRUSH, F_SHORT),
+                   (ST_TRIPPED, F_SHORT), (ST_LATCHED, F_SHORT))
+    with pytest.raises(Unsafe, match="not energised again"):
+        await actuators._unlatch(board, 0, "laser_alignment")  # type: ignore[arg-type]
