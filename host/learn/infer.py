@@ -96,6 +96,7 @@ class LearnedModel:
     channels: int = 0
     protected: tuple[int, ...] = ()
     idle: tuple[int, ...] = ()  # channels that drew no current and stopped nothing
+    loads: tuple[LearnedDevice, ...] = ()  # drew current, but their probe stopped nothing
 
 
 def topic_names(rec: Recording) -> list[str]:
@@ -146,14 +147,22 @@ def infer(rec: Recording, robot: str, ros2: bool = True) -> LearnedModel:
                                     propose(ev) if ev else None))
     rates = {lt.name: lt.evidence.rate for lt in learned if lt.evidence}
     _timing(rec, nodes, rates)
-    devices = _devices(rec, nodes)
+    found = _devices(rec, nodes)
+    loads = tuple(d for d in found if _unneeded(d))
+    devices = [d for d in found if not _unneeded(d)]
     _probe_dependencies(rec, nodes)
-    used = {d.channel for d in devices}
+    used = {d.channel for d in found}
     idle = tuple(c for c, ch in sorted(rec.channels.items())
                  if c not in used and not ch.protected)
     return LearnedModel(robot, rec.source, rec.watched_until - rec.start, ros2, learned,
                         list(nodes.values()), devices, len(rec.channels),
-                        tuple(c for c, ch in sorted(rec.channels.items()) if ch.protected), idle)
+                        tuple(c for c, ch in sorted(rec.channels.items()) if ch.protected), idle,
+                        loads)
+
+
+def _unneeded(d: LearnedDevice) -> bool:
+    """A load its probe showed nothing observed needs: no topic stopped, no node left."""
+    return d.probe is not None and not d.probe.stopped and not d.probe.gone
 
 
 def _timing(rec: Recording, nodes: dict[str, LearnedNode], rates: dict[str, float]) -> None:

@@ -163,3 +163,26 @@ def test_random_events_on_the_senders_clock_are_reactive() -> None:
     times = events(5.0, 60, 5)
     ev = learn_rate([x + 0.01 for x in times], times)
     assert ev is not None and ev.clock == "sender" and not ev.periodic
+
+
+def test_a_load_a_probe_shows_nothing_needs_is_no_component(tmp_path: Path) -> None:
+    """A channel that draws current but whose probe stopped no topic and no node (a router, a
+    sensor head's fan: TEDUSAR's channels 0, 4, 5) is no component of the diagnosis model, as
+    the hand-written model has none: a board-wide fault would otherwise power it up as a
+    repair. It is written as a commented-out component with its evidence, for the review."""
+    rec = robot()
+    rec.channels[4] = ChannelSeen(4, "router", currents=(0.3, 0.32, 0.31))
+    rec.probes.append(ChannelProbe(4, 33.0, 34.5, (), ("/scan", "/cloud", "/map", "/odom"), ()))
+    m = infer(rec, "bot")
+    assert sorted(d.channel for d in m.devices) == [0, 3]
+    assert [d.channel for d in m.loads] == [4]
+    assert m.idle == (2,)
+    text = render(m)
+    (tmp_path / "system.yaml").write_text(text)
+    assert check_written(tmp_path) == []
+    assert "\n  router:" not in text
+    assert "#   router: {kind: SH, channel: 4, current: [" in text
+    assert "probe stopped no topic and no node" in text
+    # without a probe such a channel stays a device with no known driver: nothing tells
+    m = infer(robot(probe=False), "bot")
+    assert sorted(d.channel for d in m.devices) == [0, 3] and m.loads == ()
