@@ -19,7 +19,9 @@ join the candidate, so the device is repaired first (switched on, power-cycled) 
 restart follows in the same plan. A device that cannot be repaired here — held by a person,
 quarantined, or not on a board channel — takes the node's place: the node is not restarted
 while its device cannot be brought back, and a note says so. A run that lasts longer than the
-settle time ends the loop. Pure bookkeeping: times are the observations'.
+settle time ends the loop, and so does ``RETRY_S`` without a death (nothing may tell that a
+device off the board is back: the node is tried again then). Pure bookkeeping: times are the
+observations'.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from host.repair.policy import Candidate
 
 CRASHES = 2  # this many short runs in a row make a loop
 SHORT_S = 5.0  # a run this short (or within the node's settle time) ended at once
+RETRY_S = 300.0  # a loop this old is over: the node is started once more
 
 
 @dataclass(frozen=True)
@@ -55,7 +58,9 @@ class CrashLoops:
         self.observations = observations
         self.settle = settle
         self.stops = {} if stops is None else stops  # node -> our latest stop_node
-        self._runs: dict[str, deque[float]] = {n: deque(maxlen=CRASHES) for n in nodes}
+        # node -> its latest runs: (when it ended, how long it lasted)
+        self._runs: dict[str, deque[tuple[float, float]]] = {
+            n: deque(maxlen=CRASHES) for n in nodes}
         self._up: dict[str, float] = {}  # node -> when its current run began
         observations.listen(self._changed)
 
@@ -70,17 +75,19 @@ class CrashLoops:
             elif node in self._up:
                 up = self._up.pop(node)
                 if self.stops.get(node, up - 1.0) < up:  # not ended by a stop of ours
-                    runs.append(since - up)
+                    runs.append((since, since - up))
 
-    def looping(self, node: str) -> Loop | None:
-        """The loop ``node`` is in, None when it is not in one (or runs now)."""
+    def looping(self, node: str, now: float | None = None) -> Loop | None:
+        """The loop ``node`` is in at ``now``, None when it is not in one (or runs now)."""
         runs = self._runs.get(node)
         if not runs or len(runs) < CRASHES or node in self._up:
             return None
-        limit = max(SHORT_S, self.settle.get(node, 0.0))
-        if max(runs) > limit:
+        if now is not None and now - runs[-1][0] > RETRY_S:
             return None
-        return Loop(node, len(runs), max(runs))
+        longest = max(length for _, length in runs)
+        if longest > max(SHORT_S, self.settle.get(node, 0.0)):
+            return None
+        return Loop(node, len(runs), longest)
 
 
 def _good(device: str, model: SystemModel, observations: ObservationSet) -> bool:
@@ -101,7 +108,8 @@ def _why(device: str, unavailable: Collection[str]) -> str:
 
 def blame_devices(cands: Iterable[Candidate], loops: CrashLoops, model: SystemModel,
                   observations: ObservationSet,
-                  unavailable: Collection[str]) -> tuple[list[Candidate], list[str]]:
+                  unavailable: Collection[str],
+                  now: float | None = None) -> tuple[list[Candidate], list[str]]:
     """The candidates with the devices of their looping nodes blamed (see the module), and
     one note per looping node; ``unavailable``: the held and quarantined components."""
     out: list[Candidate] = []
@@ -109,7 +117,7 @@ def blame_devices(cands: Iterable[Candidate], loops: CrashLoops, model: SystemMo
     for c in cands:
         bad = set(c.bad)
         for node in sorted(c.bad):
-            loop = loops.looping(node)
+            loop = loops.looping(node, now)
             comp = model.components.get(node)
             if loop is None or comp is None:
                 continue

@@ -285,7 +285,7 @@ class RepairService:
         (``host.repair.crashloop``); each new finding is said once."""
         ex = self.executor
         out, notes = blame_devices(cands, self.crashloops, ex.model, self.observations,
-                                   ex.quarantine.components | set(ex.held))
+                                   ex.quarantine.components | set(ex.held), ex.clock())
         for n in notes:
             if n not in self._loop_notes:
                 self._emit(Note(n))

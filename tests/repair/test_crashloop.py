@@ -141,6 +141,8 @@ def test_one_early_death_is_no_loop() -> None:
     assert loops.looping("n") is None
     at = crash(obs, "n", at, 1)
     assert loops.looping("n") is not None
+    assert loops.looping("n", at + 200) is not None
+    assert loops.looping("n", at + 400) is None  # so long ago: it is tried once more
     obs.add(Observation.parse("running(n)", at + 10))
     assert loops.looping("n") is None  # it runs now
     obs.add(Observation.parse("-running(n)", at + 100))  # this run held: no loop any more
