@@ -186,3 +186,17 @@ def test_a_load_a_probe_shows_nothing_needs_is_no_component(tmp_path: Path) -> N
     # without a probe such a channel stays a device with no known driver: nothing tells
     m = infer(robot(probe=False), "bot")
     assert sorted(d.channel for d in m.devices) == [0, 3] and m.loads == ()
+
+
+def test_a_topic_too_slow_for_the_probes_window_is_not_judged_stopped() -> None:
+    """A 0.5 Hz map sends nothing in a 1.5 s probe whatever the channel: its silence is no
+    evidence (TEDUSAR's mapper was made the driver of the laser's leveling mount, whose probe
+    happened to fall between two maps). A message during the probe still shows it went on."""
+    rec = robot()
+    rec.channels[5] = ChannelSeen(5, "mount", currents=(0.2, 0.25))
+    rec.probes.append(ChannelProbe(5, 33.0, 34.5, ("/map",), ("/scan", "/cloud", "/odom"), ()))
+    m = infer(rec, "bot")
+    nodes = {n.name: n for n in m.nodes}
+    assert nodes["mapper"].hardware == () and nodes["mapper"].kind == "N"
+    assert [d.channel for d in m.loads] == [5]  # nothing judged stopped: a load
+    assert nodes["mapper"].publishes == {"/map": ("/scan",)}  # probe 3's evidence stands
