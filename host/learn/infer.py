@@ -4,7 +4,9 @@ The rules, each leaving its evidence beside what it decided (``host.learn.render
 comments for the person who reviews the model):
 
 - *topics*: every topic some node publishes or that carried messages, but ROS 2's own
-  (``/rosout``, ``/parameter_events``, ``.../transition_event``) and dxboard's (``/dxboard/...``);
+  (``/rosout``, ``/parameter_events``, ``.../transition_event``, and the status plumbing
+  ``/diagnostics``, ``/diagnostics_agg``, ``/diagnostics_toplevel_state``: many nodes publish
+  there, so its rate is theirs summed and no one node's output) and dxboard's (``/dxboard/...``);
   its type, its rate evidence and proposed observer (``host.learn.stats``) from the passive
   watch, never from a probe's time.
 - *nodes*: every node of the graph with the topics it publishes and subscribes, managed when it
@@ -35,7 +37,8 @@ from dataclasses import dataclass, field, replace
 from host.learn.recording import ChannelProbe, Recording
 from host.learn.stats import RateEvidence, RateProposal, learn_rate, propose
 
-IGNORED = re.compile(r"^/(rosout|parameter_events)$|/transition_event$|^/dxboard(/|$)")
+IGNORED = re.compile(r"^/(rosout|parameter_events|diagnostics(_agg|_toplevel_state)?)$"
+                     r"|/transition_event$|^/dxboard(/|$)")
 NOISE_A = 0.01  # a channel drawing less than this powers nothing
 BAND_MARGIN = 0.3  # the band is the readings' range widened by this share at each end
 MIN_LAGS = 5

@@ -83,9 +83,11 @@ def robot(probe: bool = True) -> Recording:
     for t in ticks(0.5, 30, start=0.3):
         rec.add("/map", t, "nav_msgs/msg/OccupancyGrid")
     rec.add("/rosout", 1.0, "rcl_interfaces/msg/Log")
+    for t in ticks(2, 30):  # two drivers' statuses (REP-107): status plumbing, not data
+        rec.add("/diagnostics", t, "diagnostic_msgs/msg/DiagnosticArray")
     rec.nodes = {
-        "lidar": NodeSeen("lidar", ("/scan", "/rosout"), (), managed=True),
-        "base": NodeSeen("base", ("/odom",), ()),
+        "lidar": NodeSeen("lidar", ("/scan", "/rosout", "/diagnostics"), (), managed=True),
+        "base": NodeSeen("base", ("/odom", "/diagnostics"), ()),
         "filter": NodeSeen("filter", ("/cloud",), ("/scan",)),
         "mapper": NodeSeen("mapper", ("/map",), ("/scan", "/odom")),
     }
@@ -134,7 +136,7 @@ def test_the_written_model_loads_and_carries_its_evidence(tmp_path: Path) -> Non
     assert "n=1200 over " in text  # the evidence of /scan's rate
     assert "lidar: {lifecycle: true}" in text and "kind: SH" in text
     assert "probe: channel 0 off" in text
-    assert "/rosout" not in text
+    assert "/rosout" not in text and "/diagnostics" not in text
 
 
 def test_a_topic_without_a_known_publisher_is_named_for_review(tmp_path: Path) -> None:
