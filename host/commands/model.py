@@ -10,7 +10,8 @@ paper's clause number (a tug model file is accepted too). What a person should k
 a model was read (a tug file's atoms missing from ``props``, say) is printed once on stderr as
 ``note: ...``.
 
-``dxboard model learn OUT_DIR`` watches the running robot (ROS 2; ``--duration`` seconds,
+``dxboard model learn OUT_DIR`` watches the running robot (ROS 2, or Zenoh with ``--middleware
+zenoh``: ``--zenoh ENDPOINT`` and ``--zenoh-auth FILE``; ``--duration`` seconds,
 60 by default; ``--board HOST:PORT`` also reads its board's currents, ``--probe`` then
 switches each unprotected channel off in turn for at most 2 s) or reads a bag (``--bag BAG``,
 on the bag's clock) and writes ``OUT_DIR/system.yaml`` for a person to review, every learned
@@ -46,7 +47,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p.add_argument("out_dir", metavar="OUT_DIR", help="directory to write system.yaml into "
                    "(created; must not hold a system.yaml)")
     p.add_argument("--middleware", choices=["ros2", "zenoh"], default="ros2",
-                   help="how to watch the robot (default ros2; zenoh: not yet, refused)")
+                   help="how to watch the robot (default ros2)")
+    p.add_argument("--zenoh", metavar="ENDPOINT", action="append", default=[],
+                   help="with --middleware zenoh: the robot's endpoint to connect to (default "
+                   "tcp/127.0.0.1:7447, the one `dxboard run` listens on)")
+    p.add_argument("--zenoh-auth", metavar="FILE",
+                   help="with --middleware zenoh: the daemon's credentials file (JOURNAL-"
+                   "zenoh.auth beside its journal; default $DXBOARD_ZENOH_AUTH)")
     p.add_argument("--duration", type=float, default=60.0, metavar="S",
                    help="seconds to watch (default 60)")
     p.add_argument("--board", metavar="HOST:PORT", help="also read this board's currents")
@@ -133,6 +140,19 @@ def _say(line: str) -> None:
     print(f"dxboard model learn: {line}", file=sys.stderr, flush=True)
 
 
+def _zenoh_auth(args: argparse.Namespace) -> Path | None:
+    """The Zenoh credentials file: ``--zenoh-auth``, else ``$DXBOARD_ZENOH_AUTH``, checked."""
+    import os
+
+    from host.observers.sources.zenoh_auth import ENV, read
+
+    given = args.zenoh_auth or os.environ.get(ENV)
+    if args.middleware != "zenoh" or not given:
+        return None
+    read(Path(given))  # a file that is not one user:password line: one line, exit 2
+    return Path(given)
+
+
 def _learn(args: argparse.Namespace) -> int:
     from host.errors import UserError
     from host.learn.infer import infer
@@ -142,9 +162,9 @@ def _learn(args: argparse.Namespace) -> int:
     out = Path(args.out_dir)
     if (out / "system.yaml").exists() or (out.exists() and not out.is_dir()):
         raise UserError(f"{out} holds a model already", "give a new directory for the model")
-    if args.middleware == "zenoh":
-        raise UserError("--middleware zenoh: learning watches ROS 2 only so far",
-                        "learn with --middleware ros2, or from a bag with --bag")
+    if args.middleware == "zenoh" and args.bag:
+        raise UserError("--bag learns from a ROS 2 bag, not over zenoh",
+                        "leave out --middleware zenoh with --bag")
     if args.bag:
         if args.board or args.probe:
             raise UserError("--bag learns from the bag alone",
@@ -160,8 +180,11 @@ def _learn(args: argparse.Namespace) -> int:
 
         url = board_url(args.board) if args.board else None
         key = load_key(args.key_file) if args.probe else None
-        rec = learn_live(LearnOptions(args.duration, url, key, args.probe), _say)
-    model = infer(rec, out.resolve().name or "robot", ros2=not args.bag)
+        rec = learn_live(LearnOptions(args.duration, url, key, args.probe,
+                                      middleware=args.middleware, zenoh=tuple(args.zenoh),
+                                      auth=_zenoh_auth(args)), _say)
+    model = infer(rec, out.resolve().name or "robot",
+                  ros2=not args.bag and args.middleware == "ros2")
     out.mkdir(parents=True, exist_ok=True)
     (out / "system.yaml").write_text(render(model))
     problems = check_written(out)

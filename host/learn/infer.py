@@ -4,7 +4,9 @@ The rules, each leaving its evidence beside what it decided (``host.learn.render
 comments for the person who reviews the model):
 
 - *topics*: every topic some node publishes or that carried messages, but ROS 2's own
-  (``/rosout``, ``/parameter_events``, ``.../transition_event``) and dxboard's (``/dxboard/...``);
+  (``/rosout``, ``/parameter_events``, ``.../transition_event``, and the status plumbing
+  ``/diagnostics``, ``/diagnostics_agg``, ``/diagnostics_toplevel_state``: many nodes publish
+  there, so its rate is theirs summed and no one node's output) and dxboard's (``/dxboard/...``);
   its type, its rate evidence and proposed observer (``host.learn.stats``) from the passive
   watch, never from a probe's time.
 - *nodes*: every node of the graph with the topics it publishes and subscribes, managed when it
@@ -15,6 +17,9 @@ comments for the person who reviews the model):
   time* (the lag from the input's latest message is steady: published in answer to it) is
   measured and noted; a timer that stops when its inputs go stale does not show in time, so
   timing alone never removes a dependency.
+- *probes*: a topic too slow to send ``MIN_EXPECTED`` messages while its channel was off (a
+  0.5 Hz map in a 1.5 s probe) is not judged stopped by it: its silence is no evidence; a
+  message it sent meanwhile still shows that it went on.
 - *devices* (``--probe``): a channel whose switching off stopped topics or nodes powers a
   device (switchable hardware, named after the channel); its drivers are the nodes that left
   the graph, or whose outputs stopped while none of their inputs did. Without a probe, a
@@ -27,16 +32,18 @@ from __future__ import annotations
 import bisect
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from host.learn.recording import ChannelProbe, Recording
 from host.learn.stats import RateEvidence, RateProposal, learn_rate, propose
 
-IGNORED = re.compile(r"^/(rosout|parameter_events)$|/transition_event$|^/dxboard(/|$)")
+IGNORED = re.compile(r"^/(rosout|parameter_events|diagnostics(_agg|_toplevel_state)?)$"
+                     r"|/transition_event$|^/dxboard(/|$)")
 NOISE_A = 0.01  # a channel drawing less than this powers nothing
 BAND_MARGIN = 0.3  # the band is the readings' range widened by this share at each end
 MIN_LAGS = 5
 FOLLOW_SPREAD = 0.2  # lag stddev below this share of the input's period: follows it
+MIN_EXPECTED = 3.0  # a probe judges a topic stopped only when it expected this many messages
 
 
 @dataclass(frozen=True)
@@ -96,6 +103,7 @@ class LearnedModel:
     channels: int = 0
     protected: tuple[int, ...] = ()
     idle: tuple[int, ...] = ()  # channels that drew no current and stopped nothing
+    loads: tuple[LearnedDevice, ...] = ()  # drew current, but their probe stopped nothing
 
 
 def topic_names(rec: Recording) -> list[str]:
@@ -146,14 +154,30 @@ def infer(rec: Recording, robot: str, ros2: bool = True) -> LearnedModel:
                                     propose(ev) if ev else None))
     rates = {lt.name: lt.evidence.rate for lt in learned if lt.evidence}
     _timing(rec, nodes, rates)
-    devices = _devices(rec, nodes)
+    rec = replace(rec, probes=[_judged(p, rates) for p in rec.probes])
+    found = _devices(rec, nodes)
+    loads = tuple(d for d in found if _unneeded(d))
+    devices = [d for d in found if not _unneeded(d)]
     _probe_dependencies(rec, nodes)
-    used = {d.channel for d in devices}
+    used = {d.channel for d in found}
     idle = tuple(c for c, ch in sorted(rec.channels.items())
                  if c not in used and not ch.protected)
     return LearnedModel(robot, rec.source, rec.watched_until - rec.start, ros2, learned,
                         list(nodes.values()), devices, len(rec.channels),
-                        tuple(c for c, ch in sorted(rec.channels.items()) if ch.protected), idle)
+                        tuple(c for c, ch in sorted(rec.channels.items()) if ch.protected), idle,
+                        loads)
+
+
+def _unneeded(d: LearnedDevice) -> bool:
+    """A load its probe showed nothing observed needs: no topic stopped, no node left."""
+    return d.probe is not None and not d.probe.stopped and not d.probe.gone
+
+
+def _judged(p: ChannelProbe, rates: dict[str, float]) -> ChannelProbe:
+    """``p`` less the stopped topics too slow for its window (see the module)."""
+    window = p.on - p.off
+    stopped = tuple(t for t in p.stopped if t not in rates or rates[t] * window >= MIN_EXPECTED)
+    return replace(p, stopped=stopped, lost=tuple(t for t in p.lost if t in stopped))
 
 
 def _timing(rec: Recording, nodes: dict[str, LearnedNode], rates: dict[str, float]) -> None:

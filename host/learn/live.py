@@ -114,15 +114,9 @@ class RosWatcher:
         return on
 
     def count(self, topic: str, since: float) -> int:
-        """Messages of ``topic`` *sent* at ``since`` or later: for a stamped type, those whose
-        stamp, moved onto this clock by the fastest delivery seen lately, is that late (a busy
-        receiver still delivers messages sent before a channel went off); else the arrivals."""
+        """Messages of ``topic`` sent at ``since`` or later (``Recording.sent_since``)."""
         with self.lock:
-            pairs = self.rec.stamps.get(topic)
-            if pairs:
-                shift = min(a - s for a, s in pairs[-RECENT:])
-                return sum(1 for _, s in pairs if s + shift >= since)
-            return sum(1 for t in self.rec.arrivals.get(topic, ()) if t >= since)
+            return self.rec.sent_since(topic, since, RECENT)
 
     def present(self) -> set[str]:
         """The nodes in the graph now."""

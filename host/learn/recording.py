@@ -80,6 +80,17 @@ class Recording:
         until = self.watched_until
         return [t for t in self.arrivals.get(topic, []) if t < until]
 
+    def sent_since(self, topic: str, since: float, recent: int = 200) -> int:
+        """Messages of ``topic`` *sent* at ``since`` or later: for a stamped topic, those whose
+        stamp, moved onto the arrivals' clock by the fastest delivery among the ``recent``
+        latest, is that late (a busy receiver still delivers messages sent before a channel
+        went off); else the arrivals."""
+        pairs = self.stamps.get(topic)
+        if pairs:
+            shift = min(a - s for a, s in pairs[-recent:])
+            return sum(1 for _, s in pairs if s + shift >= since)
+        return sum(1 for t in self.arrivals.get(topic, ()) if t >= since)
+
     def watched_stamps(self, topic: str) -> list[float]:
         """The header stamps of the topic's messages that arrived during the passive watch."""
         until = self.watched_until

@@ -50,6 +50,12 @@ def _device(d: LearnedDevice, drivers: list[str]) -> list[str]:
     return lines
 
 
+def _load(d: LearnedDevice) -> str:
+    band = (f", current: [{_num(d.band[0])}, {_num(d.band[1])}]" if d.band is not None else "")
+    return (f"  #   {d.name}: {{kind: SH, channel: {d.channel}{band}}}  # n={d.n} readings from "
+            f"{d.low:.3f} to {d.high:.3f} A")
+
+
 def _node(n: LearnedNode) -> list[str]:
     managed = "  # a managed (lifecycle) node" if n.managed else ""
     lines = [f"  {n.name}:{managed}"]
@@ -102,6 +108,12 @@ def render(m: LearnedModel) -> str:
         out += _device(d, [n.name for n in m.nodes if d.name in n.hardware])
     for n in nodes.values():
         out += _node(n)
+    if m.loads:
+        out.append("  # loads: they draw current, but their probe stopped no topic and no node, so "
+                   "no observation")
+        out.append("  # depends on them; uncomment one to watch its current band and repair "
+                   "its power:")
+        out += [_load(d) for d in m.loads]
     out += ["", "observers:"]
     if m.ros2:
         out.append("  source: {kind: ros2}")

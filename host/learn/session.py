@@ -1,6 +1,8 @@
 """One learning session on a running robot: watch its topics and graph, read its board, probe.
 
-``learn_live(options, progress)`` runs the ROS 2 watcher (``host.learn.live``) for
+``learn_live(options, progress)`` runs the ROS 2 watcher (``host.learn.live``), or with
+``middleware="zenoh"`` the Zenoh one (``host.learn.zenoh_watch``: the robot's endpoint and
+credentials file), for
 ``duration`` seconds while, with a board, it collects the channels' currents
 (``host.learn.board``); then, with ``probe``, it switches each unprotected channel off in turn.
 Progress lines (what it does, how far it is, how many topics and nodes so far) go to
@@ -16,11 +18,18 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from host.errors import UserError
 from host.learn.recording import Recording
 
+if TYPE_CHECKING:
+    from host.learn.live import RosWatcher
+    from host.learn.zenoh_watch import ZenohWatcher
+
 PROGRESS_S = 10.0
+JOIN_QUIET_S = 3.0  # Zenoh: the robot's peers have all found the watcher when no new topic
+JOIN_MAX_S = 30.0  # came for this long (or after this long at most)
 CONNECT_S = 30.0  # the board's HELLO: generous, a robot's computer may be busy
 
 
@@ -31,6 +40,9 @@ class LearnOptions:
     key: bytes | None = None
     probe: bool = False
     domain: int | None = None
+    middleware: str = "ros2"  # or "zenoh"
+    zenoh: tuple[str, ...] = ()  # the endpoints a Zenoh watcher connects to (default: the daemon's)
+    auth: Path | None = None  # the daemon's Zenoh credentials file
 
 
 def board_url(text: str) -> str:
@@ -55,13 +67,46 @@ async def _progress(rec: Recording, until: float, say: Callable[[str], None]) ->
             f"{len(rec.nodes)} nodes")
 
 
+async def _joined(watcher: ZenohWatcher, say: Callable[[str], None]) -> None:
+    """Wait until the robot's Zenoh peers have found the watcher (they do by gossip, one by
+    one: no new topic for ``JOIN_QUIET_S``, at most ``JOIN_MAX_S``), then start the watch
+    afresh, so that every topic is watched for the whole duration."""
+    start = last = time.monotonic()
+    seen: set[str] = set()
+    while time.monotonic() - last < JOIN_QUIET_S and time.monotonic() - start < JOIN_MAX_S:
+        await asyncio.sleep(0.2)
+        with watcher.lock:
+            now = set(watcher.rec.arrivals)
+        if now - seen:
+            seen, last = now, time.monotonic()
+    with watcher.lock:
+        watcher.rec.arrivals.clear()
+        watcher.rec.stamps.clear()
+        watcher.rec.start = time.monotonic()
+    say(f"joined the robot's zenoh network: {len(seen)} topics so far")
+
+
 async def _learn(opts: LearnOptions, say: Callable[[str], None]) -> Recording:
     from host.learn.board import probe, watch_board
-    from host.learn.live import RosWatcher
 
-    rec = Recording(time.monotonic(), 0.0, source="the running robot (ROS 2)")
+    watcher: RosWatcher | ZenohWatcher
+    if opts.middleware == "zenoh":
+        from host.learn.zenoh_watch import ZenohWatcher
+        from host.observers.sources.zenoh_peer import DEFAULT_ENDPOINT
+
+        rec = Recording(time.monotonic(), 0.0, source="the running robot (Zenoh)")
+        watcher = ZenohWatcher(rec, opts.zenoh or (DEFAULT_ENDPOINT,), opts.auth)
+        try:
+            await _joined(watcher, say)
+        except BaseException:
+            watcher.close()
+            raise
+    else:
+        from host.learn.live import RosWatcher
+
+        rec = Recording(time.monotonic(), 0.0, source="the running robot (ROS 2)")
+        watcher = RosWatcher(rec, opts.domain)
     until = rec.start + opts.duration
-    watcher = RosWatcher(rec, opts.domain)
     ticker = asyncio.create_task(_progress(rec, until, say))
     try:
         if opts.board is None:

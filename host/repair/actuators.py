@@ -93,6 +93,8 @@ class Actuators:
         #: (clock time, channel, on) of the latest switch commands sent (RECENT), so that the
         #: daemon can tell its own commands from a person's
         self.commands: list[tuple[float, int, bool]] = []
+        #: node -> clock time of the latest stop_node sent (a run it ended is no crash)
+        self.stops: dict[str, float] = {}
         self._may_unlatch_short: set[str] = set()
         self._on_lock = asyncio.Lock()
         self._next_on = 0.0
@@ -257,6 +259,7 @@ class Actuators:
     async def stop_node(self, node: str) -> str:
         self._never_off("stop_node", node)
         sup = self._node(node)
+        self.stops[node] = self.clock()
         try:
             code = await sup.stop(node)
         except ProcessError as exc:

@@ -69,6 +69,7 @@ from host.repair.booting import (
     up_atom,
     up_since,
 )
+from host.repair.crashloop import CrashLoops, blame_devices
 from host.repair.effects import settle_times
 from host.repair.executor import Event as ExecutorEvent
 from host.repair.executor import Executor, StepReport, load_stretch
@@ -128,6 +129,10 @@ class RepairService:
         self._pending: asyncio.Task[Any] | None = None
         self._running: asyncio.Task[Any] | None = None
         self.unsettled = Unsettled()
+        self.crashloops = CrashLoops(observations, executor.settle,
+                                     [c.name for c in executor.model.components.values()
+                                      if c.is_node], executor.actuators.stops)
+        self._loop_notes: list[str] = []
 
     # --- inputs -------------------------------------------------------------------------
     def link(self, client: BoardClient | None) -> None:
@@ -273,7 +278,19 @@ class RepairService:
         await self._wait_for_board()
         result = await self._fresh()
         cands = [Candidate(frozenset(d.bad), d.probability) for d in result.diagnoses]
-        return self._spare_restored(cands), self.observations.literals()
+        return self._blame_devices(self._spare_restored(cands)), self.observations.literals()
+
+    def _blame_devices(self, cands: list[Candidate]) -> list[Candidate]:
+        """A node that dies at once after every start blames its device
+        (``host.repair.crashloop``); each new finding is said once."""
+        ex = self.executor
+        out, notes = blame_devices(cands, self.crashloops, ex.model, self.observations,
+                                   ex.quarantine.components | set(ex.held), ex.clock())
+        for n in notes:
+            if n not in self._loop_notes:
+                self._emit(Note(n))
+        self._loop_notes = notes
+        return out
 
     def _spare_restored(self, cands: list[Candidate]) -> list[Candidate]:
         """Leave out the candidates that blame a device the board has just restored by itself

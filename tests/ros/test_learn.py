@@ -104,7 +104,8 @@ def test_learn_from_a_bag_on_its_clock(tmp_path: Path) -> None:
 
 def test_bad_input_is_one_line(tmp_path: Path) -> None:
     for args in (["--bag", str(tmp_path / "none")], ["--probe"], ["--duration", "0"],
-                 ["--board", "nowhere"], ["--middleware", "zenoh"]):
+                 ["--board", "nowhere"], ["--middleware", "zenoh", "--bag", "b"],
+                 ["--middleware", "zenoh", "--zenoh-auth", str(tmp_path / "none")]):
         p = dxboard("model", "learn", str(tmp_path / "x"), *args)
         assert p.returncode == 2, (args, p.stderr)
         assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr

@@ -83,9 +83,11 @@ def robot(probe: bool = True) -> Recording:
     for t in ticks(0.5, 30, start=0.3):
         rec.add("/map", t, "nav_msgs/msg/OccupancyGrid")
     rec.add("/rosout", 1.0, "rcl_interfaces/msg/Log")
+    for t in ticks(2, 30):  # two drivers' statuses (REP-107): status plumbing, not data
+        rec.add("/diagnostics", t, "diagnostic_msgs/msg/DiagnosticArray")
     rec.nodes = {
-        "lidar": NodeSeen("lidar", ("/scan", "/rosout"), (), managed=True),
-        "base": NodeSeen("base", ("/odom",), ()),
+        "lidar": NodeSeen("lidar", ("/scan", "/rosout", "/diagnostics"), (), managed=True),
+        "base": NodeSeen("base", ("/odom", "/diagnostics"), ()),
         "filter": NodeSeen("filter", ("/cloud",), ("/scan",)),
         "mapper": NodeSeen("mapper", ("/map",), ("/scan", "/odom")),
     }
@@ -134,7 +136,7 @@ def test_the_written_model_loads_and_carries_its_evidence(tmp_path: Path) -> Non
     assert "n=1200 over " in text  # the evidence of /scan's rate
     assert "lidar: {lifecycle: true}" in text and "kind: SH" in text
     assert "probe: channel 0 off" in text
-    assert "/rosout" not in text
+    assert "/rosout" not in text and "/diagnostics" not in text
 
 
 def test_a_topic_without_a_known_publisher_is_named_for_review(tmp_path: Path) -> None:
@@ -163,3 +165,40 @@ def test_random_events_on_the_senders_clock_are_reactive() -> None:
     times = events(5.0, 60, 5)
     ev = learn_rate([x + 0.01 for x in times], times)
     assert ev is not None and ev.clock == "sender" and not ev.periodic
+
+
+def test_a_load_a_probe_shows_nothing_needs_is_no_component(tmp_path: Path) -> None:
+    """A channel that draws current but whose probe stopped no topic and no node (a router, a
+    sensor head's fan: TEDUSAR's channels 0, 4, 5) is no component of the diagnosis model, as
+    the hand-written model has none: a board-wide fault would otherwise power it up as a
+    repair. It is written as a commented-out component with its evidence, for the review."""
+    rec = robot()
+    rec.channels[4] = ChannelSeen(4, "router", currents=(0.3, 0.32, 0.31))
+    rec.probes.append(ChannelProbe(4, 33.0, 34.5, (), ("/scan", "/cloud", "/map", "/odom"), ()))
+    m = infer(rec, "bot")
+    assert sorted(d.channel for d in m.devices) == [0, 3]
+    assert [d.channel for d in m.loads] == [4]
+    assert m.idle == (2,)
+    text = render(m)
+    (tmp_path / "system.yaml").write_text(text)
+    assert check_written(tmp_path) == []
+    assert "\n  router:" not in text
+    assert "#   router: {kind: SH, channel: 4, current: [" in text
+    assert "probe stopped no topic and no node" in text
+    # without a probe such a channel stays a device with no known driver: nothing tells
+    m = infer(robot(probe=False), "bot")
+    assert sorted(d.channel for d in m.devices) == [0, 3] and m.loads == ()
+
+
+def test_a_topic_too_slow_for_the_probes_window_is_not_judged_stopped() -> None:
+    """A 0.5 Hz map sends nothing in a 1.5 s probe whatever the channel: its silence is no
+    evidence (TEDUSAR's mapper was made the driver of the laser's leveling mount, whose probe
+    happened to fall between two maps). A message during the probe still shows it went on."""
+    rec = robot()
+    rec.channels[5] = ChannelSeen(5, "mount", currents=(0.2, 0.25))
+    rec.probes.append(ChannelProbe(5, 33.0, 34.5, ("/map",), ("/scan", "/cloud", "/odom"), ()))
+    m = infer(rec, "bot")
+    nodes = {n.name: n for n in m.nodes}
+    assert nodes["mapper"].hardware == () and nodes["mapper"].kind == "N"
+    assert [d.channel for d in m.loads] == [5]  # nothing judged stopped: a load
+    assert nodes["mapper"].publishes == {"/map": ("/scan",)}  # probe 3's evidence stands
