@@ -85,7 +85,12 @@ class RunningDaemon:
         self.urls: dict[str, str] = self.child.urls()
         if "journal" not in self.urls:
             raise AssertionError("dxboard run exited: " + self.err_path.read_text()[-2000:])
-        self._told = len(self.child.lines)  # the URL lines; what it says afterwards: lines
+        # what it says after its URL lines (the last is the journal's) is ``lines``: counted
+        # from that line, not from what the reader had read by now (on a busy machine the
+        # run's first line is read before this thread gets here)
+        said = list(self.child.lines)
+        self._told = next(i + 1 for i in range(len(said) - 1, -1, -1)
+                          if said[i].strip().startswith("journal: "))
 
     @property
     def proc(self) -> subprocess.Popen[bytes]:
