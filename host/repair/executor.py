@@ -95,15 +95,29 @@ TRIP_MARGIN_S = 0.05  # a wait that ended this much before its deadline was ende
 MAX_STRETCH = 3.0  # a busy machine's steps get at most this many times their time
 
 
+def runnable_now(path: str = "/proc/loadavg") -> float:
+    """How many tasks other than this reader can run at this instant (Linux: the fourth field
+    of ``/proc/loadavg``, ``running/total``); 0 where that is not known."""
+    try:
+        with open(path) as f:
+            return max(0.0, float(f.read().split()[3].split("/")[0]) - 1)
+    except (OSError, IndexError, ValueError):
+        return 0.0
+
+
 def load_stretch(getloadavg: Callable[[], tuple[float, float, float]] = os.getloadavg,
-                 cores: int | None = None) -> float:
-    """How many times its settle and verify time a step gets: the one-minute load average
-    per core, at least 1 (an idle or normally busy machine), at most ``MAX_STRETCH`` (a
-    broken step still fails within a bounded time)."""
+                 cores: int | None = None, runnable: Callable[[], float] = runnable_now
+                 ) -> float:
+    """How many times its settle and verify time a step gets: the load per core, at least 1
+    (an idle or normally busy machine), at most ``MAX_STRETCH`` (a broken step still fails
+    within a bounded time). The load is the one-minute load average or, when more, the tasks
+    runnable now: the average lags a burst by a minute (on a machine that had just become busy
+    a driver's first start got 12 s, unstretched, and its first 0.5 Hz output came later)."""
     try:
         load = getloadavg()[0]
     except OSError:  # no load average on this system
-        return 1.0
+        load = 0.0
+    load = max(load, runnable())
     return min(MAX_STRETCH, max(1.0, load / (cores or os.cpu_count() or 1)))
 
 

@@ -19,7 +19,7 @@ from host.events import ActionState
 from host.planning.errors import NoPlanError
 from host.planning.plan import Plan, Step
 from host.repair.actuators import Refused
-from host.repair.executor import MAX_STRETCH, Outcome, StepReport, load_stretch
+from host.repair.executor import MAX_STRETCH, Outcome, StepReport, load_stretch, runnable_now
 from host.repair.limits import Quarantined
 from host.repair.loop import LoopOutcome, RepairLoop
 from tests.executor.conftest import (
@@ -362,14 +362,28 @@ def test_the_stretch_follows_the_load_per_core_within_bounds() -> None:
     def load(x: float) -> Callable[[], tuple[float, float, float]]:
         return lambda: (x, 0.0, 0.0)
 
-    assert load_stretch(load(0.5), cores=2) == 1.0  # never shorter than written
-    assert load_stretch(load(5.0), cores=2) == 2.5
-    assert load_stretch(load(40.0), cores=2) == MAX_STRETCH  # a broken step still fails
+    def idle() -> float:
+        return 0.0
+
+    assert load_stretch(load(0.5), cores=2, runnable=idle) == 1.0  # never shorter than written
+    assert load_stretch(load(5.0), cores=2, runnable=idle) == 2.5
+    assert load_stretch(load(40.0), cores=2, runnable=idle) == MAX_STRETCH  # still bounded
+    # a burst the one-minute average has not caught up with yet: the tasks runnable now
+    assert load_stretch(load(0.7), cores=2, runnable=lambda: 4.0) == 2.0
 
     def none() -> tuple[float, float, float]:
         raise OSError("no load average")
 
-    assert load_stretch(none, cores=2) == 1.0
+    assert load_stretch(none, cores=2, runnable=idle) == 1.0
+
+
+def test_the_tasks_runnable_now_are_read_from_proc_loadavg(tmp_path: Path) -> None:
+    f = tmp_path / "loadavg"
+    f.write_text("0.70 0.50 0.40 5/812 12345\n")
+    assert runnable_now(str(f)) == 4.0  # not counting the reader
+    f.write_text("garbage\n")
+    assert runnable_now(str(f)) == 0.0
+    assert runnable_now(str(tmp_path / "absent")) == 0.0
 
 
 async def test_a_slow_topic_gets_the_time_its_observer_needs_to_judge_it(
