@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from protocol import messages as m
 from protocol.connection import BOARD, HOST, Connection
 from protocol.framing import BadFrame
-from tests.protocol.mutations import mutated
+from tests.protocol.mutations import damaged
 from tests.protocol.samples import later_samples, samples
 from tests.protocol.util import KEY, hello
 
@@ -26,10 +26,6 @@ _host.events()
 # Valid frames of every message in both directions, signed ones included.
 VALID = [(_board if s.DIR == "B" else _host).send(s) for s in samples() + later_samples()]
 TRAILER = _board.send(m.Pong(0xABCD, 1, req_id=1))
-
-
-def mutated_frame() -> st.SearchStrategy[bytes]:
-    return mutated(VALID, b"\xdb\x58")
 
 
 def _decode(role: str, data: bytes, cuts: "list[int]") -> "list[object]":
@@ -61,7 +57,7 @@ def _decode(role: str, data: bytes, cuts: "list[int]") -> "list[object]":
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
 )
 @given(
-    frames=st.lists(mutated_frame(), min_size=FRAMES_PER_EXAMPLE, max_size=FRAMES_PER_EXAMPLE),
+    frames=damaged(VALID, b"\xdb\x58", FRAMES_PER_EXAMPLE),
     cuts=st.lists(st.integers(0, 1 << 16), max_size=12),
     role=st.sampled_from([BOARD, HOST]),
 )
