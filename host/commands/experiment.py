@@ -46,6 +46,8 @@ Options:
   --fast           short device boot times (lidar 1.5 s, base and mount 0.3 s) instead of
                    the real devices' (lidar 5 s, base and mount 1 s), for tests
   --only parallel|sequential   power-up: one of the two runs
+  --no-fault-free  M1-M4: leave out the fault-free run (and the delays against it), when a
+                   fault-free run of the same mission was made already
   --timeout S      give up a run after S seconds (default 180)
 """
 
@@ -74,6 +76,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="short device boot times (for tests); default: the real devices'")
     parser.add_argument("--only", choices=("parallel", "sequential"),
                         help="power-up: run only this execution mode (default: both)")
+    parser.add_argument("--no-fault-free", dest="fault_free", action="store_false",
+                        help="M1-M4: leave out the fault-free run (and the delays against it)")
     parser.add_argument("--timeout", type=float, default=180.0, metavar="S",
                         help="give up a run after S seconds (default 180)")
 
@@ -95,15 +99,19 @@ def run(args: argparse.Namespace) -> int:
     from host.experiment.session import beside
 
     system_dir = check_robot(Path(args.system_dir), args.timeout)
+    if not args.fault_free and args.which not in ("mission-fault", *PLANDIAG):
+        from host.errors import UserError
+
+        raise UserError(f"--no-fault-free: {args.which} has no fault-free run",
+                        "use it with mission-fault, door-closed, marker-missing or plan-error")
     if args.journal is not None:
         journal = Path(args.journal)
         _check_new(journal)
         if args.which == "power-up":
             _check_new(beside(journal, "sequential"))
         if args.which == "mission-fault":
-            for label in ("fault-free", "flat"):
-                _check_new(beside(journal, label))
-        if args.which in PLANDIAG:
+            _check_new(beside(journal, "flat"))
+        if args.which in ("mission-fault", *PLANDIAG) and args.fault_free:
             _check_new(beside(journal, "fault-free"))
     with tempfile.TemporaryDirectory(prefix="dxboard-experiment-") as tmp:
         robot_dir = fast_model(system_dir, Path(tmp)) if args.fast else system_dir
@@ -113,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
             from host.experiment.plandiag import plan_diagnosis, plan_diagnosis_text
 
             pd = asyncio.run(plan_diagnosis(args.which, robot_dir, base,
-                                            timeout_s=args.timeout))
+                                            timeout_s=args.timeout, fault_free=args.fault_free))
             if args.json:
                 print(json.dumps({"experiment": args.which, "robot": robot, "fast": args.fast,
                                   "runs": {k: r.to_json() for k, r in pd.items()}}, indent=2))
@@ -122,7 +130,8 @@ def run(args: argparse.Namespace) -> int:
         elif args.which == "mission-fault":
             from host.experiment.mission import mission_fault, mission_fault_text
 
-            m1 = asyncio.run(mission_fault(robot_dir, base, timeout_s=args.timeout))
+            m1 = asyncio.run(mission_fault(robot_dir, base, timeout_s=args.timeout,
+                                           fault_free=args.fault_free))
             if args.json:
                 print(json.dumps({"experiment": "mission-fault", "robot": robot,
                                   "fast": args.fast,

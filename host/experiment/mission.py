@@ -212,22 +212,25 @@ async def _inject(s: RobotSession, watch: _Watch, run: MissionRun) -> None:
     log.info("injected: %s hangs", FAULT_DEVICE)
 
 
-async def mission_fault(system_dir: Path, journal: Path, *, timeout_s: float = 300.0
-                        ) -> dict[str, MissionRun]:
-    """M1: fault-free, the lidar hang on the layered robot, the same on the flat system."""
+async def mission_fault(system_dir: Path, journal: Path, *, timeout_s: float = 300.0,
+                        fault_free: bool = True) -> dict[str, MissionRun]:
+    """M1: fault-free (unless ``fault_free`` is False), the lidar hang on the layered robot,
+    the same on the flat system."""
 
-    return {
-        "fault-free": await run_mission(system_dir, beside(journal, "fault-free"),
-                                        label="fault-free", timeout_s=timeout_s),
-        "layered": await run_mission(system_dir, journal, label="layered", fault=True,
-                                     timeout_s=timeout_s),
-        "flat": await run_mission(system_dir, beside(journal, "flat"), label="flat",
-                                  fault=True, flat=True, timeout_s=timeout_s),
-    }
+    runs: dict[str, MissionRun] = {}
+    if fault_free:
+        runs["fault-free"] = await run_mission(system_dir, beside(journal, "fault-free"),
+                                               label="fault-free", timeout_s=timeout_s)
+    runs["layered"] = await run_mission(system_dir, journal, label="layered", fault=True,
+                                        timeout_s=timeout_s)
+    runs["flat"] = await run_mission(system_dir, beside(journal, "flat"), label="flat",
+                                     fault=True, flat=True, timeout_s=timeout_s)
+    return runs
 
 
 def mission_fault_text(robot: str, fast: bool, runs: dict[str, MissionRun]) -> str:
-    base = runs["fault-free"].duration_s
+    free = runs.get("fault-free")
+    base = None if free is None else free.duration_s
     lines = [f"experiment M1 (mission-fault) on {robot}"
              + (" (fast boot times)" if fast else "")
              + f": {FAULT_DEVICE} hangs {FAULT_DELAY_S:g} s into the first navigation", ""]

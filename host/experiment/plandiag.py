@@ -123,27 +123,31 @@ SCENARIOS = {
 
 
 async def plan_diagnosis(which: str, system_dir: Path, journal: Path, *,
-                         timeout_s: float = 300.0) -> dict[str, MissionRun]:
-    """One of M2-M4: the fault-free mission, then the one with the scenario's event."""
+                         timeout_s: float = 300.0, fault_free: bool = True
+                         ) -> dict[str, MissionRun]:
+    """One of M2-M4: the fault-free mission (unless ``fault_free`` is False), then the one with
+    the scenario's event."""
 
     sc = SCENARIOS[which]
-    free = await run_mission(system_dir, beside(journal, "fault-free"), label="fault-free",
-                             timeout_s=timeout_s)
-    event = await run_mission(
+    runs: dict[str, MissionRun] = {}
+    if fault_free:
+        runs["fault-free"] = await run_mission(system_dir, beside(journal, "fault-free"),
+                                               label="fault-free", timeout_s=timeout_s)
+    runs[which] = await run_mission(
         system_dir, journal, label=which, timeout_s=timeout_s, prepare=sc.prepare,
         inject=sc.injection())
-    return {"fault-free": free, which: event}
+    return runs
 
 
 def plan_diagnosis_text(which: str, robot: str, fast: bool, runs: dict[str, MissionRun]
                         ) -> str:
     sc = SCENARIOS[which]
-    free, r = runs["fault-free"], runs[which]
+    free, r = runs.get("fault-free"), runs[which]
     lines = [f"experiment {sc.label} ({which}) on {robot}" + (" (fast boot times)" if fast
                                                                 else "") + f": {sc.what}", ""]
     for name, run in runs.items():
         state = "completed" if run.completed else f"did not complete: {run.detail}"
-        delay = ("" if name == "fault-free" or free.duration_s is None
+        delay = ("" if name == "fault-free" or free is None or free.duration_s is None
                  or run.duration_s is None or not run.completed else
                  f", delay {run.duration_s - free.duration_s:+.1f} s against fault-free")
         lines.append(f"{name:14} {state}: {run.duration_s or 0:.1f} s, {run.actions} actions, "

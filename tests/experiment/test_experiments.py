@@ -34,11 +34,11 @@ DRIVERS = {"jaguar": "jaguar_node", "hokuyo": "hokuyo_node",
            "laser_alignment": "laser_alignment_node", "thermal_camera": "thermal_camera_node"}
 
 
-def experiment(which: str, journal: Path, timeout_s: float = 90) -> dict[str, Any]:
+def experiment(which: str, journal: Path, timeout_s: float = 90, *extra: str) -> dict[str, Any]:
     for _ in range(3):  # the zenoh port it picked was taken meanwhile: it says so, run again
         out = subprocess.run(
             [sys.executable, "-m", "host.cli", "experiment", which, "models/tedusar", "--fast",
-             "--json", "--journal", str(journal), "--timeout", f"{timeout_s:g}"],
+             "--json", "--journal", str(journal), "--timeout", f"{timeout_s:g}", *extra],
             cwd=ROOT, capture_output=True, text=True, timeout=max(240, 4 * timeout_s))
         if out.returncode == 0 or not clashed(out.stderr):
             break
@@ -160,3 +160,11 @@ def test_a_directory_without_a_robot_is_a_one_line_error(tmp_path: Path) -> None
                           str(tmp_path)], cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert out.returncode == 2
     assert out.stderr.strip().count("\n") == 0 and "no system.yaml" in out.stderr
+
+
+def test_no_fault_free_run_is_refused_where_there_is_none() -> None:
+    out = subprocess.run([sys.executable, "-m", "host.cli", "experiment", "power-up",
+                          "models/tedusar", "--no-fault-free"], cwd=ROOT, capture_output=True,
+                         text=True, timeout=60)
+    assert out.returncode == 2 and out.stderr.strip().count("\n") == 0, out.stderr
+    assert "--no-fault-free: power-up has no fault-free run" in out.stderr

@@ -19,10 +19,11 @@ from tests.experiment.test_experiments import experiment as run_experiment
 
 
 def experiment(which: str, journal: Path) -> dict[str, Any]:
-    data = run_experiment(which, journal, timeout_s=240)
-    assert data["experiment"] == which
-    free = data["runs"]["fault-free"]
-    assert free["completed"] and free["diagnoses"] == []
+    # the same mission fault-free, with no plan-execution diagnosis, is M1's first run
+    # (tests/mission/test_commands.py): here only the run with the event
+    data = run_experiment(which, journal, 240, "--no-fault-free")
+    assert data["experiment"] == which and set(data["runs"]) == {which}
+    assert not journal.with_name(f"{journal.stem}-fault-free.sqlite").exists()
     return dict(data["runs"][which])
 
 
@@ -68,3 +69,17 @@ def test_m4_a_plan_error_names_the_condition_the_domain_lacks(tmp_path: Path) ->
     assert d["classes"] == ["plan error"] and d["histories"] == []
     assert "open_door(door_lab,corridor,lab)" in d["plan_error"]
     assert "the domain may lack (not (locked ?d)) (locked(door_lab))" in d["plan_error"]
+
+
+def test_the_text_gives_a_delay_only_against_a_fault_free_run() -> None:
+    from host.experiment.mission import MissionRun
+    from host.experiment.plandiag import plan_diagnosis_text
+
+    runs = {"fault-free": MissionRun("fault-free", True, duration_s=40.0),
+            "door-closed": MissionRun("door-closed", True, duration_s=44.5)}
+    text = plan_diagnosis_text("door-closed", "tedusar", True, runs)
+    assert "delay +4.5 s against fault-free" in text
+    assert text.endswith("no plan-execution diagnosis was made")
+    del runs["fault-free"]  # --no-fault-free
+    text = plan_diagnosis_text("door-closed", "tedusar", True, runs)
+    assert "door-closed    completed: 44.5 s" in text and "delay" not in text

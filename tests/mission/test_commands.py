@@ -64,7 +64,9 @@ def test_m1_the_lidar_hang_is_handled_below_the_mission_layer(tmp_path: Path) ->
     assert out.returncode == 0, out.stderr[-3000:]
     runs = json.loads(out.stdout)["runs"]
     free, layered, flat = runs["fault-free"], runs["layered"], runs["flat"]
-    assert free["completed"] and free["fault_s"] is None
+    # fault-free, the mission layer's plan-execution diagnosis finds nothing to explain (the
+    # same mission as M2-M4's, tests/experiment/test_plandiag.py, which leave their own out)
+    assert free["completed"] and free["fault_s"] is None and free["diagnoses"] == []
     assert layered["completed"] and layered["mission_failures"] == []
     assert layered["fault_s"] is not None and layered["repair_start_s"] is not None
     assert layered["repair_end_s"] is not None and layered["holds"] >= 1
@@ -123,3 +125,6 @@ def test_the_m1_text_compares_only_completed_runs_and_says_which_was_first() -> 
     text = mission_fault_text("tedusar", True, runs)
     assert "flat       did not complete: no plan reaches (searched lab)" in text
     assert "-36" not in text and "finished" not in text.splitlines()[-1]
+    del runs["fault-free"]  # --no-fault-free: no delays
+    text = mission_fault_text("tedusar", True, runs)
+    assert "delay" not in text and "fault-free" not in text
