@@ -1,7 +1,7 @@
 """Flash a MicroPython board with mpremote: the firmware, the protocol, a config; then verify.
 
 ``dxboard flash --port DEVICE [--config FILE] [--key-file F] [--mpy] [--no-reset] [--board-rev
-REV]`` copies ``firmware/`` and ``protocol/`` (``.py`` sources, or ``.mpy`` compiled with
+REV] [--wait S]`` copies ``firmware/`` and ``protocol/`` (``.py`` sources, or ``.mpy`` compiled with
 ``mpy-cross`` when ``--mpy`` is given), a ``main.py`` that starts ``firmware.main``, a
 ``boot.py`` that brings the network up (``firmware.boot``) and the file ``board_rev`` (the
 revision of ``firmware/boards`` the board is built as, default rev-a) to the board, removing
@@ -14,10 +14,10 @@ board and compared with the host's. With ``--config`` (a JSON file like
 ``board.key``, or from ``$DXBOARD_KEY`` or ``--key-file``) the configuration is checked here
 first (nothing is copied for one the board would refuse), then the board's own code validates
 it, stores it and reads it back. Finally flash resets the board and checks that it came back
-running the new build (its main loop started); a board that cannot reset itself (no
-``machine.reset``) is not reset, and flash says so. mpremote runs with ``resume`` so that
-nothing is soft-reset behind our back. Every failure is one line naming the step, the device and
-the fix.
+running the new build (its main loop started) within ``--wait`` seconds (default 60); a board
+that cannot reset itself (no ``machine.reset``) is not reset, and flash says so. mpremote runs
+with ``resume`` so that nothing is soft-reset behind our back. Every failure is one line naming
+the step, the device and the fix.
 """
 
 from __future__ import annotations
@@ -121,6 +121,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--mpy", action="store_true", help="deploy .mpy compiled by mpy-cross")
     parser.add_argument("--no-reset", action="store_true", help="do not reset the board at the end")
     parser.add_argument("--json", action="store_true", help="print a JSON summary")
+    parser.add_argument("--wait", type=float, default=RESTART_S, metavar="S",
+                        help="how long the board may take to come back running the new build "
+                             f"after its reset (default {RESTART_S:g} s)")
     parser.add_argument("--board-rev", default=DEFAULT_REV, metavar="REV",
                         help="the board revision (a description in firmware/boards), written "
                              f"to the board as {REV_FILE!r} for main.py (default {DEFAULT_REV})")
@@ -279,9 +282,13 @@ def load_config(path: str, key: bytes | None) -> dict[str, Any]:
 
 
 def flash(port: str, config_path: str | None, key: bytes | None, mpy: bool,
-          reset: bool, board_rev: str = DEFAULT_REV) -> dict[str, Any]:
+          reset: bool, board_rev: str = DEFAULT_REV, wait_s: float = RESTART_S
+          ) -> dict[str, Any]:
     """Do the whole job; returns the summary printed by ``run``."""
     check_revision(board_rev)
+    if not wait_s > 0:
+        raise UserError(f"--wait {wait_s:g} must be a number of seconds above 0",
+                        "give e.g. --wait 60")
     if port.startswith("/") and not os.path.exists(port):
         raise UserError(f"no device {port}", "is the board plugged in? try `mpremote devs`")
     cfg = load_config(config_path, key) if config_path else None
@@ -328,7 +335,7 @@ def flash(port: str, config_path: str | None, key: bytes | None, mpy: bool,
             return summary
         mpremote(port, "reset")
         summary["reset"] = True
-        summary["running"] = _came_back(port, summary["build"])
+        summary["running"] = _came_back(port, summary["build"], wait_s)
     return summary
 
 
@@ -338,9 +345,10 @@ def _built(files: dict[str, Path]) -> str:
     return build_id({k: v for k, v in files.items() if k not in build})
 
 
-def _came_back(port: str, build: str) -> str:
-    """Wait for the board to come back after its reset and check that it runs ``build``."""
-    deadline = time.monotonic() + RESTART_S
+def _came_back(port: str, build: str, wait_s: float = RESTART_S) -> str:
+    """Wait up to ``wait_s`` for the board to come back after its reset and check that it
+    runs ``build``."""
+    deadline = time.monotonic() + wait_s
     last = ""
     while True:
         try:
@@ -356,8 +364,8 @@ def _came_back(port: str, build: str) -> str:
                         f"build {build} is there but did not start (its main loop never "
                         "began: see the board's console)")
         if time.monotonic() >= deadline:
-            raise UserError(f"{port}: the board reset but does not run the new firmware: "
-                            f"{last or 'no answer'}",
+            raise UserError(f"{port}: the board reset but does not run the new firmware "
+                            f"within {wait_s:g} s: {last or 'no answer'}",
                             "watch its console (mpremote connect PORT repl) and flash again")
         time.sleep(0.5)
 
@@ -392,7 +400,8 @@ def run(args: argparse.Namespace) -> int:
     from host.board.keys import load_key
 
     key = load_key(args.key_file)
-    summary = flash(args.port, args.config, key, args.mpy, not args.no_reset, args.board_rev)
+    summary = flash(args.port, args.config, key, args.mpy, not args.no_reset, args.board_rev,
+                    args.wait)
     if args.json:
         print(json.dumps(summary))
         return 0

@@ -117,15 +117,17 @@ def test_flash_deploys_verifies_and_boots(repl: PtyRepl, tmp_path: Path) -> None
 def test_flash_resets_and_checks_that_the_new_firmware_runs(tmp_path: Path) -> None:
     """A board that can reset is reset, and flash checks that it came back running the new
     build. On the unix port the flashed firmware cannot start (no I2C, no pins): flash must
-    say that it did not come back running it, rather than that all went well."""
+    say that it did not come back running it, rather than that all went well (within the
+    --wait it is given: the unix port boots in well under a second, and one mpremote exec on a
+    busy machine takes seconds)."""
     board = tmp_path / "board"
     board.mkdir()
     r = PtyRepl(board, resettable=True)
     try:
-        done = dxboard("flash", "--port", r.device)
+        done = dxboard("flash", "--port", r.device, "--wait", "20")
         assert r.boots == 2  # it was reset, and booted again
         assert done.returncode == 2, done.stdout
-        assert "does not run the new firmware" in done.stderr
+        assert "does not run the new firmware within 20 s" in done.stderr
         assert "did not start" in done.stderr and "Traceback" not in done.stderr
         assert done.stderr.count("\n") == 1
     finally:
@@ -158,6 +160,12 @@ def test_flash_missing_device_is_one_line() -> None:
     done = dxboard("flash", "--port", "/dev/does-not-exist")
     assert done.returncode == 2
     assert done.stderr.count("\n") == 1 and "no device /dev/does-not-exist" in done.stderr
+
+
+def test_flash_wait_must_be_positive() -> None:
+    done = dxboard("flash", "--port", "/dev/does-not-exist", "--wait", "0")
+    assert done.returncode == 2
+    assert done.stderr.count("\n") == 1 and "--wait 0 must be a number of seconds" in done.stderr
 
 
 def test_flash_unknown_board_revision_is_one_line() -> None:
