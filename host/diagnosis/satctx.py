@@ -26,6 +26,7 @@ from pysat.card import ITotalizer  # type: ignore[import-untyped]
 from pysat.formula import WCNF  # type: ignore[import-untyped]
 from pysat.solvers import Solver  # type: ignore[import-untyped]
 
+import host.diagnosis.sigint  # noqa: F401  (PySAT leaves SIGINT to the process)
 from host.diagnosis.encoding import Encoding, encode
 from host.diagnosis.logic import Literal, Theory, ab
 from host.diagnosis.quota import Quota
