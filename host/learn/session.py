@@ -28,7 +28,7 @@ if TYPE_CHECKING:
     from host.learn.zenoh_watch import ZenohWatcher
 
 PROGRESS_S = 10.0
-JOIN_QUIET_S = 3.0  # Zenoh: the robot's peers have all found the watcher when no new topic
+JOIN_QUIET_S = 3.0  # the robot's publishers have all found the watcher when no new topic
 JOIN_MAX_S = 30.0  # came for this long (or after this long at most)
 CONNECT_S = 30.0  # the board's HELLO: generous, a robot's computer may be busy
 
@@ -67,10 +67,13 @@ async def _progress(rec: Recording, until: float, say: Callable[[str], None]) ->
             f"{len(rec.nodes)} nodes")
 
 
-async def _joined(watcher: ZenohWatcher, say: Callable[[str], None]) -> None:
-    """Wait until the robot's Zenoh peers have found the watcher (they do by gossip, one by
-    one: no new topic for ``JOIN_QUIET_S``, at most ``JOIN_MAX_S``), then start the watch
-    afresh, so that every topic is watched for the whole duration."""
+async def _joined(watcher: RosWatcher | ZenohWatcher, say: Callable[[str], None],
+                  network: str) -> None:
+    """Wait until the robot's publishers have found the watcher (Zenoh's peers by gossip,
+    ROS 2's by DDS discovery, one by one, seconds apart on a busy machine: no new topic for
+    ``JOIN_QUIET_S``, at most ``JOIN_MAX_S``), then start the watch afresh, so that every
+    topic is watched for the whole duration (a ROS 2 robot's camera found 8 s into an 8 s
+    watch, on a loaded machine, had no message in it)."""
     start = last = time.monotonic()
     seen: set[str] = set()
     while time.monotonic() - last < JOIN_QUIET_S and time.monotonic() - start < JOIN_MAX_S:
@@ -83,7 +86,7 @@ async def _joined(watcher: ZenohWatcher, say: Callable[[str], None]) -> None:
         watcher.rec.arrivals.clear()
         watcher.rec.stamps.clear()
         watcher.rec.start = time.monotonic()
-    say(f"joined the robot's zenoh network: {len(seen)} topics so far")
+    say(f"joined the robot's {network}: {len(seen)} topics so far")
 
 
 async def _learn(opts: LearnOptions, say: Callable[[str], None]) -> Recording:
@@ -96,16 +99,18 @@ async def _learn(opts: LearnOptions, say: Callable[[str], None]) -> Recording:
 
         rec = Recording(time.monotonic(), 0.0, source="the running robot (Zenoh)")
         watcher = ZenohWatcher(rec, opts.zenoh or (DEFAULT_ENDPOINT,), opts.auth)
-        try:
-            await _joined(watcher, say)
-        except BaseException:
-            watcher.close()
-            raise
+        network = "zenoh network"
     else:
         from host.learn.live import RosWatcher
 
         rec = Recording(time.monotonic(), 0.0, source="the running robot (ROS 2)")
         watcher = RosWatcher(rec, opts.domain)
+        network = "ROS 2 graph"
+    try:
+        await _joined(watcher, say, network)
+    except BaseException:
+        watcher.close()
+        raise
     until = rec.start + opts.duration
     ticker = asyncio.create_task(_progress(rec, until, say))
     try:

@@ -66,6 +66,7 @@ def test_learn_the_second_robot(tmp_path: Path, env: dict[str, str], second_robo
     p = dxboard("model", "learn", str(out), "--duration", "8", env=env)
     assert p.returncode == 0, p.stderr
     assert "watching the robot for 8 s" in p.stderr  # progress on stderr
+    assert "joined the robot's ROS 2 graph" in p.stderr  # the watch began once all were found
     assert check_written(out) == []
     model = load_system(out)
     text = (out / "system.yaml").read_text()
