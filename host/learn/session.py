@@ -70,13 +70,14 @@ async def _progress(rec: Recording, until: float, say: Callable[[str], None]) ->
 async def _joined(watcher: RosWatcher | ZenohWatcher, say: Callable[[str], None],
                   network: str) -> None:
     """Wait until the robot's publishers have found the watcher (Zenoh's peers by gossip,
-    ROS 2's by DDS discovery, one by one, seconds apart on a busy machine: no new topic for
-    ``JOIN_QUIET_S``, at most ``JOIN_MAX_S``), then start the watch afresh, so that every
-    topic is watched for the whole duration (a ROS 2 robot's camera found 8 s into an 8 s
-    watch, on a loaded machine, had no message in it)."""
+    ROS 2's by DDS discovery, one by one, seconds apart on a busy machine: a message on at
+    least one topic and then no new topic for ``JOIN_QUIET_S``, at most ``JOIN_MAX_S``), then
+    start the watch afresh, so that every topic is watched for the whole duration (on a
+    loaded machine an 8 s ROS 2 watch ended without a message of the robot's camera)."""
     start = last = time.monotonic()
     seen: set[str] = set()
-    while time.monotonic() - last < JOIN_QUIET_S and time.monotonic() - start < JOIN_MAX_S:
+    while (time.monotonic() - last < JOIN_QUIET_S or not seen) \
+            and time.monotonic() - start < JOIN_MAX_S:
         await asyncio.sleep(0.2)
         with watcher.lock:
             now = set(watcher.rec.arrivals)
