@@ -50,6 +50,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import time
 from collections.abc import Awaitable, Callable, Collection, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -457,8 +458,11 @@ def build(planner: RepairPlanner, model: SystemModel, procs: Mapping[str, Proces
     supervisor = ProcessSupervisor(procs, logs_dir, on_start=on_start, env=dict(env))
     actuators = Actuators(model, None, supervisor)
     # on the machine's clock a busy machine stretches a step's time; on a simulated clock
-    # nothing real is slow, so nothing is stretched
-    kw: dict[str, Any] = {"stretch": load_stretch} if clock is None else {"clock": clock}
+    # nothing real is slow, so nothing is stretched (the daemon passes its clock, the
+    # machine's monotonic one unless simulated: the stretch had never reached it)
+    kw: dict[str, Any] = {"clock": clock} if clock is not None else {}
+    if clock is None or clock is time.monotonic:
+        kw["stretch"] = load_stretch
     executor = Executor(
         actuators, ObservedBeliefs(observations),
         settle=settle_times(model, procs, devices=device_boot_s),
