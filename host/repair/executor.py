@@ -26,7 +26,8 @@ sum of every step's settle time. Each step:
    a change at once); what the step only keeps (``kept``: a reconfigured node's process) in
    any observation that still stands. The deadline is settle + ``verify_s`` + the longest
    time an observer of the expected atoms needs to judge one (``judge_s``: two periods of a
-   slow topic, whose rate is judged from two messages), all times ``stretch()`` (at least 1:
+   slow topic, whose rate is judged from two messages), all times ``stretch()`` (a power
+   step's settle, the device's own boot time, excepted) (at least 1:
    the daemon passes ``load_stretch``, so a step started while the machine is busy gets the
    time a busy machine needs to start a process) (``Beliefs.wait_for``), the settle counted
    again from the moment the steps it waits for were verified if that was later (a node whose
@@ -93,6 +94,7 @@ ENABLING = frozenset({"power_up", "power_cycle", "start_node"})
 EARLY = frozenset({"start_node", "reconfigure_node"})
 TRIP_MARGIN_S = 0.05  # a wait that ended this much before its deadline was ended by a trip
 MAX_STRETCH = 3.0  # a busy machine's steps get at most this many times their time
+DEVICE_STEPS = frozenset({"power_up", "power_cycle", "shutdown"})  # a device's own time
 
 
 def runnable_now(path: str = "/proc/loadavg") -> float:
@@ -381,6 +383,13 @@ class Executor:
             settle += self.actuators.off_s
         return settle
 
+    def stretched_settle(self, step: Step, k: float) -> float:
+        """The settle time of ``step`` on a machine busy ``k`` times over: a process starts
+        ``k`` times slower; a device boots in its own time whatever the computer's load, so
+        a power step's settle is not stretched (only the window after it, in which the loaded
+        computer must see the effect)."""
+        return self.settle_of(step) * (1.0 if step.action in DEVICE_STEPS else k)
+
     async def _step(self, step: Step, plan_id: str, prog: _Progress | None = None,
                     waits: Sequence[int] = ()) -> str | None:
         """Run one step; None when it worked, else why not (already reported)."""
@@ -426,7 +435,7 @@ class Executor:
             return str(exc)
         end = self.clock()
         k = max(1.0, self.stretch())  # a busy machine starts a process slowly: more time
-        settle = self.settle_of(step) * k
+        settle = self.stretched_settle(step, k)
         acted = end
         if step.action == "power_cycle":  # the channel is back on only after the off time
             acted += self.actuators.off_s

@@ -37,3 +37,18 @@ def test_the_machines_clock_is_stretched_a_simulated_one_never(tmp_path: Path) -
     assert built(tmp_path, None).executor.stretch is load_stretch
     simulated = [0.0]
     assert built(tmp_path, lambda: simulated[0]).executor.stretch() == 1.0
+
+
+def test_a_device_boots_in_its_own_time_a_process_starts_slower(tmp_path: Path) -> None:
+    """Stretched three times over, a driver's start gets three times its settle; a device's
+    power-up and power cycle keep theirs (its boot does not wait for the computer), so a busy
+    robot does not wait three times a lidar's boot before it looks."""
+    from host.planning.plan import Step
+
+    ex = built(tmp_path, time.monotonic).executor
+    start = Step(0, "start_node", ("hokuyo_node",))
+    up, cycle = Step(0, "power_up", ("hokuyo",)), Step(0, "power_cycle", ("hokuyo",))
+    assert ex.settle_of(start) > 0 and ex.settle_of(up) > 0
+    assert ex.stretched_settle(start, 3.0) == 3.0 * ex.settle_of(start)
+    assert ex.stretched_settle(up, 3.0) == ex.settle_of(up)
+    assert ex.stretched_settle(cycle, 3.0) == ex.settle_of(cycle)
