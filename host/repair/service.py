@@ -31,7 +31,8 @@ deliberate switch-off is not undone. Quarantines and holds a previous run left i
 are ``restore``d at start.
 
 While the board's own protection has the channels (it sheds them for input under-voltage and
-restores them itself afterwards) repairs wait for it rather than fight it. A channel the board
+restores them itself afterwards, or retries a channel whose trip it blames on its own current
+sensor) repairs wait for it rather than fight it. A channel the board
 shed to stay under its total-current limit is no fault of its device and stays off until it is
 commanded on: the device is held (``SHED_HOLD``, shown like any hold) while the board keeps it
 shed, so no repair switches it back for the board to shed again, and the diagnosis turns to the
@@ -81,7 +82,15 @@ from host.repair.policy import Candidate
 from host.repair.processes import ProcessConfig
 from host.repair.supervisor import ProcessSupervisor
 from host.repair.unsettled import Unsettled
-from protocol.constants import B_OVER_TOTAL, B_UV_OFF, B_UV_SHED, F_SHED_TOTAL, F_SHED_UV
+from protocol.constants import (
+    B_OVER_TOTAL,
+    B_UV_OFF,
+    B_UV_SHED,
+    F_SENSOR,
+    F_SHED_TOTAL,
+    F_SHED_UV,
+    ST_TRIPPED,
+)
 
 if TYPE_CHECKING:
     from host.board.client import BoardClient
@@ -224,6 +233,14 @@ class RepairService:
             return "the board is over its total-current limit"
         if shed:
             return f"the board is restoring {', '.join(shed)} after an under-voltage"
+        # a trip the board blames on its own current sensor (a noisy one trips once as the
+        # noise starts: its first two samples can read like a short's) is retried by the
+        # board itself: a power-up would race the retry and power-cycle a healthy device
+        doubted = [c.name for c in state.channels
+                   if c.state == ST_TRIPPED and c.live_faults & F_SENSOR]
+        if doubted:
+            return (f"the board retries {', '.join(doubted)} itself (it doubts its current "
+                    "sensor)")
         return ""
 
     def _hold_shed(self, state: BoardState) -> None:

@@ -1,6 +1,8 @@
 """End to end: the campaign's noisy current sensor, 2.4 A of noise on the lidar's channel (a
-channel that is not protected), is a sensor fault: the board does not trip the channel and
-says ``sensor``, the daemon says the sensor is suspect, not the lidar, and switches no power.
+channel that is not protected), is a sensor fault: the board keeps the channel on (or, when the
+noise's first two samples read like a short's, trips it once and retries it itself) and says
+``sensor``, the daemon says the sensor is suspect, not the lidar, and switches no power (it
+waited for the board's retry only since a suite run caught its power_up racing it).
 
 Found in the campaign (issue 25, item 7): the noise's variance heated the board's I2t model and
 two noisy samples above 3 A made an instant trip, so the board tripped and latched the lidar and
@@ -47,14 +49,18 @@ def test_noise_of_2_4_a_on_the_lidar_is_a_sensor_fault_and_switches_nothing(
                    HEAL_S, "the daemon told of the board's doubt",
                    show=lambda: d.err_path.read_text()[-1500:])
         d.settled(10.0, runs=4)  # the noise's chance to make the board trip and a repair start
+        d.wait_for(lambda s: s["observations"].get("on(hokuyo)") is True, HEAL_S,
+                   "the lidar on")  # (after the board's own retry, if the onset tripped it)
         st = d.status()
-        assert st["observations"].get("on(hokuyo)") is True
         assert st["observations"].get("tripped(hokuyo)") is False
         assert st["observations"].get("in_band(hokuyo)") is None  # not judged: unknown
         assert not st["quarantined"], st["quarantined"]
         d.caught_up()
-        assert observed(d, "tripped(hokuyo)", True, mark) == 0  # the board never tripped it
-        assert observed(d, "on(hokuyo)", False, mark) == 0  # nor switched it off
+        # the board tripped it at most once: as the noise began, two samples read like a
+        # short's (firmware/channel.py: the one case two samples cannot tell); it doubted its
+        # sensor then and retried the channel itself, and the daemon left that to it
+        assert observed(d, "tripped(hokuyo)", True, mark) <= 1
+        assert observed(d, "on(hokuyo)", False, mark) <= 1
         assert [a for a in actions_started(d, mark) if a.split("(")[0] in POWER] == []
     finally:
         d.inject("clear")
