@@ -100,6 +100,7 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 BOARD_POLL_S = 0.5
+SENSOR_JUDGE_S = 0.4  # a trip is left to the board this long: it may yet doubt its sensor
 FOREIGN_WINDOW_S = 5.0  # a switch command this host sent that long ago is still its own
 SHED_HOLD = "shed by the board to stay under its total-current limit"
 Emit = Callable[[Event], None]
@@ -124,6 +125,7 @@ class RepairService:
         self.debounce_s = debounce_s
         self.confirmed = confirmed
         self.confirmed_debounce_s = confirmed_debounce_s
+        self._tripped_at: dict[int, float] = {}  # channel -> when it was first seen TRIPPED
         self._seen: frozenset[Literal] = frozenset()  # the literals at the last diagnosis
         # device -> when it came back on, for the restored devices spared once already: if
         # restarting their drivers did not do it, the device is blamed again (a lidar that
@@ -241,6 +243,15 @@ class RepairService:
         if doubted:
             return (f"the board retries {', '.join(doubted)} itself (it doubts its current "
                     "sensor)")
+        # ... and the board judges its sensor a moment after the trip (215-265 ms seen): a
+        # trip just seen gets that moment before a repair may act on it
+        now = self.executor.clock()
+        tripped = {c.channel: c.name for c in state.channels if c.state == ST_TRIPPED}
+        self._tripped_at = {ch: self._tripped_at.get(ch, now) for ch in tripped}
+        fresh = [name for ch, name in tripped.items()
+                 if now - self._tripped_at[ch] < SENSOR_JUDGE_S]
+        if fresh:
+            return f"the board has just tripped {', '.join(fresh)}: its own judgement first"
         return ""
 
     def _hold_shed(self, state: BoardState) -> None:
