@@ -32,7 +32,8 @@ are ``restore``d at start.
 
 While the board's own protection has the channels (it sheds them for input under-voltage and
 restores them itself afterwards, or retries a channel whose trip it blames on its own current
-sensor) repairs wait for it rather than fight it. A channel the board
+sensor; a trip just seen is left to it for ``SENSOR_JUDGE_S``, the moment it takes to judge
+its sensor) repairs wait for it rather than fight it. A channel the board
 shed to stay under its total-current limit is no fault of its device and stays off until it is
 commanded on: the device is held (``SHED_HOLD``, shown like any hold) while the board keeps it
 shed, so no repair switches it back for the board to shed again, and the diagnosis turns to the
