@@ -200,4 +200,6 @@ async def test_a_part_fault_injected_from_the_command_line_reaches_the_host() ->
 
             got = await wait_until_async(sensor_fault, what="the sensor fault of hokuyo")
             assert got is not None and got.state_name == "off"  # left as it was (off)
-            assert (await client.state()).channels[PC].state_name == "on"
+            # the computer's channel stays switched on (a busy machine may still find it in
+            # the inrush window its power-up at boot began)
+            assert (await client.state()).channels[PC].state_name in ("inrush", "on")
