@@ -232,8 +232,9 @@ def test_a_bag_recorded_from_a_live_board_trip_replays_to_the_daemons_diagnoses(
     # (the overcurrent stays injected until the test clears it: when the daemon's power-cycle
     # comes first on a busy machine, the channel trips again, a second blame, as it should)
     # (diagnoses made while a process's own link to the board had lapsed are left out on both
-    # sides: the CI machine's recorder lost /board_stream twice during a trip, and blamed the
-    # device three times where the daemon, which saw no gap, blamed it once)
+    # sides: a recorder whose /board_stream lapses during a trip blames the device again when
+    # the stream comes back; CI's recorder blamed it three times where the daemon blamed it
+    # once)
     daemon_blamed = blamed([((),), *diagnoses_seeing(d.journal_path, DEVICE, after=mark)],
                            DEVICE)  # healthy at the mark
     assert daemon_blamed[:2] == [False, True] and daemon_blamed[-1] is False, daemon_blamed
