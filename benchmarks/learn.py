@@ -2,7 +2,14 @@
 hand-written one (issue 28, item 3).
 
     .venv/bin/python -m benchmarks.learn [--duration 60] [--singles 6] [--doubles 2]
-        [--quiet-s 60] [--seed 1] [--keep DIR]
+        [--quiet-s 60] [--seed 1] [--keep DIR | --learned DIR] [--trials I,J,...]
+        [--models written,learned] [--work DIR]
+
+``--keep DIR`` keeps the learned model (DIR must not hold a ``system.yaml`` yet);
+``--learned DIR`` skips step 1 and uses the model a run kept there; ``--trials`` plays only
+those trials of the seeded plan (by index, as printed) and ``--models`` only those models: a
+re-run of the trials that differed, on the same learned model. ``--work DIR`` keeps the
+campaigns' journals there (``DIR/written/journal.sqlite``, ``DIR/learned/...``).
 
 1. *Learn*: the virtual robot (``dxboard emulate models/tedusar --robot``, every unprotected
    channel on, every node of ``processes:`` started as a plain process on ROS 2, on a domain of
@@ -157,6 +164,8 @@ def deploy(learned: Path, dest: Path) -> Path:
 async def campaign(system_dir: Path, args: argparse.Namespace,
                    tmp: Path) -> tuple[list[Trial], dict[str, Any]]:
     plan = plan_trials(random.Random(args.seed), args.singles, args.doubles)
+    if args.trials:
+        plan = [p for p in plan if p.index in args.trials]
     c = Campaign(fast_model(system_dir, tmp), tmp / "journal.sqlite")
     try:
         await c.open()
@@ -174,6 +183,13 @@ async def campaign(system_dir: Path, args: argparse.Namespace,
         await c.close()
 
 
+def _indices(text: str) -> set[int]:
+    try:
+        return {int(x) for x in text.split(",") if x.strip()}
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: give trial indices, e.g. 3,7") from None
+
+
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--duration", type=float, default=60.0)
@@ -182,14 +198,37 @@ def main() -> int:
     p.add_argument("--quiet-s", type=float, default=60.0)
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--keep", metavar="DIR", help="keep the learned model here")
+    p.add_argument("--learned", metavar="DIR", help="use the model a run kept here (no learn)")
+    p.add_argument("--trials", type=_indices, default=None, metavar="I,J",
+                   help="only these trials of the plan (indices)")
+    p.add_argument("--models", default="written,learned", help="written, learned or both")
+    p.add_argument("--work", metavar="DIR", help="keep the campaigns' files (journals) in this "
+                   "new directory")
     args = p.parse_args()
+    if args.work:
+        try:
+            Path(args.work).mkdir(parents=True)
+        except OSError as e:
+            p.error(f"--work {args.work}: {e.strerror}; give a new directory")
+    if args.keep and (Path(args.keep) / "system.yaml").exists():
+        p.error(f"--keep {args.keep}: it already holds a system.yaml; give a new directory, or "
+                f"--learned {args.keep} to use that model")
+    if args.learned and not (Path(args.learned) / "system.yaml").is_file():
+        p.error(f"--learned {args.learned}: no system.yaml there; keep one with --keep DIR")
+    models = [m for m in args.models.split(",") if m]
+    if not models or set(models) - {"written", "learned"}:
+        p.error(f"--models {args.models}: give written, learned or written,learned")
     with tempfile.TemporaryDirectory(prefix="dxboard-learn-bench-") as tmp_s, \
             claim_domain() as domain:
-        tmp = Path(tmp_s)
+        tmp = Path(args.work) if args.work else Path(tmp_s)
         env = {**os.environ, **domain_env(domain), "PYTHONPATH": str(ROOT)}
-        out = Path(args.keep) if args.keep else tmp / "learned"
-        took = learn(out, args.duration, env)
-        print(f"learn time: {took:.1f} s wall for a {args.duration:g} s watch and the probe")
+        if args.learned:
+            out = Path(args.learned)
+            print(f"the model learned before, in {out}")
+        else:
+            out = Path(args.keep) if args.keep else tmp / "learned"
+            took = learn(out, args.duration, env)
+            print(f"learn time: {took:.1f} s wall for a {args.duration:g} s watch and the probe")
         diff = subprocess.run([DXBOARD, "model", "diff", str(TEDUSAR), str(out)], env=env,
                               capture_output=True, text=True, timeout=120)
         print(f"model diff written -> learned ({len(diff.stdout.splitlines())} lines):")
@@ -197,9 +236,13 @@ def main() -> int:
         runnable = deploy(out / "system.yaml", tmp / "deployed")
         results = {}
         for name, model in (("written", TEDUSAR), ("learned", runnable)):
+            if name not in models:
+                continue
             print(f"campaign on the {name} model:", flush=True)
             (tmp / name).mkdir()
             results[name] = asyncio.run(campaign(model, args, tmp / name))
+        if len(results) < 2:
+            return 0
         (w, wq), (lt, lq) = results["written"], results["learned"]
         same = sum(1 for a, b in zip(w, lt, strict=True)
                    if sorted(a.first_plan_basis) == sorted(b.first_plan_basis))

@@ -254,10 +254,11 @@ def _one_fault(d: RunningDaemon, kind: str, device: str, clock: TopicClock,
 
 
 def schedule(n_faults: int, seed: int) -> list[tuple[str, str]]:
-    """``n_faults`` (kind, device) pairs, half of each kind, the devices of a kind in turn,
-    in a seeded order."""
-    faults = [(k, KINDS[k][i % len(KINDS[k])]) for k in KINDS
-              for i in range(n_faults // len(KINDS))]
+    """``n_faults`` (kind, device) pairs, half of each kind (an odd count: one more of the
+    first), the devices of a kind in turn, in a seeded order."""
+    each, extra = divmod(n_faults, len(KINDS))
+    faults = [(k, KINDS[k][i % len(KINDS[k])]) for j, k in enumerate(KINDS)
+              for i in range(each + (j < extra))]
     random.Random(seed).shuffle(faults)
     return faults
 
