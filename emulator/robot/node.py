@@ -20,11 +20,19 @@ standard messages (``emulator.robot.ros_msgs``), and a driver also publishes its
 a ROS 2 managed (lifecycle) node in ROS 2 mode (``emulator.robot.managed``); in Zenoh mode,
 which has no lifecycle, it is ignored.
 
+``--exit-without-device[=SECONDS]`` makes a driver behave as many real drivers do (usb_cam,
+a serial driver that cannot open its port): when its device cannot be reached within SECONDS
+(default 1) of its start (off, absent), or the connection to it is lost, it logs why and exits
+1. By default a driver waits for its device as long as it runs and, once it lost it, stays up
+publishing nothing until it is restarted (the shipped models' behaviour). Ignored by
+``--managed`` in ROS 2 mode (a lifecycle node opens its device on its configure transition).
+
 It logs to stderr, runs until SIGTERM or SIGINT and then exits 0. The signals are heard on a
 thread of their own (``emulator.stopsignals``, as ``dxboard run`` hears them), never through
 the loop's self-pipe that messages could fill; a second one, or a stop still running 9 s
 after the first, ends the process at once. A wrong name, directory or
-environment is one line on stderr and exit code 2.
+environment is one line on stderr and exit code 2; a device that ``--exit-without-device``
+gave up on, exit code 1.
 """
 
 from __future__ import annotations
@@ -51,10 +59,16 @@ from emulator.stopsignals import StopSignals
 log = logging.getLogger("emulator.robot.node")
 
 RETRY_S = 0.5
+EXIT_WITHOUT_DEVICE = "--exit-without-device"
+NO_DEVICE_S = 1.0  # --exit-without-device's default wait for the device
 
 
 class NodeError(InputError):
     """The node cannot start; the message says what to fix."""
+
+
+class NoDevice(Exception):
+    """A driver with ``--exit-without-device`` could not reach its device in time."""
 
 
 def device_address(spec: NodeSpec, env: dict[str, str]) -> tuple[str, tuple[str, int]]:
@@ -82,14 +96,16 @@ def device_address(spec: NodeSpec, env: dict[str, str]) -> tuple[str, tuple[str,
 
 
 async def run_driver(spec: NodeSpec, bus: TopicBus, device: str, address: tuple[str, int],
-                     stop: asyncio.Event) -> None:
+                     stop: asyncio.Event, give_up_s: float | None = None) -> None:
+    """Drive ``device`` until ``stop``; with ``give_up_s``, raise ``NoDevice`` when the first
+    connection has not succeeded within that many seconds, or the connection is lost."""
     topics = list(spec.publishes)
     if len(topics) != 1:
         raise NodeError(f"{spec.name}: a driver publishes exactly one topic, not {topics}")
     status = DriverStatus(spec.name, device) if getattr(bus, "ros", False) else None
     reporting = asyncio.ensure_future(_report(bus, status, stop)) if status else None
     try:
-        await _drive(spec, bus, topics[0], device, address, stop, status)
+        await _drive(spec, bus, topics[0], device, address, stop, status, give_up_s)
     finally:
         if reporting is not None:
             reporting.cancel()
@@ -107,7 +123,7 @@ async def _report(bus: TopicBus, status: DriverStatus, stop: asyncio.Event) -> N
 
 async def _drive(spec: NodeSpec, bus: TopicBus, topic: str, device: str,
                  address: tuple[str, int], stop: asyncio.Event,
-                 status: DriverStatus | None) -> None:
+                 status: DriverStatus | None, give_up_s: float | None = None) -> None:
     waited = False
 
     def refused(exc: OSError) -> None:
@@ -117,7 +133,13 @@ async def _drive(spec: NodeSpec, bus: TopicBus, topic: str, device: str,
                      exc.strerror or exc)
         waited = True
 
-    pair = await connect_retrying(address, RETRY_S, stop=stop, refused=refused)
+    deadline = None if give_up_s is None else asyncio.get_running_loop().time() + give_up_s
+    try:
+        pair = await connect_retrying(address, RETRY_S, deadline=deadline, stop=stop,
+                                      refused=refused)
+    except OSError as exc:  # only with a deadline: --exit-without-device
+        raise NoDevice(f"{device} at {address[0]}:{address[1]} unreachable for "
+                       f"{give_up_s:g} s ({exc.strerror or exc}); exiting") from None
     if pair is None:
         return
     reader, writer = pair
@@ -142,14 +164,18 @@ async def _drive(spec: NodeSpec, bus: TopicBus, topic: str, device: str,
     connected = False
     if status is not None:
         status.connected = False
-    if reading.done():
+    lost = reading.result() if reading.done() else None
+    if lost is not None and give_up_s is None:
         log.warning("lost the connection to %s (%s); publishing nothing until restarted",
-                    device, reading.result())
+                    device, lost)
         await stopping
+    stopping.cancel()
     reading.cancel()
     with contextlib.suppress(asyncio.CancelledError):
         await reading
     writer.transport.abort()
+    if lost is not None and give_up_s is not None and not stop.is_set():
+        raise NoDevice(f"lost the connection to {device} ({lost}); exiting")
 
 
 async def read_frames(reader: asyncio.StreamReader, publish: B.Publish, topic: str,
@@ -241,10 +267,14 @@ async def run_managed(spec: NodeSpec, device: str, address: tuple[str, int],
         driver.close()
 
 
-async def main_async(spec: NodeSpec, env: dict[str, str], managed: bool = False) -> None:
+async def main_async(spec: NodeSpec, env: dict[str, str], managed: bool = False,
+                     give_up_s: float | None = None) -> None:
+    """Run the node until stopped; ``give_up_s``: ``--exit-without-device`` (drivers)."""
     driver = spec.kind in ("SN", "HN")
     if managed and not driver:
         raise NodeError(f"{spec.name} is not a driver: only drivers are managed nodes")
+    if give_up_s is not None and not driver:
+        raise NodeError(f"{spec.name} is not a driver: {EXIT_WITHOUT_DEVICE} is for drivers")
     device, address = device_address(spec, env) if driver else ("", ("", 0))
     stop = asyncio.Event()
     # not loop.add_signal_handler: its signal byte shares the loop's self-pipe with every
@@ -258,7 +288,7 @@ async def main_async(spec: NodeSpec, env: dict[str, str], managed: bool = False)
         bus = open_bus(spec, env)
         try:
             if driver:
-                await run_driver(spec, bus, device, address, stop)
+                await run_driver(spec, bus, device, address, stop, give_up_s)
             else:
                 await run_node(spec, bus, stop)
         finally:
@@ -269,25 +299,54 @@ async def main_async(spec: NodeSpec, env: dict[str, str], managed: bool = False)
         signals.close()
 
 
+def exit_without_device(args: list[str]) -> tuple[float | None, list[str]]:
+    """``--exit-without-device[=SECONDS]``'s wait (None: not given) and the other arguments."""
+    give_up: float | None = None
+    rest = []
+    for a in args:
+        if a == EXIT_WITHOUT_DEVICE:
+            give_up = NO_DEVICE_S
+        elif a.startswith(EXIT_WITHOUT_DEVICE + "="):
+            raw = a.split("=", 1)[1]
+            try:
+                give_up = float(raw)
+            except ValueError:
+                give_up = -1.0
+            if not give_up >= 0.0 or give_up == float("inf"):
+                raise NodeError(f"{EXIT_WITHOUT_DEVICE}={raw}: give a number of seconds >= 0")
+        else:
+            rest.append(a)
+    return give_up, rest
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
     managed = "--managed" in args
     args = [a for a in args if a != "--managed"]
+    try:
+        give_up, args = exit_without_device(args)
+    except NodeError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     if len(args) == 1 and os.environ.get("DXBOARD_ROBOT"):
         args.append(os.environ["DXBOARD_ROBOT"])
     if len(args) != 2 or args[0].startswith("-"):
         print("usage: python -m emulator.robot.node NAME [SYSTEM_DIR] [--managed] "
-              "(SYSTEM_DIR defaults to $DXBOARD_ROBOT)", file=sys.stderr)
+              f"[{EXIT_WITHOUT_DEVICE}[=SECONDS]] (SYSTEM_DIR defaults to $DXBOARD_ROBOT)",
+              file=sys.stderr)
         return 2
     name, system_dir = args
     logging.basicConfig(stream=sys.stderr, level=logging.INFO,
                         format=f"%(asctime)s {name}[%(process)d] %(levelname)s %(message)s")
     try:
         spec = load_node(system_dir, name)
-        asyncio.run(main_async(spec, dict(os.environ), managed))
+        asyncio.run(main_async(spec, dict(os.environ), managed, give_up))
     except (EmulatorModelError, NodeError) as exc:
         print(f"{name}: error: {exc}", file=sys.stderr)
         return 2
+    except NoDevice as exc:
+        log.error("%s", exc)
+        return 1
     return 0
 
 

@@ -124,3 +124,23 @@ def test_bad_name_or_environment_is_one_line_exit_2(robot_dir: Path) -> None:
                         str(robot_dir)], capture_output=True, text=True, timeout=30, cwd=ROOT,
                        env=env)
     assert p.returncode == 2 and "DXBOARD_DEVICES" in p.stderr.splitlines()[-1], p.stderr
+
+
+def test_exit_without_device_exits_1_when_its_device_is_off_or_lost(
+        robot: Robot, topics: Topics, nodes: Nodes) -> None:
+    """``--exit-without-device``: a driver as usb_cam is, for the daemon's crash-loop test."""
+    nodes.start("jaguar_node", extra=("--exit-without-device",))  # the base is off
+    wait_until(lambda: not nodes.running("jaguar_node"), 60, "the driver's exit")
+    assert nodes.stop("jaguar_node") == 1
+    assert "jaguar at 127.0.0.1" in nodes.log("jaguar_node")
+    robot.board("on", "jaguar")
+    nodes.start("jaguar_node", extra=("--exit-without-device=60",))
+    topics.wait_for("/odom")
+    robot.board("off", "jaguar")  # the base loses its power: the driver its connection
+    wait_until(lambda: not nodes.running("jaguar_node"), 60, "the driver's exit")
+    assert nodes.stop("jaguar_node") == 1
+    assert "lost the connection to jaguar" in nodes.log("jaguar_node")
+    p = subprocess.run([sys.executable, "-m", "emulator.robot.node", "jaguar_node",
+                        "--exit-without-device=soon"], capture_output=True, text=True,
+                       timeout=60, cwd=ROOT)
+    assert p.returncode == 2 and "--exit-without-device=soon" in p.stderr, p.stderr
