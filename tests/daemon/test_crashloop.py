@@ -1,0 +1,124 @@
+"""End to end: a driver that exits at once because its device is off is diagnosed as the
+device, and is neither restarted in a loop nor quarantined for the device's fault (issue 28,
+item 1).
+
+``dxboard run --emulate`` on a copy of the fast TEDUSAR robot whose thermal camera driver
+behaves as real drivers do (usb_cam): it exits 1 when it loses its camera, or cannot reach it
+within a second of its start (``emulator/robot/node.py --exit-without-device``), instead of
+waiting for it. One daemon serves the module; each test starts with the robot healthy and
+ends with it healthy again.
+
+A person switches the camera off on the board (``dxboard board off``): the daemon holds it
+(no repair undoes a deliberate switch-off), and the driver exits. Each restart of the driver
+dies at once. The test proves, from the daemon's journal and JSON API, that
+
+1. every diagnosis that blames the driver blames the camera with it, never the driver alone;
+2. the driver is started at most 3 times, no more over several further diagnoses, and is not
+   quarantined: the daemon says it waits for the camera (``host.repair.crashloop``);
+3. once the person switches the camera on again, the driver is started and the robot is
+   healthy, the camera's images back.
+
+Without the crash-loop handling (``RepairService._blame_devices`` returning the diagnosis as
+it is) the driver is restarted three times and quarantined: the test fails on (2).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from host.events import describe
+from host.journal import ActionRecord, DiagnosisRecord
+from host.launch.running import healthy_robot
+from tests.daemon.runner import KEY, RunningDaemon, fast_copy, healthy, last_id
+
+HEAL_S = 90.0
+QUARANTINE_S = 150.0
+DEVICE, DRIVER = "thermal_camera", "thermal_camera_node"
+MAX_STARTS = 3
+
+
+def exiting_copy(tmp: Path) -> Path:
+    """The fast TEDUSAR robot whose thermal camera driver exits without its camera."""
+    system = fast_copy(tmp)
+    path = system / "system.yaml"
+    text = path.read_text()
+    shipped = f"command: [python, -m, emulator.robot.node, {DRIVER}]"
+    assert text.count(shipped) == 1, "the shipped model's driver command changed"
+    path.write_text(text.replace(
+        shipped, f"command: [python, -m, emulator.robot.node, {DRIVER}, --exit-without-device]"))
+    return system
+
+
+@pytest.fixture(scope="module")
+def robot(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[RunningDaemon, Path]]:
+    tmp = tmp_path_factory.mktemp("crashloop")
+    with healthy_robot(tmp, exiting_copy(tmp), KEY, HEAL_S) as d:
+        yield d, tmp / "key"
+
+
+def actions(d: RunningDaemon, mark: int) -> list[ActionRecord]:
+    return [e.payload for e in d.journal("action")
+            if e.id > mark and isinstance(e.payload, ActionRecord)]
+
+
+def starts(d: RunningDaemon, mark: int) -> int:
+    """The driver's starts since ``mark`` (each start_node step's first record)."""
+    return len({a.action_id for a in actions(d, mark)
+                if a.action == "start_node" and tuple(a.args) == (DRIVER,)})
+
+
+def diagnoses(d: RunningDaemon, mark: int) -> list[set[str]]:
+    return [set(bad) for e in d.journal("diagnosis") if e.id > mark
+            and isinstance(e.payload, DiagnosisRecord) for bad in e.payload.diagnoses]
+
+
+def said(d: RunningDaemon, mark: int) -> list[str]:
+    return [describe(e.payload) for e in d.journal(("note", "repair", "quarantine"))
+            if e.id > mark]
+
+
+def all_finished(d: RunningDaemon, mark: int) -> bool:
+    acts = actions(d, mark)
+    return {a.action_id for a in acts if str(a.state) == "started"} <= {
+        a.action_id for a in acts if a.finished is not None}
+
+
+def test_a_driver_that_dies_without_its_device_switched_off_waits_for_it(
+        robot: tuple[RunningDaemon, Path]) -> None:
+    d, key = robot
+    d.wait_for(healthy, HEAL_S, "healthy")
+    mark = last_id(d)
+    d.board("off", DEVICE, key_file=key)  # a person switches the camera off on purpose
+    d.wait_for(lambda s: DEVICE in s["held"], 15, "the camera held")
+    # its driver loses the camera and exits; each restart dies at once: the daemon sees the
+    # loop and waits for the camera (or, what this test exists to catch, quarantines the
+    # driver after its attempts)
+    d.wait_journal(lambda: DRIVER in d.status()["quarantined"] or any(
+        f"{DRIVER} is not restarted until {DEVICE} is back" in t for t in said(d, mark)),
+        QUARANTINE_S, "the loop seen, or the driver quarantined")
+    d.wait_journal(lambda: all_finished(d, mark), 30, "the started actions' results")
+    d.settled(10.0, runs=4)  # the daemon had its chances to start the driver again
+    count = starts(d, mark)
+    d.settled(10.0, runs=4)
+    d.caught_up()
+    st = d.status()
+    assert DRIVER not in st["quarantined"], st["quarantined"]
+    assert starts(d, mark) == count, "the driver is still restarted"
+    assert 1 <= count <= MAX_STARTS, f"{count} starts of {DRIVER}"
+    assert st["observations"].get(f"running({DRIVER})") is False
+    assert any(f"{DRIVER} is not restarted until {DEVICE} is back" in t
+               for t in said(d, mark)), said(d, mark)
+    found = diagnoses(d, mark)  # the camera is the fault, the driver never alone
+    assert any(DEVICE in bad for bad in found), found
+    assert not [bad for bad in found if DRIVER in bad and DEVICE not in bad], found
+    assert st["observations"]["ok(/odom)"] is True  # the rest of the robot keeps running
+    # the person switches the camera on again: its driver is started, the robot healthy
+    d.board("on", DEVICE, key_file=key)
+    st = d.wait_for(lambda s: healthy(s) and s["observations"].get("ok(/thermal/image)") is True
+                    and not s["held"], HEAL_S, "the robot healthy with its camera back")
+    assert st["observations"][f"running({DRIVER})"] is True
+    assert not st["quarantined"]
+
