@@ -20,7 +20,14 @@ restart follows in the same plan. A device that cannot be repaired here — held
 quarantined, or not on a board channel — takes the node's place: the node is not restarted
 while its device cannot be brought back, and a note says so. A run that lasts longer than the
 settle time ends the loop, and so does ``RETRY_S`` without a death (nothing may tell that a
-device off the board is back: the node is tried again then). Pure bookkeeping: times are the
+device off the board is back: the node is tried again then).
+
+A node whose device is *quarantined* and not good is not restarted either, loop or not: the
+daemon has given up on the device (its repairs failed, it is in its safe state, off), so a
+restart cannot bring the node's outputs back, and it would spend the node's own repair
+attempts until the node is quarantined too, for its device's fault (a driver that exits as
+its device's switch fails off, restarted once the device is quarantined). The device takes the
+node's place until a person clears it; then both are repaired. Pure bookkeeping: times are the
 observations'.
 """
 
@@ -109,9 +116,11 @@ def _why(device: str, unavailable: Collection[str]) -> str:
 def blame_devices(cands: Iterable[Candidate], loops: CrashLoops, model: SystemModel,
                   observations: ObservationSet,
                   unavailable: Collection[str],
-                  now: float | None = None) -> tuple[list[Candidate], list[str]]:
-    """The candidates with the devices of their looping nodes blamed (see the module), and
-    one note per looping node; ``unavailable``: the held and quarantined components."""
+                  now: float | None = None,
+                  quarantined: Collection[str] = ()) -> tuple[list[Candidate], list[str]]:
+    """The candidates with the devices of their looping nodes, and the quarantined devices of
+    their nodes, blamed (see the module), and one note per such node; ``unavailable``: the held
+    and quarantined components, ``quarantined``: the quarantined ones."""
     out: list[Candidate] = []
     notes: dict[str, str] = {}
     for c in cands:
@@ -119,10 +128,18 @@ def blame_devices(cands: Iterable[Candidate], loops: CrashLoops, model: SystemMo
         for node in sorted(c.bad):
             loop = loops.looping(node, now)
             comp = model.components.get(node)
-            if loop is None or comp is None:
+            if comp is None:
                 continue
             suspects = [h for h in comp.hardware if not _good(h, model, observations)]
-            if not suspects:
+            gone = [h for h in suspects if h in quarantined]
+            if loop is None and gone:
+                bad.discard(node)
+                bad |= set(gone)
+                names = ", ".join(gone)
+                notes[node] = (f"{node}: its device {names} is quarantined and not working: "
+                               f"{node} is not restarted until {names} is back")
+                continue
+            if loop is None or not suspects:
                 continue
             bad |= set(suspects)
             stuck = [h for h in suspects

@@ -311,11 +311,12 @@ class RepairService:
         return self._blame_devices(self._spare_restored(cands)), self.observations.literals()
 
     def _blame_devices(self, cands: list[Candidate]) -> list[Candidate]:
-        """A node that dies at once after every start blames its device
-        (``host.repair.crashloop``); each new finding is said once."""
+        """A node that dies at once after every start, or whose device is quarantined and off,
+        blames its device (``host.repair.crashloop``); each new finding is said once."""
         ex = self.executor
         out, notes = blame_devices(cands, self.crashloops, ex.model, self.observations,
-                                   ex.quarantine.components | set(ex.held), ex.clock())
+                                   ex.quarantine.components | set(ex.held), ex.clock(),
+                                   ex.quarantine.components)
         for n in notes:
             if n not in self._loop_notes:
                 self._emit(Note(n))

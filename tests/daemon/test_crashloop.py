@@ -5,8 +5,9 @@ item 1).
 ``dxboard run --emulate`` on a copy of the fast TEDUSAR robot whose thermal camera driver
 behaves as real drivers do (usb_cam): it exits 1 when it loses its camera, or cannot reach it
 within a second of its start (``emulator/robot/node.py --exit-without-device``), instead of
-waiting for it. One daemon serves the module; each test starts with the robot healthy and
-ends with it healthy again.
+waiting for it. Each test has a daemon of its own, started healthy (the attempts a test
+spends and the driver's runs are history the next test must not inherit), and ends with the
+robot healthy again.
 
 A person switches the camera off on the board (``dxboard board off``): the daemon holds it
 (no repair undoes a deliberate switch-off), and the driver exits. Each restart of the driver
@@ -20,6 +21,14 @@ dies at once. The test proves, from the daemon's journal and JSON API, that
 
 Without the crash-loop handling (``RepairService._blame_devices`` returning the diagnosis as
 it is) the driver is restarted three times and quarantined: the test fails on (2).
+
+Then the camera's switch fails off (``dxboard inject thermal_camera stuck_off``: the board
+faults the channel, the camera loses its power, its driver exits). The camera's power-ups fail
+and it is quarantined; the driver must not be quarantined with it: restarted once the camera
+was quarantined, it died at once and its attempts, spent with the camera's, quarantined it
+too, before the daemon waited for a dead device's driver (``host.repair.crashloop``). Once the
+switch works again, a person clears the camera (one command, as
+docs/troubleshooting-quarantine.md says) and the robot is healthy.
 """
 
 from __future__ import annotations
@@ -52,11 +61,11 @@ def exiting_copy(tmp: Path) -> Path:
     return system
 
 
-@pytest.fixture(scope="module")
-def robot(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[RunningDaemon, Path]]:
-    tmp = tmp_path_factory.mktemp("crashloop")
-    with healthy_robot(tmp, exiting_copy(tmp), KEY, HEAL_S) as d:
-        yield d, tmp / "key"
+@pytest.fixture
+def robot(tmp_path: Path) -> Iterator[tuple[RunningDaemon, Path]]:
+    """A daemon of the test's own, once its robot is healthy, and the board's key file."""
+    with healthy_robot(tmp_path, exiting_copy(tmp_path), KEY, HEAL_S) as d:
+        yield d, tmp_path / "key"
 
 
 def actions(d: RunningDaemon, mark: int) -> list[ActionRecord]:
@@ -122,3 +131,36 @@ def test_a_driver_that_dies_without_its_device_switched_off_waits_for_it(
     assert st["observations"][f"running({DRIVER})"] is True
     assert not st["quarantined"]
 
+
+
+def test_a_driver_that_dies_with_its_switch_stuck_off_is_not_quarantined_with_it(
+        robot: tuple[RunningDaemon, Path]) -> None:
+    d, _ = robot
+    d.wait_for(healthy, HEAL_S, "healthy")
+    mark = last_id(d)
+    d.inject(DEVICE, "stuck_off")  # the camera's switch fails off: its driver exits
+    d.wait_journal(lambda: any(t.startswith(f"quarantined {DEVICE}") for t in said(d, mark)),
+                   QUARANTINE_S, f"{DEVICE} quarantined")
+    d.wait_journal(lambda: all_finished(d, mark), 30, "the started actions' results")
+    d.settled(10.0, runs=4)  # the daemon had its chances to start the driver again
+    count = starts(d, mark)
+    d.settled(10.0, runs=4)
+    d.caught_up()
+    st = d.status()
+    assert DRIVER not in st["quarantined"], st["quarantined"]
+    assert starts(d, mark) == count, "the driver is still restarted"
+    assert count <= MAX_STARTS, f"{count} starts of {DRIVER}"
+    assert any(f"{DRIVER} is not restarted until {DEVICE} is back" in t
+               for t in said(d, mark)), said(d, mark)
+    found = diagnoses(d, mark)  # the camera is the fault, the driver never alone
+    assert any(DEVICE in bad for bad in found), found
+    assert not [bad for bad in found if DRIVER in bad and DEVICE not in bad], found
+    assert st["observations"]["ok(/odom)"] is True  # the rest of the robot keeps running
+    # the switch is replaced; a person clears the camera (one command): the robot comes back
+    d.inject("clear")
+    answer = d.operator("quarantine", "clear", DEVICE)
+    assert answer.startswith(f"{DEVICE}: quarantine cleared"), answer
+    st = d.wait_for(lambda s: healthy(s) and s["observations"].get("ok(/thermal/image)") is True,
+                    HEAL_S, "the robot healthy with its camera back")
+    assert st["observations"][f"running({DRIVER})"] is True
+    assert not st["quarantined"]

@@ -7,7 +7,8 @@ false again within its settle time, twice. Before, the service planned the node'
 time (and the attempt limiter quarantined the node after three): with the device held by a
 person (its channel switched off on the board), the held device was left out and the driver
 alone restarted; with a device the board cannot switch (the USB IMU), the driver alone was the
-diagnosis.
+diagnosis. A driver that died while its device is quarantined and off is not restarted
+either, before any loop: it would spend its own attempts on its device's fault.
 """
 
 from __future__ import annotations
@@ -128,6 +129,31 @@ def test_a_driver_that_ran_or_whose_device_is_well_is_restarted_as_before(
         assert steps_on(rnd, "hokuyo_node")
         await svc.close()
         await svc2.close()
+
+    asyncio.run(main())
+
+
+def test_a_dead_driver_of_a_quarantined_device_is_not_restarted_before_any_loop(
+        tmp_path: Path) -> None:
+    async def main() -> None:
+        svc, events = make(tmp_path, frozenset({"hokuyo", "hokuyo_node"}))
+        now = time.monotonic() - 30.0
+        await svc.quarantine("hokuyo", "its switch is stuck off")  # its repairs failed
+        svc.observations.add(Observation.parse("-on(hokuyo)", now))
+        svc.observations.add(Observation.parse("running(hokuyo_node)", now - 100.0))
+        svc.observations.add(Observation.parse("-running(hokuyo_node)", now))  # it ran, died
+        assert svc.crashloops.looping("hokuyo_node") is None
+        cands, _ = await svc._diagnose()
+        assert [set(c.bad) for c in cands] == [{"hokuyo"}]  # it waits for its device
+        rnd = await svc.loop.repair_once()
+        assert steps_on(rnd, "hokuyo_node") == [], rnd
+        assert any(isinstance(e, Note) and e.text.startswith("hokuyo_node: its device hokuyo "
+                                                             "is quarantined") for e in events)
+        # cleared by a person: the device is repaired and its driver restarted
+        await svc.clear("hokuyo")
+        cands, _ = await svc._diagnose()
+        assert [set(c.bad) for c in cands] == [{"hokuyo", "hokuyo_node"}]
+        await svc.close()
 
     asyncio.run(main())
 
