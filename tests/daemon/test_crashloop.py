@@ -9,11 +9,12 @@ waiting for it. Each test has a daemon of its own, started healthy (the attempts
 spends and the driver's runs are history the next test must not inherit), and ends with the
 robot healthy again.
 
-A person switches the camera off on the board (``dxboard board off``): the daemon holds it
-(no repair undoes a deliberate switch-off), and the driver exits. Each restart of the driver
-dies at once. The test proves, from the daemon's journal and JSON API, that
+First, a person switches the camera off on the board (``dxboard board off``): the daemon holds
+it (no repair undoes a deliberate switch-off), and the driver exits. Each restart of the
+driver dies at once. The test proves, from the daemon's journal and JSON API, that
 
-1. every diagnosis that blames the driver blames the camera with it, never the driver alone;
+1. once the camera is seen off, every diagnosis that blames the driver blames the camera with
+   it, never the driver alone;
 2. the driver is started at most 3 times, no more over several further diagnoses, and is not
    quarantined: the daemon says it waits for the camera (``host.repair.crashloop``);
 3. once the person switches the camera on again, the driver is started and the robot is
@@ -22,13 +23,13 @@ dies at once. The test proves, from the daemon's journal and JSON API, that
 Without the crash-loop handling (``RepairService._blame_devices`` returning the diagnosis as
 it is) the driver is restarted three times and quarantined: the test fails on (2).
 
-Then the camera's switch fails off (``dxboard inject thermal_camera stuck_off``: the board
+Second, the camera's switch fails off (``dxboard inject thermal_camera stuck_off``: the board
 faults the channel, the camera loses its power, its driver exits). The camera's power-ups fail
-and it is quarantined; the driver must not be quarantined with it: restarted once the camera
-was quarantined, it died at once and its attempts, spent with the camera's, quarantined it
-too, before the daemon waited for a dead device's driver (``host.repair.crashloop``). Once the
-switch works again, a person clears the camera (one command, as
-docs/troubleshooting-quarantine.md says) and the robot is healthy.
+and it is quarantined; the test proves the same (1) and (2): the driver is not quarantined
+with it. (It was, before the daemon let a dead device's driver wait, ``host.repair.crashloop``:
+restarted once the camera was quarantined, it died at once, and its attempts, spent with the
+camera's, quarantined it too.) Once the switch works again, a person clears the camera (one
+command, as docs/troubleshooting-quarantine.md says) and the robot is healthy.
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ from pathlib import Path
 import pytest
 
 from host.events import describe
-from host.journal import ActionRecord, DiagnosisRecord
+from host.journal import ActionRecord, DiagnosisRecord, Observation
 from host.launch.running import healthy_robot
 from tests.daemon.runner import KEY, RunningDaemon, fast_copy, healthy, last_id
 
@@ -80,7 +81,14 @@ def starts(d: RunningDaemon, mark: int) -> int:
 
 
 def diagnoses(d: RunningDaemon, mark: int) -> list[set[str]]:
-    return [set(bad) for e in d.journal("diagnosis") if e.id > mark
+    """The candidate diagnoses since the camera was first seen off after ``mark`` (before, a
+    driver that lost its camera may die before the board's reading of the camera arrives)."""
+    off = min((e.id for e in d.journal("observation") if e.id > mark
+               and isinstance(e.payload, Observation)
+               and e.payload.literal == f"on({DEVICE})" and e.payload.value is False),
+              default=None)
+    assert off is not None, f"on({DEVICE}) = false never observed"
+    return [set(bad) for e in d.journal("diagnosis") if e.id > off
             and isinstance(e.payload, DiagnosisRecord) for bad in e.payload.diagnoses]
 
 
