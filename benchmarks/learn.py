@@ -171,7 +171,8 @@ async def campaign(system_dir: Path, args: argparse.Namespace,
         await c.open()
         quiet = await c.quiet(args.quiet_s)
         print(f"  fault-free {quiet['seconds']:g} s: {quiet['repairs']} repair actions, "
-              f"{quiet['false_alarms']} abnormal diagnoses", flush=True)
+              f"{quiet['false_alarms']} abnormal diagnoses"
+              + (f" {quiet['alarms']}" if quiet["alarms"] else ""), flush=True)
         trials = []
         for p in plan:
             trials.append(await c.trial(p))
