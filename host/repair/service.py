@@ -32,8 +32,9 @@ are ``restore``d at start.
 
 While the board's own protection has the channels (it sheds them for input under-voltage and
 restores them itself afterwards, or retries a channel whose trip it blames on its own current
-sensor; a trip just seen is left to it for ``SENSOR_JUDGE_S``, the moment it takes to judge
-its sensor) repairs wait for it rather than fight it. A channel the board
+sensor; a trip just seen is left to it for ``SENSOR_JUDGE_MS`` of the board's own clock, the
+moment it takes to judge its sensor, and at most ``SENSOR_JUDGE_CAP_S`` of ours) repairs wait
+for it rather than fight it. A channel the board
 shed to stay under its total-current limit is no fault of its device and stays off until it is
 commanded on: the device is held (``SHED_HOLD``, shown like any hold) while the board keeps it
 shed, so no repair switches it back for the board to shed again, and the diagnosis turns to the
@@ -101,7 +102,11 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 BOARD_POLL_S = 0.5
-SENSOR_JUDGE_S = 0.4  # a trip is left to the board this long: it may yet doubt its sensor
+# a trip is left to the board this long on its own clock (its uptime): it may yet doubt its
+# sensor (215-265 ms after the trip, seen); the board's clock, not ours, because a busy machine
+# delays the board's judgement and our view of it alike. Bounded on our clock all the same.
+SENSOR_JUDGE_MS = 400
+SENSOR_JUDGE_CAP_S = 5.0
 FOREIGN_WINDOW_S = 5.0  # a switch command this host sent that long ago is still its own
 SHED_HOLD = "shed by the board to stay under its total-current limit"
 Emit = Callable[[Event], None]
@@ -126,7 +131,8 @@ class RepairService:
         self.debounce_s = debounce_s
         self.confirmed = confirmed
         self.confirmed_debounce_s = confirmed_debounce_s
-        self._tripped_at: dict[int, float] = {}  # channel -> when it was first seen TRIPPED
+        # channel -> (boot id, board uptime ms, our clock) when it was first seen TRIPPED
+        self._tripped_at: dict[int, tuple[int, int, float]] = {}
         self._seen: frozenset[Literal] = frozenset()  # the literals at the last diagnosis
         # device -> when it came back on, for the restored devices spared once already: if
         # restarting their drivers did not do it, the device is blamed again (a lidar that
@@ -245,12 +251,17 @@ class RepairService:
             return (f"the board retries {', '.join(doubted)} itself (it doubts its current "
                     "sensor)")
         # ... and the board judges its sensor a moment after the trip (215-265 ms seen): a
-        # trip just seen gets that moment before a repair may act on it
+        # trip just seen gets that moment, on the board's clock, before a repair may act on it
         now = self.executor.clock()
         tripped = {c.channel: c.name for c in state.channels if c.state == ST_TRIPPED}
-        self._tripped_at = {ch: self._tripped_at.get(ch, now) for ch in tripped}
+        seen = {ch: self._tripped_at.get(ch, (state.boot_id, state.uptime_ms, now))
+                for ch in tripped}
+        self._tripped_at = {ch: (b, up, t) if b == state.boot_id and up <= state.uptime_ms
+                            else (state.boot_id, state.uptime_ms, now)  # the board rebooted
+                            for ch, (b, up, t) in seen.items()}
         fresh = [name for ch, name in tripped.items()
-                 if now - self._tripped_at[ch] < SENSOR_JUDGE_S]
+                 if state.uptime_ms - self._tripped_at[ch][1] < SENSOR_JUDGE_MS
+                 and now - self._tripped_at[ch][2] < SENSOR_JUDGE_CAP_S]
         if fresh:
             return f"the board has just tripped {', '.join(fresh)}: its own judgement first"
         return ""

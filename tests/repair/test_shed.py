@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
+from collections.abc import Callable
 from pathlib import Path
 
 from host.board.types import BoardState, ChannelState
@@ -48,7 +49,8 @@ class Board:
         return self.now
 
 
-def make(tmp_path: Path, bad: set[str]) -> tuple[service.RepairService, list[Event]]:
+def make(tmp_path: Path, bad: set[str],
+         clock: Callable[[], float] | None = None) -> tuple[service.RepairService, list[Event]]:
     model = load_system(TEDUSAR / "system.yaml")
     events: list[Event] = []
 
@@ -59,7 +61,7 @@ def make(tmp_path: Path, bad: set[str]) -> tuple[service.RepairService, list[Eve
         RepairPlanner.for_system(TEDUSAR), model,
         load_processes(TEDUSAR / "system.yaml", model), observations=ObservationSet(),
         observable=set(), diagnose=diagnose, emit=events.append, logs_dir=tmp_path, env={},
-        device_boot_s={}, dry_run=True)
+        device_boot_s={}, dry_run=True, clock=clock)
     return svc, events
 
 
@@ -126,7 +128,8 @@ def test_a_trip_the_board_blames_on_its_sensor_is_left_to_the_boards_retry(
     from protocol.constants import F_SENSOR, ST_TRIPPED
 
     async def main() -> None:
-        svc, _ = make(tmp_path, {"hokuyo"})
+        t = [100.0]  # our clock, moved by the test
+        svc, _ = make(tmp_path, {"hokuyo"}, clock=lambda: t[0])
         on = board(set())
         hokuyo = NAMES.index("hokuyo")
         tripped = dataclasses.replace(on, channels=tuple(
@@ -143,12 +146,24 @@ def test_a_trip_the_board_blames_on_its_sensor_is_left_to_the_boards_retry(
         b.now = board(set())  # retried and on again
         assert await svc._board_busy() == ""
         # a trip not (yet) blamed on the sensor: the board judges its sensor a moment after
-        # the trip (215-265 ms seen), so a trip just seen is left to it that long, no longer
-        b.now = dataclasses.replace(tripped, channels=tuple(
+        # the trip (215-265 ms seen), so a trip just seen is left to it that long on the
+        # board's own clock, no longer; a busy machine that delays the board (its uptime moves
+        # slowly) delays the repair with it
+        fresh = dataclasses.replace(tripped, channels=tuple(
             dataclasses.replace(c, live_faults=0) for c in tripped.channels))
+        b.now = fresh
         assert "the board has just tripped hokuyo" in await svc._board_busy()
-        svc._tripped_at[hokuyo] -= 1.0  # seen tripped a second ago
-        assert await svc._board_busy() == ""
+        t[0] += 1.0
+        assert "the board has just tripped hokuyo" in await svc._board_busy(), \
+            "a second of ours, but no time of the board's: its judgement is still to come"
+        b.now = dataclasses.replace(fresh, uptime_ms=fresh.uptime_ms + 399)
+        assert "the board has just tripped hokuyo" in await svc._board_busy()
+        b.now = dataclasses.replace(fresh, uptime_ms=fresh.uptime_ms + 400)
+        assert await svc._board_busy() == ""  # the board has had its moment
+        b.now = dataclasses.replace(fresh, boot_id=fresh.boot_id + 1, uptime_ms=50)
+        assert "the board has just tripped hokuyo" in await svc._board_busy()  # a new boot
+        t[0] += 6.0
+        assert await svc._board_busy() == "", "a board whose clock stands still holds nothing"
         await svc.close()
 
     asyncio.run(main())
