@@ -13,7 +13,11 @@ stale data — knowing nothing of the daemon that feeds it.
   saying it needs no second wait (``confirmed(atom)``, the observer hub's: a silence judged in
   the publisher's own time, a trip the board's readings bore out): a diagnosis that changed
   with such a finding new since the last one starts its repair after ``confirmed_debounce_s``
-  (default 0); any other change, a flapping diagnosis among them, still waits ``debounce_s``;
+  (default 0); any other change, a flapping diagnosis among them, still waits ``debounce_s``.
+  A topic's silence is no such finding while an input it depends on (the model's
+  ``publishes``) is observed and still ok: the input stopping first is judged a moment later
+  when its own silence is longer (a 45 Hz map pose judged silent 12 ms before the 40 Hz scan it
+  follows made a learned model restart the mapper for a lidar hang), so it gets the debounce;
 - ``link(client)``: the board link it acts through (``None``: the link is down); back up,
   it starts the repair of what the latest diagnosis names after ``debounce_s``, so a repair
   refused while the link was down is not forgotten;
@@ -193,7 +197,24 @@ class RepairService:
         new, self._seen = now - self._seen, now
         if self.confirmed is None:
             return []
-        return sorted(str(x) for x in new if self.confirmed(x.atom))
+        ok = {x.atom: x.positive for x in now}
+        return sorted(str(x) for x in new if self.confirmed(x.atom)
+                      and not any(ok.get(f"ok({u})") for u in self._inputs(x.atom)))
+
+    def _inputs(self, atom: str) -> set[str]:
+        """The topics the output topic of ``ok(/t)`` depends on (every publisher's inputs, by
+        the model), and theirs in turn; empty for any other atom."""
+        if not (atom.startswith("ok(/") and atom.endswith(")")):
+            return set()
+        todo, seen = [atom[3:-1]], set[str]()
+        while todo:
+            topic = todo.pop()
+            for c in self.executor.model.publishers(topic):
+                for u in c.publishes[topic]:
+                    if u not in seen:
+                        seen.add(u)
+                        todo.append(u)
+        return seen
 
     @property
     def busy(self) -> bool:

@@ -77,3 +77,29 @@ def test_a_flapping_diagnosis_is_held_off_while_a_confirmed_finding_stands(
         await svc.close()
 
     asyncio.run(main())
+
+
+def test_a_silence_whose_observed_input_is_still_ok_waits_for_the_input(tmp_path: Path) -> None:
+    """Found with a learned model: hector_mapping's 45 Hz pose, judged silent 12 ms before the
+    40 Hz scan it follows (its silence, 4 periods, was the shorter), was repaired at once:
+    the mapper restarted for a lidar hang. An output's silence while an input it depends on
+    (``/map`` on ``/scan`` here) is observed and still ok is not confirmed evidence: it gets
+    the debounce, in which the input's own verdict comes; then it is repaired as before."""
+    async def main() -> None:
+        obs, events, firm = ObservationSet(), [], {"ok(/map)", "ok(/scan)"}
+        svc = make(tmp_path, obs, events, firm, [result("hokuyo")])
+        obs.add(Observation.parse("ok(/scan)", 1.0))
+        obs.add(Observation.parse("ok(/map)", 1.0))
+        svc.diagnosed(result())
+        obs.add(Observation.parse("~ok(/map)", 2.0))  # judged first, /scan still ok
+        svc.diagnosed(result("hector_mapping"))
+        assert svc.active and not svc.busy  # waiting out the (hour's) debounce
+        said = [e.text for e in events if isinstance(e, Note)]
+        assert not any("confirmed by its observer" in t for t in said), said
+        obs.add(Observation.parse("~ok(/scan)", 2.012))  # the lidar's silence, judged now
+        svc.diagnosed(result("hokuyo"))
+        await wait_until_async(lambda: plans(events), 60.0, "a repair plan")
+        assert "hokuyo" in str(plans(events)[0]) and "hector" not in str(plans(events)[0])
+        await svc.close()
+
+    asyncio.run(main())
