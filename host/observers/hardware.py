@@ -135,6 +135,10 @@ class Settled(Generic[V]):
         """Set the value at once (a source believed without agreement), or forget it (None)."""
         self.value, self._cand, self._count = value, None, 0
 
+    def hold(self) -> None:
+        """Keep the value, and start the agreement on a new one afresh."""
+        self._cand, self._count = None, 0
+
     def state(self) -> tuple[object, ...]:
         return (self.value, self._cand, self._count)
 
@@ -277,7 +281,7 @@ class HardwareObserver(Observer[BoardInput]):
         self._link_up(now)
         shows = self._shows(r)
         if shows == self._steady and not self.noisy:  # a noisy sensor's quiet is looked for
-            return
+            return  # (and jumpy readings never leave a steady view: see below)
         before, said = self._evidence(), len(self._out)
         for d in self.devices.values():
             if d.channel < len(r.currents_ma):
@@ -285,7 +289,9 @@ class HardwareObserver(Observer[BoardInput]):
                              bool(r.fault_mask >> d.channel & 1), r.currents_ma[d.channel], now)
         # looking at it again (or at one that shows the same) would be as idle as this was
         idle = len(self._out) == said and self._evidence() == before
-        self._steady = shows if idle else None
+        # ... unless the readings were jumpy: the same reading is judged once they are not
+        jumpy = any(m.jumpy(now) for m in self._noise.values())
+        self._steady = shows if idle and not jumpy else None
 
     def _evidence(self) -> tuple[object, ...]:
         """Everything a reading's rules read and write, but the literals said."""
@@ -332,7 +338,10 @@ class HardwareObserver(Observer[BoardInput]):
         if meter is not None and (turned := meter.add(band, now)) is not None:
             self._noisy(d, turned, now)
         if band is not None and d.name not in self.doubted and d.name not in self.noisy:
-            ev.band.add(band)  # judged: on, sensed, and the sensor not noisy
+            if meter is not None and meter.jumpy(now):
+                ev.band.hold()  # jumping across the band: no verdict (host.observers.noise)
+            else:
+                ev.band.add(band)  # judged: on, sensed, and the sensor not noisy
             if ev.on.value and ev.band.value is not None:
                 self.bands[d.name] = ev.band.value
                 self._say(self._atoms[d.name][2], ev.band.value == "nominal", now)

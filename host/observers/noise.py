@@ -14,6 +14,15 @@ repairs in the campaign).
 current unjudged (``in_band(d)`` retracted: unknown, as when the board itself doubts the
 sensor) and says that the sensor, not the device, is suspect. It is quiet again after
 ``QUIET_S`` seconds with at most ``QUIET_CHANGES`` changes. Time is passed in.
+
+Before the meter has counted enough to call the sensor noisy, the first noisy readings can
+already agree three times in a row (``under, under, under`` between two ``over``), and
+``in_band(d)`` would turn false for the moment it takes the meter to catch up (120 ms seen: a
+diagnosis of the device that no repair followed, but a false one). So the readings are
+``jumpy`` for ``JUMPY_S`` after one that crossed the whole band from the last (``under`` to
+``over`` or back): no band verdict is made from them. A device's current does not do that
+from one reading to the next; its own changes go between the band and one side of it (a
+hang's or a drop-out's drop, an overload's rise, a spike and back), judged as before.
 """
 
 from __future__ import annotations
@@ -24,6 +33,7 @@ WINDOW_S = 1.0
 NOISY_CHANGES = 10  # five times out of the band and back within a second
 QUIET_S = 3.0
 QUIET_CHANGES = 1
+JUMPY_S = 0.2  # after a reading that crossed the whole band: no band verdict for this long
 
 
 class NoiseMeter:
@@ -36,13 +46,20 @@ class NoiseMeter:
         self.noisy = False
         self._since = 0.0  # when it turned noisy
         self._last: str | None = None
+        self._crossed: float | None = None  # the latest reading that crossed the whole band
         self._changes: deque[float] = deque()
+
+    def jumpy(self, now: float) -> bool:
+        """The latest readings jump across the band (see the module): no verdict from them."""
+        return self._crossed is not None and now - self._crossed <= JUMPY_S
 
     def add(self, band: str | None, now: float) -> bool | None:
         """One reading's raw band (None: not judged, the channel off); returns True when the
         sensor turns noisy, False when it turns quiet again, None when nothing changed."""
         if band is not None and self._last is not None and band != self._last:
             self._changes.append(now)
+            if band != "nominal" and self._last != "nominal":  # under <-> over in one reading
+                self._crossed = now
         if band is not None:
             self._last = band
         keep = self.quiet_s if self.noisy else self.window_s
