@@ -13,6 +13,11 @@ and calls ``deliver(item)`` for every item in arrival order (per topic, as the s
 promise). When the loop lags so far that ``maxlen`` items are held, the *oldest* is dropped
 (fresh data matters more to a diagnosis than stale data), ``dropped`` counts every loss, and the
 drain says so on the log, at most once every ``TELL_EVERY_S``, with the running total.
+
+A drain delivers for at most ``SLICE_S`` and leaves the rest (ahead of newer items) to a drain
+it schedules after whatever else the loop has ready: a loop that fell far behind (a recorder
+starved at a load of 24, writing every message into its bag) held a stop request behind one
+drain of thousands of messages, and did not react to SIGINT for a minute.
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ T = TypeVar("T")
 
 MAXLEN = 10_000  # items held while the loop lags: 5 s of a 2,000 msg/s flood
 TELL_EVERY_S = 10.0
+SLICE_S = 0.05  # a drain delivers this long at most, then lets the loop's other work run
 
 
 class Inbox(Generic[T]):
@@ -70,12 +76,33 @@ class Inbox(Generic[T]):
             self._items.clear()
             self._scheduled = False
             dropped = self.dropped
-        for item in items:
+        end = time.monotonic() + SLICE_S
+        for i, item in enumerate(items):
             try:
                 self.deliver(item)
             except Exception:  # one bad callback must not lose the rest of the batch
                 log.exception("%s: delivering a message failed", self.name)
+            if i + 1 < len(items) and time.monotonic() >= end:
+                self._later(items[i + 1:])
+                break
         if dropped != self._told and time.monotonic() - self._told_at >= TELL_EVERY_S:
             log.warning("%s: %d dropped so far (the event loop fell behind by more than %d; "
                         "the oldest go first)", self.name, dropped, self.maxlen)
             self._told, self._told_at = dropped, time.monotonic()
+
+    def _later(self, rest: list[T]) -> None:
+        """Put ``rest`` back ahead of what came in meanwhile (the oldest dropped if that is
+        more than ``maxlen``), and drain it after the loop's other ready work."""
+        with self._lock:
+            merged = rest + list(self._items)
+            over = len(merged) - self.maxlen
+            if over > 0:
+                self.dropped += over
+                merged = merged[over:]
+            self._items.clear()
+            self._items.extend(merged)
+            if self._scheduled:  # a put() meanwhile scheduled the next drain already
+                return
+            self._scheduled = True
+            self.wakeups += 1
+        self.loop.call_soon(self._drain)

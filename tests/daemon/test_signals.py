@@ -66,6 +66,32 @@ async def test_the_inbox_wakes_the_loop_once_per_batch_and_counts_what_it_drops(
     assert any("150 dropped" in r.getMessage() for r in caplog.records), caplog.text
 
 
+async def test_a_long_backlog_is_drained_in_slices_so_a_stop_request_runs_between() -> None:
+    """Found with two suites beside a CPU hog: a recorder far behind its messages held the
+    stop request behind one drain of thousands, and did not react to SIGINT for a minute.
+    Now a drain delivers for at most ``SLICE_S`` (50 ms); what the loop had ready runs
+    between."""
+    loop = asyncio.get_running_loop()
+    got: list[int] = []
+
+    def slow(i: int) -> None:  # a starved loop: each message costs a millisecond
+        time.sleep(0.001)
+        got.append(i)
+
+    inbox: Inbox[int] = Inbox(loop, slow, maxlen=100_000, name="test messages")
+    for i in range(1000):  # a second of work behind one wakeup
+        inbox.put(i)
+    stopped_after: list[int] = []
+    loop.call_soon_threadsafe(lambda: stopped_after.append(len(got)))  # the stop request
+    deadline = time.monotonic() + 120
+    while len(got) < 1000 and time.monotonic() < deadline:
+        await asyncio.sleep(0.01)
+    assert got == list(range(1000))  # all of it, in order
+    assert stopped_after and stopped_after[0] <= 500, stopped_after  # after a slice or so,
+    # not after the whole backlog
+    assert inbox.dropped == 0
+
+
 async def test_a_second_signal_ends_at_once_and_the_deadline_cuts_a_stuck_stop() -> None:
     loop = asyncio.get_running_loop()
     before = signal.getsignal(signal.SIGINT)
