@@ -36,6 +36,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -103,6 +104,28 @@ def all_finished(d: RunningDaemon, mark: int) -> bool:
         a.action_id for a in acts if a.finished is not None}
 
 
+def waits_for_its_device(d: RunningDaemon, mark: int) -> tuple[int, dict[str, Any]]:
+    """(2) and (1) of the module: once the started actions have ended, the driver is not
+    started again over two further windows, is not quarantined, and the daemon says it waits
+    for the camera; every diagnosis that blames the driver blames the camera with it. The
+    driver's starts since ``mark``, and the daemon's status."""
+    d.wait_journal(lambda: all_finished(d, mark), 30, "the started actions' results")
+    d.settled(10.0, runs=4)  # the daemon had its chances to start the driver again
+    count = starts(d, mark)
+    d.settled(10.0, runs=4)
+    d.caught_up()
+    st = d.status()
+    assert DRIVER not in st["quarantined"], st["quarantined"]
+    assert starts(d, mark) == count, "the driver is still restarted"
+    assert count <= MAX_STARTS, f"{count} starts of {DRIVER}"
+    assert any(f"{DRIVER} is not restarted until {DEVICE} is back" in t
+               for t in said(d, mark)), said(d, mark)
+    found = diagnoses(d, mark)  # the camera is the fault, the driver never alone
+    assert any(DEVICE in bad for bad in found), found
+    assert not [bad for bad in found if DRIVER in bad and DEVICE not in bad], found
+    return count, st
+
+
 def test_a_driver_that_dies_without_its_device_switched_off_waits_for_it(
         robot: tuple[RunningDaemon, Path]) -> None:
     d, key = robot
@@ -116,21 +139,8 @@ def test_a_driver_that_dies_without_its_device_switched_off_waits_for_it(
     d.wait_journal(lambda: DRIVER in d.status()["quarantined"] or any(
         f"{DRIVER} is not restarted until {DEVICE} is back" in t for t in said(d, mark)),
         QUARANTINE_S, "the loop seen, or the driver quarantined")
-    d.wait_journal(lambda: all_finished(d, mark), 30, "the started actions' results")
-    d.settled(10.0, runs=4)  # the daemon had its chances to start the driver again
-    count = starts(d, mark)
-    d.settled(10.0, runs=4)
-    d.caught_up()
-    st = d.status()
-    assert DRIVER not in st["quarantined"], st["quarantined"]
-    assert starts(d, mark) == count, "the driver is still restarted"
-    assert 1 <= count <= MAX_STARTS, f"{count} starts of {DRIVER}"
-    assert st["observations"].get(f"running({DRIVER})") is False
-    assert any(f"{DRIVER} is not restarted until {DEVICE} is back" in t
-               for t in said(d, mark)), said(d, mark)
-    found = diagnoses(d, mark)  # the camera is the fault, the driver never alone
-    assert any(DEVICE in bad for bad in found), found
-    assert not [bad for bad in found if DRIVER in bad and DEVICE not in bad], found
+    count, st = waits_for_its_device(d, mark)
+    assert count >= 1 and st["observations"].get(f"running({DRIVER})") is False
     assert st["observations"]["ok(/odom)"] is True  # the rest of the robot keeps running
     # the person switches the camera on again: its driver is started, the robot healthy
     d.board("on", DEVICE, key_file=key)
@@ -149,20 +159,7 @@ def test_a_driver_that_dies_with_its_switch_stuck_off_is_not_quarantined_with_it
     d.inject(DEVICE, "stuck_off")  # the camera's switch fails off: its driver exits
     d.wait_journal(lambda: any(t.startswith(f"quarantined {DEVICE}") for t in said(d, mark)),
                    QUARANTINE_S, f"{DEVICE} quarantined")
-    d.wait_journal(lambda: all_finished(d, mark), 30, "the started actions' results")
-    d.settled(10.0, runs=4)  # the daemon had its chances to start the driver again
-    count = starts(d, mark)
-    d.settled(10.0, runs=4)
-    d.caught_up()
-    st = d.status()
-    assert DRIVER not in st["quarantined"], st["quarantined"]
-    assert starts(d, mark) == count, "the driver is still restarted"
-    assert count <= MAX_STARTS, f"{count} starts of {DRIVER}"
-    assert any(f"{DRIVER} is not restarted until {DEVICE} is back" in t
-               for t in said(d, mark)), said(d, mark)
-    found = diagnoses(d, mark)  # the camera is the fault, the driver never alone
-    assert any(DEVICE in bad for bad in found), found
-    assert not [bad for bad in found if DRIVER in bad and DEVICE not in bad], found
+    _, st = waits_for_its_device(d, mark)
     assert st["observations"]["ok(/odom)"] is True  # the rest of the robot keeps running
     # the switch is replaced; a person clears the camera (one command): the robot comes back
     d.inject("clear")
