@@ -35,10 +35,11 @@ deliberate switch-off is not undone. Quarantines and holds a previous run left i
 are ``restore``d at start.
 
 While the board's own protection has the channels (it sheds them for input under-voltage and
-restores them itself afterwards, or retries a channel whose trip it blames on its own current
-sensor; a trip just seen is left to it for ``SENSOR_JUDGE_MS`` of the board's own clock, the
-moment it takes to judge its sensor, and at most ``SENSOR_JUDGE_CAP_S`` of ours) repairs wait
-for it rather than fight it. A channel the board
+restores them itself afterwards, or retries a channel it tripped: a power-up then would only
+wait for that retry, spend one of the device's attempts and, when the trip was its noisy
+sensor's doing, power-cycle a healthy device; the wait for a retry lasts at most
+``RETRY_WAIT_MS`` of the board's own clock and ``RETRY_WAIT_CAP_S`` of ours) repairs wait for
+it rather than fight it. A channel the board
 shed to stay under its total-current limit is no fault of its device and stays off until it is
 commanded on: the device is held (``SHED_HOLD``, shown like any hold) while the board keeps it
 shed, so no repair switches it back for the board to shed again, and the diagnosis turns to the
@@ -106,11 +107,11 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 BOARD_POLL_S = 0.5
-# a trip is left to the board this long on its own clock (its uptime): it may yet doubt its
-# sensor (215-265 ms after the trip, seen); the board's clock, not ours, because a busy machine
-# delays the board's judgement and our view of it alike. Bounded on our clock all the same.
-SENSOR_JUDGE_MS = 400
-SENSOR_JUDGE_CAP_S = 5.0
+# a tripped channel is left to the board's retry this long on its own clock (its uptime): longer
+# than its longest default retry delay (5 s); the board's clock, not ours, because a busy
+# machine delays the board's retry and our view of it alike. Bounded on our clock all the same.
+RETRY_WAIT_MS = 6000
+RETRY_WAIT_CAP_S = 12.0
 FOREIGN_WINDOW_S = 5.0  # a switch command this host sent that long ago is still its own
 SHED_HOLD = "shed by the board to stay under its total-current limit"
 Emit = Callable[[Event], None]
@@ -263,28 +264,27 @@ class RepairService:
             return "the board is over its total-current limit"
         if shed:
             return f"the board is restoring {', '.join(shed)} after an under-voltage"
-        # a trip the board blames on its own current sensor (a noisy one trips once as the
-        # noise starts: its first two samples can read like a short's) is retried by the
-        # board itself: a power-up would race the retry and power-cycle a healthy device
-        doubted = [c.name for c in state.channels
-                   if c.state == ST_TRIPPED and c.live_faults & F_SENSOR]
-        if doubted:
-            return (f"the board retries {', '.join(doubted)} itself (it doubts its current "
-                    "sensor)")
-        # ... and the board judges its sensor a moment after the trip (215-265 ms seen): a
-        # trip just seen gets that moment, on the board's clock, before a repair may act on it
+        # a channel the board tripped has its retry pending (with no retry left it latches):
+        # a power-up would only wait for it, spend an attempt, and, when the trip was a noisy
+        # sensor's (its first two samples can read like a short's), power-cycle a healthy
+        # device. Each trip is left to the board for its retry, on the board's clock.
         now = self.executor.clock()
-        tripped = {c.channel: c.name for c in state.channels if c.state == ST_TRIPPED}
+        tripped = {c.channel: c for c in state.channels if c.state == ST_TRIPPED}
         seen = {ch: self._tripped_at.get(ch, (state.boot_id, state.uptime_ms, now))
                 for ch in tripped}
         self._tripped_at = {ch: (b, up, t) if b == state.boot_id and up <= state.uptime_ms
                             else (state.boot_id, state.uptime_ms, now)  # the board rebooted
                             for ch, (b, up, t) in seen.items()}
-        fresh = [name for ch, name in tripped.items()
-                 if state.uptime_ms - self._tripped_at[ch][1] < SENSOR_JUDGE_MS
-                 and now - self._tripped_at[ch][2] < SENSOR_JUDGE_CAP_S]
-        if fresh:
-            return f"the board has just tripped {', '.join(fresh)}: its own judgement first"
+        waiting = [c for ch, c in tripped.items()
+                   if state.uptime_ms - self._tripped_at[ch][1] < RETRY_WAIT_MS
+                   and now - self._tripped_at[ch][2] < RETRY_WAIT_CAP_S]
+        doubted = [c.name for c in waiting if c.live_faults & F_SENSOR]
+        if doubted:
+            return (f"the board retries {', '.join(doubted)} itself (it doubts its current "
+                    "sensor)")
+        if waiting:
+            return (f"the board has tripped {', '.join(c.name for c in waiting)} and retries "
+                    "it itself")
         return ""
 
     def _hold_shed(self, state: BoardState) -> None:

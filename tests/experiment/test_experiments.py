@@ -12,6 +12,7 @@ all-normal. No assertion is about speed.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import json
 import shutil
@@ -88,6 +89,17 @@ def shutdown(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Any], 
     return experiment("device-shutdown", journal), journal
 
 
+def told(label: str, run: dict[str, Any]) -> str:
+    """``label`` and the run's plans, actions and notes, as ``dxboard journal`` shows them: what
+    a failed assertion about a run prints (only then is it called), so that a failure on a busy
+    machine can be read afterwards."""
+    out = subprocess.run(
+        [sys.executable, "-m", "host.cli", "journal", run["journal"], "--tail", "80", "--kind",
+         "plan", "--kind", "action", "--kind", "note"],
+        cwd=ROOT, capture_output=True, text=True, timeout=120)
+    return f"{label}:\n{out.stdout[-6000:]}{out.stderr[-500:]}"
+
+
 def overlapping(actions: list[dict[str, Any]]) -> bool:
     spans = sorted((a["start_s"], a["end_s"]) for a in actions)
     return any(b[0] < a[1] for a, b in itertools.pairwise(spans))
@@ -99,27 +111,29 @@ def test_power_up_diagnoses_the_papers_11_and_powers_before_drivers(
     assert data["experiment"] == "power-up" and data["paper_s"] == 30.2
     assert set(data["runs"]) == {"parallel", "sequential"}
     for label, run in data["runs"].items():
-        assert set(run["paper_diagnosis"]) == PAPER_11, label
-        assert set(run["beyond_paper"]) == BEYOND_PAPER, label
-        assert set(run["first_diagnosis"]) == PAPER_11 | BEYOND_PAPER, label
+        why = functools.partial(told, label, run)
+        assert set(run["paper_diagnosis"]) == PAPER_11, why()
+        assert set(run["beyond_paper"]) == BEYOND_PAPER, why()
+        assert set(run["first_diagnosis"]) == PAPER_11 | BEYOND_PAPER, why()
         plan = run["plan"]
         for dev, node in DRIVERS.items():
-            assert plan.index(f"power_up({dev})") < plan.index(f"start_node({node})"), label
-        assert {p.split("(")[0] for p in plan} <= {"power_up", "start_node"}, label
+            assert plan.index(f"power_up({dev})") < plan.index(f"start_node({node})"), why()
+        assert {p.split("(")[0] for p in plan} <= {"power_up", "start_node"}, why()
         acts = run["actions"]
-        assert acts and all(a["state"] == "succeeded" for a in acts), label
+        assert acts and all(a["state"] == "succeeded" for a in acts), why()
         up_start = {a["args"][0]: a["start_s"] for a in acts if a["action"] == "power_up"}
         up_end = {a["args"][0]: a["end_s"] for a in acts if a["action"] == "power_up"}
         starts = {a["args"][0]: a["start_s"] for a in acts if a["action"] == "start_node"}
-        assert set(up_end) == set(DRIVERS), label
+        assert set(up_end) == set(DRIVERS), why()
         for dev, node in DRIVERS.items():
             # in parallel a driver starts once its device is switched on (it retries while
             # the device boots), before the power-up is verified; one at a time, after it
             first = up_end[dev] if label == "sequential" else up_start[dev]
-            assert starts[node] >= first, f"{label}: {node} started before {dev} was switched on"
-        assert run["time_to_healthy_s"] is not None and run["repair_s"] is not None, label
+            assert starts[node] >= first, told(
+                f"{label}: {node} started before {dev} was switched on", run)
+        assert run["time_to_healthy_s"] is not None and run["repair_s"] is not None, why()
         if label == "parallel":  # the lidar's driver did not wait out the lidar's boot
-            assert starts["hokuyo_node"] < up_end["hokuyo"], label
+            assert starts["hokuyo_node"] < up_end["hokuyo"], why()
     assert overlapping(data["runs"]["parallel"]["actions"])
     assert not overlapping(data["runs"]["sequential"]["actions"])
     assert data["parallel_vs_sequential"] is not None
