@@ -9,15 +9,16 @@ this made hector_mapping the only diagnosis right after every lidar repair, and 
 restarted it (tests/diagnosis/test_lags.py replays the run).
 
 ``lags`` maps an atom to the window its observer judges (``observation_lags`` reads it off
-the observers: ``window`` of frequency and trend observers, ``within`` of response
-observers). ``held_atoms`` names the observed atoms to treat as unknown now: those whose value
-was established before the last change of an atom they depend on (``depends_on``: the
-positive conditions of the clauses that conclude them, transitively), or that turned false
-after it, while that change is younger than their lag (an observer may notice a silence only
-after the input came back: the map's silence noticed 0.14 s after the scan's return still
-judged the outage; a value that turned true after the change is evidence at once). Once the
-window has passed, the observation is evidence again: a node that is really broken is
-diagnosed one window later, never missed. Without lags nothing is held. Time is passed in;
+the observers: ``lag`` of frequency observers, their window and one message interval more, as
+their rate is judged only when a message comes; ``window`` of trend observers, ``within`` of
+response observers). ``held_atoms`` names the observed atoms to treat as unknown now:
+those whose value was established before the last change of an atom they depend on
+(``depends_on``: the positive conditions of the clauses that conclude them, transitively), or
+that turned false after it, while that change is younger than their lag (an observer may
+notice a silence only after the input came back: the map's silence noticed 0.14 s after the
+scan's return still judged the outage; a value that turned true after the change is evidence
+at once). Once the lag has passed, the observation is evidence again: a node that is really
+broken is diagnosed one lag later, never missed. Without lags nothing is held. Time is passed in;
 nothing here reads a clock.
 """
 
@@ -29,10 +30,12 @@ from host.diagnosis.logic import Theory, ab_component
 
 
 def observation_lags(observers: Iterable[object]) -> dict[str, float]:
-    """``atom -> seconds`` for observers that judge a window (``window`` or ``within``)."""
+    """``atom -> seconds`` for observers that judge a window (``lag``, ``window`` or
+    ``within``)."""
     out: dict[str, float] = {}
     for o in observers:
-        lag = getattr(o, "window", None) or getattr(o, "within", None)
+        lag = (getattr(o, "lag", None) or getattr(o, "window", None)
+               or getattr(o, "within", None))
         atoms = getattr(o, "atoms", None)
         if not isinstance(lag, int | float) or lag <= 0 or not callable(atoms):
             continue

@@ -194,6 +194,18 @@ class FrequencyObserver(TopicObserver):
     def atoms(self) -> list[str]:
         return [self.atom]
 
+    @property
+    def lag(self) -> float:
+        """How long after its publisher's input came back a verdict may still describe the
+        time without it (``host.diagnosis.lags``): the window, and one message interval more
+        at the slowest rate still ok (at most the silence limit). A rate is judged only when
+        a message arrives, so the first verdict on the new regime comes with the first
+        message after the old regime left the window: a map every 2 s, judged over 6 s, up
+        to 11 s after the scan's return (held for the window alone, a map judged low 6.4 s
+        after it restarted a healthy hector_mapping)."""
+        slowest = self.rate - self.tolerance
+        return self.window + min(1.0 / slowest if slowest > 0 else self.max_gap, self.max_gap)
+
     def judge_s(self) -> dict[str, float]:
         """A rate is judged from two messages: up to two periods after the publisher starts
         (4 s for a 0.5 Hz map; nothing to speak of at 40 Hz)."""
