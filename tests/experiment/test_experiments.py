@@ -2,12 +2,13 @@
 (a subprocess, ``--fast`` boot times), then ``dxboard report`` on each experiment's journal.
 
 Power-up (§VI-A): the first diagnosis is the paper's 11 abnormal components (and, beyond the
-paper's model, the thermal camera with its driver, reported apart), the plan powers
+paper's model, the thermal camera with its driver, reported apart), the first plan powers
 each device before starting its driver (and the driver starts only after the power-up is
-verified), both runs end all-normal, and the one-at-a-time run never overlaps two steps while
-the parallel one does. Device shut-down (§VI-B): {jaguar} is diagnosed, the repair is the
-paper's power_up(jaguar), stop_node(jaguar_node), start_node(jaguar_node), and the robot ends
-all-normal. No assertion is about speed.
+verified), a later plan only repairs a step that failed, both runs end all-normal, and the
+one-at-a-time run never overlaps two steps while the parallel one does. Device shut-down
+(§VI-B): {jaguar} is diagnosed, the repair is the paper's power_up(jaguar),
+stop_node(jaguar_node), start_node(jaguar_node), and the robot ends all-normal. No assertion
+is about speed.
 """
 
 from __future__ import annotations
@@ -115,12 +116,30 @@ def test_power_up_diagnoses_the_papers_11_and_powers_before_drivers(
         assert set(run["paper_diagnosis"]) == PAPER_11, why()
         assert set(run["beyond_paper"]) == BEYOND_PAPER, why()
         assert set(run["first_diagnosis"]) == PAPER_11 | BEYOND_PAPER, why()
-        plan = run["plan"]
+        # the first plan is the paper's: power each device, then start its driver
+        plans = run["plans"]
+        plan = plans[0]["steps"]
         for dev, node in DRIVERS.items():
             assert plan.index(f"power_up({dev})") < plan.index(f"start_node({node})"), why()
         assert {p.split("(")[0] for p in plan} <= {"power_up", "start_node"}, why()
+        # a later plan only follows a step that failed (a busy machine can make a component
+        # fail: beside a CPU hog, a hector_mapping whose map did not come within 36 s, its
+        # stretched time, was restarted and then mapped), restarts what failed and runs
+        # what the first plan had left
         acts = run["actions"]
-        assert acts and all(a["state"] == "succeeded" for a in acts), why()
+        failed = {a["args"][0] for a in acts if a["state"] == "failed"}
+        first_id = plans[0]["plan_id"]
+        done = {f"{a['action']}({', '.join(a['args'])})" for a in acts
+                if a["state"] == "succeeded" and a["plan_id"] == first_id}
+        for later in plans[1:]:
+            for step in later["steps"]:
+                comp = step.split("(")[1].rstrip(")")
+                assert comp in failed or (step in plan and step not in done), why()
+        assert acts and (failed == set()) == (len(plans) == 1), why()
+        # each component whose step failed was planned again and succeeded then
+        again = {a["args"][0] for a in acts
+                 if a["state"] == "succeeded" and a["plan_id"] != first_id}
+        assert failed <= again, why()
         up_start = {a["args"][0]: a["start_s"] for a in acts if a["action"] == "power_up"}
         up_end = {a["args"][0]: a["end_s"] for a in acts if a["action"] == "power_up"}
         starts = {a["args"][0]: a["start_s"] for a in acts if a["action"] == "start_node"}
