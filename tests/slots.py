@@ -1,0 +1,88 @@
+"""Machine-wide slots for the test modules that start processes, so suites side by side queue.
+
+A test module that starts processes (a board, a daemon, a whole robot's nodes, MicroPython)
+holds one of ``count()`` slots shared by every pytest process on the machine while it runs:
+the first process it starts takes a slot, the end of the module gives it back. One suite has
+at most ``count()`` workers (``make test``: 4), so alone it never waits; two suites side by
+side (8 workers on 2 cores) ran up to eight robots at once, a load of 67, and their topics
+went silent for 90 s. Now the second suite's process-starting modules wait for a slot while
+its in-process tests go on. Slots are ``flock`` locks on files in one directory of the
+machine's temporary directory: the kernel frees a dead process's slot. The wait does not
+count against the test's own time limit (pytest-timeout's ``SIGALRM`` timer is paused).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import os
+import signal
+import tempfile
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+POLL_S = 0.2
+DIR = Path(tempfile.gettempdir()) / "dxboard-test-slots"
+
+
+def count() -> int:
+    """Slots on this machine: the suite's own workers (4), more on a bigger machine."""
+    return max(4, 2 * (os.cpu_count() or 1))
+
+
+class Slots:
+    """One process's hold on at most one slot of ``directory``."""
+
+    def __init__(self, directory: Path = DIR, n: int | None = None) -> None:
+        self.directory = directory
+        self.n = count() if n is None else n
+        self._held: int | None = None  # the open slot file's descriptor
+        self.waited_s = 0.0  # all the time this process waited for a slot
+
+    @property
+    def held(self) -> bool:
+        return self._held is not None
+
+    def try_acquire(self) -> bool:
+        """Take a free slot if there is one (True: held now, or already)."""
+        if self._held is not None:
+            return True
+        self.directory.mkdir(parents=True, exist_ok=True)
+        for i in range(self.n):
+            fd = os.open(self.directory / f"{i}.lock", os.O_RDWR | os.O_CREAT, 0o666)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                os.close(fd)
+                continue
+            self._held = fd
+            return True
+        return False
+
+    def acquire(self) -> None:
+        """Take a slot, waiting for one (the test's time limit paused meanwhile)."""
+        if self.try_acquire():
+            return
+        start = time.monotonic()
+        with paused_alarm():
+            while not self.try_acquire():
+                time.sleep(POLL_S)
+        self.waited_s += time.monotonic() - start
+
+    def release(self) -> None:
+        if self._held is not None:
+            os.close(self._held)  # closing the descriptor releases its flock
+            self._held = None
+
+
+@contextlib.contextmanager
+def paused_alarm() -> Iterator[None]:
+    """Stop the process's ``ITIMER_REAL`` (pytest-timeout's limit) and give it back its time
+    left afterwards: the time inside does not count."""
+    left, interval = signal.setitimer(signal.ITIMER_REAL, 0)
+    try:
+        yield
+    finally:
+        if left > 0:
+            signal.setitimer(signal.ITIMER_REAL, left, interval)
