@@ -5,9 +5,9 @@ nodes, MicroPython) and spend their time in start-ups and waits; the rest run in
 seconds. ``pytest --in-process`` runs only the latter, with no list to keep: any test that
 starts a process (``subprocess``, asyncio's subprocesses, ``os.fork``, ``os.posix_spawn``) is
 stopped at that moment and reported as skipped with the reason "starts a process". ``make
-test`` never passes the option, so every test runs there, with its real peers; there a module
-that starts a process first takes one of the machine's slots for such modules
-(``tests/slots.py``), so that suites side by side queue their robots instead of starving them.
+test`` never passes the option, so every test runs there, with its real peers; there each test
+module first takes one of the machine's slots (``tests/slots.py``), so that suites side by side
+queue their modules instead of starving each other's robots.
 """
 
 from __future__ import annotations
@@ -37,6 +37,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 
 _IN_TEST = [False]  # set while a test's setup, call or teardown runs
 _SLOTS = Slots()  # this process's hold on a machine-wide slot (tests/slots.py)
+_SLOTTED = [False]  # make test: every module runs in a slot; --in-process (make check): none
 
 
 def _guarded(original: Any) -> Any:
@@ -75,28 +76,14 @@ def _tie_children_to_the_test_process() -> None:
     subprocess.Popen.__init__ = init  # type: ignore[method-assign]
 
 
-def _slotted(original: Any) -> Any:
-    """A process started inside a test first takes a machine-wide slot for its module."""
-    def start(*args: Any, **kwargs: Any) -> Any:
-        if _IN_TEST[0] and not _SLOTS.held:
-            if threading.current_thread() is threading.main_thread():
-                _SLOTS.acquire()
-            else:  # (only the main thread may pause the test's time limit)
-                while not _SLOTS.try_acquire():
-                    threading.Event().wait(0.2)
-        return original(*args, **kwargs)
-
-    return start
-
-
 def pytest_configure(config: pytest.Config) -> None:
     """Processes die with the test process; with --in-process, refuse every process start
-    inside a test (its fixtures of every scope included), else take a slot for its module
-    first. Outside tests (pytest's and xdist's own start-up) processes start as usual."""
+    inside a test (its fixtures of every scope included). Outside tests (pytest's and xdist's
+    own start-up) processes start as usual. Without it, each test module first takes a slot
+    of the machine's (``tests/slots.py``)."""
     _tie_children_to_the_test_process()  # (the xdist controller's workers die with it too)
     if not config.getoption("--in-process"):
-        popen: Any = subprocess.Popen
-        popen._execute_child = _slotted(popen._execute_child)
+        _SLOTTED[0] = True
         return
     if getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput"):
         return  # the xdist controller: it only starts the workers
@@ -115,6 +102,8 @@ def pytest_configure(config: pytest.Config) -> None:
 
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None) -> Any:
+    if _SLOTTED[0]:
+        _SLOTS.acquire()  # (held already while the module goes on)
     _IN_TEST[0] = True
     try:
         return (yield)

@@ -1,14 +1,15 @@
-"""Machine-wide slots for the test modules that start processes, so suites side by side queue.
+"""Machine-wide slots for test modules, so that suites side by side queue instead of starving.
 
-A test module that starts processes (a board, a daemon, a whole robot's nodes, MicroPython)
-holds one of ``count()`` slots shared by every pytest process on the machine while it runs:
-the first process it starts takes a slot, the end of the module gives it back. One suite has
-at most ``count()`` workers (``make test``: 4), so alone it never waits; two suites side by
-side (8 workers on 2 cores) ran up to eight robots at once, a load of 67, and their topics
-went silent for 90 s. Now the second suite's process-starting modules wait for a slot while
-its in-process tests go on. Slots are ``flock`` locks on files in one directory of the
-machine's temporary directory: the kernel frees a dead process's slot. The wait does not
-count against the test's own time limit (pytest-timeout's ``SIGALRM`` timer is paused).
+Under ``make test`` each test module holds one of ``count()`` slots shared by every pytest
+process on the machine while it runs: its first test takes a slot, the end of the module gives
+it back. One suite has at most ``count()`` workers (``make test``: 4), so alone it never
+waits; two suites side by side (8 workers on 2 cores) ran eight modules at once, up to eight
+whole robots (a load of 67; topics silent for 90 s, 11 failures), and with slots for the
+process-starting modules only, four robots beside four CPU-bound modules (a load of 37, 3
+failures). Now the machine runs at most ``count()`` modules of all its suites at once, as
+one suite does. Slots are ``flock`` locks on files in one directory of the machine's
+temporary directory: the kernel frees a dead process's slot. The wait does not count against
+the test's own time limit (pytest-timeout's ``SIGALRM`` timer is paused).
 """
 
 from __future__ import annotations
