@@ -24,6 +24,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 POLL_S = 0.2
+NONE = -1  # "held" where slots cannot be used: the suite goes on without them
 DIR = Path(tempfile.gettempdir()) / "dxboard-test-slots"
 
 
@@ -46,20 +47,37 @@ class Slots:
         return self._held is not None
 
     def try_acquire(self) -> bool:
-        """Take a free slot if there is one (True: held now, or already)."""
+        """Take a free slot if there is one (True: held now, or already). Where the slots
+        cannot be used (another user's directory, a read-only temporary directory) the suite
+        runs as it did without them: True, holding none."""
         if self._held is not None:
             return True
-        self.directory.mkdir(parents=True, exist_ok=True)
-        for i in range(self.n):
-            fd = os.open(self.directory / f"{i}.lock", os.O_RDWR | os.O_CREAT, 0o666)
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                os.close(fd)
-                continue
-            self._held = fd
+        try:
+            self._open_directory()
+            fds = [os.open(self.directory / f"{i}.lock", os.O_RDONLY | os.O_CREAT, 0o644)
+                   for i in range(self.n)]
+        except OSError:
+            self._held = NONE
             return True
-        return False
+        for fd in fds:  # the first free one is kept, the other descriptors closed
+            if self._held is None:
+                try:
+                    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                    self._held = fd
+                    continue
+                except BlockingIOError:
+                    pass
+            os.close(fd)
+        return self._held is not None
+
+    def _open_directory(self) -> None:
+        """The slots' directory, made open to every user of the machine (as ``/tmp`` is) so
+        that their suites share it."""
+        try:
+            self.directory.mkdir(parents=True)
+        except FileExistsError:
+            return
+        self.directory.chmod(0o1777)
 
     def acquire(self) -> None:
         """Take a slot, waiting for one (the test's time limit paused meanwhile)."""
@@ -72,9 +90,9 @@ class Slots:
         self.waited_s += time.monotonic() - start
 
     def release(self) -> None:
-        if self._held is not None:
+        if self._held is not None and self._held != NONE:
             os.close(self._held)  # closing the descriptor releases its flock
-            self._held = None
+        self._held = None
 
 
 @contextlib.contextmanager

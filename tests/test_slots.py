@@ -81,3 +81,20 @@ def test_the_wait_does_not_count_against_the_time_limit() -> None:
     finally:
         signal.signal(signal.SIGALRM, old)
         signal.setitimer(signal.ITIMER_REAL, *saved)
+
+
+def test_where_slots_cannot_be_used_the_suite_goes_on_without_them(tmp_path: Path) -> None:
+    not_a_directory = tmp_path / "file"
+    not_a_directory.write_text("")
+    slots = Slots(not_a_directory, n=1)
+    assert slots.try_acquire()  # no wait, and no slot held: as without slots
+    slots.acquire()
+    slots.release()
+    assert not slots.held
+
+
+def test_the_directory_is_open_to_every_user(tmp_path: Path) -> None:
+    slots = Slots(tmp_path / "slots", n=1)
+    assert slots.try_acquire()
+    assert (tmp_path / "slots").stat().st_mode & 0o7777 == 0o1777
+    slots.release()

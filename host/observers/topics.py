@@ -201,8 +201,8 @@ class FrequencyObserver(TopicObserver):
         at the slowest rate still ok (at most the silence limit). A rate is judged only when
         a message arrives, so the first verdict on the new regime comes with the first
         message after the old regime left the window: a map every 2 s, judged over 6 s, up
-        to 11 s after the scan's return (held for the window alone, a map judged low 6.4 s
-        after it restarted a healthy hector_mapping)."""
+        to 11 s after the scan's return (held for the window alone, a map still judged not
+        ok 6 s after it restarted a healthy hector_mapping)."""
         slowest = self.rate - self.tolerance
         return self.window + min(1.0 / slowest if slowest > 0 else self.max_gap, self.max_gap)
 
