@@ -85,8 +85,9 @@ class WaitProbe:
     restarts (new pids) too. Linux adds a thread's wait to its count only when the thread gets
     the CPU, so a thread runnable at both readings that got no CPU in between (same CPU time,
     same count of times it ran) is *stuck* on the run queue: ``ChainState.stuck`` counts those
-    (the calling thread left out: the daemon reads its own process too). None when nothing can
-    be read.
+    (the calling thread left out: it is running as it reads, though its wait counts like any
+    other's — the daemon reads its own process too, and its loop thread held up on the run queue
+    holds up every message behind it). None when nothing can be read.
     """
 
     def __init__(self, lookup: Callable[[], Iterable[int]], proc: str = PROC) -> None:
@@ -108,10 +109,11 @@ class WaitProbe:
         worst, stuck = 0, 0
         for key, t in threads.items():
             old = self._threads.get(key)
-            if old is None or key == me:
+            if old is None:
                 continue
-            worst = max(worst, t.wait_ns - old.wait_ns)
-            if t.runnable and old.runnable and (t.cpu_ns, t.slices) == (old.cpu_ns, old.slices):
+            worst = max(worst, t.wait_ns - old.wait_ns)  # the reader's own wait counts too
+            if key != me and t.runnable and old.runnable \
+                    and (t.cpu_ns, t.slices) == (old.cpu_ns, old.slices):
                 stuck += 1
         self._threads = threads
         self._total += worst / 1e9

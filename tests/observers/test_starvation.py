@@ -141,6 +141,18 @@ def test_the_callers_own_thread_is_never_stuck(tmp_path: Path) -> None:
     assert probe.read() == (0.0, 1)
 
 
+def test_the_callers_own_wait_on_the_run_queue_counts(tmp_path: Path) -> None:
+    """The daemon reads its own process: its loop thread held up on the run queue holds up
+    every message queued behind it, so its wait is the chain's as much as a node's."""
+    ms = 1_000_000
+    me = (os.getpid(), threading.get_native_id())
+    probe = WaitProbe(lambda: [me[0]], proc=str(tmp_path))
+    _fake_proc(tmp_path, {me: (1 * ms, 10 * ms, 3, True), (me[0], 1): (1 * ms, 1 * ms, 2, False)})
+    assert probe.read() == (0.0, 0)
+    _fake_proc(tmp_path, {me: (5 * ms, 410 * ms, 9, True), (me[0], 1): (2 * ms, 1 * ms, 3, False)})
+    assert probe.read() == (pytest.approx(0.4), 0)
+
+
 def test_a_topics_chain_is_its_publishers_their_inputs_and_their_devices() -> None:
     model = load_system(ROOT / "models" / "tedusar")
     assert chain_of(model, "/scan") == (["hokuyo_node"], ["hokuyo"])

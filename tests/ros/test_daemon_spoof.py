@@ -2,7 +2,8 @@
 
 The fast virtual TEDUSAR robot under ``dxboard run --emulate`` on ROS 2 (its nodes are real
 rclpy nodes, in this test's own domain). A stranger — a plain rclpy node named ``stranger``,
-no part of the model — first publishes ``/odom`` at 300 Hz (the base's topic, 20 Hz in the
+no part of the model — first publishes ``/odom`` at 300 Hz, in bursts of 10 thirty times a
+second (the observer's 1 s window sees 300 Hz all the same; the base's topic, 20 Hz in the
 model: taken for the base's, it is a rate the daemon repairs by power-cycling the base), then
 ``/scan`` at 40 Hz from the moment the Hokuyo hangs (the Hokuyo's rate: taken for the
 Hokuyo's, it hides the hang). The daemon
@@ -25,6 +26,7 @@ from tests.ros.test_daemon_ros import ros_robot
 
 WAIT_S = 180.0  # a power-up of the whole robot, on a loaded 2-core machine
 SPOOF_S = 15.0  # the window the stranger publishes /odom in (the finding: 2 repairs in it)
+BURST = 10  # /odom messages the stranger sends at once, 30 times a second
 
 
 def security_notes(d: RunningDaemon) -> list[str]:
@@ -52,11 +54,12 @@ def test_a_stranger_on_the_domain_neither_repairs_the_base_nor_hides_a_lidar_han
         fake = Odometry()
         fake.twist.twist.angular.z = 3.0  # a base spinning, as the stranger says
 
-        def spoof_odom() -> None:
-            fake.header.stamp = stranger.node.get_clock().now().to_msg()
-            odom.publish(fake)
+        def spoof_odom() -> None:  # 300 Hz, in bursts (a timer at 300 Hz costs this test's
+            for _ in range(BURST):  # process a fifth of a CPU the robot's nodes need)
+                fake.header.stamp = stranger.node.get_clock().now().to_msg()
+                odom.publish(fake)
 
-        odom_timer = stranger.node.create_timer(1 / 300, spoof_odom)
+        odom_timer = stranger.node.create_timer(BURST / 300, spoof_odom)
         stranger.wait_for(lambda: odom.get_subscription_count() >= 1,
                           "the daemon subscribed the stranger's /odom", WAIT_S)
         daemon.settled(SPOOF_S, runs=5)

@@ -75,7 +75,7 @@ def test_learn_the_second_robot(tmp_path: Path, env: dict[str, str], second_robo
     assert model.components["rectify"].subscribes == ("/camera/image",)
     assert "lidar_driver: {lifecycle: true}" in text
     assert "camera: {lifecycle: true}" not in text
-    assert "# sensor_msgs/msg/Image; n=" in text
+    assert "# sensor_msgs/msg/Image; n=" in text, (text, p.stderr)  # the watch, told
     topics = {o.topics[0]: o for o in load_observers(out, model).observers
               if isinstance(o, FrequencyObserver)}
     camera = topics["/camera/image"]
