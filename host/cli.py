@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import functools
 import importlib
 import logging
 import os
@@ -73,6 +74,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="dxboard",
         description="dxboard: a self-diagnosing, self-repairing power system for robots.",
+        formatter_class=_formatter(argparse.HelpFormatter),
     )
     parser.add_argument(
         "-v", "--verbose", action="store_true", help="log more and show tracebacks on errors"
@@ -102,10 +104,31 @@ def _add_command(sub: argparse._SubParsersAction[argparse.ArgumentParser], name:
         name,
         help=module.HELP,
         description=module.__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=_formatter(argparse.RawDescriptionHelpFormatter),
     )
     module.add_arguments(command)
     command.set_defaults(_run=module.run)
+
+
+def _formatter(kind: type[argparse.HelpFormatter]) -> argparse._FormatterClass:
+    """``kind`` for the terminal's width, read once here: argparse's own formatter imports
+    ``shutil`` and asks the terminal again for every argument added (a few ms a command)."""
+    width = _columns() - 2
+    return functools.partial(kind, width=width)
+
+
+def _columns() -> int:
+    """The terminal's width as ``shutil.get_terminal_size`` finds it: ``$COLUMNS``, else
+    stdout's terminal, else 80."""
+    with contextlib.suppress(ValueError):
+        columns = int(os.environ.get("COLUMNS", "0"))
+        if columns > 0:
+            return columns
+    try:
+        columns = os.get_terminal_size(sys.__stdout__.fileno()).columns  # type: ignore[union-attr]
+    except (AttributeError, ValueError, OSError):
+        columns = 0
+    return columns if columns > 0 else 80
 
 
 class _Unavailable:

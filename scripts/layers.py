@@ -36,7 +36,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("protocol",),  # bytes in, events out; imports nothing of ours
     ("firmware",),
     ("emulator",),  # the firmware on a simulated HAL
-    ("host", "host.errors", "host.atoms", "host.layers", "host.lifeline"),  # shared by every floor
+    # shared by every floor
+    ("host", "host.errors", "host.atoms", "host.layers", "host.lifeline", "host.cachefile"),
     ("host.events",),  # the one event stream's values
     ("host.fold",),  # the one fold of that stream, which every view reads
     ("host.transports",),  # bytes

@@ -23,7 +23,6 @@ repair server's). Nothing is switched: planning is a dry run. ``--json`` prints 
 from __future__ import annotations
 
 import argparse
-import json
 import os
 from collections.abc import Mapping
 from pathlib import Path
@@ -92,6 +91,8 @@ def run(args: argparse.Namespace) -> int:
         problem = planner.problem(choice.bad, observations)
         Path(args.write_problem).write_text(planner.problem_pddl(problem))
     if args.json:
+        import json
+
         print(json.dumps(choice.to_json(), indent=2))
         return 0
     if not choice.plan.steps:
@@ -148,6 +149,8 @@ def _problem_file(args: argparse.Namespace) -> int:
                         "give only --problem FILE --domain FILE (and --planner, --json)")
     plan = plan_problem_file(load_domain(args.domain), Path(args.problem), args.planner)
     if args.json:
+        import json
+
         print(json.dumps(plan.to_json(), indent=2))
     elif plan.steps:
         print(f"plan for {args.problem}:")
@@ -182,6 +185,8 @@ def _candidates(args: argparse.Namespace, known: Any,
 
 def read_diagnoses(path: str) -> list[Candidate]:
     """The ``diagnoses`` of ``dxboard diagnose --json``."""
+    import json
+
     from host.errors import UserError
     from host.repair.policy import Candidate
 

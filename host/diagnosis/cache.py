@@ -25,17 +25,15 @@ directory is (whoever can write there can already change the user's files).
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
-import gc
 import logging
 import os
-import pickle
 import sys
 import zlib
 from collections.abc import Callable
 from pathlib import Path
 
+from host.cachefile import cache_root, read_entry, write_entry
 from host.diagnosis.encoding import Encoding, encode
 from host.diagnosis.logic import Clause, Literal, Theory
 
@@ -45,15 +43,14 @@ log = logging.getLogger(__name__)
 VERSION = 2
 #: the loader's and the encoder's modules (beside this one): a change to any of them
 #: invalidates every entry
-LOADER_FILES = ("cache.py", "files.py", "logic.py", "tug.py", "yamlpos.py", "model.py",
-                "generation.py", "../atoms.py", "encoding.py", "structure.py")
+LOADER_FILES = ("cache.py", "files.py", "logic.py", "tug.py", "yamlpos.py", "yamlparse.py",
+                "model.py", "generation.py", "../atoms.py", "encoding.py", "structure.py")
 _HERE = Path(__file__).resolve().parent
 
 
 def cache_dir() -> Path:
     """Where entries live: ``$XDG_CACHE_HOME/dxboard/models`` (``~/.cache`` by default)."""
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "dxboard" / "models"
+    return cache_root() / "models"
 
 
 def _loader_stamp() -> tuple[tuple[str, int, int], ...]:
@@ -115,40 +112,19 @@ def shared_literals(theory: Theory) -> Theory:
 
 
 def _read(entry: Path, key: tuple[object, ...], path: Path) -> Encoding | None:
-    collecting = gc.isenabled()
-    gc.disable()
+    stored = read_entry(entry, key)
+    if stored is None:
+        return None
     try:
-        with open(entry, "rb") as f:
-            if pickle.load(f) != key:
-                log.debug("%s: cache entry %s is stale", path, entry)
-                return None
-            digest, encoding = pickle.load(f)
-        if (digest != _digest(path) or not isinstance(encoding, Encoding)
-                or not isinstance(encoding.theory, Theory)):
-            log.debug("%s: cache entry %s does not match the file", path, entry)
-            return None
-        return encoding
-    except FileNotFoundError:
+        digest, encoding = stored  # type: ignore[misc]
+    except (TypeError, ValueError):
+        digest, encoding = None, None
+    if (digest != _digest(path) or not isinstance(encoding, Encoding)
+            or not isinstance(encoding.theory, Theory)):
+        log.debug("%s: cache entry %s does not match the file", path, entry)
         return None
-    # a damaged entry can fail in any way unpickling can (UnpicklingError, EOFError,
-    # ValueError, TypeError, AttributeError, ...): it is only a cache, so rebuild it
-    except Exception as exc:
-        log.debug("%s: cache entry %s unreadable (%s): rebuilt", path, entry, exc)
-        return None
-    finally:
-        if collecting:
-            gc.enable()
+    return encoding
 
 
 def _write(entry: Path, key: tuple[object, ...], path: Path, encoding: Encoding) -> None:
-    tmp = entry.with_name(f"{entry.name}.{os.getpid()}.tmp")
-    try:
-        entry.parent.mkdir(parents=True, exist_ok=True)
-        with open(tmp, "wb") as f:
-            pickle.dump(key, f, protocol=pickle.HIGHEST_PROTOCOL)
-            pickle.dump((_digest(path), encoding), f, protocol=pickle.HIGHEST_PROTOCOL)
-        os.replace(tmp, entry)
-    except OSError as exc:  # a read-only or full cache directory: work on, store nothing
-        log.debug("%s: cannot write cache entry %s: %s", path, entry, exc)
-        with contextlib.suppress(OSError):
-            tmp.unlink(missing_ok=True)
+    write_entry(entry, key, (_digest(path), encoding))

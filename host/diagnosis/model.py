@@ -183,7 +183,7 @@ def read_section(
         raise error([Problem(file, 0, f"cannot read: {why}",
                              "give a robot directory holding system.yaml")]) from exc
     try:
-        data, lines = yamlpos.load(text)
+        data, lines = yamlpos.load(text, source=file)
     except yamlpos.YamlTooBig as exc:
         raise exc.to_user_error(file) from None
     except yamlpos.YamlSyntaxError as exc:
@@ -214,7 +214,7 @@ def _load(file: Path) -> tuple[SystemModel | None, list[Problem]]:
         return None, [Problem(file, 0, f"cannot read the model: {why}",
                               "give a robot directory holding system.yaml")]
     try:
-        data, lines = yamlpos.load(text)
+        data, lines = yamlpos.load(text, source=file)
     except yamlpos.YamlTooBig as exc:
         raise exc.to_user_error(file) from None
     except yamlpos.YamlSyntaxError as exc:

@@ -48,8 +48,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 
-from pysat.examples.rc2 import RC2  # type: ignore[import-untyped]
-
 from host.diagnosis.quota import Quota
 from host.diagnosis.result import Bound, SearchOutcome
 from host.diagnosis.satctx import SatContext, maxsat_formula
@@ -172,6 +170,8 @@ def _min_card(ctx: SatContext, obs: list[int], seed: list[frozenset[int]]) -> in
     then needs no other call)."""
     if ctx.out_of_time():
         return None
+    from pysat.examples.rc2 import RC2  # type: ignore[import-untyped]  # ~4 ms: only here
+
     with RC2(ctx.health_wcnf(), solver="g3") as rc2, ctx.interrupting(rc2):
         for lit in obs:  # hard: the formula, kept by the context, is not copied per request
             rc2.add_clause([lit])
@@ -284,6 +284,8 @@ def maxsat_search(
     wcnf = maxsat_formula([*ctx.encoding.clauses, *([lit] for lit in obs)],
                           [-v for v in ctx.ab_vars], max([len(ctx.encoding.vars), *map(abs, obs)]))
     n = len(ctx.ab_vars)
+    from pysat.examples.rc2 import RC2  # ~4 ms: only here
+
     with RC2(wcnf, solver="g3", adapt=True, exhaust=True, minz=True, trim=5) as rc2:
         while True:
             if quota.reached(len(out.bad_sets[-1]) if out.bad_sets else 0):

@@ -33,13 +33,15 @@ from __future__ import annotations
 
 import itertools
 import math
-
-from pysat.examples.rc2 import RC2  # type: ignore[import-untyped]
+from typing import TYPE_CHECKING
 
 from host.diagnosis.quota import Quota
 from host.diagnosis.result import Bound, SearchOutcome
 from host.diagnosis.satctx import SatContext, maxsat_formula
 from host.diagnosis.structure import Structure
+
+if TYPE_CHECKING:
+    from pysat.examples.rc2 import RC2  # type: ignore[import-untyped]
 
 
 def _regions(ctx: SatContext, obs: list[int]) -> dict[int, list[int]]:
@@ -100,6 +102,8 @@ def min_card_search(ctx: SatContext, obs: list[int], max_card: int | None,
     if ctx.out_of_time():
         out.cut_by = Bound.TIME_BUDGET
         return out
+    from pysat.examples.rc2 import RC2  # ~4 ms: only here
+
     with RC2(wcnf, solver="g3", exhaust=True) as rc2, ctx.interrupting(rc2):
         internal = [(i, rc2.vmap.e2i[ctx.ab_vars[i]]) for i in order]
         k: int | None = None

@@ -1,43 +1,59 @@
 """YAML with line numbers, so that model errors can name the line a person must fix.
 
-``load(text)`` parses one YAML document once, with libyaml when PyYAML has it (``CSafeLoader``:
-about 30x faster than the pure-Python loader on a large model), and returns the plain Python
-value together with ``SourceLines``: a map from a path of keys and indexes (``("components",
-"jaguar", "channel")``) to the 1-based line where that value starts. A missing path falls back
-to its nearest recorded ancestor. The line table is built only when a line is first asked for
-(an error, or a loader that records lines), from a second, node-only pass over the text: a
-valid file read by a loader that asks for no line is parsed once. ``typed=False`` (every
-scalar a string, the tug format's reading) builds the value straight from libyaml's events.
-Syntax errors become ``YamlSyntaxError`` carrying the line.
+``load(text)`` parses one YAML document and returns the plain Python value together with
+``SourceLines``: a map from a path of keys and indexes (``("components", "jaguar",
+"channel")``) to the 1-based line where that value starts. A missing path falls back to its
+nearest recorded ancestor. The line table is built only when a line is first asked for (an
+error, or a loader that records lines), from a second, node-only pass over the text: a valid
+file read by a loader that asks for no line is parsed once. ``typed=False`` (every scalar a
+string, the tug format's reading) builds the value straight from libyaml's events. Syntax
+errors become ``YamlSyntaxError`` carrying the line. The parsing itself is
+``host.diagnosis.yamlparse``, PyYAML's side, imported only when a document is really parsed.
 
-Every file a person gives is bounded before it is built (``check_bounds``): at most
+``load(text, source=FILE)`` keeps the parsed value of a file in the user's cache directory, as
+Python's ``.pyc`` is of a module (``$XDG_CACHE_HOME/dxboard/yaml``, one entry a file, named by a
+checksum of its absolute path; ``host.cachefile``): the next ``load`` of the same text from the
+same file unpickles the value instead of importing PyYAML and parsing. The entry's key holds
+the stored form's ``VERSION``, the interpreter's cache tag, the path, ``typed``, the text's
+length and the size and ``st_mtime_ns`` of this module's, ``yamlparse``'s and PyYAML's sources;
+the entry holds the text itself too, compared in full, so a changed file, a changed reader or
+another PyYAML never reads an old value; and the line table, which the model's loader asks for
+(it records each component's line). A robot directory's ``system.yaml`` is read by several
+loaders in one command (the model, its processes, its observers' source): each read is the
+cache's, and every caller gets a value of its own (unpickled anew, so one caller's changes
+never reach another's).
+
+Every file a person gives is bounded before it is built (``yamlparse.check_bounds``): at most
 ``MAX_CHARS`` characters, and at most ``MAX_NODES`` values once aliases are expanded, nested at
 most ``MAX_DEPTH`` deep. A "billion laughs" file (nine aliases of nine aliases of ...) is
 refused from its events in milliseconds, with ``YamlTooBig`` (a ``YamlSyntaxError``, so every
 caller names the file and the line) instead of growing to gigabytes in whatever walks it.
-Ordinary aliases (a shared settings block) pass. ``read_text`` reads a file with its size
-checked first, for the loaders that read files themselves.
+Ordinary aliases (a shared settings block) pass. Only a document that parsed is stored, so a
+cached value was bounded when it was built. ``read_text`` reads a file with its size checked
+first, for the loaders that read files themselves.
 """
 
 from __future__ import annotations
 
+import importlib.util
+import os
 import pathlib
+import sys
+import zlib
 from typing import Any
 
-import yaml
-
+from host.cachefile import cache_root, read_entry, write_entry
 from host.errors import UserError
 
 Path = tuple[object, ...]
 
-# libyaml, when PyYAML was built with it; the base loader reads every scalar as a string
-_Loader: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-_PlainLoader: Any = getattr(yaml, "CBaseLoader", yaml.BaseLoader)
-
-
 MAX_CHARS = 8 * 1024 * 1024  # files.MAX_BYTES: far above the largest real model
 MAX_NODES = 1_000_000  # values after alias expansion
 MAX_DEPTH = 200  # nesting of sequences and mappings
+
+#: the stored form of a cached document; bump when what an entry holds changes
+VERSION = 1
+_HERE = pathlib.Path(__file__).resolve().parent
 
 
 class YamlSyntaxError(ValueError):
@@ -64,57 +80,14 @@ def read_text(file: pathlib.Path, max_chars: int = MAX_CHARS) -> str:
     return file.read_text(encoding="utf-8")
 
 
-def check_bounds(text: str) -> None:
-    """Raise ``YamlTooBig`` when ``text`` is too long, expands through aliases to more than
-    ``MAX_NODES`` values, or nests deeper than ``MAX_DEPTH``. A pass over libyaml's events,
-    made only when the text has aliases or much flow nesting (else the bounds hold)."""
-    if len(text) > MAX_CHARS:
-        raise YamlTooBig(f"the text has {len(text):,} characters, more than the "
-                         f"{MAX_CHARS:,} a file here may have", 1, "give a smaller file")
-    if "*" not in text and text.count("[") + text.count("{") <= MAX_DEPTH:
-        return
-    sizes: dict[str, int] = {}  # anchor -> values it stands for
-    open_: list[tuple[str | None, int]] = []  # (anchor, values so far) of each open collection
-    total = 0
-    events: Any = yaml.parse(text, Loader=_Loader)  # the stubs' Event lacks anchor
-    for event in events:
-        kind = type(event)
-        if kind is yaml.SequenceStartEvent or kind is yaml.MappingStartEvent:
-            open_.append((event.anchor, 1))
-            if len(open_) > MAX_DEPTH:
-                raise YamlTooBig(f"values nested more than {MAX_DEPTH} deep",
-                                 event.start_mark.line + 1, "flatten the file")
-            continue
-        if kind is yaml.SequenceEndEvent or kind is yaml.MappingEndEvent:
-            anchor, n = open_.pop()
-        elif kind is yaml.ScalarEvent:
-            anchor, n = event.anchor, 1
-        elif kind is yaml.AliasEvent:
-            anchor, n = None, sizes.get(event.anchor, 1)
-        else:
-            continue
-        if anchor is not None:
-            sizes[anchor] = n
-        if open_:
-            open_[-1] = (open_[-1][0], open_[-1][1] + n)
-            n = open_[-1][1]
-        else:
-            total += n
-            n = total
-        if n > MAX_NODES:
-            raise YamlTooBig(
-                f"aliases expand the document to more than {MAX_NODES:,} values (a "
-                "'billion laughs' file?)", event.start_mark.line + 1,
-                "write the values out, or alias fewer times")
-
-
 class SourceLines:
     """Line numbers of the values of a YAML document, by path (computed on first use)."""
 
-    def __init__(self, text: str = "", typed: bool = True) -> None:
+    def __init__(self, text: str = "", typed: bool = True,
+                 table: dict[Path, int] | None = None) -> None:
         self._text = text
         self._typed = typed
-        self._lines: dict[Path, int] | None = None if text else {}
+        self._lines: dict[Path, int] | None = table if table is not None or text else {}
 
     def __call__(self, *path: object) -> int:
         table = self._table()
@@ -125,117 +98,48 @@ class SourceLines:
 
     def _table(self) -> dict[Path, int]:
         if self._lines is None:
-            self._lines = {}
-            node = yaml.compose(self._text, Loader=_Loader)
-            if node is not None:
-                constructor = (yaml.constructor.SafeConstructor() if self._typed
-                               else yaml.constructor.BaseConstructor())
-                _walk(node, (), self._lines, constructor)
+            from host.diagnosis.yamlparse import line_table
+
+            self._lines = line_table(self._text, self._typed)
         return self._lines
 
 
-def _syntax_error(exc: yaml.YAMLError) -> YamlSyntaxError:
-    mark = None
-    if isinstance(exc, yaml.MarkedYAMLError):
-        mark = exc.problem_mark or exc.context_mark
-        problem = exc.problem or str(exc)
-    else:
-        problem = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-    line = mark.line + 1 if mark is not None else 1
-    return YamlSyntaxError(f"YAML syntax error: {problem}", line)
-
-
-def load(text: str, typed: bool = True) -> tuple[Any, SourceLines]:
+def load(text: str, typed: bool = True,
+         source: pathlib.Path | None = None) -> tuple[Any, SourceLines]:
     """Parse ``text``; return ``(value, lines)``. ``typed=False`` reads every scalar as a
     string (no implicit ints, floats or booleans: half the time on a large file of
-    strings). Raises ``YamlSyntaxError`` (``YamlTooBig`` beyond the bounds)."""
+    strings). ``source``: the file ``text`` was read from, whose parsed value is kept in the
+    cache (see the module). Raises ``YamlSyntaxError`` (``YamlTooBig`` beyond the bounds)."""
+    if source is None:
+        from host.diagnosis.yamlparse import parse
+
+        return parse(text, typed), SourceLines(text, typed)
+    key = _key(source, typed, text)
+    entry = cache_root() / "yaml" / f"{source.name}-{zlib.crc32(str(key[2]).encode()):08x}.pickle"
+    stored = read_entry(entry, key)
+    if isinstance(stored, tuple) and len(stored) == 3 and stored[0] == text:
+        return stored[1], SourceLines(text, typed, stored[2])
+    from host.diagnosis.yamlparse import line_table, parse
+
+    value = parse(text, typed)
+    table = line_table(text, typed)  # stored too: loaders record the lines of what they build
+    write_entry(entry, key, (text, value, table))
+    return value, SourceLines(text, typed, table)
+
+
+def _key(source: pathlib.Path, typed: bool, text: str) -> tuple[object, ...]:
+    spec = importlib.util.find_spec("yaml")
+    readers = [_HERE / "yamlpos.py", _HERE / "yamlparse.py"]
+    if spec is not None and spec.origin:
+        readers.append(pathlib.Path(spec.origin))
+    return (VERSION, sys.implementation.cache_tag, os.path.abspath(source), typed, len(text),
+            tuple(_stamp(p) for p in readers))
+
+
+def _stamp(path: pathlib.Path) -> tuple[int, int]:
     try:
-        check_bounds(text)
-        # safe loaders only (CSafeLoader/SafeLoader, CBaseLoader/BaseLoader)
-        value = yaml.load(text, Loader=_Loader) if typed else _plain(text)
-    except yaml.YAMLError as exc:
-        raise _syntax_error(exc) from exc
-    return value, SourceLines(text, typed)
+        st = os.stat(path)
+    except OSError:
+        return (-1, -1)
+    return (st.st_size, st.st_mtime_ns)
 
-
-class _Unusual(Exception):
-    """An anchor, an alias, a collection as a key or a second document: the full loader."""
-
-
-def _plain(text: str) -> Any:
-    """What ``yaml.load(text, Loader=CBaseLoader)`` returns (every scalar a string, tags
-    ignored), built straight from libyaml's events: no node tree, no resolver, no constructor
-    (about twice as fast on a large model). Anything but plain scalars, sequences and
-    mappings with scalar keys in one document is left to the full loader."""
-    try:
-        return _from_events(yaml.parse(text, Loader=_PlainLoader))
-    except _Unusual:
-        return yaml.load(text, Loader=_PlainLoader)
-
-
-def _from_events(events: Any) -> Any:
-    root: Any = None
-    stack: list[Any] = []  # the open collections
-    keys: list[Any] = []  # per open mapping: its pending key (None: a key comes next)
-    documents = 0
-    for event in events:
-        kind = type(event)
-        if kind is yaml.ScalarEvent:
-            value: Any = event.value
-        elif kind is yaml.SequenceStartEvent:
-            value = []
-        elif kind is yaml.MappingStartEvent:
-            value = {}
-        elif kind is yaml.SequenceEndEvent or kind is yaml.MappingEndEvent:
-            stack.pop()
-            keys.pop()
-            continue
-        elif kind is yaml.DocumentStartEvent:
-            documents += 1
-            if documents > 1:
-                raise _Unusual
-            continue
-        elif kind is yaml.AliasEvent:
-            raise _Unusual
-        else:  # the stream's start and end, a document's end
-            continue
-        if event.anchor is not None:
-            raise _Unusual
-        if not stack:
-            root = value
-        elif keys[-1] is _NO_KEY:
-            stack[-1].append(value)
-        elif keys[-1] is None:
-            if kind is not yaml.ScalarEvent:
-                raise _Unusual
-            keys[-1] = value
-        else:
-            stack[-1][keys[-1]] = value
-            keys[-1] = None
-        if kind is not yaml.ScalarEvent:
-            stack.append(value)
-            keys.append(_NO_KEY if kind is yaml.SequenceStartEvent else None)
-    return root
-
-
-_NO_KEY = object()  # the pending key of an open sequence (it takes items, not keys)
-
-
-def _walk(node: yaml.Node, path: Path, out: dict[Path, int],
-          constructor: yaml.constructor.BaseConstructor) -> None:
-    out.setdefault(path, node.start_mark.line + 1)
-    if isinstance(node, yaml.MappingNode):
-        for key_node, value_node in node.value:
-            key = _key(key_node, constructor)
-            out.setdefault((*path, key), key_node.start_mark.line + 1)
-            _walk(value_node, (*path, key), out, constructor)
-    elif isinstance(node, yaml.SequenceNode):
-        for i, item in enumerate(node.value):
-            _walk(item, (*path, i), out, constructor)
-
-
-def _key(node: yaml.Node, constructor: yaml.constructor.BaseConstructor) -> Any:
-    """The key as ``load`` builds it (``3`` for ``3:``, ``True`` for ``yes:``)."""
-    if isinstance(node, yaml.ScalarNode):
-        return constructor.construct_object(node, deep=True)
-    return str(node.start_mark)

@@ -118,7 +118,7 @@ def load_mission(system_dir: Path, model: SystemModel | None = None) -> MissionF
         raise UserError(f"{path}: no mission here", "give a robot directory with a mission, "
                         "e.g. models/tedusar")
     try:
-        raw, _ = yamlpos.load(yamlpos.read_text(path))
+        raw, _ = yamlpos.load(yamlpos.read_text(path), source=path)
     except yamlpos.YamlSyntaxError as exc:
         raise UserError(f"{path}:{exc.line}: {exc}", exc.fix) from None
     except (OSError, UnicodeDecodeError) as exc:

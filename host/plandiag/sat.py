@@ -28,7 +28,6 @@ import math
 import time
 
 from pysat.card import CardEnc, EncType  # type: ignore[import-untyped]
-from pysat.examples.rc2 import RC2  # type: ignore[import-untyped]
 from pysat.formula import WCNF  # type: ignore[import-untyped]
 
 from host.diagnosis.logic import Theory
@@ -283,6 +282,8 @@ class HistoryEncoding:
         deadline = Deadline(limits.time_budget_s)
         self.ctx.start_budget(limits.time_budget_s)
         try:
+            from pysat.examples.rc2 import RC2  # type: ignore[import-untyped]  # ~4 ms: only here
+
             with RC2(wcnf, solver="g3", exhaust=True) as rc2, self.ctx.interrupting(rc2):
                 while True:
                     if deadline.passed():

@@ -18,16 +18,16 @@ user's own cache directory is (whoever can write there can already change the us
 
 from __future__ import annotations
 
-import contextlib
 import importlib.util
 import logging
 import os
-import pickle
 import sys
 import zlib
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
+
+from host.cachefile import cache_root, read_entry, write_entry
 
 if TYPE_CHECKING:
     from host.planning.domain import Domain
@@ -43,8 +43,7 @@ _HERE = Path(__file__).resolve().parent
 
 def cache_dir() -> Path:
     """Where entries live: ``$XDG_CACHE_HOME/dxboard/domains`` (``~/.cache`` by default)."""
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "dxboard" / "domains"
+    return cache_root() / "domains"
 
 
 def _stamp(path: str | Path) -> tuple[str, int, int]:
@@ -80,28 +79,13 @@ def stored(text: str, path: Path, parse: Callable[[], Domain]) -> Domain:
 
     key = _key(text, path)
     entry = entry_path(path)
-    try:
-        with open(entry, "rb") as f:
-            if pickle.load(f) == key:
-                old, domain = pickle.load(f)
-                if old == text and isinstance(domain, Domain):
-                    return domain
-            log.debug("%s: domain cache entry %s is stale", path, entry)
-    except FileNotFoundError:
-        pass
-    # a damaged entry can fail in any way unpickling can: it is only a cache, so rebuild it
-    except Exception as exc:
-        log.debug("%s: domain cache entry %s unreadable (%s): rebuilt", path, entry, exc)
+    stored = read_entry(entry, key)
+    if isinstance(stored, tuple) and len(stored) == 2:
+        old, domain = stored
+        if old == text and isinstance(domain, Domain):
+            return domain
+    if stored is not None:
+        log.debug("%s: domain cache entry %s is stale", path, entry)
     domain = parse()
-    tmp = entry.with_name(f"{entry.name}.{os.getpid()}.tmp")
-    try:
-        entry.parent.mkdir(parents=True, exist_ok=True)
-        with open(tmp, "wb") as f:
-            pickle.dump(key, f, protocol=pickle.HIGHEST_PROTOCOL)
-            pickle.dump((text, domain), f, protocol=pickle.HIGHEST_PROTOCOL)
-        os.replace(tmp, entry)
-    except OSError as exc:  # a read-only or full cache directory: work on, store nothing
-        log.debug("%s: cannot write domain cache entry %s: %s", path, entry, exc)
-        with contextlib.suppress(OSError):
-            tmp.unlink(missing_ok=True)
+    write_entry(entry, key, (text, domain))
     return domain

@@ -19,7 +19,7 @@ import pytest
 import yaml
 
 import host.diagnosis
-from host.diagnosis import files, model, yamlpos
+from host.diagnosis import files, model, yamlparse, yamlpos
 from host.diagnosis.tug import read_tug
 from tests.diagnosis.originals import ORIGINAL
 
@@ -47,18 +47,18 @@ def outcome(load: object, text: str) -> tuple[str, object]:
 
 @pytest.mark.parametrize("text", DOCUMENTS)
 def test_events_give_what_the_base_loader_gives(text: str) -> None:
-    assert outcome(yamlpos._plain, text) == outcome(lambda t: yaml.load(t, Loader=BASE), text)
+    assert outcome(yamlparse.plain, text) == outcome(lambda t: yaml.load(t, Loader=BASE), text)
 
 
 def test_aliases_are_the_same_object_as_with_the_loader() -> None:
-    value = yamlpos._plain("a: &x [1, 2]\nb: *x\n")
+    value = yamlparse.plain("a: &x [1, 2]\nb: *x\n")
     assert value == {"a": ["1", "2"], "b": ["1", "2"]} and value["a"] is value["b"]
 
 
 @pytest.mark.parametrize("path", sorted(ORIGINAL.glob("*.yaml")), ids=lambda p: p.name[:30])
 def test_the_originals_real_files_read_as_before(path: Path) -> None:
     text = path.read_text(encoding="utf-8")
-    assert outcome(yamlpos._plain, text) == outcome(lambda t: yaml.load(t, Loader=BASE), text)
+    assert outcome(yamlparse.plain, text) == outcome(lambda t: yaml.load(t, Loader=BASE), text)
 
 
 def test_syntax_errors_still_name_the_line() -> None:
