@@ -31,7 +31,6 @@ sys.path.insert(0, ROOT)
 # 30 s of board time: every chip's CONFIG checked 300 times (DXBOARD_PARTS_TICKS: fewer, to
 # try; a Pico's os has no getenv)
 PARTS_TICKS = int(getattr(os, "getenv", lambda name: None)("DXBOARD_PARTS_TICKS") or 3000)
-RP2040_SLOWER = 100  # assumed: MicroPython on an RP2040 at 125 MHz vs the unix port here
 REF_LOOPS = 150  # reference(): about as much Python as one tick, on the unix port
 
 
@@ -292,6 +291,8 @@ def revisions():
 def section(peak_memory):
     """The Markdown section: every revision's figures, the heap with 4 clients at 100 Hz
     (``peak_memory()``: benchmarks.board_firmware's), the load average of the run."""
+    from benchmarks.mcu_speed import MEASURED as slow
+
     res = results(revisions())
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     lines = [
@@ -318,22 +319,22 @@ def section(peak_memory):
         " move with the load, and the uncontended tick is that ratio times the reference's"
         " fastest run. On a Pico, `reference_us()` (the same file) times the reference, and the"
         " tick there is the ratio times that: one number measured on a board replaces the"
-        " assumption below.",
+        " published figures below.",
         "",
-        f"Scaling to the RP2040 (an assumption, not a measurement): the unix port on one core"
-        f" here is taken as {RP2040_SLOWER}x faster than MicroPython on an RP2040 at 125 MHz (a"
-        " Cortex-M0+ running the bytecode loop from flash through a 16 KB cache, against an"
-        " x86 core at about 20x the clock and several times the instructions per clock;"
-        " published runs of one MicroPython program put an RP2040 1.5x slower than a 168 MHz"
-        " STM32F405, and Cortex-M parts score hundreds to low thousands of pystones a second"
-        " against about 10^5 for the unix port on a desktop core: 100x to 200x). The column"
+        f"Scaling to the boards' MCUs (benchmarks/mcu_speed.py): MicroPython's own benchmark"
+        " suite (`tests/perf_bench`), run here under the same unix port and set against"
+        " published runs of the same programs, puts MicroPython on an RP2350 (Pico 2 W, 150"
+        f" MHz) {slow['rp2350']}x slower than this port (median of 7 programs), and an RP2040"
+        f" (Pico W, 125 MHz) {slow['rp2040']}x (from the RP2350's figure and one program run on"
+        " both boards; the pyboard's published figures give the same within 3 %). The column"
         " 'fits the 1 ms if' is the slowdown at which the tick would use all of its 1 ms CPU"
-        " budget, so it stands whatever the true ratio is.",
+        " budget, so it stands whatever the true ratio is; a Pico's `reference_us()` replaces"
+        " both with a measurement.",
         "",
         "| revision | channels on | CPU per tick (unix, with the layer): fastest / median /"
         " p95 | tick / reference (median), with the layer; net | net ratio x the reference's"
-        " fastest = the uncontended tick | on an RP2040"
-        f" at {RP2040_SLOWER}x (goal < 1 ms) | fits the 1 ms if the RP2040 is at most |"
+        f" fastest = the uncontended tick | on an RP2040 at {slow['rp2040']}x; on an RP2350 at"
+        f" {slow['rp2350']}x (goal < 1 ms) | fits the 1 ms if the MCU is at most |"
         " sensing time per tick: the I2C bus's, or (no I2C) the ADC's conversions, mean / max"
         " (goal < 3 ms) | heap of HAL + board after boot |",
         "|---|---|---|---|---|---|---|---|---|",
@@ -348,21 +349,23 @@ def section(peak_memory):
         n, on, low, med, p95, gross, ratio, ref, bus_mean, bus_max, heap = f
         heaps[rev] = heap
         tick = ratio * ref / 1000
-        cpu_ms = tick * RP2040_SLOWER / 1000
+        cpu_ms = tick * slow["rp2040"] / 1000
+        cpu2_ms = tick * slow["rp2350"] / 1000
         lines.append(f"| {rev} | {on} of {n} | {low} / {med} / {p95} us"
                      f" | {gross / 1000:.2f}; {ratio / 1000:.2f}"
-                     f" | {ratio / 1000:.2f} x {ref} us = {tick:.0f} us | {cpu_ms:.1f} ms"
+                     f" | {ratio / 1000:.2f} x {ref} us = {tick:.0f} us"
+                     f" | {cpu_ms:.1f} ms; {cpu2_ms:.1f} ms"
                      f" | {1000 / max(tick, 1):.0f}x slower"
                      f" | {bus_mean / 1000:.2f} / {bus_max / 1000:.2f} ms | {heap} B |")
         verdicts.append(
             f"{rev}: sensing time {'meets' if bus_max < 3000 else 'misses'} its goal"
             f" ({bus_max / 1000:.2f} ms against 3 ms); the CPU goal is "
-            + ("met" if cpu_ms < 1 else "NOT met") + f" at the assumed {RP2040_SLOWER}x"
-            f" ({cpu_ms:.1f} ms against 1 ms); the tick as a whole (CPU plus the I2C calls,"
-            f" or ADC conversions, which block on the RP2040) takes"
-            f" {cpu_ms + bus_max / 1000:.1f} ms of its 10 ms"
-            f" at {RP2040_SLOWER}x and {2 * cpu_ms + bus_max / 1000:.1f} ms at"
-            f" {2 * RP2040_SLOWER}x.")
+            + ("met" if cpu_ms < 1 else "NOT met") + " on an RP2040"
+            f" ({cpu_ms:.1f} ms against 1 ms) and "
+            + ("met" if cpu2_ms < 1 else "NOT met") + f" on an RP2350 ({cpu2_ms:.1f} ms);"
+            " the tick as a whole (CPU plus the I2C calls, or ADC conversions, which block"
+            f" on the board) takes {cpu_ms + bus_max / 1000:.1f} ms of its 10 ms on an RP2040"
+            f" and {cpu2_ms + bus_max / 1000:.1f} ms on an RP2350.")
     lines += [""] + verdicts  # noqa: RUF005 (MicroPython parses this file: no [*x])
     idle_b, peak4_b, got4 = peak_memory()
     lines += ["", "The firmware's heap with 4 TCP clients subscribed at 100 Hz (goal < 64 KB),"
