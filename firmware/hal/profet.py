@@ -9,9 +9,11 @@ ADC pin ``is_adc_pin`` taps, so I_IS(FAULT) up to 10 mA stays under 3.3 V; one D
 (``den_pins``) picks which part drives the node, one shared DSEL pin (``dsel_pin``) its channel.
 
 Each read (once a tick) takes every channel in turn: DEN of its part high (the others low),
-DSEL set, ``settle_reads`` ADC conversions discarded (2 us each: at least t_sIS, 20 us), then
-two averaged. The IS current is counts x vref / 4095 / r_adc_ohm, and decodes as (thresholds
-from the description):
+DSEL set, a wait of ``settle_us`` (t_sIS, 20 us) in one ``sleep_us`` (MicroPython's
+``time.sleep_us``, which ``firmware.hal.target`` hands the driver; eleven discarded
+conversions of 2 us did the same in eleven calls of Python a channel), then two conversions
+averaged. The IS current is counts x vref / 4095 / r_adc_ohm, and decodes as (thresholds from
+the description):
 
 - at or above ``fault_ua`` (3.8 mA, between I_IS(OLOFF) at most 3.5 mA and I_IS(FAULT) at
   least 4.4 mA): the part's fault level. With IN high it is ``TRIPPED`` (the switch's own
@@ -29,6 +31,7 @@ whose IS is stuck driving would blind every channel); ``report`` says so per cha
 from firmware.hal import LOW, NO_READING, TRIPPED
 
 if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from collections.abc import Callable
     from typing import Any, Protocol
 
     from firmware.hal.target import Adc
@@ -56,7 +59,8 @@ if False:  # typing only; MicroPython never imports typing (the block is compile
 class ProfetBank:
     NAME = "profet"
 
-    def __init__(self, sense: "dict[str, Any]", machine: "Machine") -> None:
+    def __init__(self, sense: "dict[str, Any]", machine: "Machine",
+                 sleep_us: "Callable[[int], None]") -> None:
         pin = machine.Pin
         self.den = [pin(p, pin.OUT, value=0) for p in sense["den_pins"]]
         self.dsel = pin(sense["dsel_pin"], pin.OUT, value=0)
@@ -65,7 +69,8 @@ class ProfetBank:
         self.k_ilis: int = sense["k_ilis"]
         self.r_adc: int = sense["r_adc_ohm"]
         self.vref_uv: int = sense["vref_mv"] * 1000
-        self.settle_reads: int = sense["settle_us"] // 2 + 1
+        self.settle_us: int = sense["settle_us"]
+        self.sleep_us = sleep_us  # MicroPython's time.sleep_us: a busy wait of the MCU
         self.accurate_ma: int = sense["accurate_ma"]
         self.fault_ua: int = sense["fault_ua"]
         self.oloff_ua: int = sense["oloff_ua"]
@@ -95,8 +100,7 @@ class ProfetBank:
                 self.den[d].value(0)
         self.dsel.value(ch % 2)
         self.den[part].value(1)
-        for _ in range(self.settle_reads):
-            self.adc.read_u16()
+        self.sleep_us(self.settle_us)
         return self._is_ua()
 
     def _in(self, ch: int) -> bool:
@@ -133,7 +137,8 @@ class ProfetBank:
         den = self.den
         sw = self.switches
         open_off = self.open_off
-        settle = self.settle_reads
+        settle = self.settle_us
+        wait = self.sleep_us
         k = self.vref_uv
         div = 2 * 4095 * self.r_adc
         fault_ua, oloff_ua = self.fault_ua, self.oloff_ua
@@ -148,8 +153,7 @@ class ProfetBank:
                     den[part - 1].value(0)
                 dsel(0)
                 den[part].value(1)
-            for _ in range(settle):
-                rd()
+            wait(settle)
             ua = ((rd() >> 4) + (rd() >> 4)) * k // div
             on = bool(sw[ch].value()) if sw else False
             open_off[ch] = False

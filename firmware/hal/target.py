@@ -19,7 +19,7 @@ cause with that mark is a soft reset: a reboot the host asked for never counts t
 """
 
 import os
-import time
+import time as _port_time
 
 import machine  # type: ignore[import-not-found]  # MicroPython only: no stubs
 
@@ -56,6 +56,18 @@ if False:  # typing only; MicroPython never imports typing (the block is compile
 
         def read_u16(self) -> int: ...
 
+    class MpTime(Protocol):
+        """What the HAL uses of MicroPython's ``time`` (CPython's has none of it)."""
+
+        def ticks_ms(self) -> int: ...
+
+        def ticks_diff(self, a: int, b: int) -> int: ...
+
+        def sleep_us(self, us: int) -> None: ...
+
+# the port's ``time`` as the HAL sees it (the part tests hand it emulator.parts.boardtime's)
+time: "MpTime" = _port_time  # type: ignore[assignment]  # MicroPython's, beyond CPython's
+
 REBOOT_MARK = "reboot"  # a reboot this firmware asked for (storage file)
 
 
@@ -82,7 +94,7 @@ class TargetHal:
         self.vin: "Adc | None" = \
             machine.ADC(machine.Pin(vin_adc_pin)) if vin_adc_pin is not None else None
         self.mv_k = mv_per_count_x1000
-        self._t0 = time.ticks_ms()  # type: ignore[attr-defined]  # MicroPython's time
+        self._t0 = time.ticks_ms()
         self._ms = 0
         # None only for a HAL no Board runs on (the part tests); build() always gives one
         self.storage: "Storage" = storage  # type: ignore[assignment]  # (see above)
@@ -111,8 +123,8 @@ class TargetHal:
         return self.ina.report() if self.ina is not None else []
 
     def ticks_ms(self) -> int:
-        t = time.ticks_ms()  # type: ignore[attr-defined]  # MicroPython's time
-        self._ms += time.ticks_diff(t, self._t0)  # type: ignore[attr-defined]  # (the same)
+        t = time.ticks_ms()
+        self._ms += time.ticks_diff(t, self._t0)
         self._t0 = t
         return self._ms
 
@@ -178,7 +190,7 @@ def _ina3221(sense: "dict[str, Any]") -> "SenseBank":
 def _profet(sense: "dict[str, Any]") -> "SenseBank":
     from firmware.hal.profet import ProfetBank
 
-    return ProfetBank(sense, machine)
+    return ProfetBank(sense, machine, time.sleep_us)
 
 
 SENSORS = {"ina226": _ina226, "ina3221": _ina3221, "profet": _profet}

@@ -23,7 +23,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-CEILING = 19  # lower it whenever a change removes some; never raise it
+CEILING = 17  # lower it whenever a change removes some; never raise it
 IGNORE = re.compile(r"#\s*type:\s*ignore\b")
 TYPING_ONLY = ("typing", "collections.abc", "typing_extensions")
 

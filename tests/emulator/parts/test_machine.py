@@ -11,6 +11,7 @@ import unittest
 
 from emulator.parts import ina226 as I
 from emulator.parts import machine
+from emulator.parts.boardtime import BoardTime
 from emulator.parts.ina226 import Ina226
 from emulator.parts.world import BoardReset, World, install
 
@@ -209,30 +210,17 @@ class UartTest(unittest.TestCase):
         self.assertEqual(bytes(buf[:2]), b"cd")
 
 
-class WorldTicks:
-    """``time.ticks_ms``/``ticks_diff`` for CPython, which has neither (MicroPython's own are
-    used there)."""
-
-    def __init__(self, w):
-        self.w = w
-
-    def ticks_ms(self):
-        return self.w.now_us // 1000
-
-    def ticks_diff(self, a, b):
-        return a - b
-
-
 def target_on(w):
-    """``firmware.hal.target`` imported with this ``machine`` (and, on CPython, ticks read from
-    the world ``w``), as ``firmware/main.py`` gets it on a board."""
+    """``firmware.hal.target`` imported with this ``machine``, as ``firmware/main.py`` gets it
+    on a board, its ``time`` the port's ticks (on CPython, which has none, the world ``w``'s)
+    and a ``sleep_us`` charged to ``w``'s clock (``emulator.parts.boardtime``)."""
     sys.modules["machine"] = machine
     try:
         from firmware.hal import target
     finally:
         del sys.modules["machine"]
-    if not hasattr(target.time, "ticks_ms"):
-        target.time = WorldTicks(w)
+    port = target._port_time  # the interpreter's own, whatever a test before handed it
+    target.time = BoardTime(w, port)
     return target
 
 
@@ -240,13 +228,7 @@ class TargetHalTest(unittest.TestCase):
     """The shipped HAL (``firmware/hal/target.py``) on this ``machine``: its INA226 path."""
 
     def hal(self, w):
-        sys.modules["machine"] = machine
-        try:
-            from firmware.hal import target
-        finally:
-            del sys.modules["machine"]
-        if not hasattr(target.time, "ticks_ms"):  # CPython: MicroPython's ticks, on the world
-            target.time = WorldTicks(w)
+        target = target_on(w)
         return target.TargetHal((2, 3), (12, 13), i2c=machine.I2C(0),
                                 ina226_addrs=(0x40, 0x41), shunt_uohm=10000)
 
