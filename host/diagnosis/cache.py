@@ -115,10 +115,7 @@ def _read(entry: Path, key: tuple[object, ...], path: Path) -> Encoding | None:
     stored = read_entry(entry, key)
     if stored is None:
         return None
-    try:
-        digest, encoding = stored  # type: ignore[misc]
-    except (TypeError, ValueError):
-        digest, encoding = None, None
+    digest, encoding = stored if isinstance(stored, tuple) and len(stored) == 2 else (None, None)
     if (digest != _digest(path) or not isinstance(encoding, Encoding)
             or not isinstance(encoding.theory, Theory)):
         log.debug("%s: cache entry %s does not match the file", path, entry)

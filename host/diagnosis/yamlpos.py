@@ -87,7 +87,9 @@ class SourceLines:
                  table: dict[Path, int] | None = None) -> None:
         self._text = text
         self._typed = typed
-        self._lines: dict[Path, int] | None = table if table is not None or text else {}
+        # None: built from the text when first asked for; no text: no line is known
+        self._lines: dict[Path, int] | None = table if table is not None else (
+            None if text else {})
 
     def __call__(self, *path: object) -> int:
         table = self._table()
@@ -128,12 +130,24 @@ def load(text: str, typed: bool = True,
 
 
 def _key(source: pathlib.Path, typed: bool, text: str) -> tuple[object, ...]:
-    spec = importlib.util.find_spec("yaml")
-    readers = [_HERE / "yamlpos.py", _HERE / "yamlparse.py"]
-    if spec is not None and spec.origin:
-        readers.append(pathlib.Path(spec.origin))
     return (VERSION, sys.implementation.cache_tag, os.path.abspath(source), typed, len(text),
-            tuple(_stamp(p) for p in readers))
+            _readers())
+
+
+_READERS: tuple[tuple[int, int], ...] | None = None
+
+
+def _readers() -> tuple[tuple[int, int], ...]:
+    """The size and ``st_mtime_ns`` of this module's, ``yamlparse``'s and PyYAML's sources,
+    found once a process (PyYAML's without importing it)."""
+    global _READERS
+    if _READERS is None:
+        spec = importlib.util.find_spec("yaml")
+        files = [_HERE / "yamlpos.py", _HERE / "yamlparse.py"]
+        if spec is not None and spec.origin:
+            files.append(pathlib.Path(spec.origin))
+        _READERS = tuple(_stamp(p) for p in files)
+    return _READERS
 
 
 def _stamp(path: pathlib.Path) -> tuple[int, int]:

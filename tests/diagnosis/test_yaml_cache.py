@@ -95,7 +95,7 @@ def test_another_reader_or_pyyaml_is_not_trusted(doc: Path,
     monkeypatch.setattr(yamlpos, "VERSION", yamlpos.VERSION + 1)
     load(doc)
     assert parses.calls == 1
-    monkeypatch.setattr(yamlpos, "_stamp", lambda path: (1, 2))  # as if a source changed
+    monkeypatch.setattr(yamlpos, "_READERS", ((1, 2),))  # as if a source had changed
     load(doc)
     assert parses.calls == 2
     load(doc)
