@@ -70,6 +70,11 @@ async def burst_source(domain: int, got: list[TopicMessage]
         peer.close()
 
 
+def _reader(source: Ros2Source) -> Any:
+    """The source's subscription to ``/burst``, once its node lists it."""
+    return next((s for s in source.ros.node.subscriptions if s.topic_name == "/burst"), None)
+
+
 async def received(got: list[TopicMessage]) -> None:
     await wait_until_async(lambda: len(got) >= BURST, 30.0, f"{BURST} messages",
                            show=lambda: f"{len(got)} received")
@@ -91,7 +96,12 @@ async def test_a_queued_burst_is_taken_in_one_turn_of_the_executor(domain: int) 
     and every message still arrives, in order."""
     got: list[TopicMessage] = []
     async with burst_source(domain, got) as (source, pub):
-        reader = next(s for s in source.ros.node.subscriptions if s.topic_name == "/burst")
+        # rclpy lists a subscription in its node after DDS has matched it: under load the
+        # publisher can see the match first
+        await wait_until_async(lambda: _reader(source) is not None, 60.0,
+                               "the source's reader listed in its node")
+        reader = _reader(source)
+        assert reader is not None
         handed, inner = [], reader.callback
 
         def counted(data: bytes, info: object) -> None:  # what the executor hands over
