@@ -11,7 +11,9 @@ shipped ``boot.py`` and ``main.py`` on the part models of that revision,
 end asked for, prints one ``name: url`` line each, and waits for the signal. Every part that
 starts registers its own clean-up on one ``ExitStack``, so a failure half-way and a normal
 stop undo exactly what was started, in reverse order. A problem a person can fix is a
-``StartError`` (the message and what to do), raised before anything is printed.
+``StartError`` (the message and what to do), raised before anything is printed. SIGUSR1 prints
+every thread's stack on stderr (``faulthandler``, as ``dxboard run`` does): where a stop that
+does not come is stuck.
 
 ``flash`` names a directory that stands for the board's flash memory (``FileStorage``): the
 configuration saved with ``config save`` and the boot record survive a restart of the
@@ -22,6 +24,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import faulthandler
 import json
 import logging
 import signal
@@ -271,6 +274,7 @@ def run(opts: Options, out: TextIO) -> int:
     """Run the emulated board until SIGTERM or SIGINT; 0 on a clean stop."""
     stop = _StopEmulator()
     stop.install()  # before anything is started or printed: no signal can kill us half-way
+    faulthandler.register(signal.SIGUSR1, all_threads=True)  # where it is, for a bug report
     try:
         with contextlib.ExitStack() as stack:
             urls = start(opts, stack)

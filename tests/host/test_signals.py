@@ -40,6 +40,15 @@ def stop_at_first_line(argv: list[str], sig: signal.Signals) -> list[tuple[str, 
     for proc, first in zip(procs, firsts, strict=True):
         try:
             _, err = proc.communicate(timeout=60)
+        except subprocess.TimeoutExpired:  # no stop: where is it? (faulthandler on SIGUSR1)
+            proc.send_signal(signal.SIGUSR1)
+            try:
+                _, err = proc.communicate(timeout=10)
+            except subprocess.TimeoutExpired as exc:  # still running: what it printed so far
+                got = exc.stderr or b""
+                err = got.decode(errors="replace") if isinstance(got, bytes) else got
+            raise AssertionError(f"{argv[1]} did not stop within 60 s of {sig.name}; its "
+                                 f"threads:\n{err}") from None
         finally:
             if proc.poll() is None:
                 proc.kill()
