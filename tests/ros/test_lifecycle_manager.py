@@ -16,6 +16,7 @@ from __future__ import annotations
 import subprocess
 import sys
 import threading
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -92,15 +93,29 @@ def plain_transition(peer: Peer, node: str, transition: int) -> bool:
     return bool(result.success)
 
 
+RESEND_S = 10.0  # a get_state request unanswered this long is asked again (see plain_state)
+
+
 def plain_state(peer: Peer, node: str) -> str:
+    """The node's state, by the test's own get_state client. A request sent just as a new
+    client's service is found can be lost (the server's reply writer not yet matched with the
+    client's reader: no reply ever comes), so one unanswered for ``RESEND_S`` is sent again;
+    reading the state twice changes nothing. ``WAIT_S`` in all."""
     client: Any = peer.node.create_client(GetState, f"/{node}/get_state")
-    assert client.wait_for_service(WAIT_S)
-    done = threading.Event()
-    future = client.call_async(GetState.Request())
-    future.add_done_callback(lambda _: done.set())
-    assert done.wait(WAIT_S)
-    result: Any = future.result()
-    return str(result.current_state.label)
+    try:
+        assert client.wait_for_service(WAIT_S)
+        deadline = time.monotonic() + WAIT_S
+        while True:
+            done = threading.Event()
+            future = client.call_async(GetState.Request())
+            future.add_done_callback(lambda _, ev=done: ev.set())
+            if done.wait(max(0.0, min(RESEND_S, deadline - time.monotonic()))):
+                result: Any = future.result()
+                return str(result.current_state.label)
+            client.remove_pending_request(future)
+            assert time.monotonic() < deadline, f"no get_state reply from {node} in {WAIT_S} s"
+    finally:
+        peer.node.destroy_client(client)
 
 
 async def test_a_node_waiting_for_a_manager_is_brought_up_watched_and_repaired(
