@@ -75,11 +75,16 @@ class ProcessWatcher:
             self._untrack(node)
 
     def track(self, node: str, pid: int) -> None:
-        """The supervisor started ``node`` as ``pid`` (or a fixed pid is known)."""
+        """The supervisor started ``node`` as ``pid`` (or a fixed pid is known): it runs, said
+        at once. Not left to the next round: a process that ends before the loop gets there
+        (a driver that exits at once while the loop is busy) would never have been seen
+        running, and its run would be lost to whoever counts runs (``host.repair.crashloop``).
+        A process already gone ran and ended: both are said, in that order."""
         self._untrack(node)
-        try:
+        self._emit(ProcessSample(node, True, pid))
+        with contextlib.suppress(psutil.Error):
             self._adopt(node, psutil.Process(pid))
-        except psutil.Error:
+        if node not in self._tracked:  # gone, or a zombie not yet reaped
             self._emit(ProcessSample(node, False))
             return
         self._wake.set()

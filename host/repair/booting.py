@@ -5,8 +5,9 @@ or a node a freshly started daemon brought up has not yet had its settle time â€
 the model gives it â€” and its topics are silent for that reason alone. A repair that judged
 them then would power-cycle a device that is just booting. ``booting(observations, settle,
 now)`` is the pure rule: every component whose ``on(device)`` or ``running(node)`` turned true
-less than its settle time ago, with the seconds it has left (a repair step's own switch-ons and
-starts have waited their settle by the time the loop looks again, so they never show here).
+less than its settle time ago (a node's stretched on a busy machine, as the executor stretches
+a start step's), with the seconds it has left (a repair step's own switch-ons and starts have
+waited their settle by the time the loop looks again, so they never show here).
 The repair service waits for them as it waits for the board's own protection, at most
 ``MAX_WAIT_FACTOR`` times the longest settle time, so that a component that keeps coming
 back on cannot hold every repair off.
@@ -39,15 +40,18 @@ def up_since(observations: ObservationSet, atom: str) -> float | None:
 
 
 def booting(observations: ObservationSet, settle: Mapping[str, float],
-            components: Iterable[tuple[str, bool]], now: float) -> dict[str, float]:
+            components: Iterable[tuple[str, bool]], now: float,
+            stretch: float = 1.0) -> dict[str, float]:
     """``{component: seconds left}`` for those up for less than their settle time;
-    ``components`` are (name, is_node) pairs."""
+    ``components`` are (name, is_node) pairs. On a machine busy ``stretch`` times over a
+    node's settle time is that many times longer (a process starts slower, as the executor
+    stretches a start step's); a device boots in its own time."""
     out: dict[str, float] = {}
     for name, is_node in components:
         since = up_since(observations, up_atom(name, is_node))
         if since is None:
             continue
-        left = since + settle.get(name, 0.0) - now
+        left = since + settle.get(name, 0.0) * (max(1.0, stretch) if is_node else 1.0) - now
         if left > 0:
             out[name] = left
     return out

@@ -8,19 +8,21 @@ cannot switch — was never the suspect (issue 28, item 1). But a node's observa
 its device (the model's driver -> hardware dependency), so a node that keeps dying within its
 settle time is evidence against the device as much as against the node.
 
-``CrashLoops(observations, settle, nodes, stops)`` listens to the observation set and notes, for
-each node, how long each of its runs lasted (``running(n)`` true, then false; a run that a
-``stop_node`` of this host ended, ``stops``, is no crash and is not noted). A node whose last
-``CRASHES`` runs each ended within its settle time (at least ``SHORT_S``) and that is not
-running now *loops*. ``blame_devices`` then changes each candidate diagnosis that blames a
-looping node: the node's devices whose observations are not all good (``on`` and, with a
-current band, ``in_band``: a device known powered and drawing its current is not the cause)
-join the candidate, so the device is repaired first (switched on, power-cycled) and the node's
-restart follows in the same plan. A device that cannot be repaired here — held by a person,
-quarantined, or not on a board channel — takes the node's place: the node is not restarted
-while its device cannot be brought back, and a note says so. A run that lasts longer than the
-settle time ends the loop, and so does ``RETRY_S`` without a death (nothing may tell that a
-device off the board is back: the node is tried again then).
+``CrashLoops(observations, settle, nodes, stops, stretch)`` listens to the observation set and
+notes, for each node, how long each of its runs lasted (``running(n)`` true, then false; a run
+that a ``stop_node`` of this host ended, ``stops``, is no crash and is not noted). A node whose
+last ``CRASHES`` runs each ended within its settle time (at least ``SHORT_S``), stretched as the
+executor stretches it on a busy machine (``stretch``, read when the run ended: a process starts
+that many times slower), and that is not running now *loops*. ``blame_devices`` then changes
+each candidate diagnosis that blames a looping node: the node's devices whose observations
+are not all good (``on`` and, with a current band, ``in_band``: a device known powered and
+drawing its current is not the cause) join the candidate, so the device is repaired first
+(switched on, power-cycled) and the node's restart follows in the same plan. A device that
+cannot be repaired here — held by a person, quarantined, or not on a board channel — takes
+the node's place: the node is not restarted while its device cannot be brought back, and a
+note says so. A run that lasts longer than the settle time ends the loop, and so does
+``RETRY_S`` without a death (nothing may tell that a device off the board is back: the node
+is tried again then).
 
 A node whose device is *quarantined* and not good is not restarted either, loop or not: the
 daemon has given up on the device (its repairs failed, it is in its safe state, off), so a
@@ -34,7 +36,7 @@ observations'.
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Collection, Iterable, Mapping
+from collections.abc import Callable, Collection, Iterable, Mapping
 from dataclasses import dataclass
 
 from host.diagnosis.model import SystemModel
@@ -61,12 +63,15 @@ class Loop:
 
 class CrashLoops:
     def __init__(self, observations: ObservationSet, settle: Mapping[str, float],
-                 nodes: Iterable[str], stops: Mapping[str, float] | None = None) -> None:
+                 nodes: Iterable[str], stops: Mapping[str, float] | None = None,
+                 stretch: Callable[[], float] = lambda: 1.0) -> None:
         self.observations = observations
         self.settle = settle
         self.stops = {} if stops is None else stops  # node -> our latest stop_node
-        # node -> its latest runs: (when it ended, how long it lasted)
-        self._runs: dict[str, deque[tuple[float, float]]] = {
+        self.stretch = stretch
+        # node -> its latest runs: (when it ended, how long it lasted, the longest a run of
+        # that moment could last and still be a crash)
+        self._runs: dict[str, deque[tuple[float, float, float]]] = {
             n: deque(maxlen=CRASHES) for n in nodes}
         self._up: dict[str, float] = {}  # node -> when its current run began
         observations.listen(self._changed)
@@ -82,7 +87,8 @@ class CrashLoops:
             elif node in self._up:
                 up = self._up.pop(node)
                 if self.stops.get(node, up - 1.0) < up:  # not ended by a stop of ours
-                    runs.append((since, since - up))
+                    short = max(SHORT_S, self.settle.get(node, 0.0)) * max(1.0, self.stretch())
+                    runs.append((since, since - up, short))
 
     def looping(self, node: str, now: float | None = None) -> Loop | None:
         """The loop ``node`` is in at ``now``, None when it is not in one (or runs now)."""
@@ -91,10 +97,9 @@ class CrashLoops:
             return None
         if now is not None and now - runs[-1][0] > RETRY_S:
             return None
-        longest = max(length for _, length in runs)
-        if longest > max(SHORT_S, self.settle.get(node, 0.0)):
+        if any(length > short for _, length, short in runs):
             return None
-        return Loop(node, len(runs), longest)
+        return Loop(node, len(runs), max(length for _, length, _ in runs))
 
 
 def _good(device: str, model: SystemModel, observations: ObservationSet) -> bool:

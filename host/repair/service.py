@@ -155,7 +155,8 @@ class RepairService:
         self.unsettled = Unsettled()
         self.crashloops = CrashLoops(observations, executor.settle,
                                      [c.name for c in executor.model.components.values()
-                                      if c.is_node], executor.actuators.stops)
+                                      if c.is_node], executor.actuators.stops,
+                                     executor.stretch)
         self._loop_notes: list[str] = []
 
     # --- inputs -------------------------------------------------------------------------
@@ -315,8 +316,9 @@ class RepairService:
         ex = self.executor
         comps = [(c.name, c.is_node) for c in ex.model.components.values()
                  if c.is_node or c.channel is not None]
-        end = ex.clock() + MAX_WAIT_FACTOR * max(ex.settle.values(), default=0.0)
-        while (left := booting(self.observations, ex.settle, comps, ex.clock())) \
+        k = max(1.0, ex.stretch())  # read once: the wait's bound must not move
+        end = ex.clock() + MAX_WAIT_FACTOR * k * max(ex.settle.values(), default=0.0)
+        while (left := booting(self.observations, ex.settle, comps, ex.clock(), k)) \
                 and ex.clock() < end:
             if (reason := describe(left)).split(":")[0] != said.split(":")[0]:
                 self._emit(Note(f"repairs wait: {reason}"))

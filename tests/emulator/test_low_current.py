@@ -136,16 +136,21 @@ async def test_over_modbus_the_host_gets_the_same_range_event(board: Emulate) ->
         stream = mb.subscribe(20).__aiter__()
         said: list[BoardEvent] = []
         readings: list[Reading] = []
+        other: list[object] = []  # link notices, the other channels' events
 
         async def take() -> None:
             item = await stream.__anext__()
             if isinstance(item, BoardEvent) and item.channel == CAMERA:
                 said.append(item)
-            elif isinstance(item, Reading) and said:
-                readings.append(item)
+            elif isinstance(item, Reading):
+                if said:
+                    readings.append(item)
+            else:
+                other.append(item)
 
         await wait_until_async(lambda: len(readings) >= 5, timeout=120, interval=0, each=take,
-                               what="a range event and readings after it over Modbus")
+                               what="a range event and readings after it over Modbus",
+                               show=lambda: (said, readings[-2:], other[-5:]))
         assert said[0].kind_name == "range" and said[0].faults == LOW, said
         assert all(r.on_mask >> CAMERA & 1 and not r.fault_mask >> CAMERA & 1
                    for r in readings), readings

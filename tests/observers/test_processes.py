@@ -7,6 +7,7 @@ import time
 import uuid
 from collections.abc import Callable
 
+from host.diagnosis.observations import Observation
 from host.observers import NodeObserver, ObserverHub, ProcessSpec, PropertyObserver
 from tests.observers.conftest import PYTHON, Recorder
 from tests.wait import wait_until_async
@@ -63,6 +64,31 @@ async def test_supervised_node_is_tracked_by_pid() -> None:
     finally:
         proc.kill()
         proc.wait()
+        await hub.close()
+
+
+async def test_a_supervised_node_that_died_before_the_watcher_looked_was_running() -> None:
+    """A driver that dies at once (its device is off) while the daemon's loop is busy: the
+    watcher's next round finds it gone. Its start must still be reported, then its exit, or
+    the crash-loop bookkeeping (``host.repair.crashloop``) never sees the run (CI, stop 35:
+    the driver was restarted three times and quarantined)."""
+    rec = Recorder()
+    hub = ObserverHub([NodeObserver("driver")], rec)
+    await hub.start(processes={"driver": ProcessSpec("driver", supervised=True)}, poll=5.0)
+    try:
+        await wait_for(lambda: rec.value("running(driver)") is False)
+        seen = len(rec.updates)
+        proc = subprocess.Popen([PYTHON, "-c", "import time; time.sleep(0.3)"])
+        assert hub.watcher is not None
+        hub.watcher.track("driver", proc.pid)  # the supervisor's call, then the loop stalls
+        proc.wait()  # ... until the process has ended (blocking: the watcher cannot run)
+        await wait_for(lambda: rec.value("running(driver)") is False
+                       and len(rec.updates) > seen)
+        said = [(u.literal.positive, u.time) for u in rec.updates[seen:]
+                if isinstance(u, Observation) and u.literal.atom == "running(driver)"]
+        assert [v for v, _ in said][-2:] == [True, False], said
+        assert said[-2][1] <= said[-1][1], said
+    finally:
         await hub.close()
 
 

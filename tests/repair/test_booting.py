@@ -26,6 +26,15 @@ def test_up_for_less_than_the_settle_time_is_booting() -> None:
     assert booting(s, SETTLE, COMPS, 12.0) == {}
 
 
+def test_on_a_busy_machine_a_node_boots_longer_and_a_device_does_not() -> None:
+    """Busy twice over, a node's settle time is twice as long (its process starts twice as
+    slowly, as the executor stretches a start step's); a device boots in its own time."""
+    s = obs(("on(hokuyo)", 10.0), ("running(hokuyo_node)", 10.0))
+    assert booting(s, SETTLE, COMPS, 11.5) == {"hokuyo": 0.5}
+    assert booting(s, SETTLE, COMPS, 11.5, stretch=2.0) == {"hokuyo": 0.5, "hokuyo_node": 0.5}
+    assert booting(s, SETTLE, COMPS, 11.5, stretch=0.5) == {"hokuyo": 0.5}  # never shorter
+
+
 def test_off_or_unknown_is_not_booting() -> None:
     s = obs(("~on(hokuyo)", 10.0))
     assert booting(s, SETTLE, COMPS, 10.5) == {}

@@ -175,6 +175,18 @@ def test_one_early_death_is_no_loop() -> None:
     assert loops.looping("n") is None
 
 
+def test_on_a_busy_machine_a_run_is_short_within_the_stretched_settle_time() -> None:
+    """A driver's start takes ``k`` times longer on a machine busy ``k`` times over (the
+    executor gives its steps that much more time): 7 s runs at k = 3 are a loop, at k = 1 not."""
+    from host.repair.crashloop import CrashLoops
+
+    for k, loops_then in ((1.0, False), (3.0, True)):
+        obs = ObservationSet()
+        loops = CrashLoops(obs, {"n": 2.0}, ["n"], stretch=lambda k=k: k)
+        crash(obs, "n", 0.0, 2, run_s=7.0)
+        assert (loops.looping("n") is not None) is loops_then, k
+
+
 def test_runs_this_host_ended_are_no_crashes() -> None:
     from host.repair.crashloop import CrashLoops
 
