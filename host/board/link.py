@@ -47,7 +47,7 @@ from host.board.requests import Requests
 from host.board.silence import Silence
 from host.board.types import BoardEvent, BoardInfo, LinkDown, LinkUp, Rebooted
 from host.errors import RemoteError
-from host.transports.base import Transport
+from host.transports.base import BOOT_ID, Transport
 from host.transports.errors import (
     BoardRefused,
     BoardUnreachable,
@@ -437,7 +437,9 @@ class BoardLink:
         if old is not None and old.boot_id != hello.boot_id:
             rebooted = Rebooted(self.wall(), old.boot_id, hello.boot_id, hello.reset_cause,
                                 "boot id")
-        elif old is not None:
+        elif old is not None and BOOT_ID not in self.transport.CAPS:
+            # the same boot id of the board's own is the same boot, however far its uptime
+            # fell behind (an emulator that stalled lets its clock slip)
             rebooted = await self._check_uptime(old, hello)
         if session != self._session or self._closing:
             return  # lost again meanwhile: the next session tells

@@ -5,22 +5,23 @@
 returns the module's ``TRANSPORT`` class built for that URL, not yet opened. Each module
 documents its URL grammar in its header. What each can do (``Transport.CAPS``):
 
-=============  ====  ======  ====  ===========  ======  ====  =====
-scheme         push  events  auth  power_cycle  config  save  names
-=============  ====  ======  ====  ===========  ======  ====  =====
-tcp, serial,   yes   yes     yes   yes          yes     yes   yes
+=============  ====  ======  ====  ===========  ======  ====  =====  =======
+scheme         push  events  auth  power_cycle  config  save  names  boot_id
+=============  ====  ======  ====  ===========  ======  ====  =====  =======
+tcp, serial,   yes   yes     yes   yes          yes     yes   yes    yes
 memory
-modbus+tcp,    poll  no      none  off/wait/on  yes     yes   no
+modbus+tcp,    poll  no      none  off/wait/on  yes     yes   no     no
 modbus+rtu
-can            yes   no      yes   yes          no      no    no
-tug            yes   no      none  off/wait/on  no      no    no
-=============  ====  ======  ====  ===========  ======  ====  =====
+can            yes   no      yes   yes          no      no    no     yes
+tug            yes   no      none  off/wait/on  no      no    no     no
+=============  ====  ======  ====  ===========  ======  ====  =====  =======
 
 "poll": the transport reads the registers at the subscribed rate and hands the results up as
 measurements; "none": the wire has no authentication, so the key is not used and anyone on the
 link can switch (the Modbus board only accepts writes from configured client addresses);
-"off/wait/on": the host times the power cycle. The board client turns a missing capability
-into ``NotSupported`` with what to use instead.
+"off/wait/on": the host times the power cycle; "boot_id": the HELLO carries the board's own
+boot id, random at every boot (without it a reboot is told by an uptime that fell behind).
+The board client turns a missing capability into ``NotSupported`` with what to use instead.
 """
 
 from __future__ import annotations

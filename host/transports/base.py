@@ -41,6 +41,7 @@ CYCLE = "power_cycle"  # the board times a power cycle itself (else off, wait, o
 CONFIG = "config"  # channel and board configuration can be read and written
 SAVE = "save"  # the configuration can be persisted on the board
 NAMES = "names"  # channel names can be read from the board
+BOOT_ID = "boot_id"  # the HELLO's boot id is the board's own (a new one at every boot)
 
 # Request ids (PROTOCOL.md §3: 1-65535; 0 is a push): the board client numbers its requests
 # 1..CLIENT_MAX_REQ_ID, a transport's own requests use ids above it, so that a late answer to

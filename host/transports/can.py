@@ -32,7 +32,7 @@ from typing import Any
 
 import can as pycan
 
-from host.transports.base import AUTH, CYCLE, PUSH
+from host.transports.base import AUTH, BOOT_ID, CYCLE, PUSH
 from host.transports.translate import Handler, RangeEvents, TranslatingTransport, WireRefused
 from host.transports.url import BoardUrl
 from protocol import can as layout
@@ -85,7 +85,7 @@ SETTLE_S = 0.15  # after the first broadcasts, how long to collect a round of ch
 
 class CanTransport(TranslatingTransport):
     SCHEME = SCHEME
-    CAPS = frozenset({PUSH, AUTH, CYCLE})
+    CAPS = frozenset({PUSH, AUTH, CYCLE, BOOT_ID})
 
     def __init__(self, url: BoardUrl, key: bytes | None = None) -> None:
         super().__init__(url, key)

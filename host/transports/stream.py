@@ -28,6 +28,7 @@ import random
 
 from host.transports.base import (
     AUTH,
+    BOOT_ID,
     CLAIM_REQ_ID,
     CONFIG,
     CYCLE,
@@ -56,7 +57,7 @@ PER_FRAME = "per_frame"  # the URL parameter every native transport takes (1-10)
 class StreamTransport(Transport):
     """The native protocol over a byte stream (see the module docstring)."""
 
-    CAPS = frozenset({PUSH, EVENTS, AUTH, CYCLE, CONFIG, SAVE, NAMES})
+    CAPS = frozenset({PUSH, EVENTS, AUTH, CYCLE, CONFIG, SAVE, NAMES, BOOT_ID})
 
     def __init__(self, url: object, key: bytes | None = None) -> None:
         super().__init__(url, key)  # type: ignore[arg-type]
