@@ -22,7 +22,7 @@ import asyncio
 import inspect
 import time
 from collections.abc import Awaitable, Callable
-from typing import Any, TypeVar
+from typing import Any, TypeVar, cast
 
 T = TypeVar("T")
 
@@ -79,7 +79,7 @@ async def wait_until_async(probe: Callable[[], Awaitable[T]] | Callable[[], T],
         if inspect.isawaitable(value):
             value = await within(value)
         if value:
-            return value  # type: ignore[no-any-return]
+            return cast(T, value)
         if loop.time() >= end:
             _fail(what, timeout, value, show)
         await asyncio.sleep(interval)
