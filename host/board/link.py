@@ -15,7 +15,9 @@ The link is *lost* when
   held in reset or hung): the silence rule of ``host.board.silence``, judged only after the
   host has read what already arrived;
 - a keepalive PING (every ``keepalive_s`` while up, PROTOCOL.md §3) gets no answer within the
-  request timeout: the only judge while nothing is subscribed.
+  request timeout: the only judge while nothing is subscribed;
+- this host fails to read what arrived (a bug of its own): logged with its traceback, never
+  a reader that ends quietly and leaves the link up and silent for good.
 
 A lost link fails the pending requests (``LinkLost``), tells every subscriber (``LinkDown``)
 and, with ``reconnect``, reopens the transport after the waits of the one reconnect policy
@@ -200,6 +202,13 @@ class BoardLink:
                 if self._closing:
                     return
                 lost = str(exc)
+            except Exception as exc:  # so is a failure of this host's own reading of it:
+                # the reader must not end quietly (the silence rule judges only while a
+                # reader runs, so the subscription would wait forever); said, and reconnected
+                if self._closing:
+                    return
+                log.error("%s: reading the board's messages failed", self.url, exc_info=True)
+                lost = f"the host failed reading the board's messages: {exc!r}"
 
     def _dispatch_all(self, batch: list[Message | BadFrame]) -> None:
         for msg in batch:

@@ -237,3 +237,31 @@ async def test_frames_for_channels_the_board_lacks_are_dropped() -> None:
         await got.until(lambda: len(got.of(Reading)) >= n + 5)
         assert all(len(r.currents_ma) == 10 for _, r in got.of(Reading))  # type: ignore[union-attr]
         assert not got.of(BoardEvent)
+
+
+async def test_a_reader_that_failed_is_a_lost_link_not_a_silent_one(
+        caplog: pytest.LogCaptureFixture) -> None:
+    # Whatever fails while the link reads (here a reading that cannot be handed out: a fault
+    # injected into the link's own dispatch, once), the link must not go quiet for good with
+    # nothing said: before, the reader task ended, the silence rule stopped judging (it judges
+    # only while a reader runs), and an unanswered keepalive could not replace it, so the
+    # subscription waited forever (proof run G: a test hung 600 s on a quiet Modbus stream).
+    async with subscribed(silence_s=0.5) as (_mb, c, got):
+        link = c.link
+        real = link._dispatch
+        failed: list[int] = []
+
+        def once(msg: object) -> None:
+            if not failed:
+                failed.append(1)
+                raise ValueError("a reading the host could not hand out")
+            real(msg)  # type: ignore[arg-type]
+
+        link._dispatch = once  # type: ignore[method-assign,assignment]
+        await got.until(lambda: bool(got.of(LinkDown)))
+        (_, down), = got.of(LinkDown)
+        assert "ValueError" in down.reason, down  # type: ignore[union-attr]
+        await got.until(lambda: bool(got.of(LinkUp)))
+        (up_at, _), = got.of(LinkUp)
+        await got.until(lambda: any(t > up_at for t, _ in got.of(Reading)))
+        assert "a reading the host could not hand out" in caplog.text
