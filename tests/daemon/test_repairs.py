@@ -82,6 +82,13 @@ def finished(records: list[ActionRecord]) -> list[tuple[str, tuple[str, ...], st
     return [(r.action, tuple(r.args), str(r.state)) for r in records if r.finished is not None]
 
 
+def said_since(d: RunningDaemon, mark: int) -> list[str]:
+    """What the daemon journalled since ``mark`` (actions, notes, diagnoses): for a failure's
+    message, so that a run that fails once says why."""
+    return [describe(e.payload) for e in d.journal(("action", "note", "diagnosis"))
+            if e.id > mark][:40]
+
+
 def healthy_after(d: RunningDaemon, mark: int,
                   action: str) -> list[tuple[str, tuple[str, ...], str]]:
     """The actions finished since ``mark``, once the robot is healthy after an ``action``."""
@@ -216,7 +223,7 @@ def test_a_crashed_driver_is_restarted(robot: tuple[RunningDaemon, Path]) -> Non
     # flap meanwhile on a loaded machine and have its own node restarted: not asserted on)
     assert ("start_node", ("jaguar_node",), "succeeded") in done
     assert [a for a, args, _ in done if {"jaguar", "jaguar_node"} & set(args)] == [
-        "start_node"]
+        "start_node"], (done, said_since(d, mark))  # the states, and the daemon's words
     [new] = node_processes(d.system_dir)["jaguar_node"]
     assert new != pid
     assert d.status()["observations"]["ok(/odom)"] is True
