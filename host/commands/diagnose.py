@@ -94,12 +94,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from host.diagnosis.files import load_encoded
 
-    encoding = load_encoded(args.model)
     # the model lives as long as the command: out of the collector's sight meanwhile, its
     # ~60,000 objects are not walked again by every collection the search triggers (c7552:
-    # about 10 ms less CPU a run, benchmarks/RESULTS.md); given back at the end, so a caller
-    # in the same process (the tests) finds the collector as it was
-    gc.freeze()
+    # about 10 ms less CPU a run, benchmarks/RESULTS.md), nor by the one their own unpickling
+    # would set off (frozen before the collector runs again: 4-12 ms more on c7552); given
+    # back at the end, so a caller in the same process (the tests) finds it as it was
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        encoding = load_encoded(args.model)
+        gc.freeze()
+    finally:
+        if collecting:
+            gc.enable()
     try:
         return _diagnose(args, encoding)
     finally:
