@@ -129,7 +129,7 @@ def limits(b: dict[str, Any]) -> dict[str, Any]:
     top, bottom = P.PASSIVES["readback_series"]["ohm"], P.PASSIVES["readback_pulldown"]["ohm"]
     bus_pf = n_chips * P.I2C_PIN_PF + P.I2C_TRACE_PF
     return {
-        "switch": sw, "sense": sense, "mcu": mcu, "shunt_ohm": r_ohm,
+        "switch": sw, "sense": sense, "mcu": mcu, "module": P.module(b), "shunt_ohm": r_ohm,
         "fullscale_a": fullscale_a, "cont_a": cont[0], "cont_by": cont[1], "limit_a": limit_a,
         "fuse_a": P.fuse_for(cont[0]), "shunt": (shunt_w, shunt_mpn, shunt_pkg),
         "shunt_loss_w": limit_a * limit_a * r_ohm if limit_a > cont[0] else
@@ -185,11 +185,11 @@ def bom_rows(b: dict[str, Any]) -> list[list[str]]:
     """(reference, quantity, manufacturer, part number, description), one row per part."""
     lim = limits(b)
     n = b["channels"]
-    sw, mcu = lim["switch"], lim["mcu"]
+    sw = lim["switch"]
     n_sw = -(-n // sw["per_chip"])
     fuse_a, in_fuse = lim["fuse_a"], lim["input_fuse_a"]
     rows = [
-        ["U1", 1, mcu["mfr"], mcu["mpn"], mcu["what"]],
+        ["U1", 1, lim["module"]["mfr"], lim["module"]["mpn"], lim["module"]["what"]],
         ["U2", 1, P.INPUT["regulator"]["mfr"], P.INPUT["regulator"]["mpn"],
          P.INPUT["regulator"]["what"]],
         ["U3", 1, P.INPUT["surge_stopper"]["mfr"], P.INPUT["surge_stopper"]["mpn"],
@@ -351,7 +351,13 @@ def markdown(b: dict[str, Any]) -> str:
         " A second device on that channel would be as unprotected, and its fault would take"
         " the computer down.",
         "", "## Microcontroller", "",
-        f"{lim['mcu']['what']} ({lim['mcu']['mfr']} {lim['mcu']['mpn']}). An ESP32-S3 module is"
+        f"{lim['module']['what']} ({lim['module']['mfr']} {lim['module']['mpn']})."
+        + ("" if lim["module"] is lim["mcu"] else
+           f" Not the {lim['mcu']['what']} ({lim['mcu']['mpn']}): on its RP2040 this revision's"
+           " tick leaves the network too little of each 10 ms (`hardware/README.md`). The"
+           " firmware files are the same; the limits above are worked out from the RP2040's"
+           " figures, the part the tests model.")
+        + " An ESP32-S3 module is"
         " the better choice for a revision that senses current with the MCU's own ADC (20 ADC"
         " channels against the RP2040's 3 at about 8.7 effective bits) or needs more RAM or"
         " GPIOs; see `hardware/README.md`.",

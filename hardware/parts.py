@@ -38,6 +38,22 @@ MCU: dict[str, dict[str, Any]] = {
     },
 }
 
+# The module a revision's BOM orders for its MCU (``REVISIONS[rev]["module"]``; by default the
+# MCU's own entry above). The Pico 2 W has the Pico W's footprint, pins and Wi-Fi chip, and
+# MicroPython's ``RPI_PICO2_W`` build gives the firmware the same ``machine`` calls; its RP2350
+# runs MicroPython about 1.9 times as fast (benchmarks/RESULTS.md, "How fast the boards' MCUs
+# are"), which a revision whose tick does not fit an RP2040 needs. The limits in ``board.md``
+# stay worked out from the RP2040's figures (ADC, I/O), the part every test models; the
+# RP2350's watchdog reaches 16,777 ms against the RP2040's 8,388, and the firmware asks for
+# less. Order codes as the distributors list them (Mouser, DigiKey, TME: SC1633, Pico 2 W).
+MODULES: dict[str, dict[str, Any]] = {
+    "pico-2-w": {
+        "mfr": "Raspberry Pi", "mpn": "SC1633", "what": "Raspberry Pi Pico 2 W (RP2350 at "
+        "150 MHz, 4 MB flash, CYW43439 Wi-Fi; the Pico W's footprint and pins)",
+        "datasheet": "Raspberry Pi Pico 2 W datasheet; RP2350 datasheet",
+    },
+}
+
 # The sense chip of each revision (``BOARD["sense"]["chip"]``). ``fullscale_v`` is the shunt
 # voltage at which the chip's reading saturates; ``bus_max_v`` the highest common-mode/bus
 # voltage it measures; ``per_chip`` the channels one package serves; ``lsb_v`` one count of its
@@ -169,7 +185,9 @@ PASSIVES: dict[str, dict[str, Any]] = {
 # just above the BTS7008's 18 V operating range, far under its 28 V).
 REVISIONS: dict[str, dict[str, Any]] = {
     "rev-a": {"switch": "tps1h100a", "input_fuse_a": 20, "clamp_top_kohm": 205},
-    "rev-b": {"switch": "tps1h100a", "input_fuse_a": 20, "clamp_top_kohm": 187},
+    # rev B's tick takes 9.6 ms of its 10 ms on an RP2040, 5.9 ms on an RP2350 (hardware/README.md)
+    "rev-b": {"switch": "tps1h100a", "input_fuse_a": 20, "clamp_top_kohm": 187,
+              "module": "pico-2-w"},
     "rev-c": {"switch": "bts7008", "input_fuse_a": 20, "clamp_top_kohm": 150},
 }
 DEFAULT_INPUT_FUSE_A = 20
@@ -202,7 +220,17 @@ def choices(board: dict[str, Any]) -> dict[str, Any]:
     if board["mcu"] not in MCU:
         raise PartsError(f"hardware/parts.py: {board['name']} runs on {board['mcu']!r}, which "
                          "MCU does not list; add it there")
+    if got.get("module") is not None and got["module"] not in MODULES:
+        raise PartsError(f"hardware/parts.py: {board['name']} orders module {got['module']!r}, "
+                         "which MODULES does not list; add it there")
     return got
+
+
+def module(board: dict[str, Any]) -> dict[str, Any]:
+    """What the revision's BOM orders for its MCU: its ``module`` choice, else the MCU's entry
+    (manufacturer, part number, description)."""
+    name = choices(board).get("module")
+    return MODULES[name] if name is not None else MCU[board["mcu"]]
 
 
 def fuse_for(amps: float) -> int:

@@ -62,7 +62,7 @@ def column(b: dict[str, Any]) -> list[str]:
         f"{lim['instant_rated_a'] * 1000:.0f} mA",
         f"{lim['board_a']:g} A",
         f"{prot['nominal']:.1f} V (at most {prot['high']:.2f} V)",
-        f"{lim['mcu']['what']}",
+        f"{lim['module']['what']}",
     ]
 
 

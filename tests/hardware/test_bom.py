@@ -43,6 +43,9 @@ def rows(rev: str) -> dict[str, dict[str, str]]:
 def test_rev_a_parts_follow_from_the_ratings() -> None:
     got = rows("rev-a")
     assert got["U1"]["mpn"] == "SC0918"  # Pico W
+    # rev B's tick does not fit an RP2040 (hardware/README.md): its BOM orders the Pico 2 W
+    assert rows("rev-b")["U1"]["mpn"] == "SC1633"
+    assert "Pico 2 W" in (ROOT / "hardware" / "rev-b" / "board.md").read_text()
     assert got["SEN1-SEN10"]["mpn"] == "INA226AIDGSR"
     assert got["SEN1-SEN10"]["quantity"] == "10"
     # 10 mOhm at the switch's 5 A limit: 0.25 W, twice that wanted: the 0.5 W 2010 part
@@ -76,6 +79,22 @@ def test_a_part_missing_from_the_catalogue_is_one_line(tmp_path: Path) -> None:
     assert done.returncode == 2
     assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
     assert "'ina999'" in done.stderr and "add it to SENSE" in done.stderr
+
+
+def test_a_module_missing_from_the_catalogue_is_one_line(tmp_path: Path) -> None:
+    """A copy of the tree whose rev-b orders an MCU module ``parts.py`` does not list."""
+    for d in ("firmware", "protocol", "hardware"):
+        subprocess.run(["cp", "-r", str(ROOT / d), str(tmp_path / d)], check=True)
+    parts = tmp_path / "hardware" / "parts.py"
+    text = parts.read_text()
+    assert '"module": "pico-2-w"}' in text
+    parts.write_text(text.replace('"module": "pico-2-w"}', '"module": "pico-9"}'))
+    done = subprocess.run([sys.executable, "hardware/bom.py", str(tmp_path / "out")],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120,
+                          env={"PATH": "/usr/bin:/bin"})
+    assert done.returncode == 2
+    assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
+    assert "'pico-9'" in done.stderr and "MODULES" in done.stderr
 
 
 @pytest.mark.parametrize("rev", REVS)
@@ -182,8 +201,8 @@ def test_a_clamp_that_could_reach_a_part_is_refused_in_one_line(tmp_path: Path) 
         subprocess.run(["cp", "-r", str(ROOT / d), str(tmp_path / d)], check=True)
     parts = tmp_path / "hardware" / "parts.py"
     text = parts.read_text()
-    assert '"input_fuse_a": 20, "clamp_top_kohm": 187}' in text
-    parts.write_text(text.replace('"clamp_top_kohm": 187}', '"clamp_top_kohm": 205}'))
+    assert '"input_fuse_a": 20, "clamp_top_kohm": 187,' in text
+    parts.write_text(text.replace('"clamp_top_kohm": 187,', '"clamp_top_kohm": 205,'))
     done = subprocess.run([sys.executable, "hardware/bom.py", str(tmp_path / "out")],
                           cwd=tmp_path, capture_output=True, text=True, timeout=120,
                           env={"PATH": "/usr/bin:/bin"})
