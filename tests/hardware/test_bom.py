@@ -67,34 +67,35 @@ def test_rev_a_limits_are_stated() -> None:
     assert "| largest rated_ma for which the instant trip can fire | 1667 mA |" in text
 
 
-def test_a_part_missing_from_the_catalogue_is_one_line(tmp_path: Path) -> None:
-    """A copy of the tree whose rev-a senses with a chip ``parts.py`` does not know."""
+def bom_of_edited_copy(tmp_path: Path, rel: str, old: str, new: str) -> str:
+    """``hardware/bom.py`` run on a copy of the tree whose file ``rel`` has ``old`` (which must
+    be there) replaced by ``new``; it must refuse in one line with exit code 2: that line."""
     for d in ("firmware", "protocol", "hardware"):
         subprocess.run(["cp", "-r", str(ROOT / d), str(tmp_path / d)], check=True)
-    rev = tmp_path / "firmware" / "boards" / "rev_a.py"
-    rev.write_text(rev.read_text().replace('"chip": "ina226"', '"chip": "ina999"'))
+    f = tmp_path / rel
+    text = f.read_text()
+    assert old in text
+    f.write_text(text.replace(old, new))
     done = subprocess.run([sys.executable, "hardware/bom.py", str(tmp_path / "out")],
                           cwd=tmp_path, capture_output=True, text=True, timeout=120,
                           env={"PATH": "/usr/bin:/bin"})
-    assert done.returncode == 2
+    assert done.returncode == 2, done.stderr
     assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
-    assert "'ina999'" in done.stderr and "add it to SENSE" in done.stderr
+    return done.stderr
+
+
+def test_a_part_missing_from_the_catalogue_is_one_line(tmp_path: Path) -> None:
+    """A copy of the tree whose rev-a senses with a chip ``parts.py`` does not know."""
+    err = bom_of_edited_copy(tmp_path, "firmware/boards/rev_a.py", '"chip": "ina226"',
+                             '"chip": "ina999"')
+    assert "'ina999'" in err and "add it to SENSE" in err
 
 
 def test_a_module_missing_from_the_catalogue_is_one_line(tmp_path: Path) -> None:
     """A copy of the tree whose rev-b orders an MCU module ``parts.py`` does not list."""
-    for d in ("firmware", "protocol", "hardware"):
-        subprocess.run(["cp", "-r", str(ROOT / d), str(tmp_path / d)], check=True)
-    parts = tmp_path / "hardware" / "parts.py"
-    text = parts.read_text()
-    assert '"module": "pico-2-w"}' in text
-    parts.write_text(text.replace('"module": "pico-2-w"}', '"module": "pico-9"}'))
-    done = subprocess.run([sys.executable, "hardware/bom.py", str(tmp_path / "out")],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=120,
-                          env={"PATH": "/usr/bin:/bin"})
-    assert done.returncode == 2
-    assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
-    assert "'pico-9'" in done.stderr and "MODULES" in done.stderr
+    err = bom_of_edited_copy(tmp_path, "hardware/parts.py", '"module": "pico-2-w"}',
+                             '"module": "pico-9"}')
+    assert "'pico-9'" in err and "MODULES" in err
 
 
 @pytest.mark.parametrize("rev", REVS)
@@ -197,16 +198,8 @@ def test_the_clamp_stays_under_every_part_behind_it(rev: str) -> None:
 
 def test_a_clamp_that_could_reach_a_part_is_refused_in_one_line(tmp_path: Path) -> None:
     """Rev B's divider set for rev A's 26.9 V: up to 27.46 V on a 26 V INA3221."""
-    for d in ("firmware", "protocol", "hardware"):
-        subprocess.run(["cp", "-r", str(ROOT / d), str(tmp_path / d)], check=True)
-    parts = tmp_path / "hardware" / "parts.py"
-    text = parts.read_text()
-    assert '"input_fuse_a": 20, "clamp_top_kohm": 187,' in text
-    parts.write_text(text.replace('"clamp_top_kohm": 187,', '"clamp_top_kohm": 205,'))
-    done = subprocess.run([sys.executable, "hardware/bom.py", str(tmp_path / "out")],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=120,
-                          env={"PATH": "/usr/bin:/bin"})
-    assert done.returncode == 2, done.stderr
-    assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
-    assert "rev-b" in done.stderr and "INA3221AIRGVR" in done.stderr
-    assert "clamp_top_kohm" in done.stderr
+    err = bom_of_edited_copy(tmp_path, "hardware/parts.py",
+                             '"input_fuse_a": 20, "clamp_top_kohm": 187,',
+                             '"input_fuse_a": 20, "clamp_top_kohm": 205,')
+    assert "rev-b" in err and "INA3221AIRGVR" in err
+    assert "clamp_top_kohm" in err
