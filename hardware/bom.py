@@ -9,8 +9,10 @@ shunt's power rating follow from that (with the margins in ``parts.py``); the in
 narrowest of the switch, the sense chip's bus input, the ADC behind the divider, the regulator
 and the surge stopper's clamp (its lowest, with the FB reference's and the divider's
 tolerances). The clamp at its highest must stay under the absolute maximum of every part
-behind the surge stopper, and the TVS's clamp under the surge stopper's and its MOSFETs':
-``protection`` checks both, and a revision that breaks either is refused (one line, exit 2).
+behind the surge stopper, the TVS's clamp under the surge stopper's and its MOSFETs', and a
+negative surge (``parts.REVERSE_SURGES``) held by the TVS above the surge stopper's reverse
+rating: ``protection`` checks all three, and a revision that breaks one is refused (one line,
+exit 2).
 Usage, from the repository root: ``python hardware/bom.py
 [OUT_DIR]`` (default ``hardware``); ``tests/hardware/test_bom.py`` checks that the committed
 files are its output. A revision that names a part ``parts.py`` lacks: one line saying what to
@@ -83,9 +85,25 @@ def protection(b: dict[str, Any]) -> dict[str, Any]:
         raise P.PartsError(f"hardware/parts.py: the TVS {tvs['mpn']} clamps at "
                            f"{tvs['clamp_v']:g} V, not under the {front[0]:g} V of {front[1]}; "
                            "choose a lower TVS")
+    reverse = max((*reverse_surge(v, ohm), name) for name, v, ohm in P.REVERSE_SURGES)
+    if reverse[0] >= ss["reverse_v"] or reverse[1] > tvs["ipp_a"]:
+        raise P.PartsError(f"hardware/parts.py: the TVS {tvs['mpn']} holds {reverse[2]} at "
+                           f"-{reverse[0]:.1f} V and {reverse[1]:.1f} A, not above the surge "
+                           f"stopper's -{ss['reverse_v']:g} V within its {tvs['ipp_a']:g} A; "
+                           "choose a TVS with a lower breakdown")
     sense_ohm = ss["sense_v"] / (P.choices(b)["input_fuse_a"] * P.CURRENT_LIMIT_MARGIN)
     return {**cl, "weakest": weakest, "front": front, "sense_ohm": sense_ohm,
-            "sense": P.shunt_for(sense_ohm, ss["sense_v"] / sense_ohm)}
+            "sense": P.shunt_for(sense_ohm, ss["sense_v"] / sense_ohm), "reverse": reverse}
+
+
+def reverse_surge(source_v: float, source_ohm: float) -> tuple[float, float]:
+    """(volts, amperes) at which the TVS holds a surge of ``source_v`` from ``source_ohm``:
+    above its breakdown (at its highest) the TVS is a resistance ``(clamp_v - vbr_max_v) /
+    ipp_a``, so the current is what the source drives through both."""
+    tvs = P.INPUT["tvs"]
+    r_tvs = (tvs["clamp_v"] - tvs["vbr_max_v"]) / tvs["ipp_a"]
+    amps = max(0.0, (source_v - tvs["vbr_max_v"]) / (source_ohm + r_tvs))
+    return tvs["vbr_max_v"] + amps * r_tvs, amps
 
 
 def limits(b: dict[str, Any]) -> dict[str, Any]:
@@ -123,6 +141,10 @@ def limits(b: dict[str, Any]) -> dict[str, Any]:
                (inp["regulator"]["v_in"][1], f"the regulator {inp['regulator']['mpn']}"))
     vmin = max((sw["v_op"][0], f"the switch {sw['mpn']}"),
                (inp["regulator"]["v_in"][0], f"the regulator {inp['regulator']['mpn']}"))
+    if inp["tvs"]["standoff_v"] <= vmax[0]:  # the battery at its highest, or reversed
+        raise P.PartsError(f"hardware/parts.py: the TVS {inp['tvs']['mpn']} stands off "
+                           f"{inp['tvs']['standoff_v']:g} V, not above {b['name']}'s highest "
+                           f"input of {vmax[0]:g} V; choose a TVS with a higher standoff")
     in_fuse = c["input_fuse_a"]
     board_a = in_fuse / P.FUSE_MARGIN
     n_chips = 0 if smart else -(-b["channels"] // sense["per_chip"])
@@ -300,6 +322,10 @@ def protection_limits(lim: dict[str, Any]) -> list[str]:
         f"| TVS clamp at its rated surge | {tvs['clamp_v']:g} V | {tvs['mpn']}, before the surge"
         f" stopper: under the {front[0]:g} V of {front[1]}; standoff {tvs['standoff_v']:g} V, "
         "above the input range and a reversed battery |",
+        f"| negative surge at the input | -{prot['reverse'][0]:.1f} V at "
+        f"{prot['reverse'][1]:.1f} A | {prot['reverse'][2]}, the worse of pulse 1's two"
+        f" levels, held by the {tvs['mpn']} (breakdown up to {tvs['vbr_max_v']:g} V); above the"
+        f" {ss['mpn']}'s -{ss['reverse_v']:g} V, the rest blocked by its ideal-diode MOSFET |",
     ]
 
 

@@ -16,13 +16,14 @@ MOSFET as a linear regulator during a surge, holding its output at a clamp its F
 it), limits the current through a sense resistor (50 mV), turns the pass MOSFET off when a
 surge or overcurrent outlasts its timer and retries (the -2 version), and drives a second
 MOSFET as an ideal diode against a reversed battery; it runs from 4 V to 80 V and withstands
-100 V. A bidirectional TVS in front of it (standoff 33 V: neither the highest input nor a
-reversed battery makes it conduct) clamps what would exceed the stopper's and the MOSFETs'
-ratings. ``hardware/bom.py`` works the clamp's tolerance out and refuses a revision whose
-clamp could reach a part's absolute maximum. ``REVISIONS`` holds what a
-revision chooses beyond its firmware file (which switch, the input fuse); a revision without an
-entry gets its sense chip's defaults, so a new revision file is enough for a first BOM. Every
-rating here is the datasheet's (the document is named beside it); nothing is measured.
+100 V, and -40 V at its input. A bidirectional TVS in front of it (standoff 28 V: neither the
+highest input nor a reversed battery makes it conduct) clamps what would exceed the stopper's
+and the MOSFETs' ratings, and holds a negative surge (``REVERSE_SURGES``) above -40 V.
+``hardware/bom.py`` works the clamp's tolerance out and refuses a revision whose clamp could
+reach a part's absolute maximum. ``REVISIONS`` holds what a revision chooses beyond its
+firmware file (which switch, the input fuse, the MCU module); a revision without an entry gets
+its sense chip's defaults, so a new revision file is enough for a first BOM. Every rating here
+is the datasheet's (the document is named beside it); nothing is measured.
 """
 
 from __future__ import annotations
@@ -122,15 +123,18 @@ FUSE_HOLDER = {"mfr": "Keystone Electronics", "mpn": "3557-2",
                "what": "PCB fuse holder for ATO blade fuses, 30 A"}
 
 INPUT: dict[str, dict[str, Any]] = {
-    "tvs": {"mfr": "Littelfuse", "mpn": "SMCJ33CA", "what": "TVS diode 1500 W, "
-            "bidirectional, standoff 33 V, breakdown 36.7 V min, clamp 53.3 V at 28.2 A "
-            "(DO-214AB), in front of the surge stopper", "standoff_v": 33.0, "clamp_v": 53.3,
-            "datasheet": "Littelfuse SMCJ series data sheet"},
+    # ``vbr_max_v``: breakdown at its highest; ``clamp_v`` at ``ipp_a`` (10/1000 us): between
+    # the two the clamp rises about linearly with the current (``bom.tvs_clamp_at``)
+    "tvs": {"mfr": "Littelfuse", "mpn": "SMCJ28CA", "what": "TVS diode 1500 W, "
+            "bidirectional, standoff 28 V, breakdown 31.1 V to 34.4 V, clamp 45.4 V at 33.0 A "
+            "(DO-214AB), in front of the surge stopper", "standoff_v": 28.0, "vbr_max_v": 34.4,
+            "clamp_v": 45.4, "ipp_a": 33.0, "datasheet": "Littelfuse SMCJ series data sheet"},
     "surge_stopper": {"mfr": "Analog Devices", "mpn": "LTC4364IMS-2#PBF", "what": "surge "
                       "stopper with ideal diode: output clamp set by a divider on FB "
                       "(1.25 V), 50 mV current limit, fault timer with auto-retry, reverse "
                       "input to -40 V; 4 V to 80 V, 100 V absolute (MSOP-16)",
-                      "v_op": (4.0, 80.0), "abs_max_v": 100.0, "fb_v": 1.25, "fb_tol": 0.02,
+                      "v_op": (4.0, 80.0), "abs_max_v": 100.0, "reverse_v": 40.0,
+                      "fb_v": 1.25, "fb_tol": 0.02,
                       "sense_v": 0.050, "datasheet": "Analog Devices LTC4364 data sheet"},
     "mosfet": {"mfr": "Texas Instruments", "mpn": "CSD18540Q5B", "what": "N-channel MOSFET "
                "60 V, 1.8 mOhm at VGS 10 V (SON 5x6): Q1 the LTC4364's pass device (HGATE), "
@@ -178,6 +182,15 @@ PASSIVES: dict[str, dict[str, Any]] = {
     "bypass": {"mfr": "Murata", "mpn": "GRM188R71H104KA93D", "what": "100 nF 50 V X7R 0603: "
                "one per IC supply pin, one at the ADC pin"},
 }
+
+# The negative surges the input must stand: ISO 7637-2 test pulse 1 (an inductive load switched
+# off beside the board: the battery line swings below ground), its highest levels, as (name,
+# open-circuit volts, source ohms). The TVS takes the current; the surge stopper's input must
+# stay above -``reverse_v`` (its ideal-diode MOSFET blocks the rest).
+REVERSE_SURGES: tuple[tuple[str, float, float], ...] = (
+    ("ISO 7637-2 pulse 1, 12 V system (-150 V, 10 Ohm, 2 ms)", 150.0, 10.0),
+    ("ISO 7637-2 pulse 1, 24 V system (-600 V, 50 Ohm, 1 ms)", 600.0, 50.0),
+)
 
 # What a revision chooses beyond its firmware file; missing keys: the sense chip's defaults.
 # ``clamp_top_kohm``: the FB divider's upper resistor (E96), which sets the surge stopper's clamp

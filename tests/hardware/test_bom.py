@@ -53,7 +53,7 @@ def test_rev_a_parts_follow_from_the_ratings() -> None:
     # 4 A continuous x 1.25 = 5 A fuse per channel; one holder per fuse and one for the input
     assert got["F1-F10"]["mpn"] == "0287005.PXCN"
     assert got["XF0-XF10"]["quantity"] == "11"
-    assert got["D1"]["mpn"] == "SMCJ33CA" and got["U3"]["mpn"] == "LTC4364IMS-2#PBF"
+    assert got["D1"]["mpn"] == "SMCJ28CA" and got["U3"]["mpn"] == "LTC4364IMS-2#PBF"
     assert got["RFB1"]["mpn"] == "RT0603BRD07205KL"  # 1.25 V x (1 + 205 k / 10 k) = 26.9 V
     assert got["RLIM"]["mpn"] == "WSLP2512R0020FEA"  # 50 mV / 2 mOhm = 25 A = 1.25 x 20 A
     assert all(r["manufacturer"] and r["mpn"] for r in got.values())
@@ -188,12 +188,45 @@ def test_the_clamp_stays_under_every_part_behind_it(rev: str) -> None:
     tvs, ss, fet = (bom.P.INPUT[k] for k in ("tvs", "surge_stopper", "mosfet"))
     assert tvs["clamp_v"] < ss["abs_max_v"] and tvs["clamp_v"] < fet["abs_max_v"]
     assert tvs["standoff_v"] > lim["vmax"]
+    # a negative surge (ISO 7637-2 pulse 1): the TVS holds the stopper's input above -40 V
+    volts, amps, what = prot["reverse"]
+    assert tvs["vbr_max_v"] < volts < ss["reverse_v"] and 0 < amps < tvs["ipp_a"]
+    assert what.startswith("ISO 7637-2 pulse 1")
     text = (ROOT / "hardware" / rev / "board.md").read_text()
     row = re.search(r"^\| surge stopper clamp \| ([\d.]+) V, ([\d.]+) V to ([\d.]+) V \|", text,
                     re.M)
     assert row is not None
     assert float(row[3]) == round(prot["high"], 2)
     assert "42.1" not in text
+    assert f"| negative surge at the input | -{volts:.1f} V at {amps:.1f} A |" in text
+
+
+def test_the_reverse_surge_follows_from_the_source_and_the_tvs() -> None:
+    """The TVS above its breakdown as a resistance: -600 V from 50 Ohm into the SMCJ28CA
+    (34.4 V, 45.4 V at 33 A) is 11.24 A at 38.1 V; the 33 V part drawn before lets 45.6 V
+    through, past the LTC4364's -40 V."""
+    bom = load_bom()
+    volts, amps = bom.reverse_surge(600.0, 50.0)
+    assert abs(amps - (600 - 34.4) / (50 + 11.0 / 33)) < 1e-9
+    assert abs(volts - (34.4 + amps * 11.0 / 33)) < 1e-9 and 38.0 < volts < 38.3
+    assert bom.reverse_surge(20.0, 1.0) == (34.4, 0.0)  # under its breakdown: no current
+
+
+def test_a_tvs_that_lets_a_reverse_surge_through_is_refused_in_one_line(tmp_path: Path) -> None:
+    """The 33 V TVS the board was first drawn with: pulse 1 at the stopper's input is -45.6 V."""
+    err = bom_of_edited_copy(
+        tmp_path, "hardware/parts.py",
+        '"standoff_v": 28.0, "vbr_max_v": 34.4,\n            "clamp_v": 45.4, "ipp_a": 33.0,',
+        '"standoff_v": 33.0, "vbr_max_v": 40.6,\n            "clamp_v": 53.3, "ipp_a": 28.2,')
+    assert "SMCJ28CA" in err and "-40 V" in err and "lower breakdown" in err
+
+
+def test_a_tvs_that_the_battery_would_make_conduct_is_refused_in_one_line(
+        tmp_path: Path) -> None:
+    """A 24 V standoff under rev A's highest input (26.2 V)."""
+    err = bom_of_edited_copy(tmp_path, "hardware/parts.py", '"standoff_v": 28.0,',
+                             '"standoff_v": 24.0,')
+    assert "rev-a" in err and "26.2 V" in err and "higher standoff" in err
 
 
 def test_a_clamp_that_could_reach_a_part_is_refused_in_one_line(tmp_path: Path) -> None:
