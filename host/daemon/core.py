@@ -353,7 +353,8 @@ class Daemon:
         self._stop.set()
 
     async def close(self) -> None:
-        """Stop everything, in the reverse order of starting; idempotent. Each stage has a
+        """Stop everything, in the reverse order of starting (but the observers before the
+        nodes, whose silence the stop causes); idempotent. Each stage has a
         deadline within ``STOP_BUDGET_S`` (``host.daemon.stages``): one that overruns it is
         cut short (the nodes then get SIGKILL), logged, and the stop goes on. The stage
         running now is ``self.closing`` (``host.launch.stopping`` says it while it waits)."""
@@ -370,10 +371,12 @@ class Daemon:
         if self.operator is not None:
             operator, self.operator = self.operator, None
             await stages.run("the operator socket", operator.close(), 0.5, reserve_s=keep)
+        # the observers before the nodes: a topic whose publisher the stop ends is not judged
+        # silent (nor said so on the terminal) while the daemon itself stops it
+        await stages.run("the observers", self.hub.close(), 1.0, reserve_s=keep)
         sup = self.repairs.executor.actuators.supervisor
         await stages.run("the repairs and the nodes they started", self.repairs.close(), 3.0,
                          on_cut=None if sup is None else sup.kill_all, reserve_s=keep)
-        await stages.run("the observers", self.hub.close(), 1.0, reserve_s=keep)
         source = getattr(self, "source", None)
         if source is not None:
             await stages.run("the topic source", source.close, 1.0, reserve_s=keep)
