@@ -124,7 +124,7 @@ FUSE_HOLDER = {"mfr": "Keystone Electronics", "mpn": "3557-2",
 
 INPUT: dict[str, dict[str, Any]] = {
     # ``vbr_max_v``: breakdown at its highest; ``clamp_v`` at ``ipp_a`` (10/1000 us): between
-    # the two the clamp rises about linearly with the current (``bom.tvs_clamp_at``)
+    # the two the clamp rises about linearly with the current (``bom.reverse_surge``)
     "tvs": {"mfr": "Littelfuse", "mpn": "SMCJ28CA", "what": "TVS diode 1500 W, "
             "bidirectional, standoff 28 V, breakdown 31.1 V to 34.4 V, clamp 45.4 V at 33.0 A "
             "(DO-214AB), in front of the surge stopper", "standoff_v": 28.0, "vbr_max_v": 34.4,
