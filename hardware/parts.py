@@ -33,8 +33,8 @@ from typing import Any
 MCU: dict[str, dict[str, Any]] = {
     "rp2040": {
         "mfr": "Raspberry Pi", "mpn": "SC0918", "what": "Raspberry Pi Pico W (RP2040, 2 MB "
-        "flash, CYW43439 Wi-Fi)", "vsys_v": (1.8, 5.5), "adc_vref_v": 3.3, "adc_bits": 12,
-        "adc_enob": 8.7, "io_vih_v": 2.0,
+        "flash, CYW43439 Wi-Fi)", "short": "Pico W (RP2040)", "vsys_v": (1.8, 5.5),
+        "adc_vref_v": 3.3, "adc_bits": 12, "adc_enob": 8.7, "io_vih_v": 2.0,
         "datasheet": "Raspberry Pi Pico W datasheet; RP2040 datasheet",
     },
 }
@@ -51,6 +51,7 @@ MODULES: dict[str, dict[str, Any]] = {
     "pico-2-w": {
         "mfr": "Raspberry Pi", "mpn": "SC1633", "what": "Raspberry Pi Pico 2 W (RP2350 at "
         "150 MHz, 4 MB flash, CYW43439 Wi-Fi; the Pico W's footprint and pins)",
+        "short": "Pico 2 W (RP2350)",
         "datasheet": "Raspberry Pi Pico 2 W datasheet; RP2350 datasheet",
     },
 }

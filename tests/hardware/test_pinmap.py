@@ -35,6 +35,18 @@ def test_the_pin_map_says_what_the_firmware_uses() -> None:
     ET.fromstring((ROOT / "hardware" / "rev-a" / "wiring.svg").read_text())  # well-formed
 
 
+def test_the_drawings_name_the_module_the_bom_orders() -> None:
+    """Rev B's BOM orders a Pico 2 W (its tick does not fit an RP2040), the others a Pico W;
+    the pin map and the wiring picture say which, as U1 in the BOM."""
+    for rev, module, mpn in (("rev-a", "Pico W (RP2040)", "SC0918"),
+                             ("rev-b", "Pico 2 W (RP2350)", "SC1633")):
+        pins = (ROOT / "hardware" / rev / "pins.md").read_text()
+        assert pins.splitlines()[0] == f"# {rev}: pin map, {module}"
+        svg = ET.fromstring((ROOT / "hardware" / rev / "wiring.svg").read_text())
+        assert module in [t.text for t in svg.iter("{http://www.w3.org/2000/svg}text")]
+        assert f"U1,1,Raspberry Pi,{mpn}," in (ROOT / "hardware" / rev / "bom.csv").read_text()
+
+
 def test_the_address_straps_are_the_datasheets() -> None:
     """INA226 (SBOS547, its address table): A1 and A0 each tied to GND, VS, SDA or SCL; 0x40
     is both to GND, 0x45 both to VS, 0x49 A1 to SDA and A0 to VS."""
