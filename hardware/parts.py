@@ -231,20 +231,24 @@ def choices(board: dict[str, Any]) -> dict[str, Any]:
     if got["switch"] not in SWITCHES:
         raise PartsError(f"hardware/parts.py: {board['name']} uses switch {got['switch']!r}, "
                          f"which SWITCHES does not list; add it there")
-    if board["mcu"] not in MCU:
-        raise PartsError(f"hardware/parts.py: {board['name']} runs on {board['mcu']!r}, which "
-                         "MCU does not list; add it there")
-    if got.get("module") is not None and got["module"] not in MODULES:
-        raise PartsError(f"hardware/parts.py: {board['name']} orders module {got['module']!r}, "
-                         "which MODULES does not list; add it there")
+    module(board)  # the MCU and the module it orders are listed
     return got
 
 
 def module(board: dict[str, Any]) -> dict[str, Any]:
-    """What the revision's BOM orders for its MCU: its ``module`` choice, else the MCU's entry
-    (manufacturer, part number, description)."""
-    name = choices(board).get("module")
-    return MODULES[name] if name is not None else MCU[board["mcu"]]
+    """What the revision's BOM orders for its MCU: its ``module`` choice in ``REVISIONS``, else
+    the MCU's entry (manufacturer, part number, description, ``short`` name). It needs nothing
+    else of the revision (``pinmap.py`` names it on a revision ``SENSE`` does not know yet)."""
+    if board["mcu"] not in MCU:
+        raise PartsError(f"hardware/parts.py: {board['name']} runs on {board['mcu']!r}, which "
+                         "MCU does not list; add it there")
+    name = REVISIONS.get(board["name"], {}).get("module")
+    if name is None:
+        return MCU[board["mcu"]]
+    if name not in MODULES:
+        raise PartsError(f"hardware/parts.py: {board['name']} orders module {name!r}, which "
+                         "MODULES does not list; add it there")
+    return MODULES[name]
 
 
 def fuse_for(amps: float) -> int:

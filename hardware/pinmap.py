@@ -206,6 +206,9 @@ def generate(out: Path) -> list[Path]:
 def main(argv: list[str]) -> int:
     try:
         paths = generate(Path(argv[0]) if argv else ROOT / "hardware")
+    except P.PartsError as exc:  # the module it names: one line, as hardware/bom.py says it
+        print(exc, file=sys.stderr)
+        return 2
     except (KeyError, IndexError) as exc:
         print(f"firmware/boards: a revision lacks {exc} (or has too few entries) for "
               "hardware/pinmap.py; see the keys in firmware/boards/__init__.py", file=sys.stderr)

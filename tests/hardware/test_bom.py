@@ -96,6 +96,11 @@ def test_a_module_missing_from_the_catalogue_is_one_line(tmp_path: Path) -> None
     err = bom_of_edited_copy(tmp_path, "hardware/parts.py", '"module": "pico-2-w"}',
                              '"module": "pico-9"}')
     assert "'pico-9'" in err and "MODULES" in err
+    # the drawings name the module too: the same one line from pinmap.py
+    done = subprocess.run([sys.executable, "hardware/pinmap.py", str(tmp_path / "pins")],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120,
+                          env={"PATH": "/usr/bin:/bin"})
+    assert done.returncode == 2 and done.stderr == err, done.stderr
 
 
 @pytest.mark.parametrize("rev", REVS)
