@@ -119,7 +119,8 @@ def _child_env(tmp: Path) -> dict[str, str]:
     ``PYTHONDONTWRITEBYTECODE`` says here: without it every run compiled dxboard's modules
     from source again (about 30 ms a run), which no user's install does."""
     env = {**os.environ, "XDG_CACHE_HOME": str(tmp / "cache"),
-           "PYTHONPYCACHEPREFIX": str(tmp / "pycache")}
+           "PYTHONPYCACHEPREFIX": str(tmp / "pycache"),
+           "DXBOARD_WARM_SOCKET": str(tmp / "no-server.sock")}  # cold: no warm server
     env.pop("PYTHONDONTWRITEBYTECODE", None)
     return env
 
@@ -288,8 +289,11 @@ def bench_rc2_process(args: argparse.Namespace, lines: list[str]) -> None:
     (hard: the circuit's clauses and the observations; soft: each gate healthy), c2670 and
     c7552: the command's first minimum (``--min-card-only --max-count 1``) and its whole
     minimal-cardinality list (``--min-card-only``, up to 1,000); CPU of the whole process
-    (user + system), the best of ``--repeat`` runs, the command's cache warm."""
-    from benchmarks.iscas import _wcnf
+    (user + system), the best of ``--repeat`` runs, the command's cache warm. Beside them the
+    same two commands handed to a warm server (``dxboard warm``): the console script's process
+    plus the server's CPU meanwhile, its forked child's included
+    (``benchmarks/_rigs/warm.py``)."""
+    from benchmarks._rigs import warm
 
     rng = random.Random(args.seed + 2)
     per = 3 if args.quick else 5
@@ -303,47 +307,68 @@ def bench_rc2_process(args: argparse.Namespace, lines: list[str]) -> None:
                  "`python -m pysat.examples.rc2 FILE.wcnf` (its first optimum). Load average "
                  f"{os.getloadavg()[0]:.1f} at the start.\n")
     lines.append("| circuit | RC2 process | command, first | command, all | first / RC2 | "
-                 "all / RC2 | load |")
-    lines.append("|---|---|---|---|---|---|---|")
+                 "all / RC2 | warm: first | warm: all | warm first / RC2 | warm all / RC2 | "
+                 "load |")
+    lines.append("|---|---|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory(prefix="dxboard-bench-") as tmp:
         env = _child_env(Path(tmp))
-        for name in ("c2670", "c7552"):
-            circuit = parse_bench(ISCAS / f"{name}.bench")
-            if args.circuits and name not in args.circuits:
-                continue
-            theory = circuit_theory(circuit)
-            known = theory.observable_atoms()
-            model = _warm_model(theory, Path(tmp) / f"{name}.yaml", env)
-            cpu: dict[str, float] = {"rc2": 0.0, "first": 0.0, "all": 0.0}
-            loads = [os.getloadavg()[0]]
-            for n, (_flips, obs) in enumerate(sample(circuit, rng, per)):
-                obs = [o for o in obs if o.atom in known]
-                obs_file = Path(tmp) / f"{name}-{n}.obs"
-                obs_file.write_text("".join(f"{o}\n" for o in obs))
-                wcnf_file = Path(tmp) / f"{name}-{n}.wcnf"
-                _wcnf(theory, obs)[0].to_file(str(wcnf_file))
-                base = [*command, "diagnose", str(model), "--obs", str(obs_file), "--json",
-                        "--min-card-only", "--time-budget", str(args.budget)]
-                runs = {"rc2": [sys.executable, "-m", "pysat.examples.rc2", str(wcnf_file)],
-                        "first": [*base, "--max-count", "1"], "all": base}
-                costs: dict[str, int] = {}
-                for label, cmd in runs.items():
-                    best = float("inf")
-                    for _ in range(args.repeat):
-                        _t, c, proc = _run_child(cmd, env)
-                        best = min(best, c)
-                        if label == "rc2":
-                            costs[label] = int(next(line.split()[1] for line in
-                                                    proc.stdout.splitlines()
-                                                    if line.startswith("o ")))
-                        else:
-                            data = json.loads(proc.stdout)
-                            costs[label] = data["diagnoses"][0]["cardinality"]
-                    cpu[label] += best
-                assert len(set(costs.values())) == 1, costs  # the same minimum everywhere
-                loads.append(os.getloadavg()[0])
-            lines.append(f"| {name} | {fmt(cpu['rc2'])} | {fmt(cpu['first'])} | "
-                         f"{fmt(cpu['all'])} | {cpu['first'] / cpu['rc2']:.2f}x | "
-                         f"{cpu['all'] / cpu['rc2']:.2f}x | {min(loads):.1f}-{max(loads):.1f} |")
-            print(lines[-1], flush=True)
+        warm_env = {**env, "DXBOARD_WARM_SOCKET": str(Path(tmp) / "warm.sock")}
+        server = warm.start_server(command, warm_env)
+        try:
+            _rc2_rows(args, lines, command, env, warm_env, Path(tmp), rng, per)
+        finally:
+            warm.stop_server(server)
     lines.append("")
+
+
+def _rc2_rows(args: argparse.Namespace, lines: list[str], command: list[str],
+              env: dict[str, str], warm_env: dict[str, str], tmp: Path, rng: random.Random,
+              per: int) -> None:
+    from benchmarks._rigs import warm
+    from benchmarks.iscas import _wcnf
+
+    for name in ("c2670", "c7552"):
+        circuit = parse_bench(ISCAS / f"{name}.bench")
+        if args.circuits and name not in args.circuits:
+            continue
+        theory = circuit_theory(circuit)
+        known = theory.observable_atoms()
+        model = _warm_model(theory, Path(tmp) / f"{name}.yaml", env)
+        cpu: dict[str, float] = {"rc2": 0.0, "first": 0.0, "all": 0.0, "warm first": 0.0,
+                                 "warm all": 0.0}
+        loads = [os.getloadavg()[0]]
+        for n, (_flips, obs) in enumerate(sample(circuit, rng, per)):
+            obs = [o for o in obs if o.atom in known]
+            obs_file = Path(tmp) / f"{name}-{n}.obs"
+            obs_file.write_text("".join(f"{o}\n" for o in obs))
+            wcnf_file = Path(tmp) / f"{name}-{n}.wcnf"
+            _wcnf(theory, obs)[0].to_file(str(wcnf_file))
+            base = [*command, "diagnose", str(model), "--obs", str(obs_file), "--json",
+                    "--min-card-only", "--time-budget", str(args.budget)]
+            runs = {"rc2": [sys.executable, "-m", "pysat.examples.rc2", str(wcnf_file)],
+                    "first": [*base, "--max-count", "1"], "all": base,
+                    "warm first": [*base, "--max-count", "1"], "warm all": base}
+            costs: dict[str, int] = {}
+            for label, cmd in runs.items():
+                best = float("inf")
+                hot = label.startswith("warm")
+                for _ in range(args.repeat):
+                    _t, c, proc = warm.run(cmd, warm_env if hot else env, hot)
+                    best = min(best, c)
+                    if label == "rc2":
+                        costs[label] = int(next(line.split()[1] for line in
+                                                proc.stdout.splitlines()
+                                                if line.startswith("o ")))
+                    else:
+                        data = json.loads(proc.stdout)
+                        costs[label] = data["diagnoses"][0]["cardinality"]
+                cpu[label] += best
+            assert len(set(costs.values())) == 1, costs  # the same minimum everywhere
+            loads.append(os.getloadavg()[0])
+        lines.append(f"| {name} | {fmt(cpu['rc2'])} | {fmt(cpu['first'])} | "
+                     f"{fmt(cpu['all'])} | {cpu['first'] / cpu['rc2']:.2f}x | "
+                     f"{cpu['all'] / cpu['rc2']:.2f}x | {fmt(cpu['warm first'])} | "
+                     f"{fmt(cpu['warm all'])} | {cpu['warm first'] / cpu['rc2']:.2f}x | "
+                     f"{cpu['warm all'] / cpu['rc2']:.2f}x | "
+                     f"{min(loads):.1f}-{max(loads):.1f} |")
+        print(lines[-1], flush=True)

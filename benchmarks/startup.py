@@ -20,7 +20,14 @@ the problem), when ``up-fast-downward`` is installed (``pip install -e '.[bench]
 ``--base DIR`` adds each command run from another checkout (``PYTHONPATH=DIR``, e.g. ``git
 archive main | tar -x -C DIR``), interleaved too: before against after in the same run.
 
-    python -m benchmarks.startup [--repeat 15] [--from-shell] [--base DIR]
+``--warm`` adds each command handed to a warm server (``dxboard warm start --foreground``, on a
+socket of the run's own; docs/operating/warm.md), interleaved too. Its CPU is the console
+script's process plus what the server spent meanwhile, its forked child's included (the
+server's ``cpu_s`` and ``children_cpu_s`` from ``warm status`` before and after, which also
+counts answering that status: the figure errs high). The cold commands look for a server at a
+path where none listens, as a person's do who started none.
+
+    python -m benchmarks.startup [--repeat 15] [--from-shell] [--base DIR] [--warm]
 """
 
 from __future__ import annotations
@@ -31,29 +38,25 @@ import os
 import resource
 import shutil
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-FD = "fast-downward --alias lama-first (same problem files)"
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+from benchmarks._rigs import warm as warm_rig  # noqa: E402 (the checkout on the path first)
 
-def _run(cmd: list[str], env: dict[str, str]) -> tuple[float, float]:
-    """Wall and CPU seconds of one child process; it must succeed."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    start = time.perf_counter()
-    proc = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, check=False)
-    wall = time.perf_counter() - start
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+FD = "fast-downward --alias lama-first (same problem files)"
+
+
+def _run(cmd: list[str], env: dict[str, str], warm: bool = False) -> tuple[float, float]:
+    """Wall and CPU seconds of one command; it must succeed (``warm``: ``_rigs.warm.run``)."""
+    wall, cpu, proc = warm_rig.run(cmd, env, warm, cwd=ROOT)
     if proc.returncode != 0:
-        raise SystemExit(f"{' '.join(cmd)}: exit {proc.returncode}: "
-                         f"{proc.stderr.decode(errors='replace')[-400:]}")
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+        raise SystemExit(f"{' '.join(cmd)}: exit {proc.returncode}: {proc.stderr[-400:]}")
     return wall, cpu
 
 
@@ -108,6 +111,8 @@ def main() -> int:
     parser.add_argument("--from-shell", action="store_true",
                         help="clear the ROS wheels' guard: both sides pay the re-exec")
     parser.add_argument("--base", metavar="DIR", help="also run each command from this checkout")
+    parser.add_argument("--warm", action="store_true",
+                        help="also run each command through a warm server")
     args = parser.parse_args()
     env = dict(os.environ)
     if args.from_shell:
@@ -117,6 +122,7 @@ def main() -> int:
         # in a directory of the run's own so that the checkout stays clean
         env.pop("PYTHONDONTWRITEBYTECODE", None)
         env["PYTHONPYCACHEPREFIX"] = str(Path(t) / "pycache")
+        env["DXBOARD_WARM_SOCKET"] = str(Path(t) / "no-server.sock")
         cmds = commands(Path(t))
         from host.planning.downward import driver_path
 
@@ -132,21 +138,47 @@ def main() -> int:
             for name in [n for n in cmds if n != "python -c pass"]:
                 cmds[f"{name} (before: --base)"] = cmds[name]
                 envs[f"{name} (before: --base)"] = base_env
-        for name, cmd in cmds.items():  # warm the file cache, the .pyc files, the caches
-            _run(cmd, envs[name])
-        wall: dict[str, list[float]] = {k: [] for k in cmds}
-        cpu: dict[str, list[float]] = {k: [] for k in cmds}
-        load = [os.getloadavg()[0]]
-        for _ in range(args.repeat):
-            for name, cmd in cmds.items():
-                w, c = _run(cmd, envs[name])
-                wall[name].append(w)
-                cpu[name].append(c)
-            if fd_problem is not None:
-                w, c = _run_fd(ROOT / "models/tedusar/repair.pddl", fd_problem, Path(t))
-                wall.setdefault(FD, []).append(w)
-                cpu.setdefault(FD, []).append(c)
-            load.append(os.getloadavg()[0])
+        server = None
+        if args.warm:
+            warm_env = dict(env, DXBOARD_WARM_SOCKET=str(Path(t) / "warm.sock"))
+            server = warm_rig.start_server(cmds["plan models/tedusar --bad jaguar"][:2],
+                                           warm_env)
+            for name in [n for n in cmds if n != "python -c pass" and "--base" not in n]:
+                cmds[f"{name} (warm)"] = cmds[name]
+                envs[f"{name} (warm)"] = warm_env
+        try:
+            wall, cpu, load = _measure(cmds, envs, args.repeat, fd_problem, Path(t))
+        finally:
+            if server is not None:
+                warm_rig.stop_server(server)
+    _print(args, wall, cpu, load)
+    return 0
+
+
+def _measure(cmds: dict[str, list[str]], envs: dict[str, dict[str, str]], repeat: int,
+             fd_problem: Path | None, tmp: Path,
+             ) -> tuple[dict[str, list[float]], dict[str, list[float]], list[float]]:
+    """``repeat`` interleaved runs of every command (after one to warm the caches)."""
+    for name, cmd in cmds.items():  # warm the file cache, the .pyc files, the caches
+        _run(cmd, envs[name], name.endswith("(warm)"))
+    wall: dict[str, list[float]] = {k: [] for k in cmds}
+    cpu: dict[str, list[float]] = {k: [] for k in cmds}
+    load = [os.getloadavg()[0]]
+    for _ in range(repeat):
+        for name, cmd in cmds.items():
+            w, c = _run(cmd, envs[name], name.endswith("(warm)"))
+            wall[name].append(w)
+            cpu[name].append(c)
+        if fd_problem is not None:
+            w, c = _run_fd(ROOT / "models/tedusar/repair.pddl", fd_problem, tmp)
+            wall.setdefault(FD, []).append(w)
+            cpu.setdefault(FD, []).append(c)
+        load.append(os.getloadavg()[0])
+    return wall, cpu, load
+
+
+def _print(args: argparse.Namespace, wall: dict[str, list[float]],
+           cpu: dict[str, list[float]], load: list[float]) -> None:
     base_cpu = statistics.median(cpu["python -c pass"])
     base_wall = statistics.median(wall["python -c pass"])
     print(f"{args.repeat} interleaved runs each, load average {min(load):.1f}-{max(load):.1f}, "
@@ -165,7 +197,6 @@ def main() -> int:
               f"{statistics.median(wall[FD]) / statistics.median(wall[ours]):.2f}x")
     else:
         print("\nFast Downward is not installed: pip install -e '.[bench]'")
-    return 0
 
 
 if __name__ == "__main__":

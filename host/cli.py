@@ -51,6 +51,7 @@ COMMANDS: dict[str, str] = {
     "experiment": "host.commands.experiment",
     "mission": "host.commands.mission",
     "fleet": "host.commands.fleet",
+    "warm": "host.warm.command",  # above the command line: it forks the commands it runs
 }
 
 

@@ -59,6 +59,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("host.experiment",),
     ("host.commands",),  # composition: one module per command
     ("host.cli",),
+    ("host.warm",),  # runs the command line's everyday commands in a warm process
+    ("host.entry",),  # the console script: the warm server, else the command line
 )
 
 ROOTS = ("protocol", "firmware", "emulator", "host")

@@ -3,7 +3,8 @@ says ``[exit N]``) and prints what is shown.
 
 The docs cannot drift from the code: each page's blocks run in order (``tests/docs/blocks.py``
 says how they are marked) in a directory of their own that sees the project's ``models/`` and
-``.venv``, with a model cache of its own. A block titled "runs until Ctrl-C" is started, its
+``.venv``, with a model cache and a warm server's socket of its own (a server a page started is
+stopped after it, passed or failed). A block titled "runs until Ctrl-C" is started, its
 shown lines awaited with a generous deadline, then stopped with SIGINT and awaited; it is killed
 if it does not stop, and the test fails.
 """
@@ -28,7 +29,7 @@ def workdir(tmp: Path) -> tuple[Path, dict[str, str]]:
     for name in ("models", ".venv", "scripts"):
         (tmp / name).symlink_to(ROOT / name)
     env = {**os.environ, "PYTHONPATH": str(ROOT), "XDG_CACHE_HOME": str(tmp / "cache"),
-           "COLUMNS": "100"}
+           "COLUMNS": "100", "DXBOARD_WARM_SOCKET": str(tmp / "warm.sock")}
     return tmp, env
 
 
@@ -71,8 +72,13 @@ def run_long(block: Block, cwd: Path, env: dict[str, str]) -> None:
 @pytest.mark.parametrize("page", RUNNABLE, ids=[str(p.relative_to(DOCS)) for p in RUNNABLE])
 def test_the_commands_of_the_page_run_as_shown(page: Path, tmp_path: Path) -> None:
     cwd, env = workdir(tmp_path)
-    for block in blocks(page):
-        (run_long if block.long_running else run_block)(block, cwd, env)
+    try:
+        for block in blocks(page):
+            (run_long if block.long_running else run_block)(block, cwd, env)
+    finally:  # a page that started a warm server (on its own socket) leaves none behind
+        if Path(env["DXBOARD_WARM_SOCKET"]).exists():
+            subprocess.run([".venv/bin/dxboard", "warm", "stop"], cwd=cwd, env=env,
+                           capture_output=True, timeout=DEADLINE_S, check=False)
 
 
 def test_the_docs_have_runnable_blocks_of_both_kinds() -> None:
