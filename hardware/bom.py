@@ -12,7 +12,12 @@ tolerances). The clamp at its highest must stay under the absolute maximum of ev
 behind the surge stopper, the TVS's clamp under the surge stopper's and its MOSFETs', and a
 negative surge (``parts.REVERSE_SURGES``) held by the TVS above the surge stopper's reverse
 rating: ``protection`` checks all three, and a revision that breaks one is refused (one line,
-exit 2).
+exit 2). The surge stopper's own support parts (``parts.STOPPER``) set its time-outs, its UV
+and OV thresholds and the pass MOSFET's stress (``stopper``, from the LTC4364 data sheet's
+figures in ``parts.LTC4364_TIMING``): a revision whose UV threshold could reach its lowest
+input, whose OV threshold its highest, whose timer would run out before the bulk capacitor is
+charged, or (once ``parts.py`` has the figure) whose MOSFET stress reaches its SOA, is refused
+the same way.
 Usage, from the repository root: ``python hardware/bom.py
 [OUT_DIR]`` (default ``hardware``); ``tests/hardware/test_bom.py`` checks that the committed
 files are its output. A revision that names a part ``parts.py`` lacks: one line saying what to
@@ -37,6 +42,8 @@ from pinmap import write  # noqa: E402
 
 from protocol import settings  # noqa: E402
 
+# the pass MOSFET's two worst cases, as board.md and the refusals name them
+SHORTED, SURGE = "output shorted", "a surge held at the TVS's breakdown"
 TRIP_FACTOR = next(d for name, _, d, _, _ in settings.CHANNEL if name == "trip_factor_x10") / 10
 
 
@@ -96,6 +103,77 @@ def protection(b: dict[str, Any]) -> dict[str, Any]:
             "sense": P.shunt_for(sense_ohm, ss["sense_v"] / sense_ohm), "reverse": reverse}
 
 
+def divider(top: float, bottom: float, ref_v: float, ref_tol: float,
+            res_tol: float) -> tuple[float, float, float]:
+    """(nominal, lowest, highest) input voltage at which a ``top`` over ``bottom`` divider puts
+    ``ref_v`` on its joint, with the reference's and both resistors' tolerances."""
+    def at(ref: float, t: float) -> float:
+        return ref * (1 + top * (1 + t) / (bottom * (1 - t)))
+    return (at(ref_v, 0.0), at(ref_v * (1 - ref_tol), -res_tol),
+            at(ref_v * (1 + ref_tol), res_tol))
+
+
+def timeouts(tmr_f: float) -> tuple[float, float]:
+    """(overcurrent, overvoltage) time-out of the surge stopper with ``tmr_f`` on its TMR pin:
+    the data sheet's short-circuit example (P^2 t = (V_IN x dV_SNS / R_SNS)^2 x t_OC) solved for
+    its t_OC and scaled by the capacitance; the timer charges 5 times slower in an
+    overvoltage."""
+    ss = P.INPUT["surge_stopper"]
+    ex = ss["tmr_example"]
+    t_oc = ex["p2t_w2s"] / (ex["v_in"] * ex["sense_v"] / ex["sense_ohm"]) ** 2
+    t_oc *= tmr_f / ex["tmr_f"]
+    return t_oc, t_oc * ss["tmr_oc_ov_ratio"]
+
+
+def stopper(b: dict[str, Any], vmin: float, vmax: float, board_a: float,
+            prot: dict[str, Any]) -> dict[str, Any]:
+    """What the surge stopper's support parts (``parts.STOPPER``) set on revision ``b``, with
+    input range ``vmin`` to ``vmax``: its time-outs, its UV and OV thresholds, the bulk
+    capacitor's charge at the current limit and the pass MOSFET's P^2 t. ``PartsError`` if the
+    UV threshold could reach the lowest input, the OV threshold the highest, the overcurrent
+    time-out run out before the bulk capacitor is charged, or the P^2 t reach what the MOSFET's
+    SOA allows (once ``parts.py`` has that figure)."""
+    ss, sp, inp = P.INPUT["surge_stopper"], P.STOPPER, P.INPUT
+    top, mid, bottom = (sp[k]["ohm"] for k in ("uv_top", "uv_mid", "uv_bottom"))
+    th = (ss["uv_ov_v"], ss["uv_ov_tol"], P.UV_OV_RES_TOL)
+    uv, ov = divider(top, mid + bottom, *th), divider(top + mid, bottom, *th)
+    tmr = sp["timer"]
+    t_oc, t_ov = timeouts(tmr["farad"])
+    shortest = (1 - tmr["tol"]) * (1 - tmr["tempco"])
+    short_a = ss["short_sense_v"] / prot["sense_ohm"]
+    charge_s = inp["bulk"]["farad"] * vmax / short_a
+    held_v = inp["tvs"]["vbr_max_v"] - prot["low"]
+    p2t = {SHORTED: (vmax * short_a) ** 2 * t_oc * ss["p2t_margin"],
+           SURGE: (board_a * held_v) ** 2 * t_ov * ss["p2t_margin"]}
+    refs = "-".join((sp["uv_top"]["ref"], sp["uv_bottom"]["ref"]))
+    if uv[2] >= vmin:
+        raise P.PartsError(
+            f"hardware/parts.py: {b['name']}'s surge stopper turns the board off below up to "
+            f"{uv[2]:.2f} V (UV, string {refs}), not under its lowest input of {vmin:g} V; "
+            "lower uv_top or raise uv_mid in STOPPER")
+    if ov[1] <= vmax:
+        raise P.PartsError(
+            f"hardware/parts.py: {b['name']}'s surge stopper refuses to start from "
+            f"{ov[1]:.2f} V (OV, string {refs}), not above its highest input of {vmax:g} V; "
+            "lower uv_bottom in STOPPER")
+    if t_oc * shortest <= charge_s * P.START_MARGIN:
+        raise P.PartsError(
+            f"hardware/parts.py: the surge stopper's overcurrent time-out ("
+            f"{t_oc * shortest * 1000:.2f} ms at its shortest, {tmr['ref']} "
+            f"{tmr['farad'] * 1e9:g} nF) is not {P.START_MARGIN:g} x the "
+            f"{charge_s * 1000:.2f} ms its current limit takes to charge {b['name']}'s bulk "
+            "capacitor: the board would not start; raise the timer's farad in STOPPER")
+    soa = inp["mosfet"]["soa_p2t_w2s"]
+    worst = max(p2t, key=lambda k: p2t[k])
+    if soa is not None and p2t[worst] >= soa:
+        raise P.PartsError(
+            f"hardware/parts.py: {b['name']}'s pass MOSFET {inp['mosfet']['mpn']} takes "
+            f"{p2t[worst]:.0f} W^2 s ({worst}), not under the {soa:g} W^2 s its SOA allows; "
+            "lower the timer's farad in STOPPER or choose a stronger MOSFET")
+    return {"uv": uv, "ov": ov, "t_oc": t_oc, "t_ov": t_ov, "shortest": shortest,
+            "short_a": short_a, "charge_s": charge_s, "held_v": held_v, "p2t": p2t}
+
+
 def reverse_surge(source_v: float, source_ohm: float) -> tuple[float, float]:
     """(volts, amperes) at which the TVS holds a surge of ``source_v`` from ``source_ohm``:
     above its breakdown (at its highest) the TVS is a resistance ``(clamp_v - vbr_max_v) /
@@ -147,6 +225,7 @@ def limits(b: dict[str, Any]) -> dict[str, Any]:
                            f"input of {vmax[0]:g} V; choose a TVS with a higher standoff")
     in_fuse = c["input_fuse_a"]
     board_a = in_fuse / P.FUSE_MARGIN
+    support = stopper(b, vmin[0], vmax[0], board_a, prot)
     n_chips = 0 if smart else -(-b["channels"] // sense["per_chip"])
     top, bottom = P.PASSIVES["readback_series"]["ohm"], P.PASSIVES["readback_pulldown"]["ohm"]
     bus_pf = n_chips * P.I2C_PIN_PF + P.I2C_TRACE_PF
@@ -160,6 +239,7 @@ def limits(b: dict[str, Any]) -> dict[str, Any]:
         "adc_max_v": adc_max_v, "vmax": vmax[0], "vmax_by": vmax[1], "vmin": vmin[0],
         "vmin_by": vmin[1], "input_fuse_a": in_fuse, "board_a": board_a,
         "fet_loss_w": board_a * board_a * inp["mosfet"]["rds_on_ohm"], "protection": prot,
+        "stopper": support,
         "n_chips": n_chips, "bus_pf": bus_pf, "readback": bottom / (top + bottom),
         "pullup_max_ohm": P.I2C_RISE_NS * 1e-9 / (0.8473 * bus_pf * 1e-12), "smart": smart,
     }
@@ -203,6 +283,19 @@ def protection_parts(lim: dict[str, Any]) -> list[list[Any]]:
     ]
 
 
+def stopper_parts(lim: dict[str, Any]) -> list[list[Any]]:
+    """The surge stopper's support parts (``parts.STOPPER``): its timer capacitor, its UV/OV
+    string and its SHDN pull-up, the first two with what they set."""
+    sup, sp = lim["stopper"], P.STOPPER
+    sets = {"timer": f": time-outs {sup['t_oc'] * 1000:.2f} ms (overcurrent), "
+                     f"{sup['t_ov'] * 1000:.1f} ms (overvoltage)",
+            "uv_top": f"; with {sp['uv_mid']['ref']} and {sp['uv_bottom']['ref']}: the board "
+                      f"off under {sup['uv'][0]:.1f} V (UV), no start above {sup['ov'][0]:.2f} V"
+                      " (OV)"}
+    return [[p["ref"], 1, p["mfr"], p["mpn"], p["what"] + sets.get(key, "")]
+            for key, p in sp.items()]
+
+
 def bom_rows(b: dict[str, Any]) -> list[list[str]]:
     """(reference, quantity, manufacturer, part number, description), one row per part."""
     lim = limits(b)
@@ -219,6 +312,7 @@ def bom_rows(b: dict[str, Any]) -> list[list[str]]:
         ["Q1-Q2", 2, P.INPUT["mosfet"]["mfr"], P.INPUT["mosfet"]["mpn"],
          P.INPUT["mosfet"]["what"]],
         *protection_parts(lim),
+        *stopper_parts(lim),
         ["D1", 1, P.INPUT["tvs"]["mfr"], P.INPUT["tvs"]["mpn"], P.INPUT["tvs"]["what"]],
         ["F0", 1, "Littelfuse", P.FUSE_MPN.format(amps=in_fuse),
          f"ATO blade fuse {in_fuse} A 32 V: the input"],
@@ -329,6 +423,72 @@ def protection_limits(lim: dict[str, Any]) -> list[str]:
     ]
 
 
+def soa_verdict() -> str:
+    """What the pass MOSFET's P^2 t rows say of its SOA: checked against the figure in
+    ``parts.py``, or not checked."""
+    fet = P.INPUT["mosfet"]
+    if fet["soa_p2t_w2s"] is None:
+        return f"the {fet['mpn']}'s SOA figure was not found: not checked"
+    return f"under the {fet['soa_p2t_w2s']:g} W^2 s the {fet['mpn']}'s SOA allows"
+
+
+def stopper_limits(lim: dict[str, Any]) -> list[str]:
+    """The rows of what the surge stopper's support parts set: its time-outs (TMR), the start-up
+    they must outlast, the cool-down, the UV and OV thresholds and the pass MOSFET's stress.
+    Page numbers are the LTC4364 data sheet's (``parts.LTC4364_TIMING``)."""
+    ss, sp, sup = P.INPUT["surge_stopper"], P.STOPPER, lim["stopper"]
+    prot, ex, tmr = lim["protection"], ss["tmr_example"], sp["timer"]
+    kohm = [sp[k]["ohm"] / 1000 for k in ("uv_top", "uv_mid", "uv_bottom")]
+    string = " + ".join(f"{r:g} k" for r in kohm)
+    uv, ov = sup["uv"], sup["ov"]
+    return [
+        f"| surge stopper overcurrent time-out | {sup['t_oc'] * 1000:.2f} ms, at least "
+        f"{sup['t_oc'] * sup['shortest'] * 1000:.2f} ms | {tmr['ref']} {tmr['farad'] * 1e9:g} nF:"
+        f" the data sheet's short-circuit example (p. 16: {ex['v_in']:g} V, "
+        f"{ex['sense_v'] * 1000:g} mV / {ex['sense_ohm'] * 1000:g} mOhm, "
+        f"{ex['tmr_f'] * 1e9:g} nF: {ex['p2t_w2s']:g} W^2 s) solved for t_OC = "
+        f"{ex['p2t_w2s']:g} / ({ex['v_in']:g} V x {ex['sense_v'] / ex['sense_ohm']:.2f} A)^2, x "
+        f"{tmr['ref']} / {ex['tmr_f'] * 1e9:g} nF; -{tmr['tol'] * 100:g} % and "
+        f"-{tmr['tempco'] * 100:g} % (X7R over temperature) at its shortest; TMR pulls FLT low "
+        f"at {ss['tmr_flt_v']:g} V and turns Q1 off at {ss['tmr_off_v']:g} V (p. 10). With "
+        f"{ex['v_in']:g} V across Q1: how the timer current changes with it was not found, "
+        "not confirmed against a datasheet |",
+        f"| surge stopper overvoltage time-out at the clamp | {sup['t_ov'] * 1000:.1f} ms, at least"
+        f" {sup['t_ov'] * sup['shortest'] * 1000:.1f} ms | {ss['tmr_oc_ov_ratio']} x the "
+        "overcurrent time-out (the timer charges that much slower in an overvoltage, p. 10; at "
+        f"the same {ex['v_in']:g} V across Q1, not confirmed at others): "
+        "the board rides through a surge this long at the clamp; a load dump (ISO 7637-2 pulse"
+        " 5, 40 ms to 400 ms) outlasts it: Q1 turns off, and comes back on after the cool-down "
+        "once the input is under the OV threshold |",
+        f"| start-up: the bulk capacitor at the current limit | {sup['charge_s'] * 1000:.2f} ms | "
+        f"{P.INPUT['bulk']['farad'] * 1e6:g} uF to {lim['vmax']:g} V at "
+        f"{ss['short_sense_v'] * 1000:g} mV / {prot['sense_ohm'] * 1000:g} mOhm = "
+        f"{sup['short_a']:g} A (the limit while OUT is under 1.5 V, p. 10); x "
+        f"{P.START_MARGIN:g} is under the shortest overcurrent time-out, so the board starts |",
+        "| surge stopper cool-down before a retry | not found | the LTC4364-2 turns Q1 back on "
+        "after a cool-down period (p. 12); its length is not in the data sheet pages at hand: "
+        "not confirmed against a datasheet |",
+        f"| input under-voltage turn-off | {uv[0]:.2f} V, {uv[1]:.2f} V to {uv[2]:.2f} V | UV "
+        f"{ss['uv_ov_v']:g} V x ({string}) / ({kohm[1]:g} k + {kohm[2]:g} k), "
+        f"+-{P.UV_OV_RES_TOL * 100:g} % resistors, +-{ss['uv_ov_tol'] * 100:g} % threshold (not "
+        f"confirmed against a datasheet); under the lowest input, {lim['vmin']:g} V "
+        f"({lim['vmin_by']}): it never cuts inside the input range; the firmware's uv_off acts "
+        "above it |",
+        f"| input over-voltage lock-out | {ov[0]:.2f} V, {ov[1]:.2f} V to {ov[2]:.2f} V | OV "
+        f"{ss['uv_ov_v']:g} V x ({string}) / {kohm[2]:g} k; above the highest input, "
+        f"{lim['vmax']:g} V: a higher input keeps Q1 off at power-up and stops a retry after a "
+        "fault, but does not turn Q1 off (p. 12) |",
+        f"| pass MOSFET stress, {SHORTED} | {sup['p2t'][SHORTED]:.0f} W^2 s | "
+        f"({lim['vmax']:g} V x {sup['short_a']:g} A)^2 x {sup['t_oc'] * 1000:.2f} ms x "
+        f"{ss['p2t_margin']:g} for tolerances (p. 16); {soa_verdict()} |",
+        f"| pass MOSFET stress, {SURGE} | "
+        f"{sup['p2t'][SURGE]:.0f} W^2 s | ({lim['board_a']:g} A x "
+        f"({P.INPUT['tvs']['vbr_max_v']:g} V - {prot['low']:.2f} V))^2 x "
+        f"{sup['t_ov'] * 1000:.1f} ms x {ss['p2t_margin']:g}: the board's full current while Q1 "
+        f"holds the clamp until the overvoltage time-out; {soa_verdict()} |",
+    ]
+
+
 def markdown(b: dict[str, Any]) -> str:
     lim = limits(b)
     sw = lim["switch"]
@@ -360,6 +520,7 @@ def markdown(b: dict[str, Any]) -> str:
         f"| input MOSFETs' loss at that current | {lim['fet_loss_w']:.2f} W each | "
         f"I^2 x {P.INPUT['mosfet']['rds_on_ohm'] * 1000:g} mOhm (Q1 pass, Q2 ideal diode) |",
         *protection_limits(lim),
+        *stopper_limits(lim),
         *sense_limits(b, lim)[1:],
         "", "## The protected channel", "",
         "The channel the configuration marks `protected` (`dxboard flash --config`) powers the"

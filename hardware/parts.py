@@ -20,10 +20,20 @@ MOSFET as an ideal diode against a reversed battery; it runs from 4 V to 80 V an
 highest input nor a reversed battery makes it conduct) clamps what would exceed the stopper's
 and the MOSFETs' ratings, and holds a negative surge (``REVERSE_SURGES``) above -40 V.
 ``hardware/bom.py`` works the clamp's tolerance out and refuses a revision whose clamp could
-reach a part's absolute maximum. ``REVISIONS`` holds what a revision chooses beyond its
-firmware file (which switch, the input fuse, the MCU module); a revision without an entry gets
-its sense chip's defaults, so a new revision file is enough for a first BOM. Every rating here
-is the datasheet's (the document is named beside it); nothing is measured.
+reach a part's absolute maximum. The LTC4364's own support parts are in ``STOPPER``: the
+capacitor on its TMR pin that sets how long it holds a surge or a short before it turns the
+pass MOSFET off, the three-resistor string from the input to its UV and OV pins (it turns the
+board off under about 6 V and refuses to start or retry above about 30 V), and the pull-up that
+holds its SHDN pin high; ``bom.py`` works their time-outs and thresholds out and refuses a
+revision whose UV threshold could reach its lowest input, whose OV threshold its highest
+input, whose timer would run out before the bulk capacitor is charged, or (once the MOSFET's
+SOA figure is here) whose pass MOSFET would take more than that allows. ``REVISIONS`` holds
+what a revision chooses beyond its firmware file (which switch, the input fuse, the MCU
+module); a revision without an entry gets its sense chip's defaults, so a new revision file is
+enough for a first BOM. Every rating here is the datasheet's (the document is named beside it,
+the LTC4364's pages by their addresses); nothing is measured. A figure the available pages do
+not give is said to be so where it stands: "not confirmed against a datasheet" when a value is
+used all the same, ``None`` (and "not checked" in ``board.md``) when it is not.
 """
 
 from __future__ import annotations
@@ -123,6 +133,43 @@ FUSE_V = 32.0  # the ATO series' voltage rating
 FUSE_HOLDER = {"mfr": "Keystone Electronics", "mpn": "3557-2",
                "what": "PCB fuse holder for ATO blade fuses, 30 A"}
 
+# The LTC4364's timer and its UV/OV comparators, from its data sheet (Linear Technology 436412f,
+# LTC4364-1/LTC4364-2); only some of its pages were at hand, each named by its address:
+#   p. 10 https://pdf.product.network/e1049276/analog.com/LTC4364CDE-1%23PBF.html ("Operation")
+#   p. 12 http://38.142.81.21:8001/manual/linear-technology/dc2027a-a/datasheet-english/page-12.html
+#   p. 16 http://38.142.81.21:8001/manual/linear-technology/dc2027a-a/datasheet-english/page-16.html
+# - p. 10: in an overvoltage or an overcurrent a current source charges the capacitor on TMR;
+#   in an overcurrent it is 5 times the overvoltage one; at 1.25 V FLT pulls low, at 1.35 V the
+#   pass MOSFET turns off. The current limit is 50 mV over the sense resistor (SENSE to OUT),
+#   25 mV while OUT is under 1.5 V (a shorted output).
+# - p. 12: the -2 turns the pass MOSFET back on after the fault is gone and a cool-down period
+#   has passed. OV (threshold 1.25 V, a divider from the input) holds HGATE low at power-up and,
+#   once the MOSFET is on, does not turn it off but stops a restart after a fault while the
+#   input is above it. UV detects an input undervoltage (a low battery).
+# - p. 16: short-circuit stress P^2 t = (V_IN x dV_SNS / R_SNS)^2 x t_OC, t_OC the overcurrent
+#   timer interval; its example (15 V, OUT 0 V, 25 mV, 12 mOhm, C_TMR 100 nF) gives 2.2 W^2 s,
+#   "doubled to 4.4 W^2 s" for circuit tolerances. A capacitor from HGATE to ground may slow the
+#   inrush at the expense of a slower turn-off (optional; its formula needs the HGATE pull-up
+#   current, which was not found).
+# Not found in those pages: the timer currents themselves (so t_OC is the p. 16 example's,
+# scaled by the capacitance, at its 15 V across the MOSFET; how the currents change with that
+# voltage is not known), the cool-down's length, the UV threshold (1.25 V: the datasheet's
+# Figure 1 as read in https://electronics.stackexchange.com/questions/386403/ -- 383 k over
+# 90.9 k + 10 k for 6 V), the UV/OV tolerance and hysteresis, the pin descriptions of SHDN,
+# ENOUT and VCC, and the HGATE compensation paragraph.
+LTC4364_TIMING: dict[str, Any] = {
+    "short_sense_v": 0.025,  # p. 10: the current limit while OUT is under 1.5 V
+    "tmr_flt_v": 1.25, "tmr_off_v": 1.35,  # p. 10: FLT low, then the pass MOSFET off
+    "tmr_oc_ov_ratio": 5,  # p. 10: the timer charges 5 times faster in an overcurrent
+    # p. 16's short-circuit example, from which t_OC per farad of C_TMR follows
+    "tmr_example": {"v_in": 15.0, "sense_v": 0.025, "sense_ohm": 0.012, "tmr_f": 100e-9,
+                    "p2t_w2s": 2.2},
+    "p2t_margin": 2.0,  # p. 16: the P^2 t doubled for circuit tolerances
+    "uv_ov_v": 1.25,  # p. 12 (OV); UV's the same: not confirmed against a datasheet
+    "uv_ov_tol": 0.02,  # not found: the FB reference's 2 %, not confirmed against a datasheet
+    "cooldown_s": None,  # p. 12: the -2 retries after a cool-down; its length not found
+}
+
 INPUT: dict[str, dict[str, Any]] = {
     # ``vbr_max_v``: breakdown at its highest; ``clamp_v`` at ``ipp_a`` (10/1000 us): between
     # the two the clamp rises about linearly with the current (``bom.reverse_surge``)
@@ -136,22 +183,61 @@ INPUT: dict[str, dict[str, Any]] = {
                       "input to -40 V; 4 V to 80 V, 100 V absolute (MSOP-16)",
                       "v_op": (4.0, 80.0), "abs_max_v": 100.0, "reverse_v": 40.0,
                       "fb_v": 1.25, "fb_tol": 0.02,
-                      "sense_v": 0.050, "datasheet": "Analog Devices LTC4364 data sheet"},
+                      "sense_v": 0.050, **LTC4364_TIMING,
+                      "datasheet": "Analog Devices LTC4364 data sheet"},
+    # ``soa_p2t_w2s``: the P^2 t its safe operating area allows for a pulse of a few ms (the
+    # LTC4364 data sheet compares the pass MOSFET's stress with it, page 16); its SOA figure
+    # was not found: None, and board.md says the stress is not checked
     "mosfet": {"mfr": "Texas Instruments", "mpn": "CSD18540Q5B", "what": "N-channel MOSFET "
                "60 V, 1.8 mOhm at VGS 10 V (SON 5x6): Q1 the LTC4364's pass device (HGATE), "
                "Q2 its ideal diode against a reversed battery (DGATE)", "rds_on_ohm": 0.0018,
-               "abs_max_v": 60.0, "datasheet": "TI SLPS412"},
+               "abs_max_v": 60.0, "soa_p2t_w2s": None, "datasheet": "TI SLPS412"},
     "regulator": {"mfr": "RECOM", "mpn": "R-78E5.0-0.5", "what": "5 V 0.5 A switching "
                   "regulator, input 7 V to 28 V (SIP-3), feeds the Pico's VSYS",
                   "v_in": (7.0, 28.0), "abs_max_v": 28.0},
     "bulk": {"mfr": "Panasonic", "mpn": "EEU-FR1V471", "what": "470 uF 35 V electrolytic, "
-             "input bulk capacitor, after the surge stopper", "abs_max_v": 35.0},
+             "input bulk capacitor, after the surge stopper", "abs_max_v": 35.0,
+             "farad": 470e-6},
 }
 CLAMP_BOTTOM_OHM = 10000  # the FB divider's lower resistor; the upper one is per revision
 RESISTOR_TOL = 0.001  # the 0.1 % thin-film resistors of the FB divider
 # Yageo RT0603 0.1 %: the part number of a value in kOhm (E96)
 CLAMP_MPN = "RT0603BRD07{kohm}KL"
 CURRENT_LIMIT_MARGIN = 1.25  # the surge stopper limits at 1.25 x the input fuse's rating
+
+# The LTC4364's support parts (U3), one set for every revision; ``bom.stopper`` works out what
+# they set and checks it against each revision's input range.
+# - ``timer``: TMR to ground. 100 nF is the data sheet's own example (p. 16), so its time-outs
+#   are the example's; X7R, +-10 % (K) and up to +-15 % over temperature.
+# - ``uv_top``/``uv_mid``/``uv_bottom``: one string from the input (VCC's side of Q1) to ground,
+#   UV at the top joint, OV at the lower one, as the data sheet's Figure 1 draws it:
+#   UV = 1.25 V x (top + mid + bottom) / (mid + bottom), about 6.0 V, under the regulator's 7 V
+#   minimum so that it never cuts inside the input range (the firmware's uv_off acts above);
+#   OV = 1.25 V x (top + mid + bottom) / bottom, about 30 V, above every revision's highest
+#   input. 241 kOhm in all: 0.11 mA from the battery at 26 V, whenever it is connected.
+# - ``shdn_pullup``: SHDN to VCC, so the chip is always on; SHDN's input current and rating were
+#   not found: a resistor keeps it high whatever pull-down or clamp it has (0.45 mA at most into
+#   one, at the TVS's 45.4 V).
+# FLT (pulls low before a turn-off, p. 10) and ENOUT (its description not found) are left
+# open: the firmware reads neither. No HGATE capacitor (optional, p. 16): the inrush is held
+# by the current limit, and ``bom.stopper`` checks that the timer outlasts it.
+STOPPER: dict[str, dict[str, Any]] = {
+    "timer": {"ref": "CT1", "mfr": "Murata", "mpn": "GRM188R71H104KA93D", "farad": 100e-9,
+              "tol": 0.10, "tempco": 0.15, "what": "100 nF 50 V X7R 0603: the surge stopper's "
+              "fault timer (TMR to ground)"},
+    "uv_top": {"ref": "RUV1", "mfr": "Yageo", "mpn": "RC0603FR-07191KL", "ohm": 191000,
+               "what": "191 kOhm 1 % 0603: the surge stopper's UV/OV string, top (input to UV)"},
+    "uv_mid": {"ref": "RUV2", "mfr": "Yageo", "mpn": "RC0603FR-0740K2L", "ohm": 40200,
+               "what": "40.2 kOhm 1 % 0603: the surge stopper's UV/OV string, middle (UV to OV)"},
+    "uv_bottom": {"ref": "RUV3", "mfr": "Yageo", "mpn": "RC0603FR-0710KL", "ohm": 10000,
+                  "what": "10 kOhm 1 % 0603: the surge stopper's UV/OV string, bottom (OV to "
+                  "ground)"},
+    "shdn_pullup": {"ref": "REN1", "mfr": "Yageo", "mpn": "RC0603FR-07100KL", "ohm": 100000,
+                    "what": "100 kOhm 1 % 0603: the surge stopper's SHDN pulled up to its VCC "
+                    "(always on)"},
+}
+UV_OV_RES_TOL = 0.01  # the 1 % resistors of the UV/OV string
+START_MARGIN = 1.5  # the overcurrent time-out, at its shortest, outlasts 1.5 x the bulk charge
 
 CONNECTORS: dict[str, dict[str, Any]] = {
     "input": {"mfr": "AMASS", "mpn": "XT60PW-M", "what": "XT60 male, PCB, right angle: the "

@@ -2,8 +2,11 @@
 ``firmware/boards`` and ``hardware/parts.py`` now, for every revision there is; the limits are
 the arithmetic of the parts' ratings (a shunt's power rating from I^2 R at its channel's
 limit, a fuse from the continuous current, the surge stopper's clamp under the absolute
-maximum of every part behind it); and a revision naming a part the catalogue lacks, or whose
-clamp could reach a part's absolute maximum, gets one line and exit 2."""
+maximum of every part behind it, the surge stopper's time-outs and UV/OV thresholds from its
+data sheet's figures); and a revision naming a part the catalogue lacks, whose clamp could
+reach a part's absolute maximum, or whose surge stopper's support parts break a rule (UV
+inside the input range, OV under its top, a timer shorter than the start-up, a MOSFET stress
+over its SOA), gets one line and exit 2."""
 
 from __future__ import annotations
 
@@ -241,3 +244,113 @@ def test_a_clamp_that_could_reach_a_part_is_refused_in_one_line(tmp_path: Path) 
                              '"input_fuse_a": 20, "clamp_top_kohm": 205,')
     assert "rev-b" in err and "INA3221AIRGVR" in err
     assert "clamp_top_kohm" in err
+
+
+# The LTC4364's support parts (hardware/parts.py STOPPER): the timer capacitor on TMR, the
+# UV/OV string from the input and the SHDN pull-up, with the part numbers a builder orders.
+STOPPER_PARTS = {"CT1": "GRM188R71H104KA93D", "RUV1": "RC0603FR-07191KL",
+                 "RUV2": "RC0603FR-0740K2L", "RUV3": "RC0603FR-0710KL",
+                 "REN1": "RC0603FR-07100KL"}
+
+
+def family(ref: str) -> str:
+    """The letters of a reference designator: RG of RG1-RG10, CT of CT1, C of C0."""
+    found = re.match(r"[A-Z]+", ref)
+    assert found is not None, ref
+    return found[0]
+
+
+@pytest.mark.parametrize("rev", REVS)
+def test_every_bom_orders_the_surge_stoppers_support_parts(rev: str) -> None:
+    """The LTC4364 cannot work from its MOSFETs, sense resistor and FB divider alone: its timer
+    capacitor, the UV/OV string and the SHDN pull-up are in every revision's BOM and parts table,
+    each once, in a family of references no other part uses (RG is the read-back pull-downs')."""
+    got = rows(rev)
+    for ref, mpn in STOPPER_PARTS.items():
+        assert got[ref]["mpn"] == mpn and got[ref]["quantity"] == "1", ref
+    text = (ROOT / "hardware" / rev / "board.md").read_text()
+    parts = text.split("## Parts")[1]
+    for ref, mpn in STOPPER_PARTS.items():
+        assert f"| {ref} | 1 | " in parts and mpn in parts, ref
+    others = {family(ref) for ref in got if ref not in STOPPER_PARTS}
+    assert not {family(ref) for ref in STOPPER_PARTS} & others
+
+
+def limits_table(rev: str) -> dict[str, tuple[str, str]]:
+    """The rows of a revision's "Limits" table: limit -> (value, set by)."""
+    text = (ROOT / "hardware" / rev / "board.md").read_text()
+    section = text.split("## Limits")[1].split("\n## ")[0]
+    out = {}
+    for line in section.splitlines():
+        if line.startswith("| ") and not line.startswith("| limit |"):
+            name, value, by = line[2:-2].split(" | ")
+            out[name] = (value, by)
+    return out
+
+
+@pytest.mark.parametrize("rev", REVS)
+def test_the_surge_stoppers_figures_follow_from_its_data_sheet(rev: str) -> None:
+    """Worked out here from the data sheet's figures, not read back from bom.py: its
+    short-circuit example (p. 16: 15 V, 25 mV over 12 mOhm, 100 nF, 2.2 W^2 s) gives t_OC for
+    CT1's 100 nF, the overvoltage time-out is 5 times it (p. 10); UV and OV are 1.25 V over the
+    191 k / 40.2 k / 10 k string; the short-circuit P^2 t is (V_IN x 25 mV / 2 mOhm)^2 x t_OC,
+    doubled (p. 16); the bulk capacitor charges at 12.5 A well inside the shortest time-out."""
+    lim = limits_table(rev)
+    found = re.fullmatch(r"7 V to ([\d.]+) V", lim["input voltage"][0])
+    assert found is not None
+    vmax = float(found[1])
+    t_oc = 2.2 / (15 * 0.025 / 0.012) ** 2 * (100e-9 / 100e-9)
+    shortest = t_oc * 0.90 * 0.85  # X7R: -10 % (K), -15 % over temperature
+    assert 2.2e-3 < t_oc < 2.3e-3
+    assert lim["surge stopper overcurrent time-out"][0] == (
+        f"{t_oc * 1000:.2f} ms, at least {shortest * 1000:.2f} ms")
+    assert lim["surge stopper overvoltage time-out at the clamp"][0] == (
+        f"{5 * t_oc * 1000:.1f} ms, at least {5 * shortest * 1000:.1f} ms")
+    charge = 470e-6 * vmax / (0.025 / 0.002)
+    assert lim["start-up: the bulk capacitor at the current limit"][0] == f"{charge * 1000:.2f} ms"
+    assert 1.5 * charge < shortest  # the board starts before the timer runs out
+    uv = 1.25 * (191 + 40.2 + 10) / (40.2 + 10)
+    uv_high = 1.25 * 1.02 * (1 + 191 * 1.01 / ((40.2 + 10) * 0.99))
+    assert lim["input under-voltage turn-off"][0].startswith(f"{uv:.2f} V")
+    assert lim["input under-voltage turn-off"][0].endswith(f" to {uv_high:.2f} V")
+    assert uv_high < 7.0  # the regulator's minimum: never cuts inside the input range
+    ov = 1.25 * (191 + 40.2 + 10) / 10
+    ov_low = 1.25 * 0.98 * (1 + (191 + 40.2) * 0.99 / (10 * 1.01))
+    assert lim["input over-voltage lock-out"][0].startswith(f"{ov:.2f} V, {ov_low:.2f} V")
+    assert ov_low > vmax  # the board starts at its highest input
+    short = (vmax * 0.025 / 0.002) ** 2 * t_oc * 2
+    assert lim["pass MOSFET stress, output shorted"][0] == f"{short:.0f} W^2 s"
+    # the MOSFET's SOA and the cool-down were not found: the page says so, it does not guess
+    assert lim["pass MOSFET stress, output shorted"][1].endswith("not checked")
+    assert lim["surge stopper cool-down before a retry"][0] == "not found"
+    assert "not confirmed" in lim["surge stopper overcurrent time-out"][1]
+
+
+def test_a_uv_threshold_above_the_lowest_input_is_refused_in_one_line(tmp_path: Path) -> None:
+    """A 249 k top resistor: the stopper would turn off under 7.45 V, inside rev A's range."""
+    err = bom_of_edited_copy(tmp_path, "hardware/parts.py", '"ohm": 191000,', '"ohm": 249000,')
+    assert "rev-a" in err and "7 V" in err and "uv_top" in err and "RUV1-RUV3" in err
+
+
+def test_an_ov_threshold_under_the_highest_input_is_refused_in_one_line(tmp_path: Path) -> None:
+    """A 12.1 k bottom resistor: OV at 25.1 V, under rev A's highest input of 26.2 V."""
+    err = bom_of_edited_copy(tmp_path, "hardware/parts.py", '"ohm": 10000,\n',
+                             '"ohm": 12100,\n')
+    assert "rev-a" in err and "26.2 V" in err and "uv_bottom" in err
+
+
+def test_a_timer_that_runs_out_before_start_up_is_refused_in_one_line(tmp_path: Path) -> None:
+    """47 nF on TMR: the overcurrent time-out (0.81 ms at its shortest) ends before the current
+    limit has charged the 470 uF bulk capacitor to 26.2 V (0.99 ms, x 1.5)."""
+    err = bom_of_edited_copy(tmp_path, "hardware/parts.py", '"farad": 100e-9,',
+                             '"farad": 47e-9,')
+    assert "CT1 47 nF" in err and "would not start" in err and "farad" in err
+
+
+def test_a_pass_mosfet_stress_over_its_soa_is_refused_in_one_line(tmp_path: Path) -> None:
+    """Once the MOSFET's SOA figure is in parts.py it is checked: 400 W^2 s is under rev A's
+    483 W^2 s with its output shorted."""
+    err = bom_of_edited_copy(tmp_path, "hardware/parts.py", '"soa_p2t_w2s": None,',
+                             '"soa_p2t_w2s": 400.0,')
+    assert "rev-a" in err and "CSD18540Q5B" in err and "483 W^2 s (output shorted)" in err
+    assert "400 W^2 s" in err
