@@ -10,6 +10,7 @@ emulated board, not to the boot.
 from __future__ import annotations
 
 import os
+from collections.abc import MutableSequence
 from typing import Any, Protocol
 
 from emulator.electronics import Electronics
@@ -38,7 +39,7 @@ class SimHal:
     def ticks_ms(self) -> int:
         return self.emu.now - self.boot_at
 
-    def read_currents_ma(self, out: list[int]) -> None:
+    def read_currents_ma(self, out: MutableSequence[int]) -> None:
         now = self.emu.now
         read = self.elec.read_ma
         for ch in range(self.n_channels):

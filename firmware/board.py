@@ -32,9 +32,12 @@ sticky_faults, trips, retries)`` (indices ``S_*`` and ``C_*`` below). Events go 
 ``self.events`` (an ``EventLog``; see ``events.py`` for how front ends drain it).
 """
 
+from array import array
+
 from firmware import bootlog, config
-from firmware.channel import X_OFF, X_ON, X_SHED, Channel
+from firmware.channel import WINDOW, X_OFF, X_ON, X_SHED, Channel
 from firmware.events import EventLog
+from firmware.fast import HOT, steady
 from protocol.compat import const
 from protocol.constants import (
     B_DEADMAN,
@@ -105,7 +108,12 @@ class Board:
         self.n = hal.n_channels
         self.factory = factory
         self.events = EventLog(log_size)
-        self.samples = [0] * self.n
+        self.samples = array("i", [0] * self.n)
+        self.sws = array("i", [0] * self.n)  # the switches read back, 1/0
+        self.acc = array("i", [0, 0])  # the steady pass's sums: all samples, steady ON ones
+        # every channel's hot fields and noise window, flat (firmware.fast.steady)
+        self.hot = array("i", [0] * (HOT * self.n))
+        self.win = array("i", [0] * (WINDOW * self.n))
         self.channels: "list[Channel]" = []
         self.cfg: "Config" = {}
         self.cfg_status = 0
@@ -146,8 +154,10 @@ class Board:
             self.flags |= B_SAFE_MODE
             self.cfg_status = CFG_SAFE_MODE
         self.channels = []
+        hot, win = memoryview(self.hot), memoryview(self.win)
         for i in range(self.n):
-            ch = Channel(i, hal, self.events, cfg["channels"][i])
+            ch = Channel(i, hal, self.events, cfg["channels"][i],
+                         hot[i * HOT:(i + 1) * HOT], win[i * WINDOW:(i + 1) * WINDOW])
             ch.boot_ms = now
             hal.set_switch(i, False)
             self.channels.append(ch)
@@ -190,18 +200,35 @@ class Board:
         self.last = self.now = now
         samples = self.samples
         hal.read_currents_ma(samples)
-        total = 0
-        live = 0  # the current of channels still switched on after this step
-        read_switch = hal.read_switch  # (hot loop: one lookup)
-        for ch in self.channels:
-            i = ch.index
-            ma = samples[i]  # < 0: a code (no reading, tripped, low: firmware.hal)
-            ch.step(now, ma, read_switch(i), dt)
-            if ma > 0:
-                total += ma
-                st = ch.state
-                if st == ST_ON or st == ST_INRUSH:  # noqa: SIM109 (no tuple on the hot path)
-                    live += ma
+        sws = self.sws
+        read_switches = getattr(hal, "read_switches", None)
+        swl = None
+        if read_switches is not None:  # 1/0 into sws, each as read_switch's bool
+            read_switches(sws)
+        else:  # a HAL without it: read_switch's values as they are, for the full step
+            read_switch = hal.read_switch
+            swl = [read_switch(i) for i in range(self.n)]
+            for i in range(self.n):
+                sws[i] = 1 if swl[i] else 0
+        # the steady channels in one pass (firmware.fast); the others in full, in order
+        acc = self.acc
+        mask = steady(self.hot, self.win, samples, sws, self.n, dt, acc)
+        total = acc[0]
+        live = acc[1]  # the current of channels still switched on after this step
+        i = 0
+        chans = self.channels
+        while mask:
+            if mask & 1:
+                ch = chans[i]
+                ma = samples[i]  # < 0: a code (no reading, tripped, low: firmware.hal)
+                ch.step(now, ma, swl[i] if swl is not None else sws[i] != 0, dt)
+                ch.arm()
+                if ma > 0:
+                    st = ch.state
+                    if st == ST_ON or st == ST_INRUSH:  # noqa: SIM109 (no tuple)
+                        live += ma
+            mask >>= 1
+            i += 1
         self.total_ma = total
         self.input_mv = hal.read_input_mv()
         if self.queue and now >= self.queue_at:

@@ -91,6 +91,21 @@ Protection, per tick, from the integer current ``ma`` (no floating point on the 
 ``live`` faults are conditions present now; ``sticky`` faults accumulate until ``clear``.
 """
 
+from array import array
+
+from firmware.fast import (
+    H_ARMED,
+    H_AT,
+    H_CUR,
+    H_JUMP,
+    H_OPEN,
+    H_PHYS,
+    H_RATED,
+    H_START2,
+    H_STUCK,
+    H_TRIP,
+    HOT,
+)
 from firmware.hal import LOW, TRIPPED
 from protocol.compat import const
 from protocol.constants import (
@@ -196,7 +211,11 @@ TRANSITIONS = {
 class Channel:
     """One channel's configuration, state machine and protection. ``log`` is an EventLog."""
 
-    def __init__(self, index: int, hal: "Hal", log: "EventLog", cfg: "ChannelConfig") -> None:
+    def __init__(self, index: int, hal: "Hal", log: "EventLog", cfg: "ChannelConfig",
+                 hot: "Any" = None, win: "Any" = None) -> None:
+        # the fields the board's steady pass (firmware.fast.steady) reads and writes: HOT ints
+        # and the window; the board hands in slices of its flat arrays, a lone channel owns them
+        self.hot = hot if hot is not None else array("i", [0] * HOT)
         self.index = index
         self.hal = hal
         self.log = log
@@ -222,9 +241,9 @@ class Channel:
         self.open_sum = 0  # readings with the switch open during the stuck-on window
         self.open_n = 0
         self.unread = False  # the sensor gives no readings (the HAL reads -1)
-        self.win = [0] * WINDOW  # the latest samples (a ring; ``at`` is the next slot)
+        # the latest samples (a ring; ``hot[H_AT]`` is the next slot)
+        self.win = win if win is not None else array("i", [0] * WINDOW)
         self.jumped = bytearray(WINDOW)  # 1 where a sample jumped from the one before
-        self.at = 0
         self.jumps = 0  # the 1s in ``jumped``
         self.fresh = True  # the next sample starts the window anew (no jump from before)
         self.swing = 0  # the way of the last move over jump_ma: 1 up, -1 down, 0 none yet
@@ -257,8 +276,50 @@ class Channel:
         self.stuck_on_ms = cfg["stuck_on_ms"]
         self.priority = cfg["priority"]
         self.protected = cfg["protected"]
+        h = self.hot
+        h[H_ARMED] = 0
+        h[H_TRIP] = self.trip_lim
+        h[H_RATED] = rated
+        h[H_START2] = self.start2
+        h[H_OPEN] = self.open_ma
+        h[H_JUMP] = self.jump_ma
+        h[H_STUCK] = self.stuck_on_ma
         if self.state == ST_ON:
             self._limit(self.trip_lim)
+
+    @property
+    def current_ma(self) -> int:
+        """The latest reading (raw: no offset taken off), 0 for a code."""
+        v: int = self.hot[H_CUR]
+        return v
+
+    @current_ma.setter
+    def current_ma(self, ma: int) -> None:
+        self.hot[H_CUR] = ma
+
+    def arm(self) -> None:
+        """After a step: whether the board's steady pass may take the next ones (``hot[H_ARMED]``,
+        see ``firmware.fast.steady``): a state in which ``step`` changes nothing but the current
+        and the window as long as the sample stays in the limits that pass checks. Anything
+        else that changes the channel (``fire``, ``clear``, ``apply``) disarms it."""
+        a = 0
+        if not (self.unread or self.noisy or self.offset_ma or self.fresh or self.jumps
+                or self.heat or self.retries or self.short_used or self.live & F_LOW) \
+                and self.heat_max > 0:
+            st = self.state
+            if st == ST_ON:
+                if self.physical and not (self.over_n or self.mismatch_n
+                                          or self.live & F_OVERLOAD):
+                    if self.low_since < 0:
+                        a = 1
+                    elif self.live & F_OPEN_LOAD:
+                        a = 2
+            elif (st == ST_OFF or st == ST_LATCHED or st == ST_FAULTED) \
+                    and self.stuck_since < 0 and self.cycle_at < 0:  # noqa: SIM109 (no tuple)
+                a = 3
+        h = self.hot
+        h[H_PHYS] = 1 if self.physical else 0
+        h[H_ARMED] = a
 
     # --- the state machine ------------------------------------------------------------
 
@@ -269,6 +330,7 @@ class Channel:
 
     def fire(self, x: int, now: int) -> int:
         """Apply input ``x``; returns 0 or the error code that refused it."""
+        self.hot[H_ARMED] = 0
         old = self.state
         new, err = TRANSITIONS[(old, x)]
         if err:
@@ -338,6 +400,7 @@ class Channel:
         self.fire(x, now)
 
     def clear(self, now: int) -> int:
+        self.hot[H_ARMED] = 0
         err = self.fire(X_CLEAR, now)
         if not err:
             self.sticky = 0
@@ -405,7 +468,8 @@ class Channel:
     def _sample(self, now: int, ma: int) -> bool:
         """Keep sample ``ma`` in the window and judge the sensor's noise; True when the window
         jumps (protection then uses its median)."""
-        at = self.at
+        hot = self.hot
+        at = hot[H_AT]
         d = ma - self.win[(at - 1) & WINDOW_MASK]
         j = 0
         if (d > self.jump_ma or -d > self.jump_ma) and not self.fresh:
@@ -417,7 +481,7 @@ class Channel:
         self.jumps += j - self.jumped[at]
         self.jumped[at] = j
         self.win[at] = ma
-        self.at = (at + 1) & WINDOW_MASK
+        hot[H_AT] = (at + 1) & WINDOW_MASK
         n = self.jumps
         if n >= NOISY_JUMPS:
             self.calm_since = -1

@@ -45,6 +45,7 @@ has no ``typing`` and compiles an ``if False:`` block away, so there ``Hal`` is 
 """
 
 if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from collections.abc import MutableSequence
     from typing import Protocol
 
     class Storage(Protocol):
@@ -77,7 +78,7 @@ class Hal(Protocol):
     def ticks_ms(self) -> int:
         raise NotImplementedError
 
-    def read_currents_ma(self, out: "list[int]") -> None:
+    def read_currents_ma(self, out: "MutableSequence[int]") -> None:
         for ch in range(self.n_channels):
             out[ch] = self.read_current_ma(ch)
 

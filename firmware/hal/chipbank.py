@@ -25,6 +25,7 @@ from firmware.hal import NO_READING
 from protocol.compat import const
 
 if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from collections.abc import MutableSequence
     from typing import Protocol
 
     class I2c(Protocol):
@@ -162,7 +163,7 @@ class ChipBank:
             self._failed(chip, exc)
             return NO_READING
 
-    def read(self, out: "list[int]") -> None:
+    def read(self, out: "MutableSequence[int]") -> None:
         """Every channel's value into ``out``; then one chip's configuration checked."""
         if self.bus_wait:
             self.bus_wait -= 1

@@ -15,10 +15,16 @@ register (2.5 uV/LSB) over the shunt, which needs no calibration. Per tick on th
 SHUNT read per channel and one CONFIG check (10 chips: each checked every 100 ms).
 """
 
-from firmware.hal.chipbank import ChipBank
+from array import array
+
+from firmware.fast import ina226_read
+from firmware.hal import NO_READING
+from firmware.hal.chipbank import C_OK, ChipBank
 from protocol.compat import const
 
 if False:  # typing only (compiled away on the board)
+    from collections.abc import MutableSequence
+
     from firmware.hal.chipbank import I2c
 
 REG_CONFIG = const(0x00)
@@ -44,10 +50,51 @@ class Ina226Bank(ChipBank):
         super().__init__(i2c, addrs, list(range(n)), [0] * n)
         self.addrs = addrs
         self.shunt_uohm = shunt_uohm
+        self.addr_b = bytes(addrs)  # for the viper read
+        self.prog = array("i", [0])  # the channel the viper read was at
 
     def _write_config(self, chip: int) -> None:
         self._put(chip, REG_CONFIG, CONFIG_TICK)
         self._put(chip, REG_CALIBRATION, calibration(self.shunt_uohm))
+
+    def read(self, out: "MutableSequence[int]") -> None:
+        """As ``ChipBank.read`` (a chip a channel, no per-tick flags), each run of ready chips
+        read by ``firmware.fast.ina226_read``."""
+        if self.bus_wait:
+            ChipBank.read(self, out)
+            return
+        n = self.n
+        rd = self.i2c.readfrom_mem_into
+        ch = 0
+        while ch < n:
+            if not self.bus_wait:
+                try:
+                    ch = ina226_read(rd, self.addr_b, self.state, self.buf, out, ch, n,
+                                     self.shunt_uohm, self.prog)
+                except OSError as exc:
+                    ch = self.prog[0]
+                    self._failed(ch, exc)
+                    out[ch] = NO_READING
+                    ch += 1
+                    continue
+                if ch >= n:
+                    break
+            # ChipBank.read's body for a chip not ready (or a bus down since)
+            try:
+                if self._ready(ch):
+                    self._before(ch)
+            except OSError as exc:
+                self._failed(ch, exc)
+            if self.state[ch] == C_OK and not self.bus_wait:
+                try:
+                    out[ch] = self._sample(ch)
+                except OSError as exc:
+                    self._failed(ch, exc)
+                    out[ch] = NO_READING
+            else:
+                out[ch] = self.read_one(ch)
+            ch += 1
+        self._check()
 
     def _sample(self, ch: int) -> int:
         buf = self.buf  # _get inlined: this runs for every channel every tick

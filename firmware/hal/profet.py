@@ -31,7 +31,7 @@ whose IS is stuck driving would blind every channel); ``report`` says so per cha
 from firmware.hal import LOW, NO_READING, TRIPPED
 
 if False:  # typing only; MicroPython never imports typing (the block is compiled away)
-    from collections.abc import Callable
+    from collections.abc import Callable, MutableSequence
     from typing import Any, Protocol
 
     from firmware.hal.target import Adc
@@ -124,7 +124,7 @@ class ProfetBank:
         ma = ua * self.k_ilis // 1000
         return LOW if ma < self.accurate_ma else ma
 
-    def read(self, out: "list[int]") -> None:
+    def read(self, out: "MutableSequence[int]") -> None:
         """Every channel into ``out``, as ``read_one`` each in turn, in one loop (the tick's hot
         path: the bound methods in locals, each part's DEN raised once for its two channels
         rather than every other DEN lowered again per channel: the same levels on the pins)."""

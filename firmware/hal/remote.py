@@ -44,6 +44,7 @@ from firmware.net import Net
 from firmware.session import FIRMWARE_VERSION, board_key
 
 if False:  # typing only; MicroPython never imports typing (the block is compiled away)
+    from collections.abc import MutableSequence
     from typing import Any, Protocol
 
     from firmware.can import Frame
@@ -120,7 +121,7 @@ class RemoteHal:
     def ticks_ms(self) -> int:
         return self.now
 
-    def read_currents_ma(self, out: "list[int]") -> None:
+    def read_currents_ma(self, out: "MutableSequence[int]") -> None:
         ma = self.ma
         for ch in range(self.n_channels):
             out[ch] = ma[ch]

@@ -24,6 +24,7 @@ import time as _port_time
 import machine  # type: ignore[import-not-found]  # MicroPython only: no stubs
 
 from firmware import boards
+from firmware.fast import pins_read
 from firmware.hal.ina226 import Ina226Bank
 from firmware.hal.ina3221 import Ina3221Bank
 from protocol.constants import (
@@ -35,7 +36,7 @@ from protocol.constants import (
 )
 
 if False:  # typing only; MicroPython never imports typing (the block is compiled away)
-    from collections.abc import Sequence
+    from collections.abc import MutableSequence, Sequence
     from typing import Any, Protocol
 
     from firmware.hal import Storage
@@ -49,7 +50,7 @@ if False:  # typing only; MicroPython never imports typing (the block is compile
 
         def read_one(self, ch: int) -> int: ...
 
-        def read(self, out: "list[int]") -> None: ...
+        def read(self, out: "MutableSequence[int]") -> None: ...
 
     class Adc(Protocol):
         """A ``machine.ADC``."""
@@ -135,7 +136,7 @@ class TargetHal:
             return self.adc[ch].read_u16() * self.ma_k // 1000
         return 0
 
-    def read_currents_ma(self, out: "list[int]") -> None:
+    def read_currents_ma(self, out: "MutableSequence[int]") -> None:
         if self.ina is not None:
             self.ina.read(out)
             return
@@ -154,6 +155,10 @@ class TargetHal:
         if self.status is not None:
             return bool(self.status[ch].value())
         return bool(self.en[ch].value())
+
+    def read_switches(self, out: "Any") -> None:
+        """Every switch read back into ``out`` (array('i')): 1 or 0, as ``read_switch``."""
+        pins_read(self.status if self.status is not None else self.en, out, self.n_channels)
 
     def read_input_mv(self) -> int:
         return self.vin.read_u16() * self.mv_k // 1000 if self.vin is not None else 0

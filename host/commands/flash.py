@@ -53,6 +53,11 @@ FACTORY_MODULE = "firmware/factory.py"
 BUILD_MODULE = "firmware/build.py"
 REV_FILE = "board_rev"  # the revision main.py builds the board from (firmware/boards)
 DEFAULT_REV = "rev-a"
+# mpy-cross's -march for a revision's MCU: firmware/fast.py is viper (machine code), which
+# mpy-cross compiles only for a named architecture. ARMv6-M code also loads on a later Arm
+# core (MicroPython's py/persistentcode.h accepts ARMV6M up to its own), so a revision file
+# that says rp2040 flashes a Pico 2 W (RP2350, Cortex-M33) too; "rp2350" gives its own.
+MPY_ARCH = {"rp2040": "armv6m", "rp2350": "armv7emsp"}
 
 # runs on the board: make the package folders, drop modules that are not being deployed
 _PREPARE = """
@@ -144,13 +149,25 @@ def _mpy_cross() -> str:
     return found
 
 
-def _deploy(src: Path, rel: str, work: Path, cross: str) -> tuple[str, Path]:
+def _march(board_rev: str) -> list[str]:
+    """mpy-cross's architecture option for the revision's MCU."""
+    from firmware import boards
+
+    mcu = boards.load(board_rev).get("mcu", "")
+    if mcu not in MPY_ARCH:
+        raise UserError(f"no mpy-cross architecture for the MCU {mcu!r} of {board_rev}",
+                        "flash without --mpy (the board compiles the sources itself)")
+    return ["-march=" + MPY_ARCH[mcu]]
+
+
+def _deploy(src: Path, rel: str, work: Path, cross: str,
+            march: list[str] | None = None) -> tuple[str, Path]:
     """(remote path, local file) of one source: itself, or compiled into ``work``."""
     if not cross:
         return rel, src
     out = work / (rel[:-3] + ".mpy")
     out.parent.mkdir(parents=True, exist_ok=True)
-    done = subprocess.run([cross, "-o", str(out), "-s", rel, str(src)],
+    done = subprocess.run([cross, *(march or []), "-o", str(out), "-s", rel, str(src)],
                           capture_output=True, text=True)
     if done.returncode:
         raise UserError(f"mpy-cross failed on {rel}: {done.stderr.strip()}",
@@ -178,6 +195,7 @@ def collect(mpy: bool, work: Path, factory: dict[str, Any] | None = None,
     board revision and ``firmware/build.py`` the build id of everything else deployed."""
     files: dict[str, Path] = {}
     cross = _mpy_cross() if mpy else ""
+    march = _march(board_rev) if mpy else []
     generated = {FACTORY_MODULE: _factory_source(factory), BUILD_MODULE: None}
     for pkg in PACKAGES:
         root = package_dir(pkg)
@@ -187,12 +205,12 @@ def collect(mpy: bool, work: Path, factory: dict[str, Any] | None = None,
             rel = src.relative_to(root.parent).as_posix()
             if rel in generated:
                 continue
-            remote, local = _deploy(src, rel, work, cross)
+            remote, local = _deploy(src, rel, work, cross, march)
             files[remote] = local
     source = work / "src" / FACTORY_MODULE
     source.parent.mkdir(parents=True, exist_ok=True)
     source.write_text(generated[FACTORY_MODULE] or "")
-    remote, local = _deploy(source, FACTORY_MODULE, work, cross)
+    remote, local = _deploy(source, FACTORY_MODULE, work, cross, march)
     files[remote] = local
     main = work / "main.py"
     main.write_bytes(MAIN_PY)
