@@ -6,8 +6,9 @@ interpreter and umask with this process's stdin, stdout and stderr attached, for
 SIGTERM, SIGHUP and SIGQUIT to the command's process group while it runs, and returns its exit
 code. It returns None, having run nothing, when there is no server, when the server declines
 (another interpreter or ``sys.path``, code changed since it started: then it says so on stderr,
-once, as the server stops), or when a standard stream is closed; the console script then runs
-the command itself. Only built-in modules are imported here (see ``host.warm.wire``).
+once, as the server stops), when a standard stream is closed, or when the command would stop on
+the terminal (``terminal_allows``); the console script then runs the command itself. Only
+built-in modules are imported here (see ``host.warm.wire``).
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ def request(argv: list[str]) -> dict[str, object]:
 
 def run(argv: list[str]) -> int | None:
     """The exit code of ``argv`` run by the warm server, or None when it did not run it."""
-    if os.environ.get(DISABLE_ENV) == "0" or not wanted(argv):
+    if os.environ.get(DISABLE_ENV) == "0" or not wanted(argv) or not terminal_allows(argv):
         return None
     try:
         for fd in (0, 1, 2):
@@ -96,6 +97,26 @@ def run(argv: list[str]) -> int | None:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         sock.close()
+
+
+def terminal_allows(argv: list[str]) -> bool:
+    """False when a command run by the server would stop on this terminal: its child is not in
+    the terminal's foreground process group, so reading the terminal (a file argument that is
+    stdin) stops it (SIGTTIN), and so does writing to it when the terminal says ``tostop``
+    (SIGTTOU). Such a command runs in the console script's own process."""
+    if os.isatty(0) and any(a.startswith(("/dev/stdin", "/dev/tty", "/dev/fd/0",
+                                          "/proc/self/fd/0")) for a in argv):
+        return False
+    for fd in (1, 2):
+        if os.isatty(fd):
+            import termios  # here: only a terminal needs it
+
+            try:
+                if termios.tcgetattr(fd)[3] & termios.TOSTOP:
+                    return False
+            except termios.error:
+                return False
+    return True
 
 
 class _Forward:

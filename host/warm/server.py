@@ -19,10 +19,10 @@ SIGTERM, SIGINT, SIGHUP), idle for ``idle_s`` seconds, or finds its code changed
 
 The server declines (``("no", reason)``), and the console script runs the command itself, when
 the request comes from another interpreter, another ``sys.path`` or other interpreter flags,
-when a ``PYTHON*`` variable differs from the server's, or when a module file it loaded has
-changed since: then it stops, and says so once. It forks only while it runs a single thread.
-What it does goes to ``say`` (the terminal with ``--foreground``, else the log file), one line
-per command.
+when a ``PYTHON*``, locale or library-path variable differs from the server's, or when a module
+file it loaded has changed since: then it stops, and says so once. It forks only while it runs
+a single thread. What it does goes to ``say`` (the terminal with ``--foreground``, else the log
+file), one line per command.
 """
 
 from __future__ import annotations
@@ -261,7 +261,7 @@ class WarmServer:
         if len(fds) != 3 or not wanted(argv):
             return "not a command the warm server runs", False
         if not same:
-            return "another interpreter, sys.path, flags or PYTHON* environment", False
+            return "another interpreter, sys.path, flags, PYTHON*, locale or library path", False
         if self.stopping:
             return f"the warm server is stopping ({self.stopping})", False
         changed = self._changed()
@@ -475,10 +475,11 @@ def _exit_code(value: object) -> int:
 
 
 def _python_env(env: dict[str, str]) -> dict[str, str]:
-    """The variables that change how the interpreter starts or what it imports."""
+    """The variables that change how the interpreter starts, what it imports, or the locale it
+    set up at its start (a child takes the rest of the environment from the request)."""
     return {k: v for k, v in env.items()
-            if k.startswith("PYTHON") or k in ("LD_LIBRARY_PATH", "LD_PRELOAD",
-                                                "_ROS_WHEELS_BOOTSTRAP_COMPLETE")}
+            if k.startswith(("PYTHON", "LC_")) or k in (
+                "LANG", "LD_LIBRARY_PATH", "LD_PRELOAD", "_ROS_WHEELS_BOOTSTRAP_COMPLETE")}
 
 
 def _answers(path: str) -> bool:

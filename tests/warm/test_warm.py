@@ -302,3 +302,68 @@ def test_signals_reach_the_commands_process_group() -> None:
                 stream.close()
         listener.close()
         shutil.rmtree(os.path.dirname(sock_path), ignore_errors=True)
+
+
+def _on_terminal(sock: str, args: list[str], tostop: bool) -> tuple[int, str]:
+    """Exit code and output of the console script with a pseudo-terminal as its stdin, stdout
+    and stderr (``tostop`` set on it or not)."""
+    import pty
+    import termios
+
+    leader, follower = pty.openpty()
+    try:
+        attrs = termios.tcgetattr(follower)
+        attrs[3] = attrs[3] | termios.TOSTOP if tostop else attrs[3] & ~termios.TOSTOP
+        termios.tcsetattr(follower, termios.TCSANOW, attrs)
+        proc = subprocess.Popen([DXBOARD, *args], cwd=ROOT, env=_env(sock), stdin=follower,
+                                stdout=follower, stderr=follower)
+        os.close(follower)
+        follower = -1
+        chunks = []
+        while True:
+            try:
+                chunk = os.read(leader, 65536)
+            except OSError:  # EIO: the terminal's last writer is gone
+                break
+            if not chunk:
+                break
+            chunks.append(chunk)
+        code = proc.wait(timeout=DEADLINE_S)
+    finally:
+        if follower >= 0:
+            os.close(follower)
+        os.close(leader)
+    return code, MS.sub("N ms", b"".join(chunks).decode().replace("\r\n", "\n"))
+
+
+def test_a_terminal_that_stops_background_writers_runs_the_command_cold(server: Server) -> None:
+    """The server's child is not in the terminal's foreground group: on a terminal set to
+    ``stty tostop`` its first line would stop it (SIGTTOU), so the command runs cold."""
+    plan = ["plan", str(TEDUSAR), "--bad", "jaguar"]
+    code, out = _on_terminal(server.sock, plan, tostop=False)
+    assert code == 0 and "power_up(jaguar)" in out
+    assert status(server.sock)["served"] == 1  # a terminal as such is served warm
+    assert _on_terminal(server.sock, plan, tostop=True) == (code, out)
+    assert status(server.sock)["served"] == 1
+
+
+PROBE = ("import sys; from host.warm.client import terminal_allows; "
+         "sys.exit(0 if terminal_allows(sys.argv[1:]) else 3)")
+
+
+@pytest.mark.parametrize("obs, allowed", [("/dev/tty", False), ("/dev/stdin", False),
+                                          ("jaguar.obs", True)])
+def test_a_command_reading_the_terminal_is_not_handed_over(obs: str, allowed: bool) -> None:
+    """With a terminal as stdin, a file argument that is the terminal would stop the server's
+    child at its first read (SIGTTIN): the console script keeps that command."""
+    import pty
+
+    leader, follower = pty.openpty()
+    try:
+        probe = subprocess.run([sys.executable, "-c", PROBE, "diagnose", "m", "--obs", obs],
+                               stdin=follower, cwd=ROOT, capture_output=True,
+                               timeout=DEADLINE_S, check=False)
+    finally:
+        os.close(follower)
+        os.close(leader)
+    assert probe.returncode == (0 if allowed else 3), probe.stderr
