@@ -133,6 +133,14 @@ class Board:
         self.uv_since = -1
         self.host_ms = 0
         self.reboot_pending = False
+        # the HAL's batch read of the switches, if it has one (looked up once, not per tick)
+        self.hal_read_switches = getattr(hal, "read_switches", None)
+        # the board rules' settings as the tick reads them, from cfg["board"] (_board_rules:
+        # at boot and by set_board_config, its only writers)
+        self.total_limit_ma = 0
+        self.uv_on = False
+        self.deadman_ms = 0
+        self.deadman_mask = 0
         self.halted = False
         self.boot_id = 0
 
@@ -145,6 +153,7 @@ class Board:
         if cfg is None:
             cfg = self.factory_config()
         self.cfg = cfg
+        self._board_rules()
         self.cfg_status = status
         self.reset_cause = hal.reset_cause()
         self.boot_id = int.from_bytes(hal.random_bytes(4), "big")
@@ -201,7 +210,7 @@ class Board:
         samples = self.samples
         hal.read_currents_ma(samples)
         sws = self.sws
-        read_switches = getattr(hal, "read_switches", None)
+        read_switches = self.hal_read_switches
         swl = None
         if read_switches is not None:  # 1/0 into sws, each as read_switch's bool
             read_switches(sws)
@@ -233,17 +242,25 @@ class Board:
         self.input_mv = hal.read_input_mv()
         if self.queue and now >= self.queue_at:
             self._run_queue(now)
-        b = self.cfg["board"]
-        if b["total_limit_ma"]:  # a channel that tripped in this step no longer counts
-            self._total_rule(now, live, b["total_limit_ma"])
-        if b["uv_warn_mv"] or b["uv_shed_mv"] or b["uv_off_mv"]:
-            self._uv_rule(now, self.input_mv, b)
-        if b["deadman_ms"] and not self.flags & B_DEADMAN \
-                and now - self.host_ms >= b["deadman_ms"]:
-            self._deadman(now, b["deadman_on_mask"])
+        limit = self.total_limit_ma
+        if limit:  # a channel that tripped in this step no longer counts
+            self._total_rule(now, live, limit)
+        if self.uv_on:
+            self._uv_rule(now, self.input_mv, self.cfg["board"])
+        dm = self.deadman_ms
+        if dm and not self.flags & B_DEADMAN and now - self.host_ms >= dm:
+            self._deadman(now, self.deadman_mask)
         if self.wdt_resets and now - self.boot_ms >= bootlog.STABLE_MS:
             self.wdt_resets = 0
             bootlog.mark_stable(hal.storage)
+
+    def _board_rules(self) -> None:
+        """The settings of the board rules the tick checks, from ``cfg["board"]``."""
+        b = self.cfg["board"]
+        self.total_limit_ma = b["total_limit_ma"]
+        self.uv_on = bool(b["uv_warn_mv"] or b["uv_shed_mv"] or b["uv_off_mv"])
+        self.deadman_ms = b["deadman_ms"]
+        self.deadman_mask = b["deadman_on_mask"]
 
     def _run_queue(self, now: int) -> None:
         while self.queue:
@@ -462,6 +479,7 @@ class Board:
         if config.check_board(fields) is not None:
             return E_BAD_VALUE
         self.cfg["board"].update(fields)
+        self._board_rules()
         return 0
 
     def save_config(self) -> int:

@@ -4,14 +4,15 @@ same source run as plain Python under CPython (the emulator, the tests).
 ``steady`` steps every channel that is in a steady state (see ``Channel.arm``) in one call and
 returns the bit mask of the channels it did not take: those ``Channel.step`` steps, which owns
 every rule and every event; the two agree exactly (the steady state is one where ``step`` would
-change nothing but the reported current and the noise window). ``ina226_read`` and ``pins_read``
-are the HAL's per-tick reads.
+change nothing but the reported current and the noise window). ``ina226_read``,
+``ina3221_read``, ``profet_read`` and ``pins_read`` are the HAL's per-tick reads.
 
 Viper integers are machine words (32 bits on the board; a ``ptr32`` load is not sign-extended
 on a 64-bit port, so a negative value is told by its bit 31) and its ``//`` is unsigned: every
-value divided here is >= 0 and every product fits 31 bits (mA x 100, r x r <= 10^6, a 15-bit shunt
-count x 2500). ``ptr32`` / ``ptr8`` index without bounds checks: every caller sizes the arrays
-(``Board``: ``n`` channels x ``HOT`` slots, ``n`` x ``WINDOW`` samples).
+value divided here is >= 0 and every product fits 31 bits (mA x 100, r x r <= 10^6, a 15-bit
+shunt count x 2500, a 12-bit INA3221 count x 40000; ``profet_read`` proves its own).
+``ptr32`` / ``ptr8`` index without bounds checks: every caller sizes the arrays (``Board``:
+``n`` channels x ``HOT`` slots, ``n`` x ``WINDOW`` samples; the banks: a slot a channel or chip).
 """
 
 from protocol.compat import IS_MICROPYTHON, const
@@ -43,6 +44,19 @@ H_START2 = const(6)
 H_OPEN = const(7)  # open_ma
 H_JUMP = const(8)  # jump_ma
 H_STUCK = const(9)  # stuck_on_ma
+
+# firmware.hal's codes (tests/firmware/test_steady.py checks they agree)
+C_TRIPPED = const(-2)
+C_LOW = const(-3)
+
+# ``profet_read``'s parameters (array('i') of 7, in this order; ``ProfetBank.par``)
+_P_SETTLE = const(0)  # settle_us
+_P_NUM = const(1)  # vref_uv / g
+_P_DIV = const(2)  # 2 x 4095 x r_adc_ohm / g (g: their greatest common divisor)
+_P_FAULT = const(3)  # fault_ua
+_P_OLOFF = const(4)  # oloff_ua
+_P_KILIS = const(5)  # k_ilis
+_P_ACCURATE = const(6)  # accurate_ma
 
 
 @micropython.viper
@@ -153,3 +167,133 @@ def ina226_read(read: object, addrs: object, state: object, buf: object, out: ob
             o[ch] = ((b[0] << 8) | b[1]) * 2500 // shunt
         ch += 1
     return ch
+
+
+@micropython.viper
+def ina3221_read(read: object, addrs: object, chip_of: object, input_of: object, state: object,
+                 flags: object, buf: object, out: object, ch: int, n: int, shunt: int,
+                 prog: object) -> int:
+    """From channel ``ch`` on, while its chip is ready (``state`` C_OK = 1), as
+    ``ChipBank.read`` with ``Ina3221Bank``'s ``_before`` and ``_sample``: at each new chip its
+    MASK/ENABLE (0F) read into ``flags[chip]``; then a channel whose CRITICAL flag (CF1 >> input)
+    is set reads TRIPPED (the flag cleared, ``prog[2]`` counts it), any other its SHUNT register
+    (01/03/05) read and converted. ``chip_of``, ``input_of``: a byte per channel; ``addrs``: a
+    byte per chip. Returns the first channel not read (``n``: all); ``prog[0]``: the channel
+    being read, ``prog[1]``: 0 while its chip's MASK/ENABLE, 1 while its SHUNT (an ``OSError``
+    passes to the caller)."""
+    b = ptr8(buf)
+    ad = ptr8(addrs)
+    co = ptr8(chip_of)
+    io = ptr8(input_of)
+    f = ptr32(flags)
+    p = ptr32(prog)
+    rd = read  # type: Any
+    st = state  # type: Any
+    o = out  # type: Any
+    last = 255  # no chip (ChipBank.read's -1): the previous channel's chip, if any
+    if ch > 0:
+        last = co[ch - 1]
+    while ch < n:
+        chip = co[ch]
+        if int(st[chip]) != 1:
+            return ch
+        p[0] = ch
+        if chip != last:  # ChipBank.read: _ready (True: C_OK, bus up), then _before
+            p[1] = 0
+            rd(ad[chip], 0x0F, buf)
+            f[chip] = (b[0] << 8) | b[1]
+            last = chip
+        k = io[ch]
+        bit = 0x200 >> k  # CF1 >> input
+        if f[chip] & bit:
+            f[chip] = f[chip] ^ bit  # (set: cleared)
+            p[2] = p[2] + 1
+            o[ch] = C_TRIPPED
+        else:
+            p[1] = 1
+            rd(ad[chip], 1 + 2 * k, buf)
+            if b[0] & 0x80:
+                o[ch] = 0  # current flowing back: none drawn
+            else:  # 40 uV/LSB, left-aligned by 3: at most 4095 x 40000 < 2^28
+                o[ch] = (((b[0] << 8) | b[1]) >> 3) * 40000 // shunt
+        ch += 1
+    return ch
+
+
+@micropython.viper
+def profet_read(den: object, dsel: object, adc_read: object, sws: object, wait: object,
+                out: object, open_off: object, par: object, n: int) -> int:
+    """``ProfetBank.read``'s loop (the sense node known good): every channel's part on the node
+    and its channel selected, ``wait(settle_us)``, two conversions of ``adc_read`` averaged
+    into uA and decoded into ``out``, ``open_off`` set; every DEN low at the end. ``par``:
+    the _P_* parameters. Returns the fault levels read with IN high (TRIPPED).
+
+    Every product fits 31 bits: a conversion is ``read_u16() >> 4`` <= 4095, so the sum ``s``
+    of two is <= 8190; ``ProfetBank`` reduces vref_uv / (2 x 4095 x r_adc) by their greatest
+    common divisor (num / div) and takes this loop only when 8190 x num < 2^31 and, ``ua`` being
+    at most 8190 x num // div, when that x k_ilis < 2^31 (rev C: 3,300,000 / 2,457,000 = 1100 /
+    819; 8190 x 1100 = 9,009,000, ua <= 11,000, x 4785 = 52,635,000); every parameter is then
+    in 0 .. 2^31 - 1. Everything divided is >= 0 (unsigned ``//`` agrees) and so is every value
+    compared (signed compares agree)."""
+    p = ptr32(par)
+    d = den  # type: Any
+    sel = dsel  # type: Any
+    rd = adc_read  # type: Any
+    sw = sws  # type: Any
+    wt = wait  # type: Any
+    o = out  # type: Any
+    oo = open_off  # type: Any
+    has_sw = 1 if sw else 0  # no IN pins given: every channel reads as off
+    settle = p[_P_SETTLE]
+    num = p[_P_NUM]
+    div = p[_P_DIV]
+    fault_ua = p[_P_FAULT]
+    oloff_ua = p[_P_OLOFF]
+    k_ilis = p[_P_KILIS]
+    accurate = p[_P_ACCURATE]
+    parts = n >> 1
+    faults = 0
+    i = 0
+    while i < parts:
+        d[i].value(0)
+        i += 1
+    ch = 0
+    while ch < n:
+        if ch & 1:
+            sel(1)
+        else:  # a new part: the last one off the node, this one on
+            part = ch >> 1
+            if part:
+                d[part - 1].value(0)
+            sel(0)
+            d[part].value(1)
+        wt(settle)
+        a = int(rd()) >> 4
+        s = a + (int(rd()) >> 4)
+        ua = s * num // div
+        on = 0
+        if has_sw:
+            on = 1 if sw[ch].value() else 0
+        oo[ch] = False
+        if ua >= fault_ua:
+            if on:
+                faults += 1
+                o[ch] = C_TRIPPED
+            else:
+                o[ch] = 0
+        elif on == 0:
+            if ua >= oloff_ua:
+                oo[ch] = True
+            o[ch] = 0
+        else:
+            ma = ua * k_ilis // 1000
+            if ma < accurate:
+                o[ch] = C_LOW
+            else:
+                o[ch] = ma
+        ch += 1
+    i = 0
+    while i < parts:
+        d[i].value(0)  # DEN falling with IN low clears a part's restart counter
+        i += 1
+    return faults

@@ -23,11 +23,16 @@ check = 15 reads, 1.8 ms. A chip that reset (CONFIG back at 0x7127, limits at 0x
 configured again, limits included.
 """
 
-from firmware.hal import TRIPPED
-from firmware.hal.chipbank import ChipBank
+from array import array
+
+from firmware.fast import ina3221_read
+from firmware.hal import NO_READING, TRIPPED
+from firmware.hal.chipbank import C_OK, ChipBank
 from protocol.compat import const
 
 if False:  # typing only (compiled away on the board)
+    from collections.abc import MutableSequence
+
     from firmware.hal.chipbank import I2c
 
 REG_CONFIG = const(0x00)
@@ -65,8 +70,14 @@ class Ina3221Bank(ChipBank):
             used[c] |= 1 << k
         self.configs = [config_for(u) for u in used]
         self.limits = [NO_LIMIT] * self.n  # CRITICAL register per channel
-        self.flags = [0] * len(chips)  # MASK/ENABLE as read this tick
+        self.flags = array("i", [0] * len(chips))  # MASK/ENABLE as read this tick
         self.trips = 0  # fast trips seen (a CRITICAL flag)
+        # for the viper read: a byte per chip, two per channel; [0] the channel it was at,
+        # [1] 0 while at its chip's MASK/ENABLE, 1 while at its SHUNT; [2] trips it counted
+        self.addr_b = bytes(chips)
+        self.chip_b = bytes(self.chip_of)
+        self.input_b = bytes(self.input_of)
+        self.prog = array("i", [0, 0, 0])
 
     def _config_of(self, chip: int) -> int:
         return self.configs[chip]
@@ -91,6 +102,60 @@ class Ina3221Bank(ChipBank):
                 self._put(chip, 7 + 2 * self.input_of[ch], code)
         except OSError as exc:
             self._failed(chip, exc)
+
+    def read(self, out: "MutableSequence[int]") -> None:
+        """As ``ChipBank.read``, each run of channels whose chips are ready read by
+        ``firmware.fast.ina3221_read`` (MASK/ENABLE at each new chip, then its inputs); an
+        ``OSError`` there handled as ``ChipBank.read`` does for ``_before`` or ``_sample``, at
+        the same channel; a chip not ready read by ``ChipBank.read``'s body."""
+        if self.bus_wait:
+            ChipBank.read(self, out)
+            return
+        n = self.n
+        rd = self.i2c.readfrom_mem_into
+        prog = self.prog
+        ch = 0
+        while ch < n:
+            before = True
+            if not self.bus_wait:
+                try:
+                    ch = ina3221_read(rd, self.addr_b, self.chip_b, self.input_b, self.state,
+                                      self.flags, self.buf, out, ch, n, self.shunt_uohm, prog)
+                except OSError as exc:
+                    ch = prog[0]
+                    self._failed(self.chip_of[ch], exc)
+                    if prog[1]:  # its SHUNT (_sample's)
+                        out[ch] = NO_READING
+                        ch += 1
+                        continue
+                    before = False  # its chip's MASK/ENABLE (_before's): on with the channel
+                if ch >= n:
+                    break
+            self._one(out, ch, before)
+            ch += 1
+        if prog[2]:
+            self.trips += prog[2]
+            prog[2] = 0
+        self._check()
+
+    def _one(self, out: "MutableSequence[int]", ch: int, before: bool) -> None:
+        """``ChipBank.read``'s body for one channel (``before``: its chip's ``_ready`` and
+        ``_before`` when it is a new chip, not done yet)."""
+        chip = self.chip_of[ch]
+        if before and (ch == 0 or self.chip_of[ch - 1] != chip):
+            try:
+                if self._ready(chip):
+                    self._before(chip)
+            except OSError as exc:
+                self._failed(chip, exc)
+        if self.state[chip] == C_OK and not self.bus_wait:
+            try:
+                out[ch] = self._sample(ch)
+            except OSError as exc:
+                self._failed(chip, exc)
+                out[ch] = NO_READING
+        else:
+            out[ch] = self.read_one(ch)
 
     def _before(self, chip: int) -> None:
         self.flags[chip] = self._get(chip, REG_MASK)

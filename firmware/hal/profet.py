@@ -28,6 +28,9 @@ A part has no ID to check: at boot (``setup``) the node must read 0 with every D
 whose IS is stuck driving would blind every channel); ``report`` says so per channel.
 """
 
+from array import array
+
+from firmware.fast import profet_read
 from firmware.hal import LOW, NO_READING, TRIPPED
 
 if False:  # typing only; MicroPython never imports typing (the block is compiled away)
@@ -56,6 +59,12 @@ if False:  # typing only; MicroPython never imports typing (the block is compile
         def ADC(self, pin: IoPin) -> Adc: ...
 
 
+def _gcd(a: int, b: int) -> int:
+    while b:
+        a, b = b, a % b
+    return a
+
+
 class ProfetBank:
     NAME = "profet"
 
@@ -78,6 +87,18 @@ class ProfetBank:
         self.open_off = [False] * self.n
         self.faults = 0  # fault levels read with IN high (trips by the switch itself)
         self.node_ok = True
+        # firmware.fast.profet_read's parameters: vref_uv / (2 x 4095 x r_adc) reduced by their
+        # greatest common divisor, so that a sum of two counts (<= 8190) times it, and the
+        # largest IS current times k_ilis, fit 31 bits (see profet_read); else the loop in
+        # Python (no revision needs it)
+        div = 2 * 4095 * self.r_adc
+        g = _gcd(self.vref_uv, div)
+        num, div = self.vref_uv // g, div // g
+        vals = (self.settle_us, num, div, self.fault_ua, self.oloff_ua, self.k_ilis,
+                self.accurate_ma)  # in the order of firmware.fast's _P_* slots
+        self.fast = (min(vals) >= 0 and max(vals) < 1 << 31 and div > 0
+                     and 8190 * num < 1 << 31 and 8190 * num // div * self.k_ilis < 1 << 31)
+        self.par = array("i", vals if self.fast else [0] * len(vals))
 
     def setup(self) -> None:
         """Every DEN low: the node must read (almost) nothing."""
@@ -127,10 +148,16 @@ class ProfetBank:
     def read(self, out: "MutableSequence[int]") -> None:
         """Every channel into ``out``, as ``read_one`` each in turn, in one loop (the tick's hot
         path: the bound methods in locals, each part's DEN raised once for its two channels
-        rather than every other DEN lowered again per channel: the same levels on the pins)."""
+        rather than every other DEN lowered again per channel: the same levels on the pins),
+        by ``firmware.fast.profet_read`` when its products fit 31 bits (``fast``)."""
         if not self.node_ok:
             for ch in range(self.n):
                 out[ch] = NO_READING
+            return
+        if self.fast:
+            self.faults += profet_read(self.den, self.dsel.value, self.adc.read_u16,
+                                       self.switches, self.sleep_us, out, self.open_off,
+                                       self.par, self.n)
             return
         rd = self.adc.read_u16
         dsel = self.dsel.value

@@ -7,12 +7,15 @@ Runs under pytest and under the real MicroPython (``micropython tests/mpy_run.py
 tests/emulator/parts``).
 """
 
+import errno
 import unittest
 
 from emulator.parts import ina3221 as T
 from emulator.parts.wiring import wire
 from emulator.parts.world import World, install
 from firmware import boards
+from firmware.hal import TRIPPED
+from firmware.hal.chipbank import ChipBank
 from firmware.hal.ina3221 import limit_code
 from firmware.hal.storage import MemStorage
 from protocol.constants import EV_FAULT, EV_TRIP, F_SENSOR, F_SHORT, F_STUCK_ON, ST_ON
@@ -210,3 +213,125 @@ class PartFaultTest(unittest.TestCase):
         b.chips[3].inject("open_shunt")
         b.run(100)
         self.assertEqual(b.board.channels[8].current_ma, 0)
+
+
+# per tick, (transaction of the tick that fails, how): a NACK at every place of a tick's
+# transactions (MASK/ENABLE, SHUNT, CONFIG check, a configuration after), the bus held low at
+# a few; ("nack", chip), ("reset", chip), ("clear", chip): a chip's own fault from that tick on
+SCRIPT = ([None] * 4 + [(k, "nack") for k in range(24)] + [None] * 3
+          + [(0, "stuck_low")] + [None] * 12 + [(1, "stuck_low")] + [None] * 12
+          + [(5, "stuck_low")] + [None] * 12 + [(14, "stuck_low")] + [None] * 12
+          + [("nack", 1)] + [None] * 3 + [("clear", 1)] + [None] * 2 + [("reset", 2)]
+          + [(4, "nack")] + [("reset", 0)] + [(0, "nack")] + [("nack", 3)] + [(2, "nack")]
+          + [("clear", 3)] + [None] * 8)
+
+
+def read_script(python):
+    """Rev B's driver through ``SCRIPT``, the CRITICAL flags firing on three channels now and
+    then: every I2C transaction in order (address, register and the word read or written, or
+    minus the error: one int each, to fit MicroPython's heap) and per tick what it read and
+    holds. ``python``: by ``ChipBank.read`` (the
+    reference, Python only), else by the driver's own read (``firmware.fast.ina3221_read``)."""
+    b = Bench()
+    bank = b.hal.ina
+    if python:
+        bank.read = lambda out: ChipBank.read(bank, out)
+    b.closed = [True] * b.n
+    for ch in range(b.n):
+        bank.set_trip_ma(ch, RATED_MA * 3)
+    # over the limit during every third 10 ms, on inputs of three chips (first, middle, last)
+    for ch in (0, 4, 9):
+        b.spike[ch] = lambda t, ch=ch: 20.0 if (t // 10000 + ch) % 3 == 0 else 0.5
+    devices = b.w.bus(0).devices
+    i2c = bank.i2c
+    log = []
+    at = [0, -1, ""]  # the tick's transactions so far; the one to fail, how
+
+    def fault(addr):
+        if at[0] == at[1]:
+            dev = devices[addr] if at[2] == "nack" else devices[0x40]
+            setattr(dev, at[2], True)
+            return dev
+        return None
+
+    def logged(real):
+        def call(addr, reg, buf):
+            dev = fault(addr)
+            at[0] += 1
+            try:
+                real(addr, reg, buf)
+                log.append((addr * 256 + reg) * 65536 + buf[0] * 256 + buf[1])
+            except OSError as exc:
+                log.append(-((addr * 256 + reg) * 65536 + exc.args[0]))
+                raise
+            finally:
+                if dev is not None:
+                    setattr(dev, at[2], False)
+        return call
+
+    i2c.readfrom_mem_into = logged(i2c.readfrom_mem_into)
+    i2c.writeto_mem = logged(i2c.writeto_mem)
+    out = [0] * b.n
+    seen = []
+    for step in SCRIPT:
+        b.w.set_time(b.w.now_us + 10000 - b.w.now_us % 10000)
+        at[0], at[1] = 0, -1
+        if step is not None and isinstance(step[0], int):
+            at[1], at[2] = step
+        elif step is not None:
+            chip = b.chips[step[1]]
+            if step[0] == "clear":
+                chip.clear()
+            else:
+                chip.inject(step[0], now_us=b.w.now_us)
+        b.hal.read_currents_ma(out)
+        seen.append((list(out), list(bank.state), list(bank.flags), bank.trips, bank.errors,
+                     bank.resets, bank.bus_wait, bank.check_i))
+    return log, seen
+
+
+class ReadPathTest(unittest.TestCase):
+    """The driver's read (``Ina3221Bank.read``: ``firmware.fast.ina3221_read``, Python for a
+    chip not ready) against ``ChipBank.read``, the same parts and faults: the same bus
+    transactions in the same order, the same values and codes, the same state after each
+    tick."""
+
+    def test_the_read_is_chipbank_reads_transaction_for_transaction(self):
+        ref_log, ref = read_script(True)
+        log, got = read_script(False)
+        for i in range(len(SCRIPT)):
+            self.assertEqual(got[i], ref[i], f"tick {i} ({SCRIPT[i]!r})")
+        self.assertEqual(len(log), len(ref_log))
+        for i in range(len(ref_log)):
+            self.assertEqual(log[i], ref_log[i], f"transaction {i}")
+        # the script reaches what it is for: flags, NACKs, a bus held low, resets
+        self.assertTrue(any(TRIPPED in o[0] for o in ref))
+        self.assertGreater(ref[-1][3], 5)  # trips
+        self.assertTrue(any(e < 0 and -e % 65536 == errno.ENODEV for e in ref_log))
+        self.assertTrue(any(e < 0 and -e % 65536 == errno.ETIMEDOUT for e in ref_log))
+        self.assertTrue(any(o[6] for o in ref))  # the bus waited
+        self.assertEqual(ref[-1][5], 2)  # both resets noticed
+        self.assertEqual(ref[-1][1], [1, 1, 1, 1])  # every chip back
+
+    def test_a_critical_flag_reads_tripped_once_then_the_current(self):
+        b = Bench()
+        bank = b.hal.ina
+        b.closed = [True] * b.n
+        for ch in range(b.n):
+            bank.set_trip_ma(ch, RATED_MA * 3)
+        b.spike[4] = lambda t: 20.0  # chip 1, input 1: over its limit every conversion
+        out = [0] * b.n
+        b.w.set_time(b.w.now_us + 10000)
+        b.hal.read_currents_ma(out)
+        self.assertEqual(out[4], TRIPPED)
+        self.assertEqual(out[3], 400)  # the chip's other inputs read on
+        self.assertEqual(out[5], 600)
+        self.assertEqual(bank.trips, 1)
+        self.assertFalse(bank.flags[1] & (T.CF1 >> 1))  # cleared once told
+        b.spike[4] = None
+        b.load_a[4] = 0.5
+        for _ in range(2):  # the flag latched until MASK/ENABLE is read, then a clean cycle
+            b.w.set_time(b.w.now_us + 10000)
+            b.hal.read_currents_ma(out)
+        self.assertEqual(out[4], 500)
+        self.assertEqual(bank.trips, 1)

@@ -156,3 +156,88 @@ class PartFaultTest(unittest.TestCase):
         out = [0] * 10
         b.hal.read_currents_ma(out)
         self.assertEqual(out, [NO_READING] * 10)  # every channel: F_SENSOR, switches kept
+
+
+def read_script(python):
+    """Rev C's driver (no board: the script switches the channels) through switchings and
+    every part fault, per tick: what it read, ``open_off``, ``faults`` and each part's state;
+    and every call it made of the pins, the ADC and ``sleep_us``, in order (one int each).
+    ``python``: by the loop in Python (``fast`` off), else by ``firmware.fast.profet_read``."""
+    b = Bench(load_a=[0.5, 0.03, 2.0, 0.0, 1.25, 3.0, 0.75, 0.06, 1.5, 4.0])
+    hal = b.hal
+    bank = hal.ina
+    if python:
+        bank.fast = False
+    log = []
+
+    def logged(obj, name, tag):
+        real = getattr(obj, name)
+
+        def call(*args):
+            got = real(*args)
+            log.append(tag * 1000000 + (args[0] if args else 500000 + (got or 0)))
+            return got
+        setattr(obj, name, call)
+
+    for d, pin in enumerate(bank.den):
+        logged(pin, "value", 1 + d)
+    logged(bank.dsel, "value", 10)
+    logged(bank.adc, "read_u16", 11)
+    logged(bank, "sleep_us", 12)
+    for ch, pin in enumerate(hal.en):
+        logged(pin, "value", 20 + ch)
+    p = b.parts
+    script = {
+        0: lambda: [hal.set_switch(ch, ch != 9) for ch in range(10)],
+        3: lambda: p[3].inject("short", 0),  # channel 6: latched off, the fault level
+        5: lambda: hal.set_switch(6, False),  # IN low: the fault level still (the counter)
+        7: lambda: p[2].inject("open_load", 1),  # channel 5, on: nothing drawn
+        8: lambda: hal.set_switch(5, False),  # off: open load in the off state
+        10: lambda: p[0].inject("overtemp", 1),  # channel 1 (low load) latched off
+        12: lambda: p[4].inject("open_load", 1),  # channel 9, off all along
+        14: lambda: [part.clear() for part in p],
+        15: lambda: [hal.set_switch(ch, True) for ch in (5, 6, 9)],
+        18: lambda: [hal.set_switch(ch, False) for ch in range(0, 10, 3)],
+    }
+    out = [0] * b.n
+    seen = []
+    for tick in range(24):
+        b.w.set_time(b.w.now_us + 10000)
+        if tick in script:
+            script[tick]()
+        hal.read_currents_ma(out)
+        seen.append((list(out), list(bank.open_off), bank.faults,
+                     [(q.inp[:], q.on[:], q.latched[:], q.counter[:], q.den, q.dsel)
+                      for q in p]))
+    return log, seen
+
+
+class ReadPathTest(unittest.TestCase):
+    """The driver's read (``firmware.fast.profet_read``) against its loop in Python, the same
+    parts and faults: the same calls of the pins, the ADC and the wait in the same order, the
+    same values, codes and state after each tick."""
+
+    def test_the_read_is_the_python_loops_call_for_call(self):
+        ref_log, ref = read_script(True)
+        log, got = read_script(False)
+        for i in range(len(ref)):
+            self.assertEqual(got[i], ref[i], f"tick {i}")
+        self.assertEqual(len(log), len(ref_log))
+        for i in range(len(ref_log)):
+            self.assertEqual(log[i], ref_log[i], f"call {i}")
+        # the script reaches every outcome: a current, LOW, TRIPPED, 0 at the fault level with
+        # IN low, open load off
+        outs = ref[4][0] + ref[6][0] + ref[9][0]
+        for want in (LOW, TRIPPED, 0):
+            self.assertIn(want, outs)
+        self.assertTrue(any(v > 0 for v in outs))
+        self.assertTrue(ref[9][1][5])
+        self.assertGreater(ref[4][3][3][3][0], 0)  # part 3's restart counter, then IN low:
+        self.assertEqual(ref[5][0][6], 0)  # the fault level read with IN low
+        self.assertGreaterEqual(ref[-1][2], 2)  # faults
+
+    def test_the_fast_read_is_taken_and_its_fraction_reduced(self):
+        bank = Bench().hal.ina
+        self.assertTrue(bank.fast)
+        # 3,300,000 uV / (2 x 4095 x 300 Ohm) = 1100 / 819: 8190 x 1100 fits 31 bits
+        self.assertEqual(list(bank.par), [20, 1100, 819, 3800, 1500, 4785, 100])
