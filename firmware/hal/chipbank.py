@@ -194,6 +194,26 @@ class ChipBank:
                 out[ch] = self.read_one(ch)
         self._check()
 
+    def _read_channel(self, out: "MutableSequence[int]", ch: int, new_chip: bool) -> None:
+        """``read``'s body for channel ``ch`` alone: its chip made ready and its flags fetched
+        first when ``new_chip``, then the channel sampled (``read_one`` if the chip is not
+        ready). The drivers' fast reads hand a channel here when their loop cannot take it."""
+        chip = self.chip_of[ch]
+        if new_chip:
+            try:
+                if self._ready(chip):
+                    self._before(chip)
+            except OSError as exc:
+                self._failed(chip, exc)
+        if self.state[chip] == C_OK and not self.bus_wait:
+            try:
+                out[ch] = self._sample(ch)
+            except OSError as exc:
+                self._failed(chip, exc)
+                out[ch] = NO_READING
+        else:
+            out[ch] = self.read_one(ch)
+
     def _check(self) -> None:
         chip = self.check_i
         self.check_i = (chip + 1) % self.n_chips

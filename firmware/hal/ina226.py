@@ -19,7 +19,7 @@ from array import array
 
 from firmware.fast import ina226_read
 from firmware.hal import NO_READING
-from firmware.hal.chipbank import C_OK, ChipBank
+from firmware.hal.chipbank import ChipBank
 from protocol.compat import const
 
 if False:  # typing only (compiled away on the board)
@@ -79,20 +79,7 @@ class Ina226Bank(ChipBank):
                     continue
                 if ch >= n:
                     break
-            # ChipBank.read's body for a chip not ready (or a bus down since)
-            try:
-                if self._ready(ch):
-                    self._before(ch)
-            except OSError as exc:
-                self._failed(ch, exc)
-            if self.state[ch] == C_OK and not self.bus_wait:
-                try:
-                    out[ch] = self._sample(ch)
-                except OSError as exc:
-                    self._failed(ch, exc)
-                    out[ch] = NO_READING
-            else:
-                out[ch] = self.read_one(ch)
+            self._read_channel(out, ch, True)  # a chip not ready, or a bus down since
             ch += 1
         self._check()
 

@@ -27,7 +27,7 @@ from array import array
 
 from firmware.fast import ina3221_read
 from firmware.hal import NO_READING, TRIPPED
-from firmware.hal.chipbank import C_OK, ChipBank
+from firmware.hal.chipbank import ChipBank
 from protocol.compat import const
 
 if False:  # typing only (compiled away on the board)
@@ -142,20 +142,7 @@ class Ina3221Bank(ChipBank):
         """``ChipBank.read``'s body for one channel (``before``: its chip's ``_ready`` and
         ``_before`` when it is a new chip, not done yet)."""
         chip = self.chip_of[ch]
-        if before and (ch == 0 or self.chip_of[ch - 1] != chip):
-            try:
-                if self._ready(chip):
-                    self._before(chip)
-            except OSError as exc:
-                self._failed(chip, exc)
-        if self.state[chip] == C_OK and not self.bus_wait:
-            try:
-                out[ch] = self._sample(ch)
-            except OSError as exc:
-                self._failed(chip, exc)
-                out[ch] = NO_READING
-        else:
-            out[ch] = self.read_one(ch)
+        self._read_channel(out, ch, before and (ch == 0 or self.chip_of[ch - 1] != chip))
 
     def _before(self, chip: int) -> None:
         self.flags[chip] = self._get(chip, REG_MASK)
