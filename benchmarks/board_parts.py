@@ -356,24 +356,36 @@ def section(peak_memory):
             continue
         n, on, low, med, p95, gross, ratio, ref, bus_mean, bus_max, heap = f
         heaps[rev] = heap
-        tick = ratio * ref / 1000
+        # the net ratio takes off the layer's calibrated cost per call times the tick's calls;
+        # where that comes to (nearly) the whole tick (rev C's ~70 pin and ADC calls), the
+        # calibration's error is larger than what is left: then the with-layer ratio, an
+        # upper bound, is the figure
+        net_ok = ratio * 10 > gross
+        basis = ratio if net_ok else gross
+        tick = basis * ref / 1000
         cpu_ms = tick * slow["rp2040"] / 1000
         cpu2_ms = tick * slow["rp2350"] / 1000
+        net = f"{ratio / 1000:.2f}" if net_ok else "not measurable"
+        which = "net ratio" if net_ok else "ratio with the layer (an upper bound)"
         lines.append(f"| {rev} | {on} of {n} | {low} / {med} / {p95} us"
-                     f" | {gross / 1000:.2f}; {ratio / 1000:.2f}"
-                     f" | {ratio / 1000:.2f} x {ref} us = {tick:.0f} us"
-                     f" | {cpu_ms:.1f} ms; {cpu2_ms:.1f} ms"
+                     f" | {gross / 1000:.2f}; {net}"
+                     f" | {basis / 1000:.2f} x {ref} us = {tick:.0f} us"
+                     + ("" if net_ok else " (with the layer)")
+                     + f" | {cpu_ms:.1f} ms; {cpu2_ms:.1f} ms"
                      f" | {1000 / max(tick, 1):.0f}x slower"
                      f" | {bus_mean / 1000:.2f} / {bus_max / 1000:.2f} ms | {heap} B |")
         verdicts.append(
             f"{rev}: sensing time {'meets' if bus_max < 3000 else 'misses'} its goal"
-            f" ({bus_max / 1000:.2f} ms against 3 ms); the CPU goal is "
+            f" ({bus_max / 1000:.2f} ms against 3 ms); by the {which}, the CPU goal is "
             + ("met" if cpu_ms < 1 else "NOT met") + " on an RP2040"
             f" ({cpu_ms:.1f} ms against 1 ms) and "
             + ("met" if cpu2_ms < 1 else "NOT met") + f" on an RP2350 ({cpu2_ms:.1f} ms);"
             " the tick as a whole (CPU plus the I2C calls, or ADC conversions, which block"
             f" on the board) takes {cpu_ms + bus_max / 1000:.1f} ms of its 10 ms on an RP2040"
-            f" and {cpu2_ms + bus_max / 1000:.1f} ms on an RP2350.")
+            f" and {cpu2_ms + bus_max / 1000:.1f} ms on an RP2350"
+            + ("." if net_ok else "; its net figure is not measurable here: the measuring"
+               " layer's calibrated cost per call, times the tick's many pin and ADC calls,"
+               " comes to more than the tick."))
     lines += [""] + verdicts  # noqa: RUF005 (MicroPython parses this file: no [*x])
     idle_b, peak4_b, got4 = peak_memory()
     lines += ["", "The firmware's heap with 4 TCP clients subscribed at 100 Hz (goal < 64 KB),"

@@ -285,7 +285,7 @@ REVERSE_SURGES: tuple[tuple[str, float, float], ...] = (
 # just above the BTS7008's 18 V operating range, far under its 28 V).
 REVISIONS: dict[str, dict[str, Any]] = {
     "rev-a": {"switch": "tps1h100a", "input_fuse_a": 20, "clamp_top_kohm": 205},
-    # rev B's tick takes 9.6 ms of its 10 ms on an RP2040, 5.9 ms on an RP2350 (hardware/README.md)
+    # rev B's tick: 3.9 ms of its 10 ms on an RP2040, 2.9 ms on an RP2350 (hardware/README.md)
     "rev-b": {"switch": "tps1h100a", "input_fuse_a": 20, "clamp_top_kohm": 187,
               "module": "pico-2-w"},
     "rev-c": {"switch": "bts7008", "input_fuse_a": 20, "clamp_top_kohm": 150},
