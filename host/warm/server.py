@@ -85,6 +85,7 @@ class WarmServer:
         self.stopping = ""
         self.stamps: dict[str, tuple[int, int]] = {}
         self.listener: socket.socket | None = None
+        self.bound = (0, 0)
         self.selector = selectors.DefaultSelector()
         self.wake_r, self.wake_w = os.pipe()
         self.base_path = list(sys.path[1:])
@@ -107,6 +108,8 @@ class WarmServer:
             listener.bind(self.path)
         finally:
             os.umask(old)
+        st = os.stat(self.path)
+        self.bound = (st.st_dev, st.st_ino)  # the socket file as bound: close removes only it
         listener.listen(16)
         listener.setblocking(False)
         self.listener = listener
@@ -148,11 +151,10 @@ class WarmServer:
     def close(self) -> None:
         """Stop listening and remove the socket file (if it is still ours)."""
         if self.listener is not None:
-            with contextlib.suppress(OSError):
-                if os.stat(self.path).st_ino == os.fstat(self.listener.fileno()).st_ino:
+            with contextlib.suppress(OSError):  # not another server's that took the path since
+                st = os.stat(self.path)
+                if (st.st_dev, st.st_ino) == self.bound:
                     os.unlink(self.path)
-            with contextlib.suppress(OSError):
-                os.unlink(self.path)
             self.listener.close()
             self.listener = None
         self.selector.close()

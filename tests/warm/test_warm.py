@@ -367,3 +367,31 @@ def test_a_command_reading_the_terminal_is_not_handed_over(obs: str, allowed: bo
         os.close(follower)
         os.close(leader)
     assert probe.returncode == (0 if allowed else 3), probe.stderr
+
+
+def test_a_stopping_server_leaves_a_newer_servers_socket_alone() -> None:
+    """A server removes its socket file when it stops, but not one another server bound at the
+    same path since (the path taken over while it was finishing its last commands)."""
+    import socket as socketlib
+
+    from host.warm.server import WarmServer
+
+    folder = tempfile.mkdtemp(prefix="dxw-", dir="/tmp")
+    path = os.path.join(folder, "warm.sock")
+    old = WarmServer(path, 60.0, lambda line: None)
+    newer = socketlib.socket(socketlib.AF_UNIX, socketlib.SOCK_STREAM)
+    try:
+        old.bind()
+        os.unlink(path)  # the newer server's bind finds the path free
+        newer.bind(path)
+        old.close()
+        assert os.path.exists(path)
+        newer.close()
+        os.unlink(path)
+        mine = WarmServer(path, 60.0, lambda line: None)
+        mine.bind()
+        mine.close()
+        assert not os.path.exists(path)
+    finally:
+        newer.close()
+        shutil.rmtree(folder, ignore_errors=True)
