@@ -17,8 +17,10 @@ the best of ``--repeat`` runs of each:
   process's colder search.
 - *command (warm)*: ``dxboard diagnose MODEL --obs FILE --json --min-card-only``, its cache
   filled (before the circuit's first instance); *cold*: with an empty cache directory each time
-  (it parses the YAML, encodes and writes the entry); *before*: the command from the checkout
-  ``--base`` names, interleaved with it.
+  (it parses the YAML, encodes and writes the entry); *warm*: the same command handed to a warm
+  server (``dxboard warm``), its CPU the console script's process plus the server's over the
+  same span, its forked child's included (``benchmarks/_rigs/warm.py``); *before*: the command
+  from the checkout ``--base`` names, interleaved with it.
 
 CPU is user + system time (the command's whole process; the engine's calls in-process), which
 the machine's load changes far less than wall time.
@@ -177,6 +179,8 @@ def _intro(args: argparse.Namespace, per: int) -> str:
             "given the encoding the warm command reads from its cache; *fresh*: the engine's "
             "calls timed in a process of their own per run (the command's code path); "
             "*command*: warm (its model cache filled); *cold*: an empty cache each run; "
+            "*warm*: the command handed to a warm server (`dxboard warm`), its CPU the console "
+            "script's plus the server's over the same span, its child's included; "
             f"*runs cut*: runs the time budget ({args.budget:g} s) cut, not compared; CPU: user "
             "+ system; every process with Python's bytecode kept, as an installed program has it"
             + ("; *before*: the command from the checkout `--base` names, run interleaved"
@@ -190,83 +194,104 @@ def bench_command(args: argparse.Namespace, lines: list[str]) -> None:
     per = 3 if args.quick else 10
     commands = _commands(args)
     commands = {"command": commands["command"], "cold": commands["command"],
+                "warm": commands["command"],
                 **{k: v for k, v in commands.items() if k != "command"}}
     lines.append("### The whole command against the engine alone\n")
     lines.append(_intro(args, per))
-    before = "before, sum | before / engine | " if args.base else ""
+    from benchmarks._rigs import warm
+
     with tempfile.TemporaryDirectory(prefix="dxboard-bench-") as tmp:
-        env = _child_env(Path(tmp))
-        bench_startup(args, lines, env)
-        lines.append(
-            f"| circuit | engine, sum | given enc., sum | fresh, sum | command, sum | {before}"
-            "**command / engine** | CPU, command / engine | CPU, command / given enc. | "
-            "CPU, command / fresh | cold / engine | CPU, cold / engine | overhead per run, "
-            "mean / worst | load | runs cut |")
-        lines.append("|---|---|---|---|---|" + ("---|---|" if args.base else "") + "---|" * 9)
-        colds = 0
-        for name in names:
-            circuit = parse_bench(ISCAS / f"{name}.bench")
-            if args.circuits and name not in args.circuits:
-                list(sample(circuit, rng, per))  # drawn all the same: the others' sample stays
-                continue
-            theory = circuit_theory(circuit)
-            encoding = encode(theory, structure=True)  # as the cache holds it
-            known = theory.observable_atoms()
-            model = _warm_model(theory, Path(tmp) / f"{name}.yaml", env)
-            labels = ["engine", "given", "fresh", *commands]
-            wall: dict[str, list[float]] = {label: [] for label in labels}
-            cpu: dict[str, list[float]] = {label: [] for label in labels}
-            cut = 0
-            loads = [os.getloadavg()[0]]
-            for n, (_flips, obs) in enumerate(sample(circuit, rng, per)):
-                obs = [o for o in obs if o.atom in known]
-                obs_file = Path(tmp) / f"{name}-{n}.obs"
-                obs_file.write_text("".join(f"{o}\n" for o in obs))
-                runs = [cpu_timed(_engine, theory, obs, args.budget) for _ in range(args.repeat)]
-                r = runs[0][2]
-                wall["engine"].append(min(t for t, _c, _r in runs))
-                cpu["engine"].append(min(c for _t, c, _r in runs))
-                copies = [copy.deepcopy(encoding) for _ in range(args.repeat)]  # untimed
-                runs = [cpu_timed(_engine_as_command, theory, obs, args.budget, e)
-                        for e in copies]
-                wall["given"].append(min(t for t, _c, _r in runs))
-                cpu["given"].append(min(c for _t, c, _r in runs))
-                for label, prefix in commands.items():
-                    best, best_cpu = float("inf"), float("inf")
-                    for _ in range(args.repeat):
-                        run_env = env
-                        if label == "cold":  # a cache directory of its own, empty
-                            colds += 1
-                            run_env = {**env, "XDG_CACHE_HOME": str(Path(tmp) / f"c{colds}")}
-                        t, c, proc = _run_child(
-                            [*prefix, "diagnose", str(model), "--obs", str(obs_file), "--json",
-                             "--min-card-only", "--time-budget", str(args.budget)], run_env)
-                        best, best_cpu = min(best, t), min(best_cpu, c)
-                        assert proc.returncode in (0, 1), proc.stderr  # 1: cut before the first
-                        data = json.loads(proc.stdout)
-                        if "time_budget" in (data["cut_by"], r.cut_by):
-                            cut += 1  # the budget cut one of the two on a loaded machine
-                            continue
-                        if not data["complete"] or r.cut_by is not None:
-                            continue  # 1,000 kept of more: not compared (ties at the edge)
-                        assert sorted(map(tuple, (x["bad"] for x in data["diagnoses"]))) == (
-                            sorted(tuple(sorted(x.bad)) for x in r.diagnoses))
-                    wall[label].append(best)
-                    cpu[label].append(best_cpu)
-                fresh = []
-                for _ in range(args.repeat):  # after the command: its cache entry is there
-                    proc = subprocess.run(
-                        [sys.executable, "-c", FRESH_ENGINE, str(model), str(obs_file),
-                         str(args.budget)], capture_output=True, text=True, check=True, env=env)
-                    t, c, cut_by, count = json.loads(proc.stdout)
-                    assert count == len(r.diagnoses) or "time_budget" in (cut_by, r.cut_by)
-                    fresh.append((t, c))
-                wall["fresh"].append(min(t for t, _c in fresh))
-                cpu["fresh"].append(min(c for _t, c in fresh))
-                loads.append(os.getloadavg()[0])
-            lines.append(_row(name, wall, cpu, args.base is not None, cut, loads))
-            print(lines[-1], flush=True)
+        dir_ = Path(tmp)
+        env = _child_env(dir_)
+        warm_env = {**env, "DXBOARD_WARM_SOCKET": str(dir_ / "warm.sock")}
+        server = warm.start_server(commands["command"], warm_env)
+        try:
+            _command_rows(args, lines, names, per, commands, rng, env, warm_env, dir_)
+        finally:
+            warm.stop_server(server)
     lines.append("")
+
+
+def _command_rows(args: argparse.Namespace, lines: list[str], names: list[str], per: int,
+                  commands: dict[str, list[str]], rng: random.Random, env: dict[str, str],
+                  warm_env: dict[str, str], tmp: Path) -> None:
+    from benchmarks._rigs import warm
+
+    before = "before, sum | before / engine | " if args.base else ""
+    bench_startup(args, lines, env)
+    lines.append(
+        f"| circuit | engine, sum | given enc., sum | fresh, sum | command, sum | {before}"
+        "**command / engine** | CPU, command / engine | CPU, command / given enc. | "
+        "CPU, command / fresh | cold / engine | CPU, cold / engine | "
+        "**CPU, warm / engine** | CPU, warm / given enc. | overhead per run, "
+        "mean / worst | load | runs cut |")
+    lines.append("|---|---|---|---|---|" + ("---|---|" if args.base else "") + "---|" * 11)
+    colds = 0
+    for name in names:
+        circuit = parse_bench(ISCAS / f"{name}.bench")
+        if args.circuits and name not in args.circuits:
+            list(sample(circuit, rng, per))  # drawn all the same: the others' sample stays
+            continue
+        theory = circuit_theory(circuit)
+        encoding = encode(theory, structure=True)  # as the cache holds it
+        known = theory.observable_atoms()
+        model = _warm_model(theory, tmp / f"{name}.yaml", env)
+        labels = ["engine", "given", "fresh", *commands]
+        wall: dict[str, list[float]] = {label: [] for label in labels}
+        cpu: dict[str, list[float]] = {label: [] for label in labels}
+        cut = 0
+        loads = [os.getloadavg()[0]]
+        for n, (_flips, obs) in enumerate(sample(circuit, rng, per)):
+            obs = [o for o in obs if o.atom in known]
+            obs_file = tmp / f"{name}-{n}.obs"
+            obs_file.write_text("".join(f"{o}\n" for o in obs))
+            runs = [cpu_timed(_engine, theory, obs, args.budget) for _ in range(args.repeat)]
+            r = runs[0][2]
+            wall["engine"].append(min(t for t, _c, _r in runs))
+            cpu["engine"].append(min(c for _t, c, _r in runs))
+            copies = [copy.deepcopy(encoding) for _ in range(args.repeat)]  # untimed
+            runs = [cpu_timed(_engine_as_command, theory, obs, args.budget, e)
+                    for e in copies]
+            wall["given"].append(min(t for t, _c, _r in runs))
+            cpu["given"].append(min(c for _t, c, _r in runs))
+            for label, prefix in commands.items():
+                best, best_cpu = float("inf"), float("inf")
+                for _ in range(args.repeat):
+                    run_env = env
+                    if label == "cold":  # a cache directory of its own, empty
+                        colds += 1
+                        run_env = {**env, "XDG_CACHE_HOME": str(tmp / f"c{colds}")}
+                    cmd = [*prefix, "diagnose", str(model), "--obs", str(obs_file),
+                           "--json", "--min-card-only", "--time-budget", str(args.budget)]
+                    if label == "warm":  # handed to the warm server: its CPU counted
+                        t, c, proc = warm.run(cmd, warm_env, True)
+                    else:
+                        t, c, proc = _run_child(cmd, run_env)
+                    best, best_cpu = min(best, t), min(best_cpu, c)
+                    assert proc.returncode in (0, 1), proc.stderr  # 1: cut before the first
+                    data = json.loads(proc.stdout)
+                    if "time_budget" in (data["cut_by"], r.cut_by):
+                        cut += 1  # the budget cut one of the two on a loaded machine
+                        continue
+                    if not data["complete"] or r.cut_by is not None:
+                        continue  # 1,000 kept of more: not compared (ties at the edge)
+                    assert sorted(map(tuple, (x["bad"] for x in data["diagnoses"]))) == (
+                        sorted(tuple(sorted(x.bad)) for x in r.diagnoses))
+                wall[label].append(best)
+                cpu[label].append(best_cpu)
+            fresh = []
+            for _ in range(args.repeat):  # after the command: its cache entry is there
+                proc = subprocess.run(
+                    [sys.executable, "-c", FRESH_ENGINE, str(model), str(obs_file),
+                     str(args.budget)], capture_output=True, text=True, check=True, env=env)
+                t, c, cut_by, count = json.loads(proc.stdout)
+                assert count == len(r.diagnoses) or "time_budget" in (cut_by, r.cut_by)
+                fresh.append((t, c))
+            wall["fresh"].append(min(t for t, _c in fresh))
+            cpu["fresh"].append(min(c for _t, c in fresh))
+            loads.append(os.getloadavg()[0])
+        lines.append(_row(name, wall, cpu, args.base is not None, cut, loads))
+        print(lines[-1], flush=True)
 
 
 def _row(name: str, wall: dict[str, list[float]], cpu: dict[str, list[float]], base: bool,
@@ -279,7 +304,8 @@ def _row(name: str, wall: dict[str, list[float]], cpu: dict[str, list[float]], b
             f"{fmt(w['command'])} | {old}**{w['command'] / w['engine']:.2f}x** | "
             f"{c['command'] / c['engine']:.2f}x | {c['command'] / c['given']:.2f}x | "
             f"{c['command'] / c['fresh']:.2f}x | {w['cold'] / w['engine']:.2f}x | "
-            f"{c['cold'] / c['engine']:.2f}x | {mean_worst(overhead)} | "
+            f"{c['cold'] / c['engine']:.2f}x | **{c['warm'] / c['engine']:.2f}x** | "
+            f"{c['warm'] / c['given']:.2f}x | {mean_worst(overhead)} | "
             f"{min(loads):.1f}-{max(loads):.1f} | {cut} |")
 
 
@@ -333,15 +359,15 @@ def _rc2_rows(args: argparse.Namespace, lines: list[str], command: list[str],
             continue
         theory = circuit_theory(circuit)
         known = theory.observable_atoms()
-        model = _warm_model(theory, Path(tmp) / f"{name}.yaml", env)
+        model = _warm_model(theory, tmp / f"{name}.yaml", env)
         cpu: dict[str, float] = {"rc2": 0.0, "first": 0.0, "all": 0.0, "warm first": 0.0,
                                  "warm all": 0.0}
         loads = [os.getloadavg()[0]]
         for n, (_flips, obs) in enumerate(sample(circuit, rng, per)):
             obs = [o for o in obs if o.atom in known]
-            obs_file = Path(tmp) / f"{name}-{n}.obs"
+            obs_file = tmp / f"{name}-{n}.obs"
             obs_file.write_text("".join(f"{o}\n" for o in obs))
-            wcnf_file = Path(tmp) / f"{name}-{n}.wcnf"
+            wcnf_file = tmp / f"{name}-{n}.wcnf"
             _wcnf(theory, obs)[0].to_file(str(wcnf_file))
             base = [*command, "diagnose", str(model), "--obs", str(obs_file), "--json",
                     "--min-card-only", "--time-budget", str(args.budget)]

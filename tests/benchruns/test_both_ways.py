@@ -37,3 +37,16 @@ def test_the_benchmark_starts_both_ways(name: str, way: str) -> None:
     assert "Traceback" not in proc.stderr, proc.stderr[-2000:]
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "usage:" in proc.stdout.lower(), proc.stdout[-500:]
+
+
+def test_plandiag_without_k_star_says_how_to_get_it_in_one_line() -> None:
+    """K* comes with ``.[bench]``; a machine without it gets the fix, not a traceback."""
+    hide = ("import runpy, sys; sys.modules['kstar_planner'] = None; "
+            "sys.argv = ['plandiag', '--sizes', '10']; "
+            "runpy.run_module('benchmarks.plandiag', run_name='__main__')")
+    proc = subprocess.run([sys.executable, "-c", hide], cwd=ROOT, capture_output=True,
+                          text=True, timeout=240, check=False)
+    assert proc.returncode == 2, proc.stderr[-2000:]
+    assert "Traceback" not in proc.stderr
+    assert "--no-planner" in proc.stderr and ".[bench]" in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1  # refused before anything runs
