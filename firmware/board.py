@@ -215,10 +215,7 @@ class Board:
         if read_switches is not None:  # 1/0 into sws, each as read_switch's bool
             read_switches(sws)
         else:  # a HAL without it: read_switch's values as they are, for the full step
-            read_switch = hal.read_switch
-            swl = [read_switch(i) for i in range(self.n)]
-            for i in range(self.n):
-                sws[i] = 1 if swl[i] else 0
+            swl = self._read_switch_values(sws)
         # the steady channels in one pass (firmware.fast); the others in full, in order
         acc = self.acc
         mask = steady(self.hot, self.win, samples, sws, self.n, dt, acc)
@@ -253,6 +250,16 @@ class Board:
         if self.wdt_resets and now - self.boot_ms >= bootlog.STABLE_MS:
             self.wdt_resets = 0
             bootlog.mark_stable(hal.storage)
+
+    def _read_switch_values(self, sws: "Any") -> "list[Any]":
+        """Each switch as ``hal.read_switch`` reads it, and 1/0 into ``sws`` (a HAL without
+        ``read_switches``). A method of its own: in ``tick``, the comprehension's use of
+        ``read_switch`` made that a cell, allocated on the heap at every tick, on every HAL."""
+        read_switch = self.hal.read_switch
+        swl = [read_switch(i) for i in range(self.n)]
+        for i in range(self.n):
+            sws[i] = 1 if swl[i] else 0
+        return swl
 
     def _board_rules(self) -> None:
         """The settings of the board rules the tick checks, from ``cfg["board"]``."""

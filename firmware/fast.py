@@ -5,7 +5,7 @@ same source run as plain Python under CPython (the emulator, the tests).
 returns the bit mask of the channels it did not take: those ``Channel.step`` steps, which owns
 every rule and every event; the two agree exactly (the steady state is one where ``step`` would
 change nothing but the reported current and the noise window). ``ina226_read``,
-``ina3221_read``, ``profet_read`` and ``pins_read`` are the HAL's per-tick reads.
+``ina3221_read``, ``profet_read``, ``pins_read`` and ``gpio_read`` are the HAL's per-tick reads.
 
 Viper integers are machine words (32 bits on the board; a ``ptr32`` load is not sign-extended
 on a 64-bit port, so a negative value is told by its bit 31) and its ``//`` is unsigned: every
@@ -139,6 +139,22 @@ def pins_read(pins: object, out: object, n: int) -> int:
     i = 0
     while i < n:
         o[i] = 1 if p[i].value() else 0
+        i += 1
+    return n
+
+
+@micropython.viper
+def gpio_read(mem: object, addr: object, shifts: object, out: object, n: int) -> int:
+    """``out[i]`` = bit ``shifts[i]`` (a byte each) of the word ``mem[addr]``, read once: on an
+    RP2040 or RP2350 ``machine.mem32`` at the SIO's GPIO_IN, every GPIO's input level (what
+    ``Pin.value()`` reads, one pin at a time). Returns ``n``."""
+    m = mem  # type: Any
+    v = int(m[addr])  # (an object subscript: C on the board, one call)
+    s = ptr8(shifts)
+    o = ptr32(out)
+    i = 0
+    while i < n:
+        o[i] = (v >> s[i]) & 1
         i += 1
     return n
 

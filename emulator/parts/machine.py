@@ -16,6 +16,11 @@ calls as on the board, wired to the simulated parts of ``emulator.parts.world.cu
 - ``ADC(pin or channel)``: ``read_u16`` is the RP2040's 12-bit conversion of the pin's voltage
   against 3.3 V, with the noise of its ENOB of about 8.7 bits (2.84 LSB rms), scaled to 16 bit
   as the port does (``raw << 4 | raw >> 8``).
+- ``mem32[SIO_GPIO_IN]`` (0xd0000004, RP2040 datasheet 2.3.1.7; the same on the RP2350): every
+  GPIO's level in one word, bit n GPIO n, each read as its ``Pin.value()`` would (an output:
+  its latch; an input or open drain: its net, else its pull; a GPIO never set up: its net,
+  else 0). Any other address, and any write, raises ``ValueError``: nothing else of the chip's
+  memory is modelled, and firmware must not read something made up.
 - ``WDT(timeout=ms)``: ``feed``; unfed for longer than the timeout, the board resets (the next
   call into ``machine`` raises ``BoardReset``); at most 8388 ms, as on the RP2040.
 - ``UART(id, baudrate)``: ``write``, ``read``, ``readinto``, ``readline``, ``any``; bytes go to
@@ -32,6 +37,7 @@ __all__ = [
     "ADC",
     "I2C",
     "PWRON_RESET",
+    "SIO_GPIO_IN",
     "UART",
     "WDT",
     "WDT_RESET",
@@ -41,6 +47,7 @@ __all__ = [
     "enable_irq",
     "freq",
     "idle",
+    "mem32",
     "reset",
     "reset_cause",
     "unique_id",
@@ -48,6 +55,7 @@ __all__ = [
 
 ADC_NOISE_LSB = 2.84  # 2 ** (12 - 8.7) / sqrt(12): the RP2040's ENOB of about 8.7 bits
 WDT_MAX_MS = 8388
+SIO_GPIO_IN = 0xD0000004  # the SIO's GPIO_IN register (RP2040 and RP2350)
 
 
 def _w() -> "_world.World":
@@ -78,6 +86,8 @@ class Pin:
         self.mode = self.IN if mode == -1 else mode
         self.pull = pull
         w = _w()
+        w.pad_mode[self.id] = self.mode
+        w.pad_pull[self.id] = pull
         if value is not None:
             w.latches[self.id] = 1 if value else 0
         if self.mode == self.OUT:
@@ -89,9 +99,7 @@ class Pin:
     def value(self, x: "int | None" = None) -> "int | None":
         w = _w()
         if x is None:
-            if self.mode == self.OUT:
-                return w.latches.get(self.id, 0)
-            return w.sense(self.id, 1 if self.pull == self.PULL_UP else 0)
+            return _level(w, self.id, self.mode, self.pull)
         level = 1 if x else 0
         if self.mode == self.OUT:
             w.drive(self.id, level)
@@ -110,6 +118,37 @@ class Pin:
 
     def toggle(self) -> None:
         self.value(0 if self.value() else 1)
+
+
+def _level(w: "_world.World", gpio: int, mode: int, pull: int) -> int:
+    """What a GPIO set up as ``mode`` with ``pull`` reads: an output its latch, else its net
+    (its pull if nothing is wired to it)."""
+    if mode == Pin.OUT:
+        return w.latches.get(gpio, 0)
+    return w.sense(gpio, 1 if pull == Pin.PULL_UP else 0)
+
+
+class _Mem32:
+    """``machine.mem32``: of the chip's memory only the SIO's GPIO_IN register is modelled."""
+
+    def __getitem__(self, addr: int) -> int:
+        w = _w()
+        if addr != SIO_GPIO_IN:
+            raise ValueError(f"mem32[0x{addr:x}]: not modelled (only SIO GPIO_IN,"
+                             f" 0x{SIO_GPIO_IN:x})")
+        word = 0
+        for gpio in range(_world.N_GPIO):
+            mode = w.pad_mode[gpio]
+            # a GPIO never set up: its pad's reset state, an input (its net, else 0)
+            if _level(w, gpio, mode, w.pad_pull[gpio]) if mode >= 0 else w.sense(gpio, 0):
+                word |= 1 << gpio
+        return word
+
+    def __setitem__(self, addr: int, value: int) -> None:
+        raise ValueError(f"mem32[0x{addr:x}] = {value}: writes are not modelled")
+
+
+mem32 = _Mem32()
 
 
 class I2C:

@@ -25,6 +25,7 @@ WDT_RESET = 3
 
 I2C_TIMEOUT_US = 50000  # the rp2 port's default ``timeout`` of machine.I2C
 ADC_CONVERSION_US = 2  # RP2040: 96 ADC clocks at 48 MHz
+N_GPIO = 30  # GPIO 0-29 (RP2040; the RP2350A's too)
 
 
 class BoardReset(BaseException):
@@ -112,6 +113,11 @@ class World:
         self.outputs: dict[int, object] = {}  # pin -> fn(level), the nets an output drives
         self.inputs: dict[int, object] = {}  # pin -> fn() -> level
         self.latches: dict[int, int] = {}  # the output latch of every pin driven
+        # the mode and pull of the ``machine.Pin`` last set up on each GPIO (-1: none), for a
+        # read of every pad at once (``machine.mem32``); lists made here, so that setting a
+        # pin up allocates nothing the firmware's heap figures would count
+        self.pad_mode = [-1] * N_GPIO
+        self.pad_pull = [-1] * N_GPIO
         self.adcs: dict[int, object] = {}  # GPIO -> fn() -> volts at the pin
         self.vref = 3.3
         self.cause = PWRON_RESET
@@ -171,6 +177,8 @@ class World:
         for pin in list(self.latches):
             self.drive(pin, 0)
         self.latches = {}
+        for gpio in range(N_GPIO):  # every pad back to its reset state
+            self.pad_mode[gpio] = -1
         self.boots += 1
         return cause
 

@@ -63,6 +63,9 @@ class ChipBank:
         self.n = len(chip_of)
         self.state = [C_UNKNOWN] * self.n_chips
         self.ids = [0] * self.n_chips  # (manufacturer << 16) | die, as last read
+        # the CONFIG each chip is written and checked against (a subclass whose chips differ
+        # sets its own list)
+        self.configs = [self.CONFIG_TICK] * self.n_chips
         self.buf = bytearray(2)
         self.wbuf = bytearray(2)
         self.check_i = 0
@@ -78,9 +81,6 @@ class ChipBank:
         self.wbuf[0] = (value >> 8) & 0xFF
         self.wbuf[1] = value & 0xFF
         self.i2c.writeto_mem(self.chips[chip], reg, self.wbuf)
-
-    def _config_of(self, chip: int) -> int:
-        return self.CONFIG_TICK
 
     def _write_config(self, chip: int) -> None:
         raise NotImplementedError
@@ -219,8 +219,10 @@ class ChipBank:
         self.check_i = (chip + 1) % self.n_chips
         if self.state[chip] != C_OK or self.bus_wait:
             return
+        buf = self.buf  # _get inlined: this runs every tick
         try:
-            if self._get(chip, REG_CONFIG) != self._config_of(chip):
+            self.i2c.readfrom_mem_into(self.chips[chip], REG_CONFIG, buf)
+            if (buf[0] << 8) | buf[1] != self.configs[chip]:
                 self.resets += 1
                 self._configure(chip)
         except OSError as exc:

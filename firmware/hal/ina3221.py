@@ -79,9 +79,6 @@ class Ina3221Bank(ChipBank):
         self.input_b = bytes(self.input_of)
         self.prog = array("i", [0, 0, 0])
 
-    def _config_of(self, chip: int) -> int:
-        return self.configs[chip]
-
     def _write_config(self, chip: int) -> None:
         self._put(chip, REG_CONFIG, self.configs[chip])
         for ch in range(self.n):

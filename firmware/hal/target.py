@@ -11,7 +11,10 @@ its CRITICAL limit a fast trip input, set from ``set_trip_ma``) or
 driver checks its parts at boot and reads ``NO_READING`` (``F_SENSOR``) for a channel whose
 part does not answer, ``TRIPPED`` or ``LOW`` where its part says so (``firmware.hal``).
 Each switch has an enable pin and, where the board
-has one, a status (read-back) pin; without one the enable pin's output latch is read back.
+has one, a status (read-back) pin; without one the enable pin's output latch is read back. On
+an RP2040 or RP2350 (``board["mcu"]``, ``GPIO_IN_OF``) the tick reads every switch back at once,
+from the SIO's GPIO_IN register (``machine.mem32``: each pin's bit, what its ``Pin.value()``
+reads), one call instead of one a pin; elsewhere, and for a pin past GPIO 31, pin by pin.
 ``ticks_ms`` turns the port's wrapping ``time.ticks_ms`` into a monotonic count with
 ``ticks_diff``. On the rp2 port ``machine.reset()`` reboots through the watchdog (the next boot
 reads ``WDT_RESET``), so ``reboot`` first writes the storage file ``reboot``, and a watchdog
@@ -24,7 +27,7 @@ import time as _port_time
 import machine  # type: ignore[import-not-found]  # MicroPython only: no stubs
 
 from firmware import boards
-from firmware.fast import pins_read
+from firmware.fast import gpio_read, pins_read
 from firmware.hal.ina226 import Ina226Bank
 from firmware.hal.ina3221 import Ina3221Bank
 from protocol.constants import (
@@ -70,6 +73,9 @@ if False:  # typing only; MicroPython never imports typing (the block is compile
 time: "MpTime" = _port_time  # type: ignore[assignment]  # MicroPython's, beyond CPython's
 
 REBOOT_MARK = "reboot"  # a reboot this firmware asked for (storage file)
+# the MCUs whose SIO has GPIO_IN (every GPIO's input level, bit n GPIO n, n < 32) and its
+# address: RP2040 datasheet 2.3.1.7, RP2350 datasheet 3.1.11 (SIO_BASE 0xd0000000 + 0x004)
+GPIO_IN_OF = {"rp2040": 0xD0000004, "rp2350": 0xD0000004}
 
 
 class TargetHal:
@@ -78,10 +84,19 @@ class TargetHal:
                  i2c: "Any" = None, ina226_addrs: "tuple[int, ...] | None" = None,
                  shunt_uohm: int = 10000, vin_adc_pin: "int | None" = None,
                  mv_per_count_x1000: int = 1000, wdt_timeout_ms: int = 2000,
-                 storage: "Storage | None" = None, bank: "SenseBank | None" = None) -> None:
+                 storage: "Storage | None" = None, bank: "SenseBank | None" = None,
+                 gpio_in: "int | None" = None) -> None:
         self.n_channels = len(en_pins)
         self.en = [machine.Pin(p, machine.Pin.OUT, value=0) for p in en_pins]
         self.status = [machine.Pin(p, machine.Pin.IN) for p in status_pins] if status_pins else None
+        # the switches read back (status pins, else the enables): by GPIO_IN at ``gpio_in``
+        # when the MCU has one (an address of GPIO_IN_OF) and every pin is in it, else a pin
+        # at a time
+        back = status_pins if status_pins else en_pins
+        in_word = all(isinstance(p, int) and 0 <= p < 32 for p in back)
+        self.gpio_in = gpio_in if in_word else None
+        self.mem32 = machine.mem32 if self.gpio_in is not None else None
+        self.back_bits = bytes(back)  # each switch's bit in GPIO_IN
         self.adc: "list[Adc] | None" = \
             [machine.ADC(machine.Pin(p)) for p in adc_pins] if adc_pins else None
         self.ma_k = ma_per_count_x1000
@@ -158,7 +173,10 @@ class TargetHal:
 
     def read_switches(self, out: "Any") -> None:
         """Every switch read back into ``out`` (array('i')): 1 or 0, as ``read_switch``."""
-        pins_read(self.status if self.status is not None else self.en, out, self.n_channels)
+        if self.gpio_in is not None:
+            gpio_read(self.mem32, self.gpio_in, self.back_bits, out, self.n_channels)
+        else:
+            pins_read(self.status if self.status is not None else self.en, out, self.n_channels)
 
     def read_input_mv(self) -> int:
         return self.vin.read_u16() * self.mv_k // 1000 if self.vin is not None else 0
@@ -210,4 +228,5 @@ def build(board: "dict[str, Any]", storage: "Storage") -> TargetHal:
     vin = board["vin"]
     return TargetHal(board["en_pins"], board["status_pins"] or None, bank=bank,
                      vin_adc_pin=vin["adc_pin"],
-                     mv_per_count_x1000=boards.mv_per_count_x1000(vin), storage=storage)
+                     mv_per_count_x1000=boards.mv_per_count_x1000(vin), storage=storage,
+                     gpio_in=GPIO_IN_OF.get(board["mcu"]))
