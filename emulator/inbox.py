@@ -17,7 +17,10 @@ drain says so on the log, at most once every ``TELL_EVERY_S``, with the running 
 A drain delivers for at most ``SLICE_S`` and leaves the rest (ahead of newer items) to a drain
 it schedules after whatever else the loop has ready: a loop that fell far behind (a recorder
 starved at a load of 24, writing every message into its bag) held a stop request behind one
-drain of thousands of messages, and did not react to SIGINT for a minute.
+drain of thousands of messages, and did not react to SIGINT for a minute. So the loop's timers
+run between slices while older items still wait: ``oldest()`` is the item waiting longest
+(None: none waits), for a consumer that must not judge ahead of what it has not read yet (the
+daemon's observer hub does not call a topic silent while its messages wait here).
 """
 
 from __future__ import annotations
@@ -69,6 +72,11 @@ class Inbox(Generic[T]):
         except RuntimeError:  # the loop closed while the middleware was still delivering
             with self._lock:
                 self._scheduled = False
+
+    def oldest(self) -> T | None:
+        """The item waiting longest for a drain (any thread); None when none waits."""
+        with self._lock:
+            return self._items[0] if self._items else None
 
     def _drain(self) -> None:
         with self._lock:

@@ -10,6 +10,20 @@ refreshes go out on time — no fixed poll. A deadline that recedes (a board's l
 on with each of its hundred readings a second) keeps its timer, which is moved on when it fires:
 an observer is ticked only once its deadline is due. The hub reads the clock (``clock``), as the
 I/O edge.
+
+A topic observer's rules judge no further than its messages have been read. The source hands
+them over through an inbox that a loop far behind drains in slices, its timers running in
+between (``emulator.inbox``), so a deadline can fire while messages that came in before it still
+wait there, and the observer would call silent a topic whose messages are only queued behind it:
+beside CPU hogs, with a stranger flooding ``/odom``, the daemon read its messages up to 4 s after
+they came in, called every topic silent at the cap and power-cycled healthy devices (issue 25).
+So while a message waits (``TopicSource.waiting_since``) a topic observer is ticked with
+``read``, the time the oldest waiting one came in, up to which it has read every message: its
+rules judge there (a silence judged there is one), its refreshes go out on time as before. A
+deadline that ``read`` has not reached yet is looked at again every ``BEHIND_S`` at most, until
+the messages before it are read. A backlog of ``BEHIND_TELL_S`` or more is said on the log. The
+board's readings and the processes' samples do not come through the inbox: their observers tick
+on the clock.
 """
 
 from __future__ import annotations
@@ -29,6 +43,9 @@ from host.observers.topics import FrequencyObserver, TopicObserver, WayIn
 from host.observers.watcher import ProcessSpec, ProcessWatcher
 
 log = logging.getLogger(__name__)
+
+BEHIND_S = 0.05  # a tick waiting for the inbox looks again this often at most (a drain's slice)
+BEHIND_TELL_S = 0.5  # a backlog at least this old is said on the log, once a spell
 
 Sink = Callable[[list[Update]], None]
 
@@ -58,6 +75,8 @@ class ObserverHub:
                 o.way_in = self.way_in
         self._timers: dict[int, tuple[float, asyncio.TimerHandle]] = {}
         self._subs: list[Subscription] = []
+        self._source: TopicSource | None = None
+        self._behind_told = False  # this spell of a backlog in the inbox was said
         self.watcher: ProcessWatcher | None = None
 
     def confirmed(self, atom: str) -> bool:
@@ -78,6 +97,7 @@ class ObserverHub:
                     poll: float | None = None) -> None:
         """Subscribe the topics, start watching the processes, arm the first deadlines."""
         if source is not None:
+            self._source = source
             for topic in self._by_topic:
                 self._subs.append(source.subscribe(topic, self.feed_message))
         if processes:
@@ -149,7 +169,31 @@ class ObserverHub:
         if due is None or (fired is not None and due > fired):
             self._arm(o)  # the deadline receded meanwhile: no tick before it is due
             return
-        updates = o.tick(self.clock())
+        now = self.clock()
+        read = self._waiting(now) if isinstance(o, TopicObserver) else None
+        updates = o.tick(now) if read is None else o.tick(now, read)
         if updates:
             self.sink(updates)
+        if read is not None:
+            nxt = o.next_deadline()
+            if nxt is not None and read <= nxt <= now:  # due, but a message by then is unread
+                delay = min(max(nxt - read, 0.001), BEHIND_S)
+                self._timers[id(o)] = (nxt, asyncio.get_running_loop().call_later(
+                    delay, self._fire, o))
+                return
         self._arm(o, fired)
+
+    def _waiting(self, now: float) -> float | None:
+        """When the oldest message still waiting in the source's inbox came in (the loop is
+        that far behind its messages); None when none that came in before ``now`` waits."""
+        waiting = None if self._source is None else self._source.waiting_since()
+        if waiting is None or waiting >= now:
+            self._behind_told = False
+            return None
+        if now - waiting < BEHIND_TELL_S:
+            self._behind_told = False  # the spell (if any) is over
+        elif not self._behind_told:
+            self._behind_told = True
+            log.warning("the topics' messages are read %.3f s after they came in (the loop is "
+                        "behind them): no topic is judged silent ahead of them", now - waiting)
+        return waiting

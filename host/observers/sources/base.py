@@ -5,7 +5,9 @@ with the host time it arrived, since it is the I/O edge; observers below it neve
 Callbacks run on the asyncio loop's thread (a backend with its own threads marshals them
 there through one ``host.observers.sources.inbox.Inbox``: one wakeup of the loop per batch,
 never one per message, and ``dropped`` counts what a lagging loop lost), must not block, and
-see messages of one topic in arrival order. ``close()`` is
+see messages of one topic in arrival order. ``waiting_since()`` is when the oldest message
+still waiting in that inbox arrived (None: none waits): the loop is that far behind its
+messages, and nothing may be judged silent ahead of it (``host.observers.hub``). ``close()`` is
 idempotent; sources are async context managers.
 """
 
@@ -42,6 +44,13 @@ class TopicSource(ABC):
         if inbox is None:
             inbox = self._inbox = Inbox(loop, _call, name=f"{type(self).__name__} messages")
         inbox.put((callback, msg))
+
+    def waiting_since(self) -> float | None:
+        """When the oldest message not yet handed to its callback arrived (the source's
+        clock); None when none waits (or the source calls its subscribers at once)."""
+        inbox = self._inbox
+        item = None if inbox is None else inbox.oldest()
+        return None if item is None else item[1].time
 
     @property
     def dropped(self) -> int:
