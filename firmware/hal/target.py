@@ -96,7 +96,7 @@ class TargetHal:
         in_word = all(isinstance(p, int) and 0 <= p < 32 for p in back)
         self.gpio_in = gpio_in if in_word else None
         self.mem32 = machine.mem32 if self.gpio_in is not None else None
-        self.back_bits = bytes(back)  # each switch's bit in GPIO_IN
+        self.back_bits = bytes(back) if in_word else b""  # each switch's bit in GPIO_IN
         self.adc: "list[Adc] | None" = \
             [machine.ADC(machine.Pin(p)) for p in adc_pins] if adc_pins else None
         self.ma_k = ma_per_count_x1000
