@@ -99,13 +99,15 @@ def _timer(spent, clock, diff):
     return timed
 
 
-def time_machine(machine, clock, diff, bank=None):
+def time_machine(machine, clock, diff, bank=None, meter=None):
     """Wrap the parts' ``machine`` classes so that ``spent[0]`` sums the time inside their
     calls (the outermost only: a call inside another is not counted twice), whatever HAL
     object makes them; ``spent[2]`` counts those calls (see ``layer_ns``). ``bank``: the HAL's
-    sensing driver, whose ``sleep_us`` (MicroPython's, handed to it at build) is wrapped too."""
+    sensing driver, whose ``sleep_us`` (MicroPython's, handed to it at build) is wrapped too.
+    ``meter``: the bare Cortex-M board's ``icount`` module, whose ``timed`` wraps in C (it
+    counts into ``meter.inside()`` and ``meter.calls()``, and ``spent`` stays unused)."""
     spent = [0, 0, 0]
-    timed = _timer(spent, clock, diff)
+    timed = meter.timed if meter is not None else _timer(spent, clock, diff)
     for cls_name, names in MACHINE_CALLS:
         cls = getattr(machine, cls_name)
         if not isinstance(cls, type):
@@ -115,6 +117,25 @@ def time_machine(machine, clock, diff, bank=None):
     if bank is not None and hasattr(bank, "sleep_us"):
         bank.sleep_us = timed(bank.sleep_us)
     return spent
+
+
+def meter_layer(meter, clock, diff, n=200):
+    """``layer_ns`` for the C wrapper of the bare Cortex-M board (instructions x 1000 a call):
+    a wrapped C function's cost outside ``meter.inside()`` less calling it directly. It comes
+    out negative: the C call's own dispatch falls inside the count, and belongs to the
+    firmware (a board pays it calling its C ``machine``), so the net figure adds it back.
+    Instruction counts do not vary: one loop of each suffices."""
+    wrapped = meter.timed(abs)
+    meter.inside()
+    t = clock()
+    for _ in range(n):
+        wrapped(0)
+    total = diff(clock(), t) - meter.inside()
+    t = clock()
+    for _ in range(n):
+        abs(0)
+    direct = diff(clock(), t)
+    return (total - direct) * 1000 // n
 
 
 def layer_ns(clock, diff, n=2000, runs=7):
@@ -230,27 +251,38 @@ def measure(rev):
     w, board, hal, b, heap = got
     import machine  # the parts' (MICROPYPATH), the one the HAL was built with
 
-    clock = time.ticks_us
+    try:  # the bare Cortex-M board under QEMU (benchmarks/board_cortexm.py): instructions
+        import icount as meter
+        clock = meter.instructions
+    except ImportError:
+        meter = None
+        clock = time.ticks_us
     diff = time.ticks_diff
-    spent = time_machine(machine, clock, diff, hal.ina)
+    spent = time_machine(machine, clock, diff, hal.ina, meter)
     i2c = board["sense"].get("i2c")
     bus = w.bus(i2c["id"]) if i2c else None
 
     def step():
         w.set_time(w.now_us + 10000 - w.now_us % 10000)
+        spent[0] = 0  # per tick: a sum over the run would outgrow a small int in instructions
+        calls = meter.calls() if meter else spent[2]
+        if meter:
+            meter.inside()
         t = clock()
-        inside, calls = spent[0], spent[2]
         hal.wdt_feed()
         b.tick(w.now_us // 1000)
-        return diff(clock(), t) - (spent[0] - inside), spent[2] - calls
+        took = diff(clock(), t)
+        if meter:
+            return took - meter.inside(), meter.calls() - calls
+        return took - spent[0], spent[2] - calls
 
     for _ in range(200):  # 2 s: past the power-up and the inrush windows
         step()
     from protocol.constants import ST_ON
 
     on = sum(1 for ch in b.channels if ch.state == ST_ON)
-    cpu, busy, refs, ratios, nets = [], [], [], [], []
-    layer = layer_ns(clock, diff)
+    cpu, busy, refs, ratios, nets, owns = [], [], [], [], [], []
+    layer = meter_layer(meter, clock, diff) if meter else layer_ns(clock, diff)
     for _ in range(PARTS_TICKS):
         # the time the sensing blocks the tick: the I2C bus's, or (no I2C) every conversion
         # and wait the simulated clock was charged with during the tick
@@ -264,14 +296,16 @@ def measure(rev):
         refs.append(r)
         ratios.append(c * 1000 // max(r, 1))
         nets.append((c * 1000 - calls * layer) // max(r, 1))
+        owns.append((c * 1000 - calls * layer) // 1000)
     cpu.sort()
+    owns.sort()
     busy.sort()
     ratios.sort()
     nets.sort()
     print("PARTS", rev, board["channels"], on, cpu[0], cpu[len(cpu) // 2],
           cpu[int(len(cpu) * 0.95)], ratios[len(ratios) // 2],
           nets[len(nets) // 2], min(refs),
-          sum(busy) // len(busy), busy[-1], heap)
+          sum(busy) // len(busy), busy[-1], heap, owns[len(owns) // 2])
 
 
 def results(revs):
@@ -357,7 +391,7 @@ def section(peak_memory):
             lines.append(f"| {rev} | - | no part model wiring for its sense chip in"
                          " emulator/parts/wiring.py WIRING yet | - | - | - | - | - | - |")
             continue
-        n, on, low, med, p95, gross, ratio, ref, bus_mean, bus_max, heap = f
+        n, on, low, med, p95, gross, ratio, ref, bus_mean, bus_max, heap = f[:11]
         heaps[rev] = heap
         # the net ratio takes off the layer's calibrated cost per call times the tick's calls;
         # where that comes to (nearly) the whole tick (rev C's ~70 pin and ADC calls), the

@@ -98,6 +98,16 @@ def measure(perf_bench: Path, repeat: int) -> dict[str, float]:
     return out
 
 
+def perf_bench_ok(perf_bench: Path) -> bool:
+    """Whether ``perf_bench`` is MicroPython's ``tests/perf_bench``; if not, says so in one
+    line on stderr."""
+    if (perf_bench / "benchrun.py").is_file():
+        return True
+    print(f"{perf_bench}: no benchrun.py: give tests/perf_bench of a MicroPython checkout",
+          file=sys.stderr)
+    return False
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--perf-bench", metavar="DIR", type=Path,
@@ -109,9 +119,7 @@ def main() -> int:
         for mcu, ratio in MEASURED.items():
             print(f"{mcu:10} {ratio}x slower than the unix port here (last measured)")
         return 0
-    if not (args.perf_bench / "benchrun.py").is_file():
-        print(f"{args.perf_bench}: no benchrun.py: give tests/perf_bench of a MicroPython "
-              "checkout", file=sys.stderr)
+    if not perf_bench_ok(args.perf_bench):
         return 2
     load = os.getloadavg()[0]
     measure(args.perf_bench, args.repeat)

@@ -10,6 +10,7 @@ like a package of ours (the old ``benchmarks/protocol.py``) would shadow it.
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -50,3 +51,17 @@ def test_plandiag_without_k_star_says_how_to_get_it_in_one_line() -> None:
     assert "Traceback" not in proc.stderr
     assert "--no-planner" in proc.stderr and ".[bench]" in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1  # refused before anything runs
+
+
+def test_board_cortexm_without_the_arm_tools_says_which_to_install_in_one_line(
+        tmp_path: Path) -> None:
+    """The Cortex-M count needs Debian's cross compiler and QEMU, which ``make test`` does not
+    install; without them the benchmark names the packages instead of failing in make."""
+    (tmp_path / "make").symlink_to(shutil.which("make") or "/usr/bin/make")
+    env = dict(os.environ, PATH=str(tmp_path))  # no arm-none-eabi-gcc, no qemu-system-arm
+    proc = subprocess.run([sys.executable, "-m", "benchmarks.board_cortexm"], cwd=ROOT,
+                          env=env, capture_output=True, text=True, timeout=240, check=False)
+    assert proc.returncode == 2, proc.stderr[-2000:]
+    assert "Traceback" not in proc.stderr
+    assert "gcc-arm-none-eabi" in proc.stderr and "qemu-system-arm" in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1

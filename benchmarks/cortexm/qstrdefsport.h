@@ -1,0 +1,1 @@
+// qstrs of this port beyond those the sources name: none
