@@ -187,7 +187,7 @@ class _Electrics:
         self.closed[ch] = bool(level)
 
 
-def parts_board(rev):
+def parts_board(rev, before_build=None):
     """A parts world wired as revision ``rev`` (every file of ``firmware/boards``): a switch per
     enable pin read back on its status pin, a load per channel, the revision's sensing parts
     as ``emulator.parts.wiring`` wires them for every revision (a smart switch is its own
@@ -231,6 +231,8 @@ def parts_board(rev):
 
     # the port's ticks; a busy wait (a smart switch's settle) charged to the world's clock
     target.time = BoardTime(w, target._port_time)
+    if before_build is not None:  # the meter on the parts' machine classes, before the HAL
+        before_build()  # keeps any of their bound methods
     gc.collect()
     before = gc.mem_alloc()
     hal = target.build(board, MemStorage())
@@ -244,13 +246,6 @@ def measure(rev):
     """Under MicroPython: the tick of revision ``rev`` on the parts; prints one PARTS line."""
     import time
 
-    got = parts_board(rev)
-    if got is None:
-        print("PARTS", rev, "none")
-        return
-    w, board, hal, b, heap = got
-    import machine  # the parts' (MICROPYPATH), the one the HAL was built with
-
     try:  # the bare Cortex-M board under QEMU (benchmarks/board_cortexm.py): instructions
         import icount as meter
         clock = meter.instructions
@@ -258,7 +253,22 @@ def measure(rev):
         meter = None
         clock = time.ticks_us
     diff = time.ticks_diff
-    spent = time_machine(machine, clock, diff, hal.ina, meter)
+    box = []
+
+    def wrap():
+        import machine  # the parts' (MICROPYPATH), the one the HAL is built with
+
+        box.append(time_machine(machine, clock, diff, None, meter))
+
+    got = parts_board(rev, wrap)
+    if got is None:
+        print("PARTS", rev, "none")
+        return
+    w, board, hal, b, heap = got
+    spent = box[0]
+    if hasattr(hal.ina, "sleep_us"):  # handed to the sensing driver at build
+        hal.ina.sleep_us = meter.timed(hal.ina.sleep_us) if meter else _timer(
+            spent, clock, diff)(hal.ina.sleep_us)
     i2c = board["sense"].get("i2c")
     bus = w.bus(i2c["id"]) if i2c else None
 

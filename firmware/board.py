@@ -135,6 +135,10 @@ class Board:
         self.reboot_pending = False
         # the HAL's batch read of the switches, if it has one (looked up once, not per tick)
         self.hal_read_switches = getattr(hal, "read_switches", None)
+        # and the two reads every tick makes, bound once: a method looked up on an object
+        # with many attributes costs a miss in its attribute map first, at every call
+        self.hal_read_currents = hal.read_currents_ma
+        self.hal_read_input_mv = hal.read_input_mv
         # the board rules' settings as the tick reads them, from cfg["board"] (_board_rules:
         # at boot and by set_board_config, its only writers)
         self.total_limit_ma = 0
@@ -204,11 +208,10 @@ class Board:
             self.halted = True
             self.hal.reboot()
             return
-        hal = self.hal
         dt = now - self.last
         self.last = self.now = now
         samples = self.samples
-        hal.read_currents_ma(samples)
+        self.hal_read_currents(samples)
         sws = self.sws
         read_switches = self.hal_read_switches
         swl = None
@@ -236,11 +239,13 @@ class Board:
             mask >>= 1
             i += 1
         self.total_ma = total
-        self.input_mv = hal.read_input_mv()
+        self.input_mv = self.hal_read_input_mv()
         if self.queue and now >= self.queue_at:
             self._run_queue(now)
         limit = self.total_limit_ma
-        if limit:  # a channel that tripped in this step no longer counts
+        # a channel that tripped in this step no longer counts; under the limit with nothing
+        # counted or flagged, the rule has nothing to do (the usual tick: no call)
+        if limit and (live > limit or self.total_n or self.flags & B_OVER_TOTAL):
             self._total_rule(now, live, limit)
         if self.uv_on:
             self._uv_rule(now, self.input_mv, self.cfg["board"])
@@ -249,7 +254,7 @@ class Board:
             self._deadman(now, self.deadman_mask)
         if self.wdt_resets and now - self.boot_ms >= bootlog.STABLE_MS:
             self.wdt_resets = 0
-            bootlog.mark_stable(hal.storage)
+            bootlog.mark_stable(self.hal.storage)
 
     def _read_switch_values(self, sws: "Any") -> "list[Any]":
         """Each switch as ``hal.read_switch`` reads it, and 1/0 into ``sws`` (a HAL without

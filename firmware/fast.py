@@ -161,19 +161,22 @@ def gpio_read(mem: object, addr: object, shifts: object, out: object, n: int) ->
 
 @micropython.viper
 def ina226_read(read: object, addrs: object, state: object, buf: object, out: object, ch: int,
-                n: int, shunt: int, prog: object) -> int:
-    """From channel ``ch`` on, while its chip is ready (``state`` C_OK = 1): its SHUNT register
-    read (``read``: the bus's ``readfrom_mem_into``) and converted, as ``Ina226Bank._sample``.
-    Returns the first channel not read (``n``: all); ``prog[0]``: the channel being read (an
-    ``OSError`` passes to the caller)."""
+                n: int, shunt: int, prog: object, configs: object) -> int:
+    """From channel ``ch`` on, while its chip is ready (``state`` C_OK = 1, a byte a chip): its
+    SHUNT register read (``read``: the bus's ``readfrom_mem_into``) and converted, as
+    ``Ina226Bank._sample``. Returns the first channel not read; when it read every channel
+    left, one chip's CONFIG is checked as ``ChipBank._check`` does (the chip ``prog[3]``, which
+    moves on; read only if ready; ``prog[5]``: that chip + 1 if its CONFIG is not
+    ``configs[chip]``, else 0) and it returns ``n + 1``. ``prog[0]``: the channel being read, or
+    ``n`` + the chip being checked (an ``OSError`` passes to the caller)."""
     b = ptr8(buf)
     ad = ptr8(addrs)
+    s8 = ptr8(state)
     p = ptr32(prog)
     rd = read  # type: Any
-    st = state  # type: Any
     o = out  # type: Any
     while ch < n:
-        if int(st[ch]) != 1:
+        if s8[ch] != 1:
             return ch
         p[0] = ch
         rd(ad[ch], 1, buf)
@@ -182,36 +185,48 @@ def ina226_read(read: object, addrs: object, state: object, buf: object, out: ob
         else:
             o[ch] = ((b[0] << 8) | b[1]) * 2500 // shunt
         ch += 1
-    return ch
+    c = p[3]  # ChipBank._check, with its chip in prog (a chip a channel here)
+    if c + 1 < p[4]:
+        p[3] = c + 1
+    else:
+        p[3] = 0
+    p[5] = 0
+    if s8[c] == 1:
+        p[0] = n + c
+        rd(ad[c], 0, buf)  # CONFIG
+        if ((b[0] << 8) | b[1]) != ptr32(configs)[c]:
+            p[5] = c + 1
+    return n + 1
 
 
 @micropython.viper
 def ina3221_read(read: object, addrs: object, chip_of: object, input_of: object, state: object,
                  flags: object, buf: object, out: object, ch: int, n: int, shunt: int,
-                 prog: object) -> int:
-    """From channel ``ch`` on, while its chip is ready (``state`` C_OK = 1), as
+                 prog: object, configs: object) -> int:
+    """From channel ``ch`` on, while its chip is ready (``state`` C_OK = 1, a byte a chip), as
     ``ChipBank.read`` with ``Ina3221Bank``'s ``_before`` and ``_sample``: at each new chip its
     MASK/ENABLE (0F) read into ``flags[chip]``; then a channel whose CRITICAL flag (CF1 >> input)
     is set reads TRIPPED (the flag cleared, ``prog[2]`` counts it), any other its SHUNT register
     (01/03/05) read and converted. ``chip_of``, ``input_of``: a byte per channel; ``addrs``: a
-    byte per chip. Returns the first channel not read (``n``: all); ``prog[0]``: the channel
-    being read, ``prog[1]``: 0 while its chip's MASK/ENABLE, 1 while its SHUNT (an ``OSError``
-    passes to the caller)."""
+    byte per chip. Returns the first channel not read; when it read every channel left, one
+    chip's CONFIG is checked and it returns ``n + 1``, as ``ina226_read``. ``prog[0]``: the
+    channel being read (or ``n`` + the chip being checked), ``prog[1]``: 0 while its chip's
+    MASK/ENABLE, 1 while its SHUNT (an ``OSError`` passes to the caller)."""
     b = ptr8(buf)
     ad = ptr8(addrs)
     co = ptr8(chip_of)
     io = ptr8(input_of)
+    s8 = ptr8(state)
     f = ptr32(flags)
     p = ptr32(prog)
     rd = read  # type: Any
-    st = state  # type: Any
     o = out  # type: Any
     last = 255  # no chip (ChipBank.read's -1): the previous channel's chip, if any
     if ch > 0:
         last = co[ch - 1]
     while ch < n:
         chip = co[ch]
-        if int(st[chip]) != 1:
+        if s8[chip] != 1:
             return ch
         p[0] = ch
         if chip != last:  # ChipBank.read: _ready (True: C_OK, bus up), then _before
@@ -233,7 +248,20 @@ def ina3221_read(read: object, addrs: object, chip_of: object, input_of: object,
             else:  # 40 uV/LSB, left-aligned by 3: at most 4095 x 40000 < 2^28
                 o[ch] = (((b[0] << 8) | b[1]) >> 3) * 40000 // shunt
         ch += 1
-    return ch
+    # ChipBank._check, with its chip in prog: ina226_read's lines, inline (a call from viper to
+    # viper goes through the runtime: some 600 instructions a tick on the M0+)
+    c = p[3]
+    if c + 1 < p[4]:
+        p[3] = c + 1
+    else:
+        p[3] = 0
+    p[5] = 0
+    if s8[c] == 1:
+        p[0] = n + c
+        rd(ad[c], 0, buf)  # CONFIG
+        if ((b[0] << 8) | b[1]) != ptr32(configs)[c]:
+            p[5] = c + 1
+    return n + 1
 
 
 @micropython.viper

@@ -124,7 +124,7 @@ const mp_obj_module_t mp_module_time = {
 MP_REGISTER_MODULE(MP_QSTR_time, mp_module_time);
 
 // icount.spin(n): 2 n instructions exactly (a SUBS and a BNE n times), to check the clock
-static mp_obj_t cortexm_spin(mp_obj_t n_in) {
+static mp_obj_t icount_spin(mp_obj_t n_in) {
     mp_uint_t n = mp_obj_get_int(n_in);
     if (n) {
         #if defined(__ARM_ARCH_6M__)
@@ -136,7 +136,7 @@ static mp_obj_t cortexm_spin(mp_obj_t n_in) {
     }
     return mp_const_none;
 }
-static MP_DEFINE_CONST_FUN_OBJ_1(cortexm_spin_obj, cortexm_spin);
+static MP_DEFINE_CONST_FUN_OBJ_1(icount_spin_obj, icount_spin);
 
 // icount.timed(fn): fn, called through C that counts the instructions inside it (the
 // outermost such call only) into icount.inside(), and the calls into icount.calls(); bound
@@ -148,6 +148,7 @@ typedef struct {
 } timed_obj_t;
 
 static uint64_t inside_sum;
+static uint64_t inside_total;  // as inside_sum, never zeroed (profiled() takes it off)
 static mp_uint_t inside_calls;
 static int inside_depth;
 
@@ -163,11 +164,15 @@ static mp_obj_t timed_call(mp_obj_t self_in, size_t n_args, size_t n_kw, const m
     if (nlr_push(&nlr) == 0) {
         mp_obj_t ret = mp_call_function_n_kw(self->fn, n_args, n_kw, args);
         nlr_pop();
-        inside_sum += clock_count() - t;
+        t = clock_count() - t;
+        inside_sum += t;
+        inside_total += t;
         inside_depth = 0;
         return ret;
     }
-    inside_sum += clock_count() - t;
+    t = clock_count() - t;
+    inside_sum += t;
+    inside_total += t;
     inside_depth = 0;
     nlr_jump(nlr.ret_val);
 }
@@ -175,34 +180,87 @@ static mp_obj_t timed_call(mp_obj_t self_in, size_t n_args, size_t n_kw, const m
 static MP_DEFINE_CONST_OBJ_TYPE(
     timed_type, MP_QSTR_timed, MP_TYPE_FLAG_BINDS_SELF, call, timed_call);
 
-static mp_obj_t cortexm_timed(mp_obj_t fn) {
+static mp_obj_t icount_timed(mp_obj_t fn) {
     timed_obj_t *o = mp_obj_malloc(timed_obj_t, &timed_type);
     o->fn = fn;
     return MP_OBJ_FROM_PTR(o);
 }
-static MP_DEFINE_CONST_FUN_OBJ_1(cortexm_timed_obj, cortexm_timed);
+static MP_DEFINE_CONST_FUN_OBJ_1(icount_timed_obj, icount_timed);
+
+// icount.profiled(fn, slot): fn, its instructions (less those inside timed calls during it)
+// summed into slot (0-15) of icount.profile(), inclusive of anything it calls: to see where
+// a tick's instructions go
+#define PROFILE_SLOTS 16
+static uint64_t profile_sum[PROFILE_SLOTS];
+static mp_uint_t profile_calls[PROFILE_SLOTS];
+
+typedef struct {
+    mp_obj_base_t base;
+    mp_obj_t fn;
+    mp_uint_t slot;
+} profiled_obj_t;
+
+static mp_obj_t profiled_call(mp_obj_t self_in, size_t n_args, size_t n_kw, const mp_obj_t *args) {
+    profiled_obj_t *self = MP_OBJ_TO_PTR(self_in);
+    uint64_t t = clock_count();
+    uint64_t in = inside_total;
+    mp_obj_t ret = mp_call_function_n_kw(self->fn, n_args, n_kw, args);
+    profile_sum[self->slot] += clock_count() - t - (inside_total - in);
+    profile_calls[self->slot]++;
+    return ret;
+}
+
+static MP_DEFINE_CONST_OBJ_TYPE(
+    profiled_type, MP_QSTR_profiled, MP_TYPE_FLAG_BINDS_SELF, call, profiled_call);
+
+static mp_obj_t icount_profiled(mp_obj_t fn, mp_obj_t slot_in) {
+    mp_uint_t slot = mp_obj_get_int(slot_in);
+    if (slot >= PROFILE_SLOTS) {
+        mp_raise_ValueError(MP_ERROR_TEXT("slot"));
+    }
+    profiled_obj_t *o = mp_obj_malloc(profiled_obj_t, &profiled_type);
+    o->fn = fn;
+    o->slot = slot;
+    return MP_OBJ_FROM_PTR(o);
+}
+static MP_DEFINE_CONST_FUN_OBJ_2(icount_profiled_obj, icount_profiled);
+
+// icount.profile(): [(instructions, calls)] per slot since the last call of it (then zeroed)
+static mp_obj_t icount_profile(void) {
+    mp_obj_t out = mp_obj_new_list(0, NULL);
+    for (int i = 0; i < PROFILE_SLOTS; i++) {
+        mp_obj_t pair[2] = {mp_obj_new_int_from_ull(profile_sum[i]), mp_obj_new_int_from_uint(profile_calls[i])};
+        mp_obj_list_append(out, mp_obj_new_tuple(2, pair));
+        profile_sum[i] = 0;
+        profile_calls[i] = 0;
+    }
+    return out;
+}
+static MP_DEFINE_CONST_FUN_OBJ_0(icount_profile_obj, icount_profile);
 
 // icount.inside(): instructions inside timed calls since the last call of it (then zeroed)
-static mp_obj_t cortexm_inside(void) {
+static mp_obj_t icount_inside(void) {
     uint64_t v = inside_sum;
     inside_sum = 0;
     return mp_obj_new_int_from_ull(v);
 }
-static MP_DEFINE_CONST_FUN_OBJ_0(cortexm_inside_obj, cortexm_inside);
+static MP_DEFINE_CONST_FUN_OBJ_0(icount_inside_obj, icount_inside);
 
-static mp_obj_t cortexm_calls(void) {
+static mp_obj_t icount_calls(void) {
     return mp_obj_new_int_from_uint(inside_calls);
 }
-static MP_DEFINE_CONST_FUN_OBJ_0(cortexm_calls_obj, cortexm_calls);
+static MP_DEFINE_CONST_FUN_OBJ_0(icount_calls_obj, icount_calls);
 
 // icount.instructions(): the instruction count as ticks
 static const mp_rom_map_elem_t icount_globals_table[] = {
     { MP_ROM_QSTR(MP_QSTR___name__), MP_ROM_QSTR(MP_QSTR_icount) },
     { MP_ROM_QSTR(MP_QSTR_instructions), MP_ROM_PTR(&time_ticks_cpu_obj) },
-    { MP_ROM_QSTR(MP_QSTR_spin), MP_ROM_PTR(&cortexm_spin_obj) },
-    { MP_ROM_QSTR(MP_QSTR_timed), MP_ROM_PTR(&cortexm_timed_obj) },
-    { MP_ROM_QSTR(MP_QSTR_inside), MP_ROM_PTR(&cortexm_inside_obj) },
-    { MP_ROM_QSTR(MP_QSTR_calls), MP_ROM_PTR(&cortexm_calls_obj) },
+    { MP_ROM_QSTR(MP_QSTR_spin), MP_ROM_PTR(&icount_spin_obj) },
+    { MP_ROM_QSTR(MP_QSTR_timed), MP_ROM_PTR(&icount_timed_obj) },
+    { MP_ROM_QSTR(MP_QSTR_inside), MP_ROM_PTR(&icount_inside_obj) },
+    { MP_ROM_QSTR(MP_QSTR_calls), MP_ROM_PTR(&icount_calls_obj) },
+    { MP_ROM_QSTR(MP_QSTR_profiled), MP_ROM_PTR(&icount_profiled_obj) },
+    { MP_ROM_QSTR(MP_QSTR_profile), MP_ROM_PTR(&icount_profile_obj) },
 };
 static MP_DEFINE_CONST_DICT(icount_globals, icount_globals_table);
 

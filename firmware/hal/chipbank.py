@@ -20,6 +20,7 @@ than the one written (a brown-out of the chip: back at power-on) is configured a
 """
 
 import errno
+from array import array
 
 from firmware.hal import NO_READING
 from protocol.compat import const
@@ -41,10 +42,18 @@ REG_DIE = const(0xFF)
 MANUFACTURER = const(0x5449)
 BUS_RETRY_TICKS = const(10)
 
-# per chip
+# per chip (``state``, a byte each: the viper reads index it as one)
 C_UNKNOWN = const(0)  # not configured (boot, or it stopped answering)
 C_OK = const(1)
 C_WRONG = const(2)  # another chip at the address: never trusted
+
+# ``prog`` (array('i')): what the drivers' viper reads (firmware.fast) share with the bank
+P_AT = const(0)  # the channel being read; n + chip while checking that chip's CONFIG
+P_PART = const(1)  # INA3221: 0 while at its chip's MASK/ENABLE, 1 while at its SHUNT
+P_TRIPS = const(2)  # INA3221: fast trips counted
+P_CHECK = const(3)  # the chip whose CONFIG the next read checks
+P_CHIPS = const(4)  # how many chips
+P_RESET = const(5)  # after a checking read: the chip found back at power-on + 1, or 0
 
 
 class ChipBank:
@@ -61,20 +70,22 @@ class ChipBank:
         self.chip_of = chip_of
         self.input_of = input_of
         self.n = len(chip_of)
-        self.state = [C_UNKNOWN] * self.n_chips
+        # the bus's read, bound once (a bound method looked up at each use is made anew)
+        self.rd = i2c.readfrom_mem_into
+        self.state = bytearray(self.n_chips)  # C_UNKNOWN each
         self.ids = [0] * self.n_chips  # (manufacturer << 16) | die, as last read
         # the CONFIG each chip is written and checked against (a subclass whose chips differ
-        # sets its own list)
-        self.configs = [self.CONFIG_TICK] * self.n_chips
+        # sets its own)
+        self.configs = array("i", [self.CONFIG_TICK] * self.n_chips)
         self.buf = bytearray(2)
         self.wbuf = bytearray(2)
-        self.check_i = 0
+        self.prog = array("i", [0, 0, 0, 0, self.n_chips, 0])  # P_AT ... P_RESET
         self.bus_wait = 0  # reads left before a bus that timed out is tried again
         self.resets = 0  # chips found back at power-on and configured again
         self.errors = 0  # transactions that failed
 
     def _get(self, chip: int, reg: int) -> int:
-        self.i2c.readfrom_mem_into(self.chips[chip], reg, self.buf)
+        self.rd(self.chips[chip], reg, self.buf)
         return (self.buf[0] << 8) | self.buf[1]
 
     def _put(self, chip: int, reg: int, value: int) -> None:
@@ -215,15 +226,36 @@ class ChipBank:
             out[ch] = self.read_one(ch)
 
     def _check(self) -> None:
-        chip = self.check_i
-        self.check_i = (chip + 1) % self.n_chips
+        """One chip's CONFIG checked, the chips in turn (``prog[P_CHECK]``); the drivers' viper
+        reads do the same at the end of a read that took every channel."""
+        prog = self.prog
+        chip = prog[P_CHECK]
+        prog[P_CHECK] = chip + 1 if chip + 1 < self.n_chips else 0
         if self.state[chip] != C_OK or self.bus_wait:
             return
         buf = self.buf  # _get inlined: this runs every tick
         try:
-            self.i2c.readfrom_mem_into(self.chips[chip], REG_CONFIG, buf)
+            self.rd(self.chips[chip], REG_CONFIG, buf)
             if (buf[0] << 8) | buf[1] != self.configs[chip]:
-                self.resets += 1
-                self._configure(chip)
+                self._reset_found(chip)
         except OSError as exc:
             self._failed(chip, exc)
+
+    def _reset_found(self, chip: int) -> None:
+        """The check found ``chip``'s CONFIG back at power-on (or changed): configure it again
+        (``OSError`` passes)."""
+        self.resets += 1
+        self._configure(chip)
+
+    def _checked(self, exc: "OSError | None") -> None:
+        """After a viper read that checked a chip's CONFIG (``prog[P_AT]``: n + chip):
+        ``exc`` its transaction's error, else ``prog[P_RESET]`` says whether it reset."""
+        prog = self.prog
+        if exc is not None:
+            self._failed(prog[P_AT] - self.n, exc)
+            return
+        chip = prog[P_RESET] - 1
+        try:
+            self._reset_found(chip)
+        except OSError as err:
+            self._failed(chip, err)

@@ -15,11 +15,10 @@ register (2.5 uV/LSB) over the shunt, which needs no calibration. Per tick on th
 SHUNT read per channel and one CONFIG check (10 chips: each checked every 100 ms).
 """
 
-from array import array
 
 from firmware.fast import ina226_read
 from firmware.hal import NO_READING
-from firmware.hal.chipbank import ChipBank
+from firmware.hal.chipbank import P_AT, P_RESET, ChipBank
 from protocol.compat import const
 
 if False:  # typing only (compiled away on the board)
@@ -51,7 +50,6 @@ class Ina226Bank(ChipBank):
         self.addrs = addrs
         self.shunt_uohm = shunt_uohm
         self.addr_b = bytes(addrs)  # for the viper read
-        self.prog = array("i", [0])  # the channel the viper read was at
 
     def _write_config(self, chip: int) -> None:
         self._put(chip, REG_CONFIG, CONFIG_TICK)
@@ -59,33 +57,39 @@ class Ina226Bank(ChipBank):
 
     def read(self, out: "MutableSequence[int]") -> None:
         """As ``ChipBank.read`` (a chip a channel, no per-tick flags), each run of ready chips
-        read by ``firmware.fast.ina226_read``."""
+        read by ``firmware.fast.ina226_read``, which also checks a chip's CONFIG when it took
+        every channel left (``ChipBank._check``; else ``_check`` does it here)."""
         if self.bus_wait:
             ChipBank.read(self, out)
             return
         n = self.n
-        rd = self.i2c.readfrom_mem_into
+        prog = self.prog
         ch = 0
         while ch < n:
             if not self.bus_wait:
                 try:
-                    ch = ina226_read(rd, self.addr_b, self.state, self.buf, out, ch, n,
-                                     self.shunt_uohm, self.prog)
+                    ch = ina226_read(self.rd, self.addr_b, self.state, self.buf, out, ch, n,
+                                     self.shunt_uohm, prog, self.configs)
                 except OSError as exc:
-                    ch = self.prog[0]
+                    ch = prog[P_AT]
+                    if ch >= n:  # the CONFIG check's read, after every channel
+                        self._checked(exc)
+                        return
                     self._failed(ch, exc)
                     out[ch] = NO_READING
                     ch += 1
                     continue
-                if ch >= n:
-                    break
+                if ch > n:  # every channel read and a CONFIG checked
+                    if prog[P_RESET]:
+                        self._checked(None)
+                    return
             self._read_channel(out, ch, True)  # a chip not ready, or a bus down since
             ch += 1
         self._check()
 
     def _sample(self, ch: int) -> int:
         buf = self.buf  # _get inlined: this runs for every channel every tick
-        self.i2c.readfrom_mem_into(self.chips[ch], REG_SHUNT, buf)
+        self.rd(self.chips[ch], REG_SHUNT, buf)
         if buf[0] & 0x80:
             return 0  # current flowing back: none drawn
         return ((buf[0] << 8) | buf[1]) * 2500 // self.shunt_uohm  # 2.5 uV/LSB, in mA

@@ -27,11 +27,12 @@ from array import array
 
 from firmware.fast import ina3221_read
 from firmware.hal import NO_READING, TRIPPED
-from firmware.hal.chipbank import ChipBank
+from firmware.hal.chipbank import P_AT, P_PART, P_RESET, P_TRIPS, ChipBank
 from protocol.compat import const
 
 if False:  # typing only (compiled away on the board)
     from collections.abc import MutableSequence
+    from typing import Any
 
     from firmware.hal.chipbank import I2c
 
@@ -68,16 +69,14 @@ class Ina3221Bank(ChipBank):
         used = [0] * len(chips)
         for c, k in inputs:
             used[c] |= 1 << k
-        self.configs = [config_for(u) for u in used]
+        self.configs = array("i", [config_for(u) for u in used])
         self.limits = [NO_LIMIT] * self.n  # CRITICAL register per channel
         self.flags = array("i", [0] * len(chips))  # MASK/ENABLE as read this tick
         self.trips = 0  # fast trips seen (a CRITICAL flag)
-        # for the viper read: a byte per chip, two per channel; [0] the channel it was at,
-        # [1] 0 while at its chip's MASK/ENABLE, 1 while at its SHUNT; [2] trips it counted
+        # for the viper read: a byte per chip, two per channel (and ChipBank.prog)
         self.addr_b = bytes(chips)
         self.chip_b = bytes(self.chip_of)
         self.input_b = bytes(self.input_of)
-        self.prog = array("i", [0, 0, 0])
 
     def _write_config(self, chip: int) -> None:
         self._put(chip, REG_CONFIG, self.configs[chip])
@@ -109,31 +108,44 @@ class Ina3221Bank(ChipBank):
             ChipBank.read(self, out)
             return
         n = self.n
-        rd = self.i2c.readfrom_mem_into
         prog = self.prog
         ch = 0
         while ch < n:
             before = True
             if not self.bus_wait:
                 try:
-                    ch = ina3221_read(rd, self.addr_b, self.chip_b, self.input_b, self.state,
-                                      self.flags, self.buf, out, ch, n, self.shunt_uohm, prog)
+                    ch = ina3221_read(self.rd, self.addr_b, self.chip_b, self.input_b,
+                                      self.state, self.flags, self.buf, out, ch, n,
+                                      self.shunt_uohm, prog, self.configs)
                 except OSError as exc:
-                    ch = prog[0]
+                    ch = prog[P_AT]
+                    if ch >= n:  # the CONFIG check's read, after every channel
+                        if prog[P_TRIPS]:
+                            self._tripped(prog)
+                        self._checked(exc)
+                        return
                     self._failed(self.chip_of[ch], exc)
-                    if prog[1]:  # its SHUNT (_sample's)
+                    if prog[P_PART]:  # its SHUNT (_sample's)
                         out[ch] = NO_READING
                         ch += 1
                         continue
                     before = False  # its chip's MASK/ENABLE (_before's): on with the channel
-                if ch >= n:
-                    break
+                if ch > n:  # every channel read and a CONFIG checked
+                    if prog[P_TRIPS]:
+                        self._tripped(prog)
+                    if prog[P_RESET]:
+                        self._checked(None)
+                    return
             self._one(out, ch, before)
             ch += 1
-        if prog[2]:
-            self.trips += prog[2]
-            prog[2] = 0
+        if prog[P_TRIPS]:
+            self._tripped(prog)
         self._check()
+
+    def _tripped(self, prog: "Any") -> None:
+        """The fast trips the viper read counted (``prog[P_TRIPS]``) into ``trips``."""
+        self.trips += prog[P_TRIPS]
+        prog[P_TRIPS] = 0
 
     def _one(self, out: "MutableSequence[int]", ch: int, before: bool) -> None:
         """``ChipBank.read``'s body for one channel (``before``: its chip's ``_ready`` and
@@ -152,7 +164,7 @@ class Ina3221Bank(ChipBank):
             self.trips += 1
             return TRIPPED
         buf = self.buf  # _get inlined: this runs for every channel every tick
-        self.i2c.readfrom_mem_into(self.chips[chip], 1 + 2 * k, buf)
+        self.rd(self.chips[chip], 1 + 2 * k, buf)
         if buf[0] & 0x80:
             return 0  # current flowing back: none drawn
         return (((buf[0] << 8) | buf[1]) >> 3) * 40000 // self.shunt_uohm  # 40 uV/LSB, mA

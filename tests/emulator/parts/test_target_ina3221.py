@@ -236,6 +236,7 @@ def read_script(python):
     bank = b.hal.ina
     if python:
         bank.read = lambda out: ChipBank.read(bank, out)
+        b.hal.read_currents_ma = bank.read  # the HAL binds its bank's read when built
     b.closed = [True] * b.n
     for ch in range(b.n):
         bank.set_trip_ma(ch, RATED_MA * 3)
@@ -270,6 +271,7 @@ def read_script(python):
         return call
 
     i2c.readfrom_mem_into = logged(i2c.readfrom_mem_into)
+    bank.rd = i2c.readfrom_mem_into  # the bank binds the bus's read when built
     i2c.writeto_mem = logged(i2c.writeto_mem)
     out = [0] * b.n
     seen = []
@@ -286,7 +288,7 @@ def read_script(python):
                 chip.inject(step[0], now_us=b.w.now_us)
         b.hal.read_currents_ma(out)
         seen.append((list(out), list(bank.state), list(bank.flags), bank.trips, bank.errors,
-                     bank.resets, bank.bus_wait, bank.check_i))
+                     bank.resets, bank.bus_wait, bank.prog[3]))
     return log, seen
 
 
