@@ -181,6 +181,11 @@ class Board:
                 ch.commanded = True
                 self._enqueue(ch.index)
         self.queue_at = now
+        # what every tick reads, in one load (on the M0+ each attribute of an object of this
+        # size costs some 180 instructions): fixed from here on (the channels are made above)
+        self.tick_refs = (self.samples, self.hal_read_currents, self.sws,
+                          self.hal_read_switches, self.acc, self.hot, self.win, self.n,
+                          self.channels, self.hal_read_input_mv)
 
     def factory_config(self) -> "Config":
         """The configuration built into the firmware (``factory``: the one the board was
@@ -210,22 +215,19 @@ class Board:
             return
         dt = now - self.last
         self.last = self.now = now
-        samples = self.samples
-        self.hal_read_currents(samples)
-        sws = self.sws
-        read_switches = self.hal_read_switches
+        (samples, read_currents, sws, read_switches, acc, hot, win, n, chans,
+         read_input_mv) = self.tick_refs
+        read_currents(samples)
         swl = None
         if read_switches is not None:  # 1/0 into sws, each as read_switch's bool
             read_switches(sws)
         else:  # a HAL without it: read_switch's values as they are, for the full step
             swl = self._read_switch_values(sws)
         # the steady channels in one pass (firmware.fast); the others in full, in order
-        acc = self.acc
-        mask = steady(self.hot, self.win, samples, sws, self.n, dt, acc)
+        mask = steady(hot, win, samples, sws, n, dt, acc)
         total = acc[0]
         live = acc[1]  # the current of channels still switched on after this step
         i = 0
-        chans = self.channels
         while mask:
             if mask & 1:
                 ch = chans[i]
@@ -239,13 +241,14 @@ class Board:
             mask >>= 1
             i += 1
         self.total_ma = total
-        self.input_mv = self.hal_read_input_mv()
+        self.input_mv = read_input_mv()
         if self.queue and now >= self.queue_at:
             self._run_queue(now)
         limit = self.total_limit_ma
-        # a channel that tripped in this step no longer counts; under the limit with nothing
-        # counted or flagged, the rule has nothing to do (the usual tick: no call)
-        if limit and (live > limit or self.total_n or self.flags & B_OVER_TOTAL):
+        # a channel that tripped in this step no longer counts; under the limit and not over
+        # it last time (B_OVER_TOTAL: set while total_n counts), the rule has nothing to do:
+        # the usual tick makes no call
+        if limit and (live > limit or self.flags & B_OVER_TOTAL):
             self._total_rule(now, live, limit)
         if self.uv_on:
             self._uv_rule(now, self.input_mv, self.cfg["board"])

@@ -119,6 +119,10 @@ class TargetHal:
         self.storage: "Storage" = storage  # type: ignore[assignment]  # (see above)
         self._cause = self._read_cause()
         self.wdt = machine.WDT(timeout=wdt_timeout_ms)
+        # the main loop's feed goes straight to the watchdog's (as read_currents_ma above)
+        setattr(self, "wdt_feed", self.wdt.feed)  # noqa: B010
+        # the input ADC's read, bound once (the tick reads it every time)
+        self.vin_read = self.vin.read_u16 if self.vin is not None else None
 
     def _read_cause(self) -> int:
         c = machine.reset_cause()
@@ -182,7 +186,8 @@ class TargetHal:
             pins_read(self.status if self.status is not None else self.en, out, self.n_channels)
 
     def read_input_mv(self) -> int:
-        return self.vin.read_u16() * self.mv_k // 1000 if self.vin is not None else 0
+        read = self.vin_read
+        return read() * self.mv_k // 1000 if read is not None else 0
 
     def wdt_feed(self) -> None:
         self.wdt.feed()
