@@ -23,6 +23,7 @@ from ``--perf-bench DIR`` (``tests/perf_bench`` of a MicroPython checkout): the 
 counted here on ``m4``, against their published RP2350 scores (benchmarks/mcu_speed.py).
 
     python -m benchmarks.board_cortexm [--perf-bench DIR]
+    python -m benchmarks.board_cortexm --profile REV    (where a tick's instructions go)
 
 Needs Debian's gcc-arm-none-eabi, libnewlib-arm-none-eabi and qemu-system-arm; without them
 it says so in one line and exits 2.
@@ -96,6 +97,27 @@ def tick(cpu: str, elf: Path, rev: str) -> list[int]:
     return [int(x) for x in line[2:]]
 
 
+def profile(elfs: dict[str, Path], rev: str) -> None:
+    """Where the tick's instructions go (board_parts.profile), on each build: a table."""
+    got: dict[str, dict[str, str]] = {}
+    names: list[str] = []
+    for cpu, elf in elfs.items():
+        out = run(cpu, elf, "-p", "benchmarks/cortexm/lib:emulator/parts:.",
+                  "benchmarks/board_parts.py", rev, "profile")
+        got[cpu] = {}
+        for line in out.splitlines():
+            if line.startswith("PROFILE"):
+                _, _, per_tick, calls, name = line.split(None, 4)
+                got[cpu][name] = f"{int(per_tick):,}" if int(calls) else "-"
+                if name not in names:
+                    names.append(name)
+    print(f"| {rev}: instructions a tick | " + " | ".join(
+        f"{cpu} ({MCU[cpu][0]})" for cpu in elfs) + " |")
+    print("|---|" + "---|" * len(elfs))
+    for name in names:
+        print(f"| {name} | " + " | ".join(got[cpu].get(name, "-") for cpu in elfs) + " |")
+
+
 def calibrate(elf: Path, perf_bench: Path) -> list[tuple[str, float]]:
     """CPI of an RP2350 per program: its published time in cycles over the instructions the
     same program (same N and M) takes here on ``m4``."""
@@ -124,6 +146,8 @@ def main() -> int:
     parser.add_argument("--perf-bench", metavar="DIR", type=Path,
                         help="tests/perf_bench of a MicroPython checkout: calibrate the CPI "
                         "against the published RP2350 runs (else the last measured)")
+    parser.add_argument("--profile", metavar="REV",
+                        help="instead: where revision REV's tick spends its instructions")
     args = parser.parse_args()
     missing = [t for t in TOOLS if shutil.which(t) is None]
     if missing:
@@ -136,6 +160,9 @@ def main() -> int:
         return 2
     src = source()
     elfs = {cpu: build(cpu, src) for cpu in MACHINES}
+    if args.profile:
+        profile(elfs, args.profile)
+        return 0
     cpi = MEASURED_CPI
     if args.perf_bench is not None:
         got = [c for _, c in calibrate(elfs["m4"], args.perf_bench)]

@@ -124,8 +124,10 @@ def meter_layer(meter, clock, diff, n=200):
     a wrapped C function's cost outside ``meter.inside()`` less calling it directly. It comes
     out negative: the C call's own dispatch falls inside the count, and belongs to the
     firmware (a board pays it calling its C ``machine``), so the net figure adds it back.
-    Instruction counts do not vary: one loop of each suffices."""
-    wrapped = meter.timed(abs)
+    Instruction counts do not vary: one loop of each suffices. Both call a local (a global
+    ``abs`` is a miss in this module's globals first, which no ``machine`` call pays)."""
+    fn = abs
+    wrapped = meter.timed(fn)
     meter.inside()
     t = clock()
     for _ in range(n):
@@ -133,7 +135,7 @@ def meter_layer(meter, clock, diff, n=200):
     total = diff(clock(), t) - meter.inside()
     t = clock()
     for _ in range(n):
-        abs(0)
+        fn(0)
     direct = diff(clock(), t)
     return (total - direct) * 1000 // n
 
@@ -278,6 +280,7 @@ def measure(rev):
         calls = meter.calls() if meter else spent[2]
         if meter:
             meter.inside()
+            meter.cold()  # the lookup cache as the part models left it would move the count
         t = clock()
         hal.wdt_feed()
         b.tick(w.now_us // 1000)
@@ -316,6 +319,67 @@ def measure(rev):
           cpu[int(len(cpu) * 0.95)], ratios[len(ratios) // 2],
           nets[len(nets) // 2], min(refs),
           sum(busy) // len(busy), busy[-1], heap, owns[len(owns) // 2])
+
+
+#: what ``profile`` counts, a slot each
+PROFILED = ("tick", "read_currents", "read_switches", "steady", "read_input_mv",
+            "the sensing chips' viper read", "Channel.step", "reference()")
+
+
+def profile(rev, ticks=500):
+    """Under the bare Cortex-M board (``icount``): where the tick's instructions go, in the
+    sections of ``PROFILED`` (each inclusive of what it calls, less the part models), summed
+    over ``ticks`` ticks after 2 s; prints one PROFILE line a section (instructions a tick,
+    calls a tick). The C wrappers that count add some 300 instructions a call to each
+    section that contains one."""
+    import time
+
+    import icount
+    import machine  # the parts' (MICROPYPATH)
+
+    clock, diff = icount.instructions, time.ticks_diff
+    got = parts_board(rev, lambda: time_machine(machine, clock, diff, None, icount))
+    if got is None:
+        print("PROFILE", rev, "none")
+        return
+    w, _board, hal, b, _heap = got
+    if hasattr(hal.ina, "sleep_us"):
+        hal.ina.sleep_us = icount.timed(hal.ina.sleep_us)
+    import sys as _sys
+
+    from firmware import board as fboard
+    from firmware import channel as fchannel
+
+    p = icount.profiled
+    fboard.Board.tick = p(fboard.Board.tick, 0)
+    refs = list(b.tick_refs)
+    for at, slot in ((1, 1), (3, 2), (9, 4)):
+        if refs[at] is not None:
+            refs[at] = p(refs[at], slot)
+    b.tick_refs = tuple(refs)
+    fboard.steady = p(fboard.steady, 3)
+    bank = _sys.modules[type(hal.ina).__module__]
+    for name in ("ina226_read", "ina3221_read", "profet_read"):
+        if hasattr(bank, name):
+            setattr(bank, name, p(getattr(bank, name), 5))
+    fchannel.Channel.step = p(fchannel.Channel.step, 6)
+    ref = p(reference, 7)
+
+    def step():
+        w.set_time(w.now_us + 10000 - w.now_us % 10000)
+        icount.cold()
+        hal.wdt_feed()
+        b.tick(w.now_us // 1000)
+
+    for _ in range(200):
+        step()
+    icount.profile()
+    for _ in range(ticks):
+        step()
+        ref()
+    sums = icount.profile()
+    for i, name in enumerate(PROFILED):
+        print("PROFILE", rev, sums[i][0] // ticks, sums[i][1] // ticks, name)
 
 
 def results(revs):
@@ -449,7 +513,10 @@ def section(peak_memory):
 
 if __name__ == "__main__":
     if sys.implementation.name == "micropython":  # the child: one revision's figures
-        measure(sys.argv[1] if len(sys.argv) > 1 else "rev-a")
+        if len(sys.argv) > 2 and sys.argv[2] == "profile":  # (the Cortex-M board only)
+            profile(sys.argv[1])
+        else:
+            measure(sys.argv[1] if len(sys.argv) > 1 else "rev-a")
     else:  # run by hand under CPython: each revision through its MicroPython child
         import argparse
 

@@ -74,6 +74,10 @@ class ProfetBank:
         self.den = [pin(p, pin.OUT, value=0) for p in sense["den_pins"]]
         self.dsel = pin(sense["dsel_pin"], pin.OUT, value=0)
         self.adc = machine.ADC(pin(sense["is_adc_pin"]))
+        # the read's two bound methods, made once (made at each read they were the tick's
+        # only allocations)
+        self.dsel_value = self.dsel.value
+        self.adc_read = self.adc.read_u16
         self.n = 2 * len(self.den)
         self.k_ilis: int = sense["k_ilis"]
         self.r_adc: int = sense["r_adc_ohm"]
@@ -155,12 +159,12 @@ class ProfetBank:
                 out[ch] = NO_READING
             return
         if self.fast:
-            self.faults += profet_read(self.den, self.dsel.value, self.adc.read_u16,
+            self.faults += profet_read(self.den, self.dsel_value, self.adc_read,
                                        self.switches, self.sleep_us, out, self.open_off,
                                        self.par, self.n)
             return
-        rd = self.adc.read_u16
-        dsel = self.dsel.value
+        rd = self.adc_read
+        dsel = self.dsel_value
         den = self.den
         sw = self.switches
         open_off = self.open_off
