@@ -52,8 +52,9 @@ MCU: dict[str, dict[str, Any]] = {
 # The module a revision's BOM orders for its MCU (``REVISIONS[rev]["module"]``; by default the
 # MCU's own entry above). The Pico 2 W has the Pico W's footprint, pins and Wi-Fi chip, and
 # MicroPython's ``RPI_PICO2_W`` build gives the firmware the same ``machine`` calls; its RP2350
-# runs MicroPython about 1.9 times as fast (benchmarks/RESULTS.md, "How fast the boards' MCUs
-# are"), which a revision whose tick does not fit an RP2040 needs. The limits in ``board.md``
+# runs the tick in fewer instructions (ARMv8-M against ARMv6-M) at 150 MHz against 125
+# (benchmarks/RESULTS.md, "The tick in Cortex-M instructions"), which a revision whose tick is
+# not surely under 1 ms on an RP2040 needs. The limits in ``board.md``
 # stay worked out from the RP2040's figures (ADC, I/O), the part every test models; the
 # RP2350's watchdog reaches 16,777 ms against the RP2040's 8,388, and the firmware asks for
 # less. Order codes as the distributors list them (Mouser, DigiKey, TME: SC1633, Pico 2 W).
@@ -288,7 +289,8 @@ REVISIONS: dict[str, dict[str, Any]] = {
     # rev B's tick: 3.9 ms of its 10 ms on an RP2040, 2.9 ms on an RP2350 (hardware/README.md)
     "rev-b": {"switch": "tps1h100a", "input_fuse_a": 20, "clamp_top_kohm": 187,
               "module": "pico-2-w"},
-    "rev-c": {"switch": "bts7008", "input_fuse_a": 20, "clamp_top_kohm": 150},
+    "rev-c": {"switch": "bts7008", "input_fuse_a": 20, "clamp_top_kohm": 150,
+              "module": "pico-2-w"},
 }
 DEFAULT_INPUT_FUSE_A = 20
 DEFAULT_CLAMP_TOP_KOHM = 187  # 24.6 V: under every part's absolute maximum here but the INA3221's

@@ -36,10 +36,12 @@ def test_the_pin_map_says_what_the_firmware_uses() -> None:
 
 
 def test_the_drawings_name_the_module_the_bom_orders() -> None:
-    """Rev B's BOM orders a Pico 2 W (its tick does not fit an RP2040), the others a Pico W;
-    the pin map and the wiring picture say which, as U1 in the BOM."""
+    """Rev B's and rev C's BOMs order a Pico 2 W (their ticks are not surely under 1 ms on an
+    RP2040), rev A's a Pico W; the pin map and the wiring picture say which, as U1 in the
+    BOM."""
     for rev, module, mpn in (("rev-a", "Pico W (RP2040)", "SC0918"),
-                             ("rev-b", "Pico 2 W (RP2350)", "SC1633")):
+                             ("rev-b", "Pico 2 W (RP2350)", "SC1633"),
+                             ("rev-c", "Pico 2 W (RP2350)", "SC1633")):
         pins = (ROOT / "hardware" / rev / "pins.md").read_text()
         assert pins.splitlines()[0] == f"# {rev}: pin map, {module}"
         svg = ET.fromstring((ROOT / "hardware" / rev / "wiring.svg").read_text())
