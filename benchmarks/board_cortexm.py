@@ -17,7 +17,9 @@ time: the count is exact, whatever the host's load) and the files read through s
 
 In each, ``benchmarks/board_parts.py REV`` runs the shipped HAL and ``Board.tick`` on the
 part models, the ``machine`` calls wrapped in C (``icount.timed``) so that the models'
-instructions are left out and a C call's dispatch is kept in (a board pays it). What an
+instructions are left out and a C call's dispatch is kept in (a board pays it), each tick from
+an empty attribute-lookup cache (``icount.cold``: what the models left in it would move the
+count). What an
 instruction costs in time on the chip (CPI: cycles per instruction, flash and all) comes
 from ``--perf-bench DIR`` (``tests/perf_bench`` of a MicroPython checkout): the same programs
 counted here on ``m4``, against their published RP2350 scores (benchmarks/mcu_speed.py).
