@@ -15,7 +15,6 @@ register (2.5 uV/LSB) over the shunt, which needs no calibration. Per tick on th
 SHUNT read per channel and one CONFIG check (10 chips: each checked every 100 ms).
 """
 
-
 from firmware.fast import ina226_read
 from firmware.hal import NO_READING
 from firmware.hal.chipbank import P_AT, P_RESET, ChipBank
