@@ -1,7 +1,9 @@
 // time and icount: the clock of this board is the instruction count (startup.c). Virtual
 // time under QEMU's -icount shift=0 is one nanosecond an instruction, so ticks_us() is
 // instructions / 1000, and icount.instructions() the count itself, as ticks (2**30 period,
-// time.ticks_diff works on it).
+// time.ticks_diff works on it). icount also holds the benchmark's meter: timed() (a call whose
+// instructions are left out), profiled() and profile() (where they go), cold() (an empty
+// lookup cache) and spin() (a known count, to check the clock).
 #include <string.h>
 
 #include "py/gc.h"
