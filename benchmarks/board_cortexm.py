@@ -19,10 +19,14 @@ In each, ``benchmarks/board_parts.py REV`` runs the shipped HAL and ``Board.tick
 part models, the ``machine`` calls wrapped in C (``icount.timed``) so that the models'
 instructions are left out and a C call's dispatch is kept in (a board pays it), each tick from
 an empty attribute-lookup cache (``icount.cold``: what the models left in it would move the
-count). What an
-instruction costs in time on the chip (CPI: cycles per instruction, flash and all) comes
-from ``--perf-bench DIR`` (``tests/perf_bench`` of a MicroPython checkout): the same programs
-counted here on ``m4``, against their published RP2350 scores (benchmarks/mcu_speed.py).
+count). What an instruction costs in time on each chip (CPI: cycles per instruction, flash
+and all) comes from programs timed on it and counted here:
+
+- four loops timed on both Picos in one published table (``benchmarks/cortexm/loops.py``),
+  counted on both builds: the RP2040's CPI and the RP2350's, run every time;
+- for the RP2350 also ``--perf-bench DIR`` (``tests/perf_bench`` of a MicroPython checkout):
+  those programs counted on ``m4``, against their published RP2350 scores
+  (benchmarks/mcu_speed.py); without DIR, the range they last gave.
 
     python -m benchmarks.board_cortexm [--perf-bench DIR]
     python -m benchmarks.board_cortexm --profile REV    (where a tick's instructions go)
@@ -53,6 +57,11 @@ CALIBRATION = ("bm_fannkuch.py", "bm_float.py", "bm_nqueens.py", "bm_pidigits.py
 #: cycles per instruction of MicroPython on an RP2350, as last measured (RESULTS.md,
 #: "The tick in Cortex-M instructions"): lowest and highest of CALIBRATION
 MEASURED_CPI = (1.77, 2.73)
+#: milliseconds each loop of benchmarks/cortexm/loops.py took on the MCU a build stands for,
+#: as published (github.com/shaoziyang/micropython_benchmarks, README, 2024: the "100000
+#: times" and "1000 bits" columns; the RP2040 with MicroPython v1.23.0, the RP2350 v1.24.0)
+PUBLISHED_MS = {"m0plus": {"add": 799, "mul": 2823, "fadd": 1343, "pi": 868},
+                "m4": {"add": 444, "mul": 1603, "fadd": 715, "pi": 322}}
 TOOLS = ("arm-none-eabi-gcc", "qemu-system-arm")
 
 
@@ -143,6 +152,24 @@ def calibrate(elf: Path, perf_bench: Path) -> list[tuple[str, float]]:
     return out
 
 
+def loops(cpu: str, elf: Path) -> list[float]:
+    """CPI of the MCU ``cpu`` stands for, per loop of loops.py: its published time in cycles
+    over the instructions the loop takes here."""
+    mcu, mhz = MCU[cpu]
+    out = []
+    for line in run(cpu, elf, "benchmarks/cortexm/loops.py").splitlines():
+        if line.startswith("LOOP"):
+            _, name, counted = line.split()
+            instructions, ms = int(counted), PUBLISHED_MS[cpu][name]
+            cycles = ms * mhz * 1000
+            out.append(cycles / instructions)
+            print(f"{mcu} {name:5} {instructions:>12,} instructions; published {ms:,} ms ="
+                  f" {cycles:>12,} cycles -> CPI {cycles / instructions:.2f}", flush=True)
+    if len(out) != len(PUBLISHED_MS[cpu]):
+        sys.exit(f"{cpu} loops.py: {len(out)} of {len(PUBLISHED_MS[cpu])} loops counted")
+    return out
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--perf-bench", metavar="DIR", type=Path,
@@ -165,25 +192,26 @@ def main() -> int:
     if args.profile:
         profile(elfs, args.profile)
         return 0
-    cpi = MEASURED_CPI
-    if args.perf_bench is not None:
-        got = [c for _, c in calibrate(elfs["m4"], args.perf_bench)]
-        cpi = (min(got), max(got))
+    got = {cpu: loops(cpu, elf) for cpu, elf in elfs.items()}
+    got["m4"] += (MEASURED_CPI if args.perf_bench is None
+                  else [c for _, c in calibrate(elfs["m4"], args.perf_bench)])
+    cpi = {cpu: (min(c), max(c)) for cpu, c in got.items()}
     from benchmarks.board_parts import revisions
 
     print("| revision | build (MCU) | tick with the C meter: fastest / median / p95 |"
-          " the firmware's own, median | reference() | at CPI 1.0 | at the RP2350's CPI"
-          f" {cpi[0]:.2f}-{cpi[1]:.2f} | fits 1 ms if CPI under |")
+          " the firmware's own, median | reference() | at CPI 1.0 | at the MCU's CPI |"
+          " fits 1 ms if CPI under |")
     print("|---|---|---|---|---|---|---|---|")
     for rev in revisions():
         for cpu, elf in elfs.items():
             f = tick(cpu, elf, rev)
             mcu, mhz = MCU[cpu]
             own, ref = f[11], f[7]
-            lo, hi = own * cpi[0] / mhz / 1000, own * cpi[1] / mhz / 1000
+            lo, hi = (own * c / mhz / 1000 for c in cpi[cpu])
             print(f"| {rev} | {cpu} ({mcu}, {mhz} MHz) | {f[2]:,} / {f[3]:,} / {f[4]:,} |"
-                  f" {own:,} | {ref:,} | {own / mhz / 1000:.2f} ms | {lo:.2f}-{hi:.2f} ms |"
-                  f" {mhz * 1000 / own:.2f} |", flush=True)
+                  f" {own:,} | {ref:,} | {own / mhz / 1000:.2f} ms | {lo:.2f}-{hi:.2f} ms"
+                  f" ({cpi[cpu][0]:.2f}-{cpi[cpu][1]:.2f}) | {mhz * 1000 / own:.2f} |",
+                  flush=True)
     print(f"load average (1 min): {os.getloadavg()[0]:.2f} (instruction counts do not move"
           " with it)")
     return 0
