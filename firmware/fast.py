@@ -265,12 +265,14 @@ def ina3221_read(read: object, addrs: object, chip_of: object, input_of: object,
 
 
 @micropython.viper
-def profet_read(den: object, dsel: object, adc_read: object, sws: object, wait: object,
+def profet_read(den: object, dsel: object, adc_read: object, ins: object, wait: object,
                 out: object, open_off: object, par: object, n: int) -> int:
-    """``ProfetBank.read``'s loop (the sense node known good): every channel's part on the node
-    and its channel selected, ``wait(settle_us)``, two conversions of ``adc_read`` averaged
-    into uA and decoded into ``out``, ``open_off`` set; every DEN low at the end. ``par``:
-    the _P_* parameters. Returns the fault levels read with IN high (TRIPPED).
+    """``ProfetBank.read``'s loop (the sense node known good, every DEN low when it starts):
+    every channel's part on the node and its channel selected, ``wait(settle_us)``, two
+    conversions of ``adc_read`` averaged into uA and decoded into ``out`` with the channel's
+    IN level from ``ins`` (array('i'), read before), ``open_off`` set; the last part's DEN
+    lowered at the end (every DEN low again). ``den``: each part's DEN ``value``, bound;
+    ``par``: the _P_* parameters. Returns the fault levels read with IN high (TRIPPED).
 
     Every product fits 31 bits: a conversion is ``read_u16() >> 4`` <= 4095, so the sum ``s``
     of two is <= 8190; ``ProfetBank`` reduces vref_uv / (2 x 4095 x r_adc) by their greatest
@@ -280,14 +282,13 @@ def profet_read(den: object, dsel: object, adc_read: object, sws: object, wait: 
     in 0 .. 2^31 - 1. Everything divided is >= 0 (unsigned ``//`` agrees) and so is every value
     compared (signed compares agree)."""
     p = ptr32(par)
+    on_in = ptr32(ins)
     d = den  # type: Any
     sel = dsel  # type: Any
     rd = adc_read  # type: Any
-    sw = sws  # type: Any
     wt = wait  # type: Any
     o = out  # type: Any
     oo = open_off  # type: Any
-    has_sw = 1 if sw else 0  # no IN pins given: every channel reads as off
     settle = p[_P_SETTLE]
     num = p[_P_NUM]
     div = p[_P_DIV]
@@ -295,12 +296,7 @@ def profet_read(den: object, dsel: object, adc_read: object, sws: object, wait: 
     oloff_ua = p[_P_OLOFF]
     k_ilis = p[_P_KILIS]
     accurate = p[_P_ACCURATE]
-    parts = n >> 1
     faults = 0
-    i = 0
-    while i < parts:
-        d[i].value(0)
-        i += 1
     ch = 0
     while ch < n:
         if ch & 1:
@@ -308,16 +304,14 @@ def profet_read(den: object, dsel: object, adc_read: object, sws: object, wait: 
         else:  # a new part: the last one off the node, this one on
             part = ch >> 1
             if part:
-                d[part - 1].value(0)
+                d[part - 1](0)
             sel(0)
-            d[part].value(1)
+            d[part](1)
         wt(settle)
         a = int(rd()) >> 4
         s = a + (int(rd()) >> 4)
         ua = s * num // div
-        on = 0
-        if has_sw:
-            on = 1 if sw[ch].value() else 0
+        on = on_in[ch]
         oo[ch] = False
         if ua >= fault_ua:
             if on:
@@ -336,8 +330,6 @@ def profet_read(den: object, dsel: object, adc_read: object, sws: object, wait: 
             else:
                 o[ch] = ma
         ch += 1
-    i = 0
-    while i < parts:
-        d[i].value(0)  # DEN falling with IN low clears a part's restart counter
-        i += 1
+    if n:
+        d[(n >> 1) - 1](0)  # DEN falling with IN low clears a part's restart counter
     return faults

@@ -8,7 +8,8 @@ sheet's typical; at least 820 Ohm) split as a divider whose lower ``r_adc_ohm`` 
 ADC pin ``is_adc_pin`` taps, so I_IS(FAULT) up to 10 mA stays under 3.3 V; one DEN pin a part
 (``den_pins``) picks which part drives the node, one shared DSEL pin (``dsel_pin``) its channel.
 
-Each read (once a tick) takes every channel in turn: DEN of its part high (the others low),
+Each read (once a tick) takes the IN levels first (in one word from the MCU's GPIO_IN when the
+HAL gives it, ``wire``), then every channel in turn: DEN of its part high (the others low),
 DSEL set, a wait of ``settle_us`` (t_sIS, 20 us) in one ``sleep_us`` (MicroPython's
 ``time.sleep_us``, which ``firmware.hal.target`` hands the driver; eleven discarded
 conversions of 2 us did the same in eleven calls of Python a channel), then two conversions
@@ -30,7 +31,7 @@ whose IS is stuck driving would blind every channel); ``report`` says so per cha
 
 from array import array
 
-from firmware.fast import profet_read
+from firmware.fast import gpio_read, pins_read, profet_read
 from firmware.hal import LOW, NO_READING, TRIPPED
 
 if False:  # typing only; MicroPython never imports typing (the block is compiled away)
@@ -71,14 +72,13 @@ class ProfetBank:
     def __init__(self, sense: "dict[str, Any]", machine: "Machine",
                  sleep_us: "Callable[[int], None]") -> None:
         pin = machine.Pin
-        self.den = [pin(p, pin.OUT, value=0) for p in sense["den_pins"]]
+        self.den = [pin(p, pin.OUT, value=0) for p in sense["den_pins"]]  # all low between reads
         self.dsel = pin(sense["dsel_pin"], pin.OUT, value=0)
         self.adc = machine.ADC(pin(sense["is_adc_pin"]))
-        # the read's two bound methods, made once (made at each read they were the tick's
-        # only allocations)
-        self.dsel_value = self.dsel.value
-        self.adc_read = self.adc.read_u16
+        self.bind()
         self.n = 2 * len(self.den)
+        self.ins = array("i", [0] * self.n)  # the IN levels, read at the start of a read
+        self.gpio: "tuple[Any, int, bytes] | None" = None  # see wire
         self.k_ilis: int = sense["k_ilis"]
         self.r_adc: int = sense["r_adc_ohm"]
         self.vref_uv: int = sense["vref_mv"] * 1000
@@ -87,7 +87,7 @@ class ProfetBank:
         self.accurate_ma: int = sense["accurate_ma"]
         self.fault_ua: int = sense["fault_ua"]
         self.oloff_ua: int = sense["oloff_ua"]
-        self.switches: "list[IoPin]" = []  # the IN pins (TargetHal sets them)
+        self.switches: "list[IoPin]" = []  # the IN pins (``wire``)
         self.open_off = [False] * self.n
         self.faults = 0  # fault levels read with IN high (trips by the switch itself)
         self.node_ok = True
@@ -103,6 +103,22 @@ class ProfetBank:
         self.fast = (min(vals) >= 0 and max(vals) < 1 << 31 and div > 0
                      and 8190 * num < 1 << 31 and 8190 * num // div * self.k_ilis < 1 << 31)
         self.par = array("i", vals if self.fast else [0] * len(vals))
+
+    def bind(self) -> None:
+        """The read's bound methods, made once (made at each read they were the tick's only
+        allocations, and a method looked up is dearer than a bound one called); again after a
+        test wraps a pin's method."""
+        self.den_set = [p.value for p in self.den]
+        self.dsel_value = self.dsel.value
+        self.adc_read = self.adc.read_u16
+
+    def wire(self, switches: "list[IoPin]",
+             gpio: "tuple[Any, int, bytes] | None" = None) -> None:
+        """The switches' IN pins (the HAL's enables), whose levels a read decodes by; ``gpio``
+        when each is a bit of the MCU's GPIO_IN: (``machine.mem32``, GPIO_IN's address, each
+        pin's bit), read in one word rather than a pin at a time."""
+        self.switches = switches
+        self.gpio = gpio
 
     def setup(self) -> None:
         """Every DEN low: the node must read (almost) nothing."""
@@ -135,6 +151,7 @@ class ProfetBank:
         if not self.node_ok:
             return NO_READING
         ua = self._select(ch)
+        self.den[ch // 2].value(0)  # every DEN low again, as ``read`` expects
         on = self._in(ch)
         self.open_off[ch] = False
         if ua >= self.fault_ua:
@@ -151,42 +168,45 @@ class ProfetBank:
 
     def read(self, out: "MutableSequence[int]") -> None:
         """Every channel into ``out``, as ``read_one`` each in turn, in one loop (the tick's hot
-        path: the bound methods in locals, each part's DEN raised once for its two channels
-        rather than every other DEN lowered again per channel: the same levels on the pins),
-        by ``firmware.fast.profet_read`` when its products fit 31 bits (``fast``)."""
+        path: the IN levels read first, the bound methods in locals, each part's DEN raised
+        once for its two channels and lowered when the next part's rises, rather than every
+        other DEN lowered again per channel: the same levels on the pins), by
+        ``firmware.fast.profet_read`` when its products fit 31 bits (``fast``)."""
+        n = self.n
         if not self.node_ok:
-            for ch in range(self.n):
+            for ch in range(n):
                 out[ch] = NO_READING
             return
+        ins = self.ins
+        if self.gpio is not None:
+            gpio_read(self.gpio[0], self.gpio[1], self.gpio[2], ins, n)
+        elif self.switches:
+            pins_read(self.switches, ins, n)
         if self.fast:
-            self.faults += profet_read(self.den, self.dsel_value, self.adc_read,
-                                       self.switches, self.sleep_us, out, self.open_off,
-                                       self.par, self.n)
+            self.faults += profet_read(self.den_set, self.dsel_value, self.adc_read, ins,
+                                       self.sleep_us, out, self.open_off, self.par, n)
             return
         rd = self.adc_read
         dsel = self.dsel_value
-        den = self.den
-        sw = self.switches
+        den = self.den_set
         open_off = self.open_off
         settle = self.settle_us
         wait = self.sleep_us
         k = self.vref_uv
         div = 2 * 4095 * self.r_adc
         fault_ua, oloff_ua = self.fault_ua, self.oloff_ua
-        for d in den:
-            d.value(0)
-        for ch in range(self.n):
+        for ch in range(n):
             if ch & 1:
                 dsel(1)
             else:  # a new part: the last one off the node, this one on (as _select)
                 part = ch >> 1
                 if part:
-                    den[part - 1].value(0)
+                    den[part - 1](0)
                 dsel(0)
-                den[part].value(1)
+                den[part](1)
             wait(settle)
             ua = ((rd() >> 4) + (rd() >> 4)) * k // div
-            on = bool(sw[ch].value()) if sw else False
+            on = ins[ch]
             open_off[ch] = False
             if ua >= fault_ua:
                 if on:
@@ -201,5 +221,5 @@ class ProfetBank:
             else:
                 ma = ua * self.k_ilis // 1000
                 out[ch] = LOW if ma < self.accurate_ma else ma
-        for d in den:
-            d.value(0)  # DEN falling with IN low clears a part's restart counter
+        if n:
+            den[n // 2 - 1](0)  # DEN falling with IN low clears a part's restart counter

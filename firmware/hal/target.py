@@ -103,8 +103,11 @@ class TargetHal:
         if bank is None and ina226_addrs:
             bank = Ina226Bank(i2c, ina226_addrs, shunt_uohm)
         self.ina = bank  # the sensing chips' driver (INA226, INA3221 or smart switches)
-        if bank is not None and hasattr(bank, "switches"):
-            bank.switches = self.en  # a smart switch's driver reads its inputs' state
+        if bank is not None and hasattr(bank, "wire"):  # a smart switch's driver reads its
+            # inputs' levels: in one word of GPIO_IN when every enable is a bit of it
+            en_word = gpio_in is not None and all(isinstance(p, int) and 0 <= p < 32
+                                                  for p in en_pins)
+            bank.wire(self.en, (machine.mem32, gpio_in, bytes(en_pins)) if en_word else None)
         if self.ina is not None:
             self.ina.setup()
             # the tick's read goes straight to the driver: an instance attribute over the

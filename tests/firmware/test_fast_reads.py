@@ -131,7 +131,7 @@ REV_C = {"den_pins": (12, 13, 14, 15, 16), "dsel_pin": 17, "is_adc_pin": 27, "k_
 def profet(sense):
     log = []
     bank = ProfetBank(sense, Machine(), lambda us: log.append(("wait", us)))
-    bank.switches = [Pin(2 + ch) for ch in range(bank.n)]
+    bank.wire([Pin(2 + ch) for ch in range(bank.n)])
     for p in bank.den + [bank.dsel]:
         p.log = log
     return bank, log

@@ -186,6 +186,7 @@ def read_script(python):
     logged(bank, "sleep_us", 12)
     for ch, pin in enumerate(hal.en):
         logged(pin, "value", 20 + ch)
+    bank.bind()  # the driver's bound methods: the wrapped ones
     p = b.parts
     script = {
         0: lambda: [hal.set_switch(ch, ch != 9) for ch in range(10)],
