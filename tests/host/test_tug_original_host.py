@@ -114,6 +114,9 @@ def test_request_with_a_stray_byte_is_answered(emu: Emulate, host: OriginalHost)
 
 def test_refusals_change_nothing(emu: Emulate, host: OriginalHost) -> None:
     assert host.wait_until(lambda: host.specifications)
+    # the protected PC on, and its switch's output up (some 50 ms of the board's boot: a board
+    # just booted for this test had it commanded, not yet physical)
+    assert host.wait_until(lambda: native_state(emu, 2) == (True, True))
     assert host.shut_down("thermal_camera") == ord("_")  # main.cpp 65: no such channel
     host.call_message_channel_on_off(2, 0)  # the protected PC
     assert host.wait_until(lambda: len(host.ecodes) == 2)
