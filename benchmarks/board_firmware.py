@@ -91,8 +91,9 @@ def mpy_part():
     print("MPY", us, after_boot, peak, base)
 
 
-def write_section(text, heading):
-    path = os.path.join(ROOT, "benchmarks", "RESULTS.md")
+def write_section(text, heading, path=None):
+    """``text`` in place of the section ``heading`` of RESULTS.md (``path``), or at its end."""
+    path = path or os.path.join(ROOT, "benchmarks", "RESULTS.md")
     old = "# Benchmark results\n"
     if os.path.exists(path):
         with open(path) as f:
@@ -100,9 +101,10 @@ def write_section(text, heading):
     start = old.find(heading)
     if start < 0:
         new = old.rstrip("\n") + "\n\n" + text
-    else:
-        end = old.find("\n## ", start + 3)
-        new = old[:start] + text + ("" if end < 0 else old[end:])
+    else:  # up to the next heading, "##" or "###": the dated sections under it stay
+        ends = [i for i in (old.find("\n## ", start + 3), old.find("\n### ", start + 3))
+                if i >= 0]
+        new = old[:start] + text + (old[min(ends):] if ends else "")
     with open(path, "w") as f:
         f.write(new)
 
