@@ -541,9 +541,10 @@ def markdown(b: dict[str, Any]) -> str:
         f"{lim['module']['what']} ({lim['module']['mfr']} {lim['module']['mpn']})."
         + ("" if lim["module"] is lim["mcu"] else
            f" Not the {lim['mcu']['what']} ({lim['mcu']['mpn']}): on its RP2040 this revision's"
-           " protection tick is not surely under the design's 1 ms of each 10 ms"
-           " (`hardware/README.md`). The firmware files are the same; the limits above are"
-           " worked out from the RP2040's figures, the part the tests model.")
+           " protection tick is under the design's 1 ms of each 10 ms at the cycles per"
+           " instruction measured, but not surely for code that costs more cycles, where the"
+           " RP2350 keeps it under (`hardware/README.md`). The firmware files are the same; the"
+           " limits above are worked out from the RP2040's figures, the part the tests model.")
         + " An ESP32-S3 module is"
         " the better choice for a revision that senses current with the MCU's own ADC (20 ADC"
         " channels against the RP2040's 3 at about 8.7 effective bits) or needs more RAM or"

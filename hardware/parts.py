@@ -53,9 +53,9 @@ MCU: dict[str, dict[str, Any]] = {
 # MCU's own entry above). The Pico 2 W has the Pico W's footprint, pins and Wi-Fi chip, and
 # MicroPython's ``RPI_PICO2_W`` build gives the firmware the same ``machine`` calls; its RP2350
 # runs the tick in fewer instructions (ARMv8-M against ARMv6-M) at 150 MHz against 125
-# (benchmarks/RESULTS.md, "The tick in Cortex-M instructions"), which a revision whose tick is
-# not surely under 1 ms on an RP2040 needs. The limits in ``board.md``
-# stay worked out from the RP2040's figures (ADC, I/O), the part every test models; the
+# (benchmarks/RESULTS.md, "The RP2040's own cycles per instruction"): the margin a revision
+# whose tick on an RP2040 is under 1 ms only at the cycles measured wants. The limits in
+# ``board.md`` stay worked out from the RP2040's figures (ADC, I/O), the part every test models; the
 # RP2350's watchdog reaches 16,777 ms against the RP2040's 8,388, and the firmware asks for
 # less. Order codes as the distributors list them (Mouser, DigiKey, TME: SC1633, Pico 2 W).
 MODULES: dict[str, dict[str, Any]] = {
@@ -286,7 +286,8 @@ REVERSE_SURGES: tuple[tuple[str, float, float], ...] = (
 # just above the BTS7008's 18 V operating range, far under its 28 V).
 REVISIONS: dict[str, dict[str, Any]] = {
     "rev-a": {"switch": "tps1h100a", "input_fuse_a": 20, "clamp_top_kohm": 205},
-    # rev B's tick: 3.9 ms of its 10 ms on an RP2040, 2.9 ms on an RP2350 (hardware/README.md)
+    # rev B's and rev C's ticks: 0.72-0.75 and 0.86-0.89 ms of CPU on an RP2040 at its measured
+    # cycles per instruction, 0.35-0.62 and 0.44-0.77 ms on an RP2350 (hardware/README.md)
     "rev-b": {"switch": "tps1h100a", "input_fuse_a": 20, "clamp_top_kohm": 187,
               "module": "pico-2-w"},
     "rev-c": {"switch": "bts7008", "input_fuse_a": 20, "clamp_top_kohm": 150,
