@@ -33,6 +33,7 @@ from protocol.modbus_map import (
     BOARD_FLAGS,
     BOARD_REGS,
     BOARD_REGS_END,
+    BOOT_ID,
     CH_BASE,
     CH_REGS,
     CH_STRIDE,
@@ -179,6 +180,7 @@ def _input_regs(board: "Board") -> "list[int]":
     regs[CONFIG_STATUS] = cfg_status
     regs[CHANNEL_COUNT] = board.n
     regs[VERSION] = PROTOCOL_VERSION
+    _put(regs, BOOT_ID, 2, board.boot_id)
     return regs
 
 

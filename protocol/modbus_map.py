@@ -3,7 +3,7 @@
 Zero-based protocol addresses. Channel k (k < ``MAX_CHANNELS``) has coil k (commanded
 switch), discrete inputs k (read-back) and ``FAULT_INPUTS`` + k (any live fault), and input
 registers ``CURRENT`` + k (mA, u16), ``STATE`` + k, ``LIVE_FAULTS`` + k, ``STICKY_FAULTS`` + k,
-``TRIPS`` + k; the board's input registers follow at 100 (``INPUT_MV`` ... ``VERSION``). The
+``TRIPS`` + k; the board's input registers follow at 100 (``INPUT_MV`` ... ``BOOT_ID``). The
 holding table holds the configuration: the board's fields at ``BOARD_REGS`` (900-909), the
 command register ``CMD_REG`` (990: write ``CMD_SAVE`` to save), and channel k's fields at
 ``CH_BASE`` + ``CH_STRIDE``·k + the offsets of ``CH_REGS`` (two registers for a u32, high
@@ -35,7 +35,8 @@ RESET_CAUSE = const(106)
 CONFIG_STATUS = const(107)
 CHANNEL_COUNT = const(108)
 VERSION = const(109)
-INPUT_SPAN = const(110)
+BOOT_ID = const(110)  # u32, 110-111: random at every boot (PROTOCOL.md section 2)
+INPUT_SPAN = const(112)
 
 # holding registers
 HOLD_LO = const(900)

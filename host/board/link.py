@@ -171,7 +171,7 @@ class BoardLink:
             board_id=hello.board_id, firmware=hello.firmware, channels=hello.channels,
             capabilities=hello.capabilities, boot_id=hello.boot_id,
             reset_cause=hello.reset_cause, config_status=hello.config_status,
-            transport_caps=self.transport.CAPS)
+            transport_caps=self.transport.caps)
         self.fanout.new_session()
         self._new_session()
         if old is not None and old.board_id != hello.board_id:
@@ -446,7 +446,7 @@ class BoardLink:
         if old is not None and old.boot_id != hello.boot_id:
             rebooted = Rebooted(self.wall(), old.boot_id, hello.boot_id, hello.reset_cause,
                                 "boot id")
-        elif old is not None and BOOT_ID not in self.transport.CAPS:
+        elif old is not None and BOOT_ID not in self.transport.caps:
             # the same boot id of the board's own is the same boot, however far its uptime
             # fell behind (an emulator that stalled lets its clock slip)
             rebooted = await self._check_uptime(old, hello)

@@ -10,7 +10,7 @@ scheme         push  events  auth  power_cycle  config  save  names  boot_id
 =============  ====  ======  ====  ===========  ======  ====  =====  =======
 tcp, serial,   yes   yes     yes   yes          yes     yes   yes    yes
 memory
-modbus+tcp,    poll  no      none  off/wait/on  yes     yes   no     no
+modbus+tcp,    poll  no      none  off/wait/on  yes     yes   no     yes*
 modbus+rtu
 can            yes   no      yes   yes          no      no    no     yes
 tug            yes   no      none  off/wait/on  no      no    no     no
@@ -20,7 +20,9 @@ tug            yes   no      none  off/wait/on  no      no    no     no
 measurements; "none": the wire has no authentication, so the key is not used and anyone on the
 link can switch (the Modbus board only accepts writes from configured client addresses);
 "off/wait/on": the host times the power cycle; "boot_id": the HELLO carries the board's own
-boot id, random at every boot (without it a reboot is told by an uptime that fell behind).
+boot id, random at every boot (without it a reboot is told by an uptime that fell behind);
+"yes*": when the device has the boot id registers (a dxboard board does; a map file may name
+them, ``boot_id``).
 The board client turns a missing capability into ``NotSupported`` with what to use instead.
 """
 

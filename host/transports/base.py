@@ -75,6 +75,12 @@ class Transport:
     # --- public half ------------------------------------------------------------------
 
     @property
+    def caps(self) -> frozenset[str]:
+        """What this transport can do with the device it is for: ``CAPS``, unless the device
+        adds to them (a Modbus board with boot id registers)."""
+        return self.CAPS
+
+    @property
     def is_open(self) -> bool:
         return self._opened and not self._closed
 

@@ -12,9 +12,9 @@ register; absent = assumed compatible), ``switch_coils`` (coil of channel 0), ``
 and ``fault_inputs`` (discrete input of channel 0), ``current_registers`` (input register of
 channel 0, with ``current_scale`` mA per count), ``state_registers``, ``live_fault_registers``,
 ``sticky_fault_registers``, ``trip_registers`` (input registers of channel 0), ``input_mv``,
-``board_flags``, ``reset_cause``, ``config_status`` (input registers), ``total_ma`` and
-``uptime_ms`` (two input registers, high word first), ``save_register``/``save_value``
-(holding register written to persist the configuration).
+``board_flags``, ``reset_cause``, ``config_status`` (input registers), ``total_ma``,
+``uptime_ms`` and ``boot_id`` (two input registers, high word first), ``save_register``/
+``save_value`` (holding register written to persist the configuration).
 
 What Modbus cannot do, and what this transport does instead: no push, so SUBSCRIBE starts a
 poll at that rate and each poll becomes a MEASUREMENT numbered by the host (a poll that fails
@@ -22,8 +22,12 @@ is a gap in that numbering); no authentication, so no key is sent and the board 
 only from the client addresses its config allows (exception 01 otherwise, reported as such);
 no power cycle, so it is off, wait, on timed by the host; no events, no clearing, no channel
 names, no configuration through the client (``save`` only). The HELLO is made up from the
-registers: board id ``modbus@HOST:PORT/N``, the protocol version register, boot id 0 and one
-more each time the uptime register goes backwards (a reboot seen between two polls). A device
+registers: board id ``modbus@HOST:PORT/N``, the protocol version register, and the boot id
+registers (110-111), random at every boot, so a new one is a reboot (capability ``boot_id``).
+A device without them (a map that has none, or a board whose firmware predates them: exception
+02 for 110 with the default map) gets boot id 0 and one more each time the uptime register goes
+backwards (a reboot seen between two polls), and the link tells a reboot by an uptime that fell
+behind the time it was away. A device
 that does not answer as its map says (a channel count of 0 or too many, a register it does
 not have, exception 04 for a unit id it does not serve) is ``UnexpectedDevice`` on opening:
 one line naming the register or the unit and how to describe the device instead.
@@ -40,7 +44,7 @@ from typing import Any
 from pymodbus.client import AsyncModbusSerialClient, AsyncModbusTcpClient
 from pymodbus.exceptions import ModbusException
 
-from host.transports.base import PUSH, SAVE
+from host.transports.base import BOOT_ID, PUSH, SAVE
 from host.transports.errors import BadUrl, UnexpectedDevice
 from host.transports.translate import Handler, RangeEvents, TranslatingTransport, WireRefused
 from host.transports.url import BoardUrl
@@ -83,7 +87,7 @@ BOARD_MAP: dict[str, Any] = {  # the board's own map (protocol/modbus_map.py)
     "current_scale": 1.0, "state_registers": M.STATE, "live_fault_registers": M.LIVE_FAULTS,
     "sticky_fault_registers": M.STICKY_FAULTS, "trip_registers": M.TRIPS,
     "input_mv": M.INPUT_MV, "total_ma": M.TOTAL_MA, "uptime_ms": M.UPTIME_MS,
-    "board_flags": M.BOARD_FLAGS, "reset_cause": M.RESET_CAUSE,
+    "boot_id": M.BOOT_ID, "board_flags": M.BOARD_FLAGS, "reset_cause": M.RESET_CAUSE,
     "config_status": M.CONFIG_STATUS, "save_register": M.CMD_REG, "save_value": M.CMD_SAVE,
 }
 _KEYS = set(BOARD_MAP) | {"channels"}
@@ -133,6 +137,7 @@ class Snapshot:
     flags: int
     reset_cause: int
     config_status: int
+    boot_id: int | None = None
 
 
 class ModbusTransport(TranslatingTransport):
@@ -165,6 +170,11 @@ class ModbusTransport(TranslatingTransport):
         self._ranges = RangeEvents()  # the low flag's range EVENTs (no events on Modbus)
         self._poller: asyncio.Task[None] | None = None
         self._lock = asyncio.Lock()
+
+    @property
+    def caps(self) -> frozenset[str]:
+        """``CAPS``, and ``boot_id`` when the device has the boot id registers."""
+        return self.CAPS | {BOOT_ID} if self.map.get("boot_id") is not None else self.CAPS
 
     # --- wire -------------------------------------------------------------------------
 
@@ -206,7 +216,7 @@ class ModbusTransport(TranslatingTransport):
         for key in ("input_mv", "board_flags", "reset_cause", "config_status"):
             if m.get(key) is not None:
                 addrs.append(m[key])
-        for key in ("total_ma", "uptime_ms"):
+        for key in ("total_ma", "uptime_ms", "boot_id"):
             if m.get(key) is not None:
                 addrs += [m[key], m[key] + 1]
         regs = await self._registers(addrs) if addrs else {}
@@ -236,14 +246,18 @@ class ModbusTransport(TranslatingTransport):
                         chan("trip_registers"), one("input_mv"),
                         sum(currents) if total is None else total, u32("uptime_ms"),
                         one("board_flags"), one("reset_cause", RESET_UNKNOWN),
-                        one("config_status", CFG_OK))
+                        one("config_status", CFG_OK), u32("boot_id"))
 
     def _uptime(self, snap: Snapshot) -> int:
+        if snap.boot_id is not None:  # the board's own: a new one is a reboot
+            if snap.boot_id != self.boot:
+                self.boot = snap.boot_id
+                self.push(self._hello(snap))
+        elif snap.uptime_ms is not None and 0 <= snap.uptime_ms < self._last_uptime:
+            self.boot += 1  # went backwards: the board rebooted
+            self.push(self._hello(snap))
         if snap.uptime_ms is None:
             return self.uptime_ms()
-        if 0 <= snap.uptime_ms < self._last_uptime:  # went backwards: the board rebooted
-            self.boot += 1
-            self.push(self._hello(snap))
         self._last_uptime = snap.uptime_ms
         return snap.uptime_ms
 
@@ -281,9 +295,20 @@ class ModbusTransport(TranslatingTransport):
                                    '?map=FILE ("channels": N, ...)')
         self.n = n
         self._version = regs[m["version"]] if m.get("version") is not None else PROTOCOL_VERSION
+        if not self.custom_map and m.get("boot_id") is not None:
+            try:
+                await self._registers([m["boot_id"], m["boot_id"] + 1])
+            except WireRefused as exc:
+                if exc.modbus != M.X_ADDRESS:
+                    raise
+                log.info("%s: no boot id registers (firmware before them): a reboot is told "
+                         "by the uptime", self.url.text)
+                del m["boot_id"]
         self._reading = "the registers of the map"
         snap = await self.snapshot()
         self._last_uptime = snap.uptime_ms if snap.uptime_ms is not None else -1
+        if snap.boot_id is not None:
+            self.boot = snap.boot_id
         return self._hello(snap)
 
     def _unexpected(self, exc: WireRefused) -> UnexpectedDevice:

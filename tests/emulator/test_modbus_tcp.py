@@ -84,6 +84,9 @@ async def test_modbus_matches_native(board: Emulate) -> None:
         assert regs[10:16] == [0] * 6  # no channels 10..15
         assert board_regs[6] == st.reset_cause and board_regs[7] == st.config_status
         assert board_regs[8] == 10 and board_regs[9] == 1
+        boot = await client.read_input_registers(110, count=2)  # the boot id, high word first
+        assert not boot.isError() and w.hello is not None
+        assert u32(boot.registers[0], boot.registers[1]) == w.hello.boot_id
         assert abs(board_regs[0] - st.input_mv) < 500
         # configuration: channel 3 (hokuyo, rated 1000 mA) and the board's tick
         hold = await client.read_holding_registers(1000 + 32 * 3, count=22)
@@ -96,7 +99,7 @@ async def test_modbus_matches_native(board: Emulate) -> None:
         assert rw.isError() and rw.exception_code == 1
         rw = await client.write_register(1000 + 32 * 3 + 1, 2000)
         assert rw.isError() and rw.exception_code == 1
-        bad = await client.read_input_registers(105, count=10)
+        bad = await client.read_input_registers(105, count=10)  # past 111, the last
         assert bad.isError() and bad.exception_code == 2
     finally:
         client.close()

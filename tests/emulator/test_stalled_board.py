@@ -1,5 +1,6 @@
 """A board that stalls long enough for the link to be lost is not said to have rebooted when its
-HELLO carries the same boot id.
+HELLO carries the same boot id: over the native protocol, and over Modbus, whose boot id
+registers (110-111) carry the board's own.
 
 The emulator lets its simulated clock slip when its process cannot keep up for more than
 ``emulator.control.MAX_LAG_MS`` (a loaded machine, or here a stopped process), so the board's
@@ -17,6 +18,7 @@ import asyncio
 import time
 
 import psutil
+import pytest
 
 from host.board import BoardClient
 from host.board.types import LinkDown, LinkUp, Rebooted, StreamItem
@@ -26,9 +28,11 @@ from tests.wait import wait_until_async
 STALL_S = 6.0  # past the link's silence limit and the emulator's catch-up (2 s)
 
 
-async def test_a_stalled_board_with_the_same_boot_id_did_not_reboot() -> None:
-    with Emulate() as emu:
-        async with BoardClient(emu.urls["board"], KEY, timeout_s=30.0) as client:
+@pytest.mark.parametrize("link", ["board", "modbus"])
+async def test_a_stalled_board_with_the_same_boot_id_did_not_reboot(link: str) -> None:
+    with Emulate("--modbus", "127.0.0.1:0") as emu:
+        async with BoardClient(emu.urls[link], KEY if link == "board" else None,
+                               timeout_s=30.0) as client:
             boot = client.info.boot_id if client.info else None
             stream = client.subscribe(20).__aiter__()
             seen: list[StreamItem] = []

@@ -52,7 +52,8 @@ class ReadTest(unittest.TestCase):
         r.hal.load_ma[1] = 1234
         r.board.switch(1, True)
         r.run(300)
-        got = regs(r, 4, 0, 110)
+        r.board.boot_id = 0xA1B2C3D4  # (the test HAL's random bytes are zeros)
+        got = regs(r, 4, 0, 112)
         self.assertEqual(got[1], 1234)
         self.assertEqual(got[16 + 1], ST_ON)
         self.assertEqual(got[16 + 12], 0)  # channel 12 does not exist
@@ -61,6 +62,7 @@ class ReadTest(unittest.TestCase):
         self.assertEqual((got[103] << 16) | got[104], r.hal.now)
         self.assertEqual(got[108], 10)
         self.assertEqual(got[109], 1)
+        self.assertEqual(got[110:112], [0xA1B2, 0xC3D4])  # the HELLO's boot id
 
     def test_coils_and_discrete(self):
         r = rig()
@@ -89,7 +91,7 @@ class ReadTest(unittest.TestCase):
 
     def test_errors(self):
         r = rig()
-        self.assertEqual(exc(r, struct.pack(">BHH", 4, 100, 11)), 2)
+        self.assertEqual(exc(r, struct.pack(">BHH", 4, 100, 13)), 2)  # 112 is past the end
         self.assertEqual(exc(r, struct.pack(">BHH", 4, 0, 126)), 3)
         self.assertEqual(exc(r, struct.pack(">BHH", 1, 10, 7)), 2)
         self.assertEqual(exc(r, struct.pack(">BHH", 3, 899, 2)), 2)

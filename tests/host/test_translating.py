@@ -97,6 +97,41 @@ async def test_modbus_reads_the_same_board(emu: Emulate) -> None:
         await native.configurator.set_board_config(modbus_write=False, modbus_allow=[])
 
 
+async def test_a_reboot_over_modbus_is_told_by_the_boards_boot_id() -> None:
+    """The boot id registers (110-111) carry the HELLO's boot id: the Modbus link has the
+    board's own, and a watchdog reset is a new one (not an uptime that went backwards)."""
+    e = Emulate("--modbus", "127.0.0.1:0")  # its own board: this one reboots
+    try:
+        async with BoardClient(e.urls["board"], KEY) as native, \
+                BoardClient(e.urls["modbus"]) as mb:
+            assert native.info is not None and mb.info is not None
+            boot = native.info.boot_id
+            assert mb.info.boot_id == boot != 0
+            assert "boot_id" in mb.info.transport_caps
+            items: list[object] = []
+
+            async def consume() -> None:
+                async for item in mb.subscribe(10):
+                    items.append(item)
+
+            task = asyncio.create_task(consume())
+            try:
+                await wait_until_async(lambda: any(isinstance(x, Reading) for x in items),
+                                       what="a reading over Modbus")
+                request(e.urls["control"], {"op": "inject", "channel": "board",
+                                            "fault": "wdt_reset", "params": {}})
+                await wait_until_async(lambda: any(isinstance(x, Rebooted) for x in items),
+                                       what="the reboot seen over Modbus")
+            finally:
+                task.cancel()
+            reboot = next(x for x in items if isinstance(x, Rebooted))
+            assert reboot.how == "boot id" and reboot.old_boot_id == boot
+            assert reboot.new_boot_id not in (boot, 0)
+            assert reboot.reset_cause_name == "watchdog"
+    finally:
+        e.stop()
+
+
 def test_modbus_map_file(tmp_path: Path) -> None:
     good = tmp_path / "relay.json"
     good.write_text(json.dumps({"channels": 4, "switch_coils": 16}))
