@@ -233,23 +233,55 @@ def highest_rate(results, seconds=3.0):
     return best
 
 
-def mpy_peak_memory(seconds=5.0):
-    """Peak and first live heap (bytes) of the MicroPython firmware, 4 clients at 100 Hz."""
+#: the modules a revision's main.py imports (its own imports, the smart switches' driver it
+#: loads when the revision has them, the revision's file), imported before its first boot so
+#: that the heap counted from then on is the firmware's objects, not its code
+BOOT_IMPORTS = ("firmware.boot", "firmware.boards", "firmware.build", "firmware.modbus",
+                "firmware.tug", "firmware.app", "firmware.factory", "firmware.hal.target",
+                "firmware.hal.storage", "firmware.net", "firmware.session",
+                "protocol.constants", "firmware.hal.profet")
+
+
+def mpy_peak_memory(seconds=5.0, rev=None):
+    """Live heap after boot, its peak (bytes) and the fewest frames a client got, of the
+    MicroPython firmware with 4 clients at 100 Hz: the emulated board's (``App`` on a remote
+    HAL: the firmware's objects beyond its imports), or with ``rev`` that revision's shipped
+    ``boot.py`` and ``main.py`` on its part models (``--board-rev``), counted from after the
+    import of ``BOOT_IMPORTS`` and the revision's file. The part models' ``machine`` objects
+    (C objects of a few words on a board) are Python objects there and are counted too: an
+    upper bound."""
     import asyncio
     import json
+    import shutil
+    import tempfile
     import threading
+    from pathlib import Path
 
     from emulator import model
+    from emulator.board_rt import BoardRuntime
     from emulator.control import Background
     from emulator.frontends import FrontEnds
     from emulator.mpy import MicroRuntime
     from emulator.sim import Emulator
+    from firmware.hal.storage import FileStorage
 
     with open("models/tedusar/board.json") as f:
         cfg = json.loads(f.read())
     cfg["board"]["key"] = KEY.hex()
-    rt = MicroRuntime()
-    emu = Emulator(model.load("models/tedusar"), board_config=cfg, firmware_factory=rt.factory)
+    if rev is None:
+        rt = MicroRuntime()
+        base = 0
+        emu = Emulator(model.load("models/tedusar"), board_config=cfg,
+                       firmware_factory=rt.factory)
+    else:
+        flash = tempfile.mkdtemp(prefix="dxboard-heap-")
+        rt = BoardRuntime(rev, Path(flash))
+        board_file = "firmware.boards." + rev.replace("-", "_")
+        imports = list(BOOT_IMPORTS) + [board_file]  # noqa: RUF005 (MicroPython parses this)
+        base = rt.request({"op": "mem", "import": imports})["alloc"]
+        emu = Emulator(model.load("models/tedusar"), storage=FileStorage(flash),
+                       board_config=cfg, firmware_factory=rt.factory)
+        emu.parts = rt
     fronts = FrontEnds(emu)
     samples = []
     with Background(emu) as bg:
@@ -270,7 +302,9 @@ def mpy_peak_memory(seconds=5.0):
         t.join()
         bg.run(fronts.stop())
     rt.close()
-    return idle, max(samples), min(n for n, _ in got)
+    if rev is not None:
+        shutil.rmtree(flash, ignore_errors=True)
+    return idle - base, max(samples) - base, min(n for n, _ in got)
 
 
 def main():

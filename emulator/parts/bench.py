@@ -32,7 +32,8 @@ emulator moves. It connects three times to the emulator, each link naming itself
   what a logic analyser on the bench shows; a smart switch has none), ``{"op": "halt"}`` (held
   in reset: every socket closed, nothing runs until the next boot), ``{"op": "call", "m":
   NAME, "a": [..]}`` (a ``Board`` method: the emulator's status, scenario commands) and
-  ``{"op": "mem"}``.
+  ``{"op": "mem", "import": [..]}`` (the heap in use after a collection, the modules named
+  imported first: before the first boot, the firmware's code apart from its objects).
 - link B (board -> emulator): ``["set_switch", ch, on]`` the moment an enable pin changes; the
   answer (every switch's output) is what the status pins then read (``firmware.hal.remote.Link``).
 - link U: the UART's wires: ``machine.UART(1)`` is this socket (asyncio on the unix port polls
@@ -314,9 +315,11 @@ class Bench:
                 return {"regs": []}  # a smart switch has no registers
             part.advance(self.world.now_us)
             return {"regs": list(part.regs)}
-        if op == "mem":
-            import gc
+        if op == "mem":  # with "import": those modules first (their code, not the objects
+            import gc  # the firmware makes, is then what a later "mem" counts from)
 
+            for name in req.get("import", ()):
+                __import__(name)
             gc.collect()
             return {"alloc": gc.mem_alloc(), "free": gc.mem_free()}  # type: ignore[attr-defined]
         board = self.app.board  # type: ignore[attr-defined]
