@@ -268,41 +268,41 @@ def mpy_peak_memory(seconds=5.0, rev=None):
     with open("models/tedusar/board.json") as f:
         cfg = json.loads(f.read())
     cfg["board"]["key"] = KEY.hex()
-    if rev is None:
-        rt = MicroRuntime()
+    flash = tempfile.mkdtemp(prefix="dxboard-heap-")
+    rt = MicroRuntime() if rev is None else BoardRuntime(rev, Path(flash))
+    try:
         base = 0
-        emu = Emulator(model.load("models/tedusar"), board_config=cfg,
-                       firmware_factory=rt.factory)
-    else:
-        flash = tempfile.mkdtemp(prefix="dxboard-heap-")
-        rt = BoardRuntime(rev, Path(flash))
-        board_file = "firmware.boards." + rev.replace("-", "_")
-        imports = list(BOOT_IMPORTS) + [board_file]  # noqa: RUF005 (MicroPython parses this)
-        base = rt.request({"op": "mem", "import": imports})["alloc"]
-        emu = Emulator(model.load("models/tedusar"), storage=FileStorage(flash),
-                       board_config=cfg, firmware_factory=rt.factory)
-        emu.parts = rt
-    fronts = FrontEnds(emu)
-    samples = []
-    with Background(emu) as bg:
-        urls = bg.run(rt.start_frontends(fronts, ("127.0.0.1", 0), None, False, None))
-        host, port = urls["board"].split("://")[1].rsplit(":", 1)
-        idle = bg.call(lambda: rt.request({"op": "mem"}))["alloc"]
-        done = threading.Event()
+        if rev is None:
+            emu = Emulator(model.load("models/tedusar"), board_config=cfg,
+                           firmware_factory=rt.factory)
+        else:
+            board_file = "firmware.boards." + rev.replace("-", "_")
+            imports = list(BOOT_IMPORTS) + [board_file]  # noqa: RUF005 (MicroPython parses)
+            base = rt.request({"op": "mem", "import": imports})["alloc"]
+            emu = Emulator(model.load("models/tedusar"), storage=FileStorage(flash),
+                           board_config=cfg, firmware_factory=rt.factory)
+            emu.parts = rt
+        fronts = FrontEnds(emu)
+        samples = []
+        with Background(emu) as bg:
+            urls = bg.run(rt.start_frontends(fronts, ("127.0.0.1", 0), None, False, None))
+            host, port = urls["board"].split("://")[1].rsplit(":", 1)
+            idle = bg.call(lambda: rt.request({"op": "mem"}))["alloc"]
+            done = threading.Event()
 
-        def sample():
-            while not done.is_set():
-                samples.append(bg.call(lambda: rt.request({"op": "mem"}))["alloc"])
-                done.wait(0.1)
+            def sample():
+                while not done.is_set():
+                    samples.append(bg.call(lambda: rt.request({"op": "mem"}))["alloc"])
+                    done.wait(0.1)
 
-        t = threading.Thread(target=sample)
-        t.start()
-        got = asyncio.run(_subscribers((host, int(port)), 100, seconds))
-        done.set()
-        t.join()
-        bg.run(fronts.stop())
-    rt.close()
-    if rev is not None:
+            t = threading.Thread(target=sample)
+            t.start()
+            got = asyncio.run(_subscribers((host, int(port)), 100, seconds))
+            done.set()
+            t.join()
+            bg.run(fronts.stop())
+    finally:
+        rt.close()
         shutil.rmtree(flash, ignore_errors=True)
     return idle - base, max(samples) - base, min(n for n, _ in got)
 
